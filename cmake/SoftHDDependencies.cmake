@@ -1,0 +1,49 @@
+# Every dependency comes from a Debian package; a missing one stops the
+# configuration with the name of the package that provides it
+# (scripts/install-deps.sh installs them all).
+macro(softhd_require found_var debian_package what)
+  if(NOT ${found_var})
+    message(FATAL_ERROR
+      "softhd needs ${what}: install the Debian package '${debian_package}' "
+      "(apt-get install ${debian_package}, or run scripts/install-deps.sh)")
+  endif()
+endmacro()
+
+find_package(Eigen3 3.4 CONFIG QUIET)
+softhd_require(Eigen3_FOUND libeigen3-dev "Eigen 3.4")
+
+find_package(nanoflann CONFIG QUIET)
+softhd_require(nanoflann_FOUND libnanoflann-dev "nanoflann")
+
+find_package(OpenMP QUIET COMPONENTS CXX)
+softhd_require(OpenMP_CXX_FOUND libgomp1 "OpenMP (g++ ships it as libgomp)")
+
+find_package(nlohmann_json 3 CONFIG QUIET)
+softhd_require(nlohmann_json_FOUND nlohmann-json3-dev "nlohmann-json")
+
+# Debian ships two NLoptConfig.cmake files (C and C++ APIs); softhd uses the
+# C++ one, which defines NLopt::nlopt_cxx.
+find_package(NLopt CONFIG QUIET
+  PATHS /usr/lib/${CMAKE_LIBRARY_ARCHITECTURE}/cmake/nlopt_cxx NO_DEFAULT_PATH)
+if(NOT TARGET NLopt::nlopt_cxx)
+  find_package(NLopt CONFIG QUIET)
+endif()
+if(NOT TARGET NLopt::nlopt_cxx)
+  set(NLopt_FOUND FALSE)
+endif()
+softhd_require(NLopt_FOUND libnlopt-cxx-dev "NLopt with its C++ API")
+
+if(SOFTHD_BUILD_TESTS)
+  find_package(GTest CONFIG QUIET)
+  softhd_require(GTest_FOUND libgtest-dev "GoogleTest")
+endif()
+
+# Per-target settings (no global flags): warnings, optional tuning and sanitizers.
+function(softhd_target_defaults target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic)
+  if(SOFTHD_SANITIZE)
+    target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer
+      -fno-sanitize-recover=undefined)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+  endif()
+endfunction()

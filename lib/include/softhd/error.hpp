@@ -1,0 +1,30 @@
+#pragma once
+/// \file error.hpp
+/// The one exception family of softhd. Every error a caller can cause (bad input,
+/// a malformed file, an invalid parameter) is reported by throwing softhd::Error
+/// or a class derived from it, with a message that names the problem.
+
+#include <stdexcept>
+#include <string>
+
+namespace softhd {
+
+/// Base of every exception softhd throws.
+class Error : public std::runtime_error {
+ public:
+  explicit Error(const std::string& message) : std::runtime_error(message) {}
+};
+
+/// An argument or parameter outside its valid range.
+class InvalidArgument : public Error {
+ public:
+  using Error::Error;
+};
+
+/// A file that cannot be opened, read, parsed or written.
+class FileError : public Error {
+ public:
+  using Error::Error;
+};
+
+}  // namespace softhd
