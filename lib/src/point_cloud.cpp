@@ -26,9 +26,8 @@ PointCloud::PointCloud(Eigen::MatrixXd points, Eigen::VectorXd volumes)
       }
     }
     if (!std::isfinite(volumes_[i]) || !(volumes_[i] > 0.0)) {
-      throw InvalidArgument("point cloud: point " + std::to_string(i) +
-                            " has volume " + std::to_string(volumes_[i]) +
-                            " (volumes must be finite and > 0)");
+      throw InvalidArgument("point cloud: point " + std::to_string(i) + " has volume " +
+                            std::to_string(volumes_[i]) + " (volumes must be finite and > 0)");
     }
   }
   total_volume_ = volumes_.sum();

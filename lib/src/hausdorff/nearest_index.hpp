@@ -1,0 +1,30 @@
+#pragma once
+// Nearest-neighbour distances with nanoflann (internal).
+
+#include <Eigen/Core>
+#include <memory>
+
+namespace softhd::detail {
+
+/// A k-d tree over the rows of an N by d matrix, built once. The matrix must outlive
+/// the index (the tree points at it; it does not copy it).
+class NearestIndex {
+ public:
+  explicit NearestIndex(const Eigen::MatrixXd& points);
+  ~NearestIndex();
+  NearestIndex(NearestIndex&&) noexcept;
+  NearestIndex& operator=(NearestIndex&&) noexcept;
+
+  /// For each row q of `queries` (K by d): min_i |q − x_i| (Euclidean).
+  /// OpenMP over the queries; `threads` = 0 uses OpenMP's default.
+  Eigen::VectorXd distances(const Eigen::MatrixXd& queries, int threads) const;
+
+ private:
+  struct Tree;
+  std::unique_ptr<Tree> tree_;
+};
+
+/// Number of threads to use: `threads` if positive, else OpenMP's default (1 without OpenMP).
+int resolve_threads(int threads);
+
+}  // namespace softhd::detail

@@ -1,0 +1,45 @@
+#pragma once
+// Scalar formulas of SPEC §2 evaluated in the scaled / log domain (internal).
+// Each function is one formula; the comment gives the formula it implements.
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+
+namespace softhd::detail {
+
+/// d̃ = φ⁻¹(I) from the scaled kernel sum S = Σ w_n ((r_min+ε)/(r_n+ε))^α ∈ (0, 1]:
+///     d̃ = r_min · S^(−1/α) + ε · expm1(−log(S)/α)
+/// (equal to 1/I − ε with I = S^(1/α)/(r_min + ε), without its cancellation).
+inline double regularised_distance(double r_min, double S, double alpha, double eps) {
+  const double e = -std::log(S) / alpha;
+  return r_min * std::exp(e) + eps * std::expm1(e);
+}
+
+/// Weighted power mean M = (Σ w_j v_j^p)^(1/p), Σ w_j = 1, v_j ≥ 0, scaled by the
+/// maximum D = max v_j:  M = D (Σ w_j (v_j/D)^p)^(1/p). Returns 0 when all v_j = 0.
+inline double power_mean(const Eigen::VectorXd& v, const Eigen::VectorXd& w, double p) {
+  const double D = v.size() > 0 ? v.maxCoeff() : 0.0;
+  if (!(D > 0.0)) return 0.0;
+  double sum = 0.0;
+  for (Eigen::Index j = 0; j < v.size(); ++j) sum += w[j] * std::pow(v[j] / D, p);
+  return D * std::pow(sum, 1.0 / p);
+}
+
+/// ∂M/∂v_j of the power mean above: w_j (v_j/M)^(p−1). Where v_j = 0 (or M = 0) the
+/// derivative is w_j for p = 1, and 0 otherwise (the value for p > 1; a subgradient
+/// choice for p < 1, where it is unbounded).
+inline double power_mean_derivative(double v_j, double w_j, double M, double p) {
+  if (!(M > 0.0)) return 0.0;
+  if (v_j > 0.0) return w_j * std::pow(v_j / M, p - 1.0);
+  return p == 1.0 ? w_j : 0.0;
+}
+
+/// ρ̃ = ((A^γ + B^γ)/2)^(1/γ), scaled by max(A, B).
+inline double combine_means(double A, double B, double gamma) {
+  const double D = std::max(A, B);
+  if (!(D > 0.0)) return 0.0;
+  return D * std::pow(0.5 * (std::pow(A / D, gamma) + std::pow(B / D, gamma)), 1.0 / gamma);
+}
+
+}  // namespace softhd::detail
