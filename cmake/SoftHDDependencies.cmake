@@ -41,6 +41,9 @@ endif()
 # Per-target settings (no global flags): warnings, optional tuning and sanitizers.
 function(softhd_target_defaults target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic)
+  # softhd never reads errno after a math call; without this flag g++ cannot
+  # vectorise sqrt in the pair loops (it must keep a scalar errno path).
+  target_compile_options(${target} PRIVATE -fno-math-errno)
   if(SOFTHD_SANITIZE)
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer
       -fno-sanitize-recover=undefined)

@@ -51,7 +51,7 @@ PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
   const double* x[3] = {src.coord[0], src.coord[1], D == 3 ? src.coord[2] : src.coord[1]};
   const double ox = o[0], oy = o[1], oz = D == 3 ? o[2] : 0.0;
   double S = 0.0, Gx = 0.0, Gy = 0.0, Gz = 0.0, H = 0.0, Hx = 0.0, Hy = 0.0, Hz = 0.0;
-  alignas(64) double tinv[kBlock], rinv[kBlock], q[kBlock], p[kBlock];
+  alignas(64) double tinv[kBlock], trinv[kBlock], q[kBlock], p[kBlock];
 
   for (Eigen::Index n0 = 0; n0 < src.size; n0 += kBlock) {
     const int len = static_cast<int>(std::min<Eigen::Index>(kBlock, src.size - n0));
@@ -68,10 +68,19 @@ PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
         r2 += dz * dz;
       }
       const double r = std::sqrt(r2);
-      const double t = 1.0 / (r + eps);
-      tinv[k] = t;
-      q[k] = c_o * t;
-      if constexpr (kGrad || kIn) rinv[k] = r > 0.0 ? 1.0 / r : 0.0;
+      if constexpr (kGrad || kIn) {
+        // One division for both t = 1/(r + ε) and t/r = 1/(r (r + ε)); a coincident
+        // pair (r = 0) gets t = 1/ε and t/r = 0.
+        const double inv = 1.0 / (r * (r + eps));
+        const double t = r > 0.0 ? r * inv : 1.0 / eps;
+        tinv[k] = t;
+        trinv[k] = r > 0.0 ? inv : 0.0;
+        q[k] = c_o * t;
+      } else {
+        const double t = 1.0 / (r + eps);
+        tinv[k] = t;
+        q[k] = c_o * t;
+      }
     }
     if constexpr (kSum || kGrad) {
       power.apply(q, p, len);  // p = (c_o t)^α
@@ -81,7 +90,7 @@ PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
         const double wp = w[k] * p[k];
         if constexpr (kSum) S += wp;
         if constexpr (kGrad) {
-          const double g = wp * tinv[k] * rinv[k];  // w p t / r
+          const double g = wp * trinv[k];  // w p t / r
           Gx += g * (ox - bx[k]);
           Gy += g * (oy - by[k]);
           if constexpr (D == 3) Gz += g * (oz - bz[k]);
@@ -98,7 +107,7 @@ PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
       for (int k = 0; k < len; ++k) {
         const double hp = h[k] * p[k];
         H += hp;
-        const double g = hp * tinv[k] * rinv[k];
+        const double g = hp * trinv[k];
         Hx += g * (ox - bx[k]);
         Hy += g * (oy - by[k]);
         if constexpr (D == 3) Hz += g * (oz - bz[k]);
