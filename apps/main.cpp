@@ -1,9 +1,46 @@
+// softhd: command-line front end. Dispatches to the subcommands; turns every error
+// into one line on stderr and a non-zero exit code (2 for bad input).
+
+#include <exception>
 #include <iostream>
 #include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "softhd/error.hpp"
+
+namespace {
+
+const char* kUsage = R"(usage: softhd COMMAND [options]
+
+commands:
+  distance   regularised Hausdorff distance between two point clouds
+
+Run 'softhd COMMAND --help' for the options of a command.
+)";
+
+}  // namespace
 
 int main(int argc, char** argv) {
-  (void)argc;
-  (void)argv;
-  std::cout << "softhd: subcommands are coming\n";
-  return 0;
+  const std::vector<std::string> all(argv + 1, argv + argc);
+  if (all.empty() || all[0] == "--help" || all[0] == "-h" || all[0] == "help") {
+    std::cout << kUsage;
+    return all.empty() ? 2 : 0;
+  }
+  const std::string command = all[0];
+  const std::vector<std::string> rest(all.begin() + 1, all.end());
+  try {
+    if (command == "distance") return softhd::cli::run_distance(rest);
+    std::cerr << "softhd: unknown command '" << command << "' (see softhd --help)\n";
+    return 2;
+  } catch (const softhd::Error& e) {
+    std::cerr << "softhd " << command << ": error: " << e.what() << '\n';
+    return 2;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "softhd " << command << ": error: out of memory\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "softhd " << command << ": internal error: " << e.what() << '\n';
+    return 1;
+  }
 }

@@ -1,0 +1,12 @@
+#pragma once
+// The softhd subcommands. Each takes the tokens after its name and returns the
+// process exit code; bad input is thrown as softhd::Error (main prints it, exit 2).
+
+#include <string>
+#include <vector>
+
+namespace softhd::cli {
+
+int run_distance(const std::vector<std::string>& args);
+
+}  // namespace softhd::cli
