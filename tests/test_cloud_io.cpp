@@ -357,6 +357,11 @@ TEST_F(CloudIo, PlyBinaryFloatWithExtraPropertiesAndFaces) {
     EXPECT_EQ(c.points()(i, 2), static_cast<double>(zs[i]));
     EXPECT_EQ(c.volumes()[i], static_cast<double>(vols[i]));
   }
+  // An element without properties takes no bytes, whatever its count.
+  const std::string empty_element = "element nothing 18446744073709551615\n";
+  const std::string with_empty = header.substr(0, header.find("element vertex")) + empty_element +
+                                 header.substr(header.find("element vertex"));
+  EXPECT_EQ(softhd::read_cloud(write("b3.ply", with_empty + body)).size(), 2);
   // A trailing byte after the last element is ignored in binary files.
   EXPECT_EQ(softhd::read_cloud(write("b2.ply", header + body + "\n")).size(), 2);
 }
@@ -487,6 +492,10 @@ TEST_F(CloudIo, PlyErrors) {
   // The binary variants must also work with a binary that is otherwise valid.
   EXPECT_EQ(softhd::read_cloud(write("ok.ply", binary + xyz + two_points)).size(), 2);
   EXPECT_EQ(softhd::read_cloud(write("ok2.ply", ascii + xyz + "1 2 3\n4 5 6\n")).size(), 2);
+  EXPECT_EQ(softhd::read_cloud(write("ok3.ply", ascii + "element nothing 18446744073709551615\n" +
+                                                    xyz + "1 2 3\n4 5 6\n"))
+                .size(),
+            2);
 }
 
 // 10^6 points through text and binary PLY: checks the readers scale (timings are printed).

@@ -460,6 +460,7 @@ void read_ply_binary(const std::string& path, const std::string& data, const Ply
       truncated(static_cast<unsigned long long>(end - p) / min_bytes);
     }
     if (is_vertex) values.assign(static_cast<std::size_t>(e.count) * cols, 1.0);
+    if (e.properties.empty()) continue;  // nothing to read, however large the count
     for (unsigned long long i = 0; i < e.count; ++i) {
       for (const PlyProperty& prop : e.properties) {
         if (prop.is_list) {
@@ -524,6 +525,7 @@ void read_ply_ascii(const std::string& path, const std::string& data, const PlyH
           static_cast<std::size_t>(in.end - in.p) / (2 * e.properties.size()) + 1;
       values.reserve(std::min<std::size_t>(static_cast<std::size_t>(e.count), at_most) * cols);
     }
+    if (e.properties.empty()) continue;  // nothing to read, however large the count
     for (unsigned long long i = 0; i < e.count; ++i) {
       if (is_vertex) values.resize(values.size() + cols, 1.0);
       for (const PlyProperty& prop : e.properties) {

@@ -36,6 +36,9 @@ PointCloud read_text_cloud(const std::string& path, int dim = 0);
 /// properties `x` and `y`, optionally `z` (absent -> 2D) and `volume` (absent
 /// -> V = 1), each of any PLY scalar type. Other properties (scalar or list)
 /// and other elements (e.g. `face`, before or after `vertex`) are skipped.
+/// Binary values are converted exactly to double; ascii values are read as the
+/// decimal numbers they are (a `float` property's text is not rounded to float).
+/// Data after the last element is an error in ascii files and ignored in binary.
 PointCloud read_ply_cloud(const std::string& path);
 
 /// Writes `cloud` as text: a `#` header line, then one point per line,
