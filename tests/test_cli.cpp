@@ -1,0 +1,150 @@
+// The softhd command-line tool, run as a user runs it: exit codes, one-line errors that
+// name the problem, JSON output equal to the library's numbers.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "hausdorff_reference.hpp"
+#include "softhd/hausdorff.hpp"
+#include "softhd/io/cloud_io.hpp"
+
+namespace softhd::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Outcome {
+  int status = -1;
+  std::string out, err;
+};
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::path(::testing::TempDir()) /
+           ("softhd_cli_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name)) << text;
+    return path(name);
+  }
+  Outcome run(const std::string& args) const {
+    const std::string out = path("stdout"), err = path("stderr");
+    const std::string cmd = std::string(SOFTHD_CLI) + " " + args + " >" + out + " 2>" + err;
+    Outcome r;
+    const int raw = std::system(cmd.c_str());
+    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    std::stringstream o, e;
+    o << std::ifstream(out).rdbuf();
+    e << std::ifstream(err).rdbuf();
+    r.out = o.str();
+    r.err = e.str();
+    return r;
+  }
+  // Bad input: exit code 2 and exactly one line on stderr containing `needle`.
+  void expect_bad_input(const std::string& args, const std::string& needle) const {
+    const Outcome r = run(args);
+    EXPECT_EQ(r.status, 2) << args;
+    EXPECT_NE(r.err.find(needle), std::string::npos) << args << " -> " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  fs::path dir_;
+};
+
+TEST_F(Cli, JsonMatchesTheLibrary) {
+  const PointCloud X = random_cloud(40, 3, 1), Y = random_cloud(90, 3, 2, 0.3, 1.2);
+  write_text_cloud(path("x.txt"), X);
+  write_ply_cloud(path("y.ply"), Y);
+  const Outcome r = run("distance " + path("x.txt") + " " + path("y.ply") + " --json --alpha 6");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  HausdorffOptions o;
+  o.params.alpha = 6;
+  const HausdorffResult ref = hausdorff(X, Y, o);
+  EXPECT_EQ(j["rho"].get<double>(), ref.rho);
+  EXPECT_EQ(j["A"].get<double>(), ref.A);
+  EXPECT_EQ(j["B"].get<double>(), ref.B);
+  EXPECT_EQ(j["N"].get<int>(), 40);
+  EXPECT_EQ(j["M"].get<int>(), 90);
+  EXPECT_EQ(j["method"].get<std::string>(), "exact");
+  EXPECT_GE(j["seconds"].get<double>(), 0.0);
+}
+
+TEST_F(Cli, NearestGivesTheHausdorffDistance) {
+  write("x.txt", "0 0 0\n1 0 0\n");
+  write("y.txt", "0 0 0.5\n1 0 0.5\n0.5 0.5 0.5\n");
+  const Outcome r =
+      run("distance " + path("x.txt") + " " + path("y.txt") + " --method nearest --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  // By hand: y = (0.5, 0.5, 0.5) is √0.75 from both x; each x is 0.5 from a y.
+  EXPECT_DOUBLE_EQ(j["A"].get<double>(), std::sqrt(0.75));
+  EXPECT_DOUBLE_EQ(j["B"].get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(j["rho"].get<double>(), std::sqrt(0.75));
+}
+
+TEST_F(Cli, GradientFileHasOneRowPerMovingPoint) {
+  const PointCloud X = random_cloud(7, 2, 3), Y = random_cloud(9, 2, 4);
+  write_text_cloud(path("x.txt"), X, false);
+  write_text_cloud(path("y.txt"), Y, false);
+  const Outcome r =
+      run("distance " + path("x.txt") + " " + path("y.txt") + " --grad " + path("g.txt"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  HausdorffRequest req;
+  req.gradient_points = req.gradient_volumes = true;
+  const HausdorffResult ref = hausdorff(PointCloud(X.points()), PointCloud(Y.points()), {}, req);
+  std::ifstream g(path("g.txt"));
+  std::string line;
+  std::getline(g, line);
+  EXPECT_EQ(line[0], '#');
+  for (Eigen::Index i = 0; i < 7; ++i) {
+    double x, y, gx, gy, gv;
+    ASSERT_TRUE(g >> x >> y >> gx >> gy >> gv) << "row " << i;
+    EXPECT_EQ(gx, ref.gradient_points(i, 0));
+    EXPECT_EQ(gy, ref.gradient_points(i, 1));
+    EXPECT_EQ(gv, ref.gradient_volumes[i]);
+  }
+  double extra;
+  EXPECT_FALSE(g >> extra);
+}
+
+TEST_F(Cli, BadInputGivesExitCode2AndOneLine) {
+  const std::string good = write("good.txt", "0 0 0\n1 0 0\n");
+  expect_bad_input("distance " + good + " " + path("missing.txt"), "cannot open");
+  expect_bad_input("distance " + good + " " + write("m.txt", "0 0 0\n1 zero 0\n"), "m.txt:2");
+  expect_bad_input("distance " + good + " " + write("n.txt", "0 0 0\nnan 0 0\n"), "n.txt:2");
+  expect_bad_input("distance " + good + " " + write("v.txt", "0 0 0 1\n1 0 0 0\n"), "v.txt:2");
+  expect_bad_input("distance " + good + " " + write("w.txt", "0 0 0 -2\n"), "w.txt:1");
+  expect_bad_input("distance " + good + " " + write("d.txt", "0 0 0\n1 0\n"), "d.txt:2");
+  expect_bad_input("distance " + good + " " + write("e.txt", "# nothing\n"), "e.txt");
+  expect_bad_input("distance " + good + " " + write("two.txt", "0 0\n1 1\n"), "mixed dimensions");
+  expect_bad_input("distance " + good + " " + good + " --alpha 0", "alpha must be finite and > 0");
+  expect_bad_input("distance " + good + " " + good + " --beta -1", "beta must be finite and > 0");
+  expect_bad_input("distance " + good + " " + good + " --gamma nan", "--gamma");
+  expect_bad_input("distance " + good + " " + good + " --eps 0", "epsilon must be finite and > 0");
+  expect_bad_input("distance " + good + " " + good + " --method fast", "unknown method 'fast'");
+  expect_bad_input("distance " + good + " " + good + " --dim 4", "--dim must be 2 or 3");
+  expect_bad_input("distance " + good + " " + good + " --frobnicate", "unknown option");
+  expect_bad_input("distance " + good, "expected two cloud files");
+  expect_bad_input("launch", "unknown command 'launch'");
+}
+
+TEST_F(Cli, HelpIsPrintedAndSucceeds) {
+  const Outcome r = run("distance --help");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("usage: softhd distance"), std::string::npos);
+  EXPECT_NE(run("--help").out.find("distance"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace softhd::test
