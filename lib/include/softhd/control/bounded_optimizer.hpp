@@ -1,0 +1,81 @@
+#pragma once
+/// \file bounded_optimizer.hpp
+/// Bound-constrained minimisation on NLopt (SPEC §4 "Optimiser"): MMA by default,
+/// CCSAQ, L-BFGS and SLSQP selectable, variables scaled to O(1), stopping on
+/// iterations, relative change, a target value and wall-clock time, and failed
+/// evaluations turned into rejected steps instead of crashes.
+
+#include <Eigen/Core>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace softhd {
+
+enum class Algorithm { mma, ccsaq, lbfgs, slsqp };
+
+/// "mma", "ccsaq", "lbfgs", "slsqp"; algorithm_from_string throws InvalidArgument.
+std::string to_string(Algorithm algorithm);
+Algorithm algorithm_from_string(const std::string& name);
+
+/// One evaluation of the objective. `gradient` is null when only the value is needed.
+/// Returns false if the evaluation failed (e.g. the state solve did not converge): the
+/// point is then rejected and the optimiser steered back.
+using BoundedObjective =
+    std::function<bool(const Eigen::VectorXd& x, double& value, Eigen::VectorXd* gradient)>;
+
+struct BoundedOptimizerOptions {
+  Algorithm algorithm = Algorithm::mma;  ///< NLopt algorithm
+  int max_iterations = 200;              ///< accepted iterations (improvements of the best value)
+  int max_evaluations = 1000;            ///< objective evaluations, accepted or not
+  double relative_change = 1e-6;         ///< stop when |ΔJ| ≤ this × |J| between iterations
+  double target_value = -std::numeric_limits<double>::infinity();  ///< stop when J ≤ this
+  double max_seconds = 0.0;                                        ///< wall-clock limit; 0 = none
+  /// Value reported to NLopt for a failed evaluation: this factor times the largest
+  /// |J| seen so far (at least 1). Large enough that MMA's conservative step shrinks.
+  double failure_penalty = 10.0;
+
+  /// Throws InvalidArgument naming the first invalid field.
+  void validate() const;
+};
+
+/// One accepted iteration.
+struct IterationRecord {
+  int iteration = 0;                     ///< 1-based
+  int evaluation = 0;                    ///< evaluation count when it was accepted
+  double value = 0.0;                    ///< J
+  double projected_gradient_norm = 0.0;  ///< ‖P(x − ∇J) − x‖ in scaled variables
+  double seconds = 0.0;                  ///< wall time since the start of minimise()
+};
+
+struct BoundedOptimizerSummary {
+  std::string termination;  ///< why it stopped, one line
+  bool converged = false;   ///< stopped on a tolerance or the target value
+  double initial_value = 0.0;
+  double final_value = 0.0;
+  Eigen::VectorXd x;  ///< the best point found
+  int iterations = 0;
+  int evaluations = 0;
+  int failed_evaluations = 0;
+  double seconds = 0.0;
+  std::vector<IterationRecord> history;
+};
+
+/// Minimises f(x) subject to lower ≤ x ≤ upper.
+///
+/// Internally the variables are z = x / s with s = max(|lower|, |upper|) per
+/// component (so z is O(1)), and f is divided by |f(x0)| (or 1 if it is 0).
+/// `on_iteration` (optional) is called after each accepted iteration with its record
+/// and the current best x; it may write a checkpoint. Throws InvalidArgument for
+/// inconsistent bounds or a start outside them (naming the component).
+BoundedOptimizerSummary minimise(
+    const BoundedObjective& objective, const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
+    const Eigen::VectorXd& upper, const BoundedOptimizerOptions& options = {},
+    const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& on_iteration = {});
+
+/// ‖P(x − g) − x‖₂: the projected-gradient norm for bounds lower ≤ x ≤ upper.
+double projected_gradient_norm(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
+                               const Eigen::VectorXd& lower, const Eigen::VectorXd& upper);
+
+}  // namespace softhd

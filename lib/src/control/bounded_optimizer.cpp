@@ -1,0 +1,275 @@
+#include "softhd/control/bounded_optimizer.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <nlopt.hpp>
+#include <sstream>
+
+#include "softhd/error.hpp"
+
+namespace softhd {
+
+std::string to_string(Algorithm a) {
+  switch (a) {
+    case Algorithm::mma:
+      return "mma";
+    case Algorithm::ccsaq:
+      return "ccsaq";
+    case Algorithm::lbfgs:
+      return "lbfgs";
+    case Algorithm::slsqp:
+      return "slsqp";
+  }
+  return "unknown";
+}
+
+Algorithm algorithm_from_string(const std::string& name) {
+  for (Algorithm a : {Algorithm::mma, Algorithm::ccsaq, Algorithm::lbfgs, Algorithm::slsqp})
+    if (to_string(a) == name) return a;
+  throw InvalidArgument("unknown algorithm '" + name + "' (expected mma, ccsaq, lbfgs or slsqp)");
+}
+
+void BoundedOptimizerOptions::validate() const {
+  if (max_iterations < 1) throw InvalidArgument("optimizer: max_iterations must be >= 1");
+  if (max_evaluations < 1) throw InvalidArgument("optimizer: max_evaluations must be >= 1");
+  if (!(relative_change >= 0.0)) throw InvalidArgument("optimizer: relative_change must be >= 0");
+  if (std::isnan(target_value)) throw InvalidArgument("optimizer: target_value is NaN");
+  if (!(max_seconds >= 0.0)) throw InvalidArgument("optimizer: max_seconds must be >= 0");
+  if (!(failure_penalty > 1.0) || !std::isfinite(failure_penalty))
+    throw InvalidArgument("optimizer: failure_penalty must be finite and > 1");
+}
+
+double projected_gradient_norm(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
+                               const Eigen::VectorXd& lower, const Eigen::VectorXd& upper) {
+  // P(x − g) − x, P the projection onto the box.
+  const Eigen::VectorXd step = (x - g).cwiseMax(lower).cwiseMin(upper) - x;
+  return step.norm();
+}
+
+namespace {
+
+nlopt::algorithm nlopt_algorithm(Algorithm a) {
+  switch (a) {
+    case Algorithm::ccsaq:
+      return nlopt::LD_CCSAQ;
+    case Algorithm::lbfgs:
+      return nlopt::LD_LBFGS;
+    case Algorithm::slsqp:
+      return nlopt::LD_SLSQP;
+    case Algorithm::mma:
+      break;
+  }
+  return nlopt::LD_MMA;
+}
+
+// Why the driver asked NLopt to stop (NLopt only knows "forced stop").
+enum class Stop { none, iterations, relative_change, target, time };
+
+struct Driver {
+  const BoundedObjective& objective;
+  const BoundedOptimizerOptions& options;
+  const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& on_iteration;
+  Eigen::VectorXd scale;     // x = scale ∘ z
+  Eigen::VectorXd zlo, zhi;  // bounds on z
+  double fscale = 1.0;       // f_nlopt = f / fscale
+  std::chrono::steady_clock::time_point start;
+  BoundedOptimizerSummary summary;
+  double largest_abs = 1.0;  // largest |J| seen, for the failure penalty
+  Stop stop = Stop::none;
+  // The evaluation at x0, made before NLopt starts, reused for NLopt's first call.
+  Eigen::VectorXd z0, g0;
+  double f0 = 0.0;
+  bool first_pending = true;
+
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  double evaluate(const std::vector<double>& zv, std::vector<double>& grad, nlopt::opt& opt) {
+    const Eigen::Map<const Eigen::VectorXd> z(zv.data(), static_cast<Eigen::Index>(zv.size()));
+    const bool want_grad = !grad.empty();
+    double f = 0.0;
+    Eigen::VectorXd gx;
+    bool ok = true;
+    if (first_pending && z == z0) {
+      first_pending = false;
+      f = f0;
+      gx = g0;
+    } else {
+      ++summary.evaluations;
+      const Eigen::VectorXd x = scale.cwiseProduct(z);
+      ok = objective(x, f, want_grad ? &gx : nullptr) && std::isfinite(f) &&
+           (!want_grad || (gx.size() == z.size() && gx.allFinite()));
+    }
+    if (!ok) {
+      ++summary.failed_evaluations;
+      for (double& g : grad) g = 0.0;
+      return options.failure_penalty * largest_abs / fscale;
+    }
+    largest_abs = std::max(largest_abs, std::fabs(f));
+    const Eigen::VectorXd gz =
+        want_grad ? Eigen::VectorXd(scale.cwiseProduct(gx) / fscale) : Eigen::VectorXd();
+    for (size_t k = 0; k < grad.size(); ++k) grad[k] = gz[static_cast<Eigen::Index>(k)];
+    if (f < summary.final_value) accept(z, f, gz, opt);
+    if (options.max_seconds > 0.0 && seconds() > options.max_seconds && stop == Stop::none) {
+      stop = Stop::time;
+      opt.force_stop();
+    }
+    return f / fscale;
+  }
+
+  void accept(const Eigen::Ref<const Eigen::VectorXd>& z, double f, const Eigen::VectorXd& gz,
+              nlopt::opt& opt) {
+    const double previous = summary.final_value;
+    summary.final_value = f;
+    summary.x = scale.cwiseProduct(z);
+    IterationRecord rec;
+    rec.iteration = ++summary.iterations;
+    rec.evaluation = summary.evaluations;
+    rec.value = f;
+    rec.projected_gradient_norm =
+        gz.size() ? projected_gradient_norm(z, gz, zlo, zhi) : std::nan("");
+    rec.seconds = seconds();
+    summary.history.push_back(rec);
+    if (on_iteration) on_iteration(rec, summary.x);
+    Stop s = Stop::none;
+    if (f <= options.target_value) {
+      s = Stop::target;
+    } else if (std::fabs(previous - f) <= options.relative_change * std::fabs(f)) {
+      s = Stop::relative_change;
+    } else if (summary.iterations >= options.max_iterations) {
+      s = Stop::iterations;
+    }
+    if (s != Stop::none && stop == Stop::none) {
+      stop = s;
+      opt.force_stop();
+    }
+  }
+};
+
+struct Callback {
+  Driver* driver;
+  nlopt::opt* opt;
+};
+
+double nlopt_callback(const std::vector<double>& z, std::vector<double>& grad, void* data) {
+  auto* cb = static_cast<Callback*>(data);
+  return cb->driver->evaluate(z, grad, *cb->opt);
+}
+
+}  // namespace
+
+BoundedOptimizerSummary minimise(
+    const BoundedObjective& objective, const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
+    const Eigen::VectorXd& upper, const BoundedOptimizerOptions& options,
+    const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& on_iteration) {
+  options.validate();
+  const Eigen::Index n = x0.size();
+  if (n < 1) throw InvalidArgument("optimizer: no variables");
+  if (lower.size() != n || upper.size() != n)
+    throw InvalidArgument("optimizer: bounds and start have different sizes");
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (!std::isfinite(lower[k]) || !std::isfinite(upper[k]) || !(lower[k] <= upper[k])) {
+      std::ostringstream m;
+      m << "optimizer: bounds of variable " << k << " are invalid: [" << lower[k] << ", "
+        << upper[k] << "]";
+      throw InvalidArgument(m.str());
+    }
+    if (!(x0[k] >= lower[k] && x0[k] <= upper[k])) {
+      std::ostringstream m;
+      m << "optimizer: start of variable " << k << " (" << x0[k] << ") is outside its bounds ["
+        << lower[k] << ", " << upper[k] << "]";
+      throw InvalidArgument(m.str());
+    }
+  }
+
+  Driver d{objective, options, on_iteration, {}, {}, {},  1.0, std::chrono::steady_clock::now(),
+           {},        1.0,     Stop::none,   {}, {}, 0.0, true};
+  d.scale = lower.cwiseAbs().cwiseMax(upper.cwiseAbs());
+  for (Eigen::Index k = 0; k < n; ++k)
+    if (!(d.scale[k] > 0.0)) d.scale[k] = 1.0;  // bounds [0, 0]
+  d.zlo = lower.cwiseQuotient(d.scale);
+  d.zhi = upper.cwiseQuotient(d.scale);
+  d.z0 = x0.cwiseQuotient(d.scale);
+
+  // The starting point, evaluated once: it fixes the objective's scale.
+  ++d.summary.evaluations;
+  Eigen::VectorXd g;
+  double f = 0.0;
+  if (!objective(x0, f, &g) || !std::isfinite(f) || g.size() != n || !g.allFinite()) {
+    d.summary.failed_evaluations = 1;
+    d.summary.termination = "the evaluation at the starting point failed";
+    d.summary.x = x0;
+    d.summary.initial_value = d.summary.final_value = std::nan("");
+    d.summary.seconds = d.seconds();
+    return d.summary;
+  }
+  d.fscale = f != 0.0 ? std::fabs(f) : 1.0;
+  d.largest_abs = std::max(1.0, std::fabs(f));
+  d.f0 = f;
+  d.g0 = g;
+  d.summary.initial_value = d.summary.final_value = f;
+  d.summary.x = x0;
+  if (f <= options.target_value) {
+    d.summary.converged = true;
+    d.summary.termination = "the starting value already reaches the target value";
+    d.summary.seconds = d.seconds();
+    return d.summary;
+  }
+
+  nlopt::opt opt(nlopt_algorithm(options.algorithm), static_cast<unsigned>(n));
+  opt.set_lower_bounds(std::vector<double>(d.zlo.data(), d.zlo.data() + n));
+  opt.set_upper_bounds(std::vector<double>(d.zhi.data(), d.zhi.data() + n));
+  opt.set_maxeval(options.max_evaluations + 1);  // + the reused first call
+  Callback cb{&d, &opt};
+  opt.set_min_objective(nlopt_callback, &cb);
+  std::vector<double> z(d.z0.data(), d.z0.data() + n);
+  double fmin = 0.0;
+  std::string nlopt_reason;
+  try {
+    const nlopt::result r = opt.optimize(z, fmin);
+    switch (r) {
+      case nlopt::MAXEVAL_REACHED:
+        nlopt_reason = "the evaluation limit was reached";
+        break;
+      case nlopt::FTOL_REACHED:
+      case nlopt::XTOL_REACHED:
+      case nlopt::SUCCESS:
+        nlopt_reason = "NLopt reports convergence";
+        break;
+      default:
+        nlopt_reason = "NLopt stopped (result code " + std::to_string(static_cast<int>(r)) + ")";
+    }
+  } catch (const nlopt::forced_stop&) {
+    // The driver's own stopping rules; see d.stop.
+  } catch (const nlopt::roundoff_limited&) {
+    nlopt_reason = "NLopt stopped: progress limited by round-off";
+  } catch (const std::invalid_argument& e) {
+    nlopt_reason = std::string("NLopt rejected the problem: ") + e.what();
+  } catch (const std::runtime_error& e) {
+    if (d.stop == Stop::none) nlopt_reason = std::string("NLopt failed: ") + e.what();
+  }
+  switch (d.stop) {
+    case Stop::iterations:
+      d.summary.termination = "the iteration limit was reached";
+      break;
+    case Stop::relative_change:
+      d.summary.termination = "the relative change of J fell below the tolerance";
+      d.summary.converged = true;
+      break;
+    case Stop::target:
+      d.summary.termination = "J reached the target value";
+      d.summary.converged = true;
+      break;
+    case Stop::time:
+      d.summary.termination = "the wall-clock limit was reached";
+      break;
+    case Stop::none:
+      d.summary.termination = nlopt_reason;
+      d.summary.converged = nlopt_reason == "NLopt reports convergence";
+  }
+  d.summary.seconds = d.seconds();
+  return d.summary;
+}
+
+}  // namespace softhd

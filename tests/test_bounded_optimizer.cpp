@@ -1,0 +1,154 @@
+// The NLopt driver on problems whose bounded minimisers are known independently.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "softhd/control/bounded_optimizer.hpp"
+#include "softhd/error.hpp"
+
+namespace softhd {
+namespace {
+
+const Algorithm kAll[] = {Algorithm::mma, Algorithm::ccsaq, Algorithm::lbfgs, Algorithm::slsqp};
+
+// f(x) = Σ w_k (x_k − c_k)², on bounds of the magnitude of fiber tensions (1e5): the
+// bounded minimiser is the projection of c onto the box.
+TEST(BoundedOptimizer, QuadraticReachesTheProjectedMinimiser) {
+  const int n = 6;
+  Eigen::VectorXd c(n), w(n), lo(n), hi(n);
+  c << -2e4, -1.5e5, 3e4, -7e4, -1e5, 5e4;
+  w << 1, 2, 0.5, 3, 1, 1;
+  lo.setConstant(-1e5);
+  hi.setZero();
+  const Eigen::VectorXd expected = c.cwiseMax(lo).cwiseMin(hi);
+  const BoundedObjective f = [&](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+    v = (w.array() * (x - c).array().square()).sum();
+    if (g) *g = 2 * w.cwiseProduct(x - c);
+    return true;
+  };
+  for (Algorithm a : kAll) {
+    BoundedOptimizerOptions o;
+    o.algorithm = a;
+    o.relative_change = 1e-14;
+    o.max_iterations = 500;
+    const BoundedOptimizerSummary s = minimise(f, Eigen::VectorXd::Constant(n, -5e4), lo, hi, o);
+    EXPECT_LE((s.x - expected).cwiseAbs().maxCoeff(), 1.0) << to_string(a) << ": " << s.termination;
+    EXPECT_LT(s.final_value, s.initial_value);
+    ASSERT_FALSE(s.history.empty());
+    EXPECT_EQ(s.history.back().value, s.final_value);
+    EXPECT_EQ(static_cast<int>(s.history.size()), s.iterations);
+  }
+}
+
+// Rosenbrock on x ∈ [−2, 2], y ∈ [−1, 0.5]: the free minimiser (1, 1) is cut off, so the
+// minimiser lies on y = 0.5 where f = (1 − x)² + 100 (0.5 − x²)², found here by
+// bisection on its derivative (an independent 1-D solve).
+TEST(BoundedOptimizer, RosenbrockOnAnActiveBound) {
+  auto df = [](double x) { return -2 * (1 - x) - 400 * x * (0.5 - x * x); };
+  double a = 0.5, b = 1.0;  // df(0.5) < 0 < df(1)
+  for (int k = 0; k < 200; ++k) (df(0.5 * (a + b)) < 0 ? a : b) = 0.5 * (a + b);
+  const Eigen::Vector2d expected(0.5 * (a + b), 0.5);
+  const BoundedObjective f = [](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+    v = std::pow(1 - x[0], 2) + 100 * std::pow(x[1] - x[0] * x[0], 2);
+    if (g) {
+      g->resize(2);
+      (*g)[0] = -2 * (1 - x[0]) - 400 * x[0] * (x[1] - x[0] * x[0]);
+      (*g)[1] = 200 * (x[1] - x[0] * x[0]);
+    }
+    return true;
+  };
+  for (Algorithm alg : kAll) {
+    BoundedOptimizerOptions o;
+    o.algorithm = alg;
+    o.relative_change = 1e-15;
+    o.max_iterations = 2000;
+    o.max_evaluations = 5000;
+    const BoundedOptimizerSummary s = minimise(f, Eigen::Vector2d(-1.5, -0.5),
+                                               Eigen::Vector2d(-2, -1), Eigen::Vector2d(2, 0.5), o);
+    EXPECT_LE((s.x - expected).norm(), 1e-4) << to_string(alg) << ": " << s.termination;
+    EXPECT_LE(s.history.back().projected_gradient_norm, 1e-3) << to_string(alg);
+  }
+}
+
+// Evaluations fail beyond x = −0.3 (as a state solve may fail for large tensions) while
+// the minimiser is at −0.5: the run must end cleanly, inside the region that works.
+TEST(BoundedOptimizer, FailedEvaluationsAreRejectedNotFatal) {
+  int failures = 0;
+  const BoundedObjective f = [&](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+    if (x[0] < -0.3) {
+      ++failures;
+      return false;
+    }
+    v = (x[0] + 0.5) * (x[0] + 0.5);
+    if (g) *g = Eigen::VectorXd::Constant(1, 2 * (x[0] + 0.5));
+    return true;
+  };
+  for (Algorithm a : kAll) {
+    failures = 0;
+    BoundedOptimizerOptions o;
+    o.algorithm = a;
+    o.max_evaluations = 200;
+    const BoundedOptimizerSummary s = minimise(
+        f, Eigen::VectorXd::Zero(1), Eigen::VectorXd::Constant(1, -1), Eigen::VectorXd::Zero(1), o);
+    EXPECT_TRUE(std::isfinite(s.final_value)) << to_string(a);
+    EXPECT_GE(s.x[0], -0.3) << to_string(a);
+    EXPECT_LT(s.final_value, s.initial_value) << to_string(a);
+    EXPECT_EQ(s.failed_evaluations, failures) << to_string(a);
+    EXPECT_FALSE(s.termination.empty());
+  }
+}
+
+TEST(BoundedOptimizer, StopsOnIterationsTargetAndFailedStart) {
+  const BoundedObjective f = [](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+    v = x.squaredNorm() + 1.0;
+    if (g) *g = 2 * x;
+    return true;
+  };
+  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(3, -1), hi = Eigen::VectorXd::Constant(3, 1);
+  const Eigen::VectorXd x0 = Eigen::VectorXd::Constant(3, 0.9);
+  BoundedOptimizerOptions o;
+  o.max_iterations = 2;
+  o.relative_change = 0.0;
+  BoundedOptimizerSummary s = minimise(f, x0, lo, hi, o);
+  EXPECT_EQ(s.iterations, 2);
+  EXPECT_EQ(s.termination, "the iteration limit was reached");
+  o.max_iterations = 100;
+  o.target_value = 1.5;
+  s = minimise(f, x0, lo, hi, o);
+  EXPECT_LE(s.final_value, 1.5);
+  EXPECT_TRUE(s.converged);
+  EXPECT_EQ(s.termination, "J reached the target value");
+  const BoundedObjective broken = [](const Eigen::VectorXd&, double&, Eigen::VectorXd*) {
+    return false;
+  };
+  s = minimise(broken, x0, lo, hi);
+  EXPECT_EQ(s.termination, "the evaluation at the starting point failed");
+  EXPECT_FALSE(s.converged);
+}
+
+TEST(BoundedOptimizer, RejectsInconsistentInput) {
+  const BoundedObjective f = [](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+    v = x.squaredNorm();
+    if (g) *g = 2 * x;
+    return true;
+  };
+  const Eigen::VectorXd lo = Eigen::VectorXd::Zero(2), hi = Eigen::VectorXd::Ones(2);
+  EXPECT_THROW(minimise(f, Eigen::Vector2d(0.5, 2.0), lo, hi), InvalidArgument);
+  EXPECT_THROW(minimise(f, Eigen::Vector2d(0.5, 0.5), hi, lo), InvalidArgument);
+  EXPECT_THROW(minimise(f, Eigen::VectorXd::Zero(3), lo, hi), InvalidArgument);
+  BoundedOptimizerOptions o;
+  o.max_iterations = 0;
+  EXPECT_THROW(minimise(f, Eigen::Vector2d(0.5, 0.5), lo, hi, o), InvalidArgument);
+  EXPECT_THROW(algorithm_from_string("newton"), InvalidArgument);
+  try {
+    minimise(f, Eigen::Vector2d(0.5, 2.0), lo, hi);
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("start of variable 1 (2) is outside its bounds"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace softhd
