@@ -1,0 +1,32 @@
+#pragma once
+// Helpers shared by the FE tests.
+
+#include <Eigen/Core>
+#include <memory>
+#include <random>
+
+#include "softhd/fe/assembly.hpp"
+#include "softhd/fe/materials.hpp"
+#include "softhd/fe/mesh.hpp"
+
+namespace fe_test {
+
+inline softhd::fe::Mesh box(int dim, int order, const Eigen::Vector3d& len,
+                            const Eigen::Vector3i& cells) {
+  return softhd::fe::make_box_mesh(Eigen::VectorXd::Zero(dim), len.head(dim), cells.head(dim),
+                                   order);
+}
+
+inline std::shared_ptr<const softhd::fe::Material> mooney_rivlin(double scale = 1.0) {
+  return std::make_shared<softhd::fe::MooneyRivlin>(1.0 * scale, 0.2 * scale, 3.0 * scale);
+}
+
+inline Eigen::VectorXd random_vector(Eigen::Index n, double amplitude, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> U(-amplitude, amplitude);
+  Eigen::VectorXd v(n);
+  for (Eigen::Index i = 0; i < n; ++i) v[i] = U(rng);
+  return v;
+}
+
+}  // namespace fe_test
