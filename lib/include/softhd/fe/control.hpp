@@ -1,0 +1,47 @@
+#pragma once
+/// \file control.hpp
+/// Discretisations of the active tension m(X) (SPEC §4): nodal values on the mesh
+/// vertices interpolated with Q1 (bi/trilinear) shape functions on every element (also on
+/// Q2 meshes), so bounds hold pointwise, or one value per element.
+
+#include <Eigen/Core>
+#include <string>
+
+#include "softhd/fe/geometry.hpp"
+#include "softhd/fe/mesh.hpp"
+
+namespace softhd::fe {
+
+enum class ControlKind { kVertex, kElement };
+
+/// Parses "vertex" / "element"; throws InvalidArgument otherwise.
+ControlKind parse_control_kind(const std::string& name);
+
+/// The linear map m ↦ m(X_q) at the quadrature points, m(X_q) = Σ_k M_k(X_q) m_k.
+class ControlSpace {
+ public:
+  ControlSpace(const Mesh& mesh, const ReferenceGeometry& geometry, ControlKind kind);
+
+  ControlKind kind() const { return kind_; }
+  /// Number of control values: vertices or elements.
+  Eigen::Index size() const { return size_; }
+  /// Control values at the quadrature points, E by nq.
+  Eigen::MatrixXd to_quadrature(const Eigen::VectorXd& m) const;
+  /// The transpose map: g_k = Σ_e Σ_q M_k(X_q) v(e, q) (v is E by nq).
+  Eigen::VectorXd from_quadrature(const Eigen::MatrixXd& v) const;
+  /// Reference positions of the controls (vertices, or element centres): size by dim.
+  Eigen::MatrixXd positions(const Mesh& mesh) const;
+  /// (M/2) ∫ m² + (ε/2) ∫ |∇m|² and its gradient w.r.t. m (SPEC §4); `gradient` may be null.
+  double regularisation(const Eigen::VectorXd& m, double M, double eps,
+                        Eigen::VectorXd* gradient) const;
+
+ private:
+  ControlKind kind_;
+  Eigen::Index size_ = 0;
+  Connectivity support_;             ///< E by (2^dim or 1): control ids per element
+  Eigen::MatrixXd M_;                ///< nq by (2^dim or 1): shape values at the quadrature points
+  std::vector<Eigen::MatrixXd> dM_;  ///< per element q-major: dim by (nq · ncols) gradients
+  Eigen::MatrixXd weights_;          ///< E by nq
+};
+
+}  // namespace softhd::fe

@@ -1,0 +1,38 @@
+#pragma once
+/// \file dofs.hpp
+/// Degrees of freedom: dim displacement components per node (dof = node dim + component),
+/// some fixed to zero by Dirichlet constraints on named faces.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "softhd/fe/mesh.hpp"
+
+namespace softhd::fe {
+
+/// u_c = 0 on a named face for the listed components (all of them by default: a clamp).
+struct DirichletConstraint {
+  std::string face;             ///< "x0", "x1", "y0", "y1", "z0" or "z1"
+  std::vector<int> components;  ///< subset of 0..dim-1; empty means all
+};
+
+/// Numbering of the free dofs.
+struct DofMap {
+  int dim = 3;
+  Eigen::Index num_dofs = 0;  ///< num_nodes · dim
+  Eigen::Index num_free = 0;
+  /// Free index of each dof, or -1 if it is fixed.
+  Eigen::VectorXi free_index;
+  /// Dof of each free index.
+  Eigen::VectorXi free_dofs;
+
+  /// Full vector (fixed entries zero) from free values, and back.
+  Eigen::VectorXd expand(const Eigen::VectorXd& free_values) const;
+  Eigen::VectorXd restrict(const Eigen::VectorXd& full_values) const;
+};
+
+/// Throws InvalidArgument naming an unknown face or an out-of-range component.
+DofMap make_dof_map(const Mesh& mesh, const std::vector<DirichletConstraint>& constraints);
+
+}  // namespace softhd::fe

@@ -1,0 +1,42 @@
+#pragma once
+/// \file linear_solver.hpp
+/// Sparse symmetric positive definite direct solvers behind one interface: Eigen's
+/// SimplicialLLT / SimplicialLDLT and CHOLMOD's supernodal LLᵀ. The symbolic analysis is
+/// done once per pattern, the numeric factorisation once per matrix; a factorisation
+/// object can be kept and reused (the adjoint reuses the converged tangent's).
+/// Matrices store their lower triangle only.
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <memory>
+#include <string>
+
+namespace softhd::fe {
+
+enum class LinearSolverType {
+  kEigenLLT,   ///< Eigen::SimplicialLLT (AMD ordering)
+  kEigenLDLT,  ///< Eigen::SimplicialLDLT (AMD ordering)
+  kCholmod,    ///< CHOLMOD supernodal LLᵀ (METIS/AMD chosen by CHOLMOD)
+};
+
+/// "eigen-llt", "eigen-ldlt", "cholmod".
+std::string to_string(LinearSolverType type);
+/// Inverse of to_string; throws InvalidArgument listing the valid names.
+LinearSolverType parse_linear_solver(const std::string& name);
+
+class LinearSolver {
+ public:
+  virtual ~LinearSolver() = default;
+  /// Symbolic analysis of the pattern (lower triangle); call again only if it changes.
+  virtual void analyze(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& pattern) = 0;
+  /// Numeric factorisation of a matrix with the analysed pattern. Returns false if the
+  /// matrix is not (numerically) positive definite.
+  virtual bool factorize(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& K) = 0;
+  /// x = K⁻¹ b with the last successful factorisation.
+  virtual Eigen::VectorXd solve(const Eigen::VectorXd& b) const = 0;
+  virtual LinearSolverType type() const = 0;
+};
+
+std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverType type);
+
+}  // namespace softhd::fe

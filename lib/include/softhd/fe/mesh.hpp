@@ -1,0 +1,56 @@
+#pragma once
+/// \file mesh.hpp
+/// Structured Lagrange meshes of a box (SPEC §3): 8-node (Q1) and 27-node (Q2)
+/// hexahedra in 3D, 4-node and 9-node quadrilaterals in 2D (plane strain).
+
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace softhd::fe {
+
+/// Row-major integer matrix: one element (its node ids) per row.
+using Connectivity = Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+/// A Lagrange mesh. Element nodes are numbered in tensor-product order: local node
+/// a = i + (p+1) (j + (p+1) k), i, j, k in 0..p, with reference coordinate
+/// xi = -1 + 2 i / p along each axis (p = order).
+struct Mesh {
+  int dim = 3;    ///< 2 or 3
+  int order = 1;  ///< 1 (Q1) or 2 (Q2)
+  /// N by dim reference coordinates.
+  Eigen::MatrixXd nodes;
+  /// E by (p+1)^dim node ids.
+  Connectivity elements;
+  /// E by 2^dim vertex ids (the element corners, in tensor-product order, numbered
+  /// among the mesh vertices 0..num_vertices-1): the support of Q1 controls.
+  Connectivity element_vertices;
+  /// Node id of each vertex (num_vertices entries).
+  Eigen::VectorXi vertex_nodes;
+  /// Named boundary faces ("x0", "x1", "y0", "y1", and in 3D "z0", "z1"): sorted node ids.
+  std::map<std::string, std::vector<int>> boundary_nodes;
+  /// Structured-box data, used to locate points: lower corner, upper corner, cells.
+  Eigen::VectorXd box_lo, box_hi;
+  Eigen::VectorXi cells;
+
+  Eigen::Index num_nodes() const { return nodes.rows(); }
+  Eigen::Index num_elements() const { return elements.rows(); }
+  Eigen::Index num_vertices() const { return vertex_nodes.size(); }
+  int nodes_per_element() const { return static_cast<int>(elements.cols()); }
+
+  /// Node ids of a named face; throws InvalidArgument naming the face if unknown.
+  const std::vector<int>& face(const std::string& name) const;
+};
+
+/// Structured mesh of the box [lo, hi] (lo, hi of size 2 or 3) with `cells` elements per
+/// axis and Lagrange order 1 or 2. Throws InvalidArgument on bad sizes.
+Mesh make_box_mesh(const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
+                   const Eigen::VectorXi& cells, int order);
+
+/// Element containing the reference point X of a structured box mesh and the
+/// element's reference coordinates xi in [-1, 1]^dim. Returns -1 if X is outside
+/// the box (tolerance 1e-10 relative to the box size).
+int locate(const Mesh& mesh, const Eigen::VectorXd& X, Eigen::VectorXd* xi);
+
+}  // namespace softhd::fe

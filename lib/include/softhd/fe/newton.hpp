@@ -1,0 +1,129 @@
+#pragma once
+/// \file newton.hpp
+/// Newton–Raphson for the equilibrium R(u; m) = 0 (SPEC §3): energy-based backtracking
+/// line search that never accepts det F <= 0 at a quadrature point, adaptive load stepping
+/// on m when a load step fails, warm start from any state, and the factorisation of the
+/// converged tangent kept for the adjoint. Non-convergence is a status in the summary,
+/// never an exception; misuse (wrong sizes, invalid options) throws InvalidArgument.
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "softhd/fe/assembly.hpp"
+#include "softhd/fe/linear_solver.hpp"
+
+namespace softhd::fe {
+
+struct NewtonOptions {
+  /// Newton iterations allowed per load step.
+  int max_iterations = 25;
+  /// Converged when |R|₂ <= relative_tolerance · R_ref + absolute_tolerance, with R_ref =
+  /// |R(0; m)|₂ (the unbalanced fiber force of the load step), or |R(u₀; m)|₂ if that is 0.
+  double relative_tolerance = 1e-9;
+  double absolute_tolerance = 0.0;
+  /// Armijo constant c of Π(u + s du) <= Π(u) + c s R·du.
+  double armijo = 1e-4;
+  /// Step shrink factor and maximum number of shrinks of the line search.
+  double backtrack = 0.5;
+  int max_line_search_steps = 40;
+  /// First load increment (fraction of the change of m from the start state) and the
+  /// smallest one tried before giving up; increments halve on failure and double after
+  /// a step that converged in fewer than max_iterations / 2 iterations.
+  double initial_load_increment = 1.0;
+  double min_load_increment = 1.0 / 4096.0;
+  /// Total load steps (successful or not) allowed in one solve.
+  int max_load_steps = 400;
+  /// Sparse direct solver (CHOLMOD measured faster on the bending meshes).
+  LinearSolverType linear_solver = LinearSolverType::kCholmod;
+  /// Factorise the tangent at the converged state (needed by the adjoint).
+  bool factorize_converged_tangent = true;
+  /// Print one line per iteration to stderr.
+  bool verbose = false;
+
+  /// True if the options are consistent; otherwise false with a message in *error.
+  bool IsValid(std::string* error) const;
+};
+
+enum class NewtonStatus {
+  kConverged,
+  kLoadIncrementTooSmall,  ///< a load step failed with the smallest increment
+  kTooManyLoadSteps,
+};
+std::string to_string(NewtonStatus status);
+
+/// One Newton iteration.
+struct NewtonIteration {
+  int load_step = 0;      ///< index of the load step (counting failed ones)
+  double load = 0.0;      ///< fraction t of the change of m being applied
+  int iteration = 0;      ///< within the load step
+  double residual = 0.0;  ///< |R|₂ before the update
+  double energy = 0.0;    ///< Π before the update
+  double step = 0.0;      ///< accepted line-search step (0 if none)
+  double shift = 0.0;     ///< diagonal shift added because K was not positive definite
+};
+
+struct NewtonSummary {
+  NewtonStatus status = NewtonStatus::kConverged;
+  int newton_iterations = 0;  ///< total, over all load steps
+  int load_steps = 0;         ///< attempted (successful + failed)
+  int failed_load_steps = 0;
+  double final_load = 0.0;  ///< fraction of the change of m reached (1 on success)
+  double residual = 0.0;    ///< final |R|₂
+  double residual_reference = 0.0;
+  double energy = 0.0;  ///< final Π
+  double seconds_assembly = 0.0, seconds_factorization = 0.0, seconds_solve = 0.0,
+         seconds_total = 0.0;
+  int factorizations = 0;
+  std::vector<NewtonIteration> iterations;
+  std::string message;  ///< why a failure happened
+
+  bool converged() const { return status == NewtonStatus::kConverged; }
+  /// One line: status, iterations, load steps, residual, time.
+  std::string BriefReport() const;
+  /// BriefReport plus the residual history per load step.
+  std::string FullReport() const;
+};
+
+/// A displacement (all num_dofs entries, fixed ones zero) in equilibrium with m_qp.
+struct State {
+  Eigen::VectorXd u;
+  Eigen::MatrixXd m_qp;
+};
+
+/// The reference state u = 0, m = 0 of an assembler (a valid cold start).
+State rest_state(const Assembler& assembler);
+
+class NewtonSolver {
+ public:
+  /// The assembler must outlive the solver. Throws InvalidArgument on invalid options.
+  explicit NewtonSolver(const Assembler& assembler, NewtonOptions options = {});
+
+  /// Moves `state` to equilibrium with `m_qp` (E by nq), starting from state->u and
+  /// ramping m from state->m_qp. On failure *state is the last converged load step.
+  NewtonSummary solve(const Eigen::MatrixXd& m_qp, State* state);
+
+  /// The factorisation of the tangent at the last converged state, or null if the last
+  /// solve failed or factorize_converged_tangent is off.
+  const LinearSolver* converged_factorization() const {
+    return factorization_valid_ ? solver_.get() : nullptr;
+  }
+  const NewtonOptions& options() const { return options_; }
+
+ private:
+  /// Newton at fixed m from *u; returns true on convergence.
+  bool solve_load_step(const Eigen::MatrixXd& m, int load_step, double load, Eigen::VectorXd* u,
+                       NewtonSummary* summary);
+  /// Factorises K (shifting its diagonal until positive definite); returns the shift.
+  double factorize_with_fallback(NewtonSummary* summary);
+
+  const Assembler& assembler_;
+  NewtonOptions options_;
+  std::unique_ptr<LinearSolver> solver_;
+  SparseMatrix K_, shifted_;
+  std::vector<int> diagonal_;  ///< index of each diagonal entry in K_'s values
+  bool factorization_valid_ = false;
+};
+
+}  // namespace softhd::fe

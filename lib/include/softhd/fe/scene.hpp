@@ -1,0 +1,56 @@
+#pragma once
+/// \file scene.hpp
+/// Scene files (JSON, SPEC §5/§6): the body (structured box mesh), material, fibers,
+/// clamp, control space and bounds. The "target" object belongs to the optimiser and is
+/// kept as raw JSON text. Invalid files throw FileError naming the key and what was
+/// expected.
+///
+///     { "name": "bending",
+///       "mesh": { "type": "box", "lower": [0,0,0], "upper": [10,2,0.1],
+///                 "cells": [50,5,2], "order": 2 },
+///       "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
+///       "fibers": [1,0,0],
+///       "clamp": ["x0"],
+///       "constraints": [ { "face": "z0", "components": [2] } ],      (optional)
+///       "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
+///       "target": { ... } }                                           (optional)
+///
+/// Material models: "mooney_rivlin" (a, b, c) and "transversely_isotropic" (a, b, c, d,
+/// direction f as an array).
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "softhd/fe/assembly.hpp"
+#include "softhd/fe/control.hpp"
+#include "softhd/fe/materials.hpp"
+
+namespace softhd::fe {
+
+struct Scene {
+  std::string name;
+  std::string source;  ///< file name (for messages)
+  Eigen::VectorXd lower, upper;
+  Eigen::VectorXi cells;
+  int order = 2;
+  std::shared_ptr<const Material> material;
+  std::string material_model;
+  Eigen::Vector3d fibers = Eigen::Vector3d::UnitX();
+  std::vector<DirichletConstraint> constraints;  ///< the clamp, then the extra constraints
+  ControlKind control_kind = ControlKind::kVertex;
+  double control_lower = 0.0, control_upper = 0.0, control_initial = 0.0;
+  std::string target_json;  ///< raw "target" object, empty if absent
+
+  int dim() const { return static_cast<int>(lower.size()); }
+  Mesh make_mesh() const;
+  Assembler make_assembler() const;
+};
+
+/// Parses JSON text; `source` names it in error messages. Throws FileError.
+Scene parse_scene(const std::string& json_text, const std::string& source);
+/// Reads and parses a scene file. Throws FileError.
+Scene load_scene(const std::string& path);
+
+}  // namespace softhd::fe

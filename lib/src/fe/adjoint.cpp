@@ -1,0 +1,29 @@
+#include "softhd/fe/adjoint.hpp"
+
+#include "softhd/error.hpp"
+
+namespace softhd::fe {
+
+Eigen::VectorXd solve_adjoint(const Assembler& assembler, const LinearSolver* factorization,
+                              const Eigen::VectorXd& g) {
+  const DofMap& dofs = assembler.dofs();
+  if (g.size() != dofs.num_dofs) {
+    throw InvalidArgument("adjoint: g must have " + std::to_string(dofs.num_dofs) + " entries");
+  }
+  if (dofs.num_free == 0) return Eigen::VectorXd::Zero(dofs.num_dofs);
+  if (!factorization) {
+    throw InvalidArgument(
+        "adjoint: no factorisation of a converged tangent (the state solve failed or "
+        "factorize_converged_tangent is off)");
+  }
+  // K λ = g on the free dofs (K symmetric).
+  return dofs.expand(factorization->solve(dofs.restrict(g)));
+}
+
+Eigen::VectorXd control_gradient(const Assembler& assembler, const ControlSpace& control,
+                                 const Eigen::VectorXd& u, const Eigen::VectorXd& lambda) {
+  // dJ/dm_k = Σ_e Σ_q M_k(X_q) w_q det J0 (F a₀)·(∇λ a₀)
+  return control.from_quadrature(assembler.fiber_sensitivity(u, lambda));
+}
+
+}  // namespace softhd::fe

@@ -1,0 +1,87 @@
+#include "softhd/fe/linear_solver.hpp"
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/SparseCholesky>
+
+#include "softhd/error.hpp"
+
+namespace softhd::fe {
+
+using Sparse = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+std::string to_string(LinearSolverType type) {
+  switch (type) {
+    case LinearSolverType::kEigenLLT:
+      return "eigen-llt";
+    case LinearSolverType::kEigenLDLT:
+      return "eigen-ldlt";
+    case LinearSolverType::kCholmod:
+      return "cholmod";
+  }
+  return "unknown";
+}
+
+LinearSolverType parse_linear_solver(const std::string& name) {
+  for (LinearSolverType t :
+       {LinearSolverType::kEigenLLT, LinearSolverType::kEigenLDLT, LinearSolverType::kCholmod}) {
+    if (to_string(t) == name) return t;
+  }
+  throw InvalidArgument("linear solver must be one of eigen-llt, eigen-ldlt, cholmod; got \"" +
+                        name + "\"");
+}
+
+namespace {
+
+// Eigen's simplicial factorisations (SimplicialLLT or SimplicialLDLT, lower triangle).
+template <class Factorization, LinearSolverType kType>
+class EigenSolver final : public LinearSolver {
+ public:
+  void analyze(const Sparse& pattern) override { f_.analyzePattern(pattern); }
+  bool factorize(const Sparse& K) override {
+    f_.factorize(K);
+    if (f_.info() != Eigen::Success) return false;
+    if constexpr (kType == LinearSolverType::kEigenLDLT) {
+      // LDLᵀ succeeds on indefinite matrices: positive definite iff D > 0.
+      if (!(f_.vectorD().minCoeff() > 0.0)) return false;
+    }
+    return true;
+  }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const override { return f_.solve(b); }
+  LinearSolverType type() const override { return kType; }
+
+ private:
+  Factorization f_;
+};
+
+class CholmodSolver final : public LinearSolver {
+ public:
+  CholmodSolver() { f_.cholmod().print = 0; }  // non-PD is reported by status, not stderr
+  void analyze(const Sparse& pattern) override { f_.analyzePattern(pattern); }
+  bool factorize(const Sparse& K) override {
+    f_.factorize(K);
+    return f_.info() == Eigen::Success;
+  }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const override { return f_.solve(b); }
+  LinearSolverType type() const override { return LinearSolverType::kCholmod; }
+
+ private:
+  Eigen::CholmodSupernodalLLT<Sparse, Eigen::Lower> f_;
+};
+
+}  // namespace
+
+std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverType type) {
+  switch (type) {
+    case LinearSolverType::kEigenLLT:
+      return std::make_unique<
+          EigenSolver<Eigen::SimplicialLLT<Sparse, Eigen::Lower>, LinearSolverType::kEigenLLT>>();
+    case LinearSolverType::kEigenLDLT:
+      return std::make_unique<
+          EigenSolver<Eigen::SimplicialLDLT<Sparse, Eigen::Lower>, LinearSolverType::kEigenLDLT>>();
+    case LinearSolverType::kCholmod:
+      return std::make_unique<CholmodSolver>();
+  }
+  throw InvalidArgument("unknown linear solver type");
+}
+
+}  // namespace softhd::fe

@@ -1,0 +1,116 @@
+#include "softhd/fe/mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "softhd/error.hpp"
+
+namespace softhd::fe {
+
+const std::vector<int>& Mesh::face(const std::string& name) const {
+  auto it = boundary_nodes.find(name);
+  if (it == boundary_nodes.end()) {
+    throw InvalidArgument("mesh: unknown boundary face '" + name +
+                          "' (expected one of x0, x1, y0, y1" + (dim == 3 ? ", z0, z1)" : ")"));
+  }
+  return it->second;
+}
+
+Mesh make_box_mesh(const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
+                   const Eigen::VectorXi& cells, int order) {
+  const int dim = static_cast<int>(lo.size());
+  if (dim != 2 && dim != 3) throw InvalidArgument("box mesh: dimension must be 2 or 3");
+  if (hi.size() != dim || cells.size() != dim) {
+    throw InvalidArgument("box mesh: lo, hi and cells must have the same size");
+  }
+  if (order != 1 && order != 2) {
+    throw InvalidArgument("box mesh: order must be 1 or 2, got " + std::to_string(order));
+  }
+  for (int d = 0; d < dim; ++d) {
+    if (!(hi[d] > lo[d]) || !std::isfinite(lo[d]) || !std::isfinite(hi[d])) {
+      throw InvalidArgument("box mesh: need lo < hi (finite) along axis " + std::to_string(d));
+    }
+    if (cells[d] < 1) throw InvalidArgument("box mesh: cells must be >= 1 along every axis");
+  }
+  Mesh m;
+  m.dim = dim;
+  m.order = order;
+  m.box_lo = lo;
+  m.box_hi = hi;
+  m.cells = cells;
+  int nn[3] = {1, 1, 1}, nc[3] = {1, 1, 1};
+  for (int d = 0; d < dim; ++d) {
+    nc[d] = cells[d];
+    nn[d] = order * cells[d] + 1;
+  }
+  const int num_nodes = nn[0] * nn[1] * nn[2];
+  auto node_id = [&](int i, int j, int k) { return i + nn[0] * (j + nn[1] * k); };
+  m.nodes.resize(num_nodes, dim);
+  for (int k = 0; k < nn[2]; ++k)
+    for (int j = 0; j < nn[1]; ++j)
+      for (int i = 0; i < nn[0]; ++i) {
+        const int ijk[3] = {i, j, k};
+        for (int d = 0; d < dim; ++d) {
+          m.nodes(node_id(i, j, k), d) =
+              lo[d] + (hi[d] - lo[d]) * static_cast<double>(ijk[d]) / (nn[d] - 1);
+        }
+      }
+  // Vertices: the nodes whose grid indices are multiples of the order.
+  const int nv[3] = {nc[0] + 1, dim >= 2 ? nc[1] + 1 : 1, dim == 3 ? nc[2] + 1 : 1};
+  auto vertex_id = [&](int i, int j, int k) { return i + nv[0] * (j + nv[1] * k); };
+  m.vertex_nodes.resize(nv[0] * nv[1] * nv[2]);
+  for (int k = 0; k < nv[2]; ++k)
+    for (int j = 0; j < nv[1]; ++j)
+      for (int i = 0; i < nv[0]; ++i)
+        m.vertex_nodes[vertex_id(i, j, k)] = node_id(order * i, order * j, order * k);
+  const int n1 = order + 1;
+  const int nen = dim == 2 ? n1 * n1 : n1 * n1 * n1;
+  const int nve = dim == 2 ? 4 : 8;
+  const int num_el = nc[0] * nc[1] * nc[2];
+  m.elements.resize(num_el, nen);
+  m.element_vertices.resize(num_el, nve);
+  for (int ek = 0; ek < nc[2]; ++ek)
+    for (int ej = 0; ej < nc[1]; ++ej)
+      for (int ei = 0; ei < nc[0]; ++ei) {
+        const int e = ei + nc[0] * (ej + nc[1] * ek);
+        for (int a = 0; a < nen; ++a) {
+          const int i = a % n1, j = (a / n1) % n1, k = a / (n1 * n1);
+          m.elements(e, a) = node_id(order * ei + i, order * ej + j, order * ek + k);
+        }
+        for (int a = 0; a < nve; ++a) {
+          const int i = a % 2, j = (a / 2) % 2, k = a / 4;
+          m.element_vertices(e, a) = vertex_id(ei + i, ej + j, ek + k);
+        }
+      }
+  const char* axes = "xyz";
+  for (int d = 0; d < dim; ++d) {
+    std::vector<int> f0, f1;
+    for (int n = 0; n < num_nodes; ++n) {
+      const int ijk[3] = {n % nn[0], (n / nn[0]) % nn[1], n / (nn[0] * nn[1])};
+      if (ijk[d] == 0) f0.push_back(n);
+      if (ijk[d] == nn[d] - 1) f1.push_back(n);
+    }
+    m.boundary_nodes[std::string(1, axes[d]) + "0"] = f0;
+    m.boundary_nodes[std::string(1, axes[d]) + "1"] = f1;
+  }
+  return m;
+}
+
+int locate(const Mesh& mesh, const Eigen::VectorXd& X, Eigen::VectorXd* xi) {
+  const int dim = mesh.dim;
+  if (X.size() != dim) return -1;
+  int cell[3] = {0, 0, 0};
+  xi->resize(dim);
+  for (int d = 0; d < dim; ++d) {
+    const double len = mesh.box_hi[d] - mesh.box_lo[d];
+    const double s = (X[d] - mesh.box_lo[d]) / len;  // in [0, 1] inside the box
+    if (!(s >= -1e-10 && s <= 1.0 + 1e-10)) return -1;
+    const double c = std::clamp(s, 0.0, 1.0) * mesh.cells[d];
+    cell[d] = std::min(static_cast<int>(std::floor(c)), mesh.cells[d] - 1);
+    (*xi)[d] = std::clamp(2.0 * (c - cell[d]) - 1.0, -1.0, 1.0);
+  }
+  const int ny = dim >= 2 ? mesh.cells[1] : 1;
+  return cell[0] + mesh.cells[0] * (cell[1] + ny * cell[2]);
+}
+
+}  // namespace softhd::fe

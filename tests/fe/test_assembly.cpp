@@ -1,0 +1,158 @@
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "fe_test_util.hpp"
+#include "softhd/error.hpp"
+#include "softhd/fe/assembly.hpp"
+#include "softhd/fe/control.hpp"
+
+using namespace softhd::fe;
+
+namespace {
+
+struct Discretisation {
+  int dim, order;
+};
+
+std::vector<Discretisation> setups() { return {{2, 1}, {2, 2}, {3, 1}, {3, 2}}; }
+
+Assembler make(const Discretisation& s, std::vector<DirichletConstraint> bc = {{"x0", {}}}) {
+  const Mesh mesh = fe_test::box(s.dim, s.order, {2.0, 1.0, 0.5}, {3, 2, 2});
+  const Eigen::Vector3d a0 = s.dim == 3 ? Eigen::Vector3d(1, 0.5, 0.2) : Eigen::Vector3d(1, 0.5, 0);
+  return Assembler(mesh, fe_test::mooney_rivlin(), a0, bc);
+}
+
+Eigen::VectorXd admissible_u(const Assembler& A, unsigned seed) {
+  return A.dofs().expand(fe_test::random_vector(A.dofs().num_free, 0.04, seed));
+}
+
+}  // namespace
+
+// R = dΠ/du and K = dR/du by central differences along random directions, with the
+// observed second order of the difference error.
+TEST(Assembly, ResidualAndTangentMatchFiniteDifferences) {
+  for (const Discretisation& s : setups()) {
+    const Assembler A = make(s);
+    const DofMap& d = A.dofs();
+    const Eigen::MatrixXd m =
+        fe_test::random_vector(A.mesh().num_elements() * A.geometry().points_per_element(), 0.5, 9)
+            .reshaped(A.mesh().num_elements(), A.geometry().points_per_element());
+    const Eigen::VectorXd u = admissible_u(A, 1);
+    Eigen::VectorXd R;
+    SparseMatrix K = A.tangent_pattern();
+    double Pi;
+    ASSERT_TRUE(A.evaluate(u, m, &Pi, &R, &K));
+    const Eigen::VectorXd v = fe_test::random_vector(d.num_free, 1.0, 2);
+    const Eigen::VectorXd Kv = K.selfadjointView<Eigen::Lower>() * v;
+    auto errors = [&](double h) {
+      double Pp, Pm;
+      Eigen::VectorXd Rp, Rm;
+      A.evaluate(u + h * d.expand(v), m, &Pp, &Rp, nullptr);
+      A.evaluate(u - h * d.expand(v), m, &Pm, &Rm, nullptr);
+      return std::make_pair(std::abs((Pp - Pm) / (2 * h) - R.dot(v)),
+                            ((Rp - Rm) / (2 * h) - Kv).norm());
+    };
+    const auto [eR0, eK0] = errors(1e-6);
+    EXPECT_LT(eR0, 1e-7 * R.norm() * v.norm()) << s.dim << "D Q" << s.order;
+    EXPECT_LT(eK0, 1e-6 * Kv.norm()) << s.dim << "D Q" << s.order;
+    const auto [eR1, eK1] = errors(4e-3);
+    const auto [eR2, eK2] = errors(2e-3);
+    EXPECT_GT(std::log2(eR1 / eR2), 1.8) << s.dim << "D Q" << s.order;
+    EXPECT_GT(std::log2(eK1 / eK2), 1.8) << s.dim << "D Q" << s.order;
+  }
+}
+
+TEST(Assembly, RigidRotationIsStressFree) {
+  for (const Discretisation& s : setups()) {
+    const Assembler A = make(s, {});
+    const Eigen::Index N = A.mesh().num_nodes();
+    Eigen::Matrix3d Q =
+        Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.2, -0.4, 1).normalized()).toRotationMatrix();
+    if (s.dim == 2) Q = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    Eigen::VectorXd u(N * s.dim);
+    for (Eigen::Index n = 0; n < N; ++n) {
+      Eigen::Vector3d X = Eigen::Vector3d::Zero();
+      X.head(s.dim) = A.mesh().nodes.row(n).transpose();
+      const Eigen::Vector3d x = Q * X - X;
+      for (int k = 0; k < s.dim; ++k) u[n * s.dim + k] = x[k];
+    }
+    const Eigen::MatrixXd m0 =
+        Eigen::MatrixXd::Zero(A.mesh().num_elements(), A.geometry().points_per_element());
+    double Pi;
+    Eigen::VectorXd R;
+    ASSERT_TRUE(A.evaluate(u, m0, &Pi, &R, nullptr));
+    EXPECT_NEAR(Pi, 0.0, 1e-12);
+    EXPECT_LT(R.norm(), 1e-12);
+    EXPECT_NEAR(A.deformed_volume(u), s.dim == 3 ? 1.0 : 2.0, 1e-12);
+  }
+}
+
+TEST(Assembly, SameResultForOneAndTwoThreads) {
+  const Assembler A = make({3, 2});
+  const Eigen::MatrixXd m =
+      Eigen::MatrixXd::Constant(A.mesh().num_elements(), A.geometry().points_per_element(), -0.3);
+  const Eigen::VectorXd u = admissible_u(A, 4);
+  double P1, P2;
+  Eigen::VectorXd R1, R2;
+  SparseMatrix K1 = A.tangent_pattern(), K2 = A.tangent_pattern();
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  A.evaluate(u, m, &P1, &R1, &K1);
+  omp_set_num_threads(2);
+  A.evaluate(u, m, &P2, &R2, &K2);
+  omp_set_num_threads(saved);
+  EXPECT_EQ(P1, P2);
+  EXPECT_EQ((R1 - R2).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((K1 - K2).cwiseAbs().sum(), 0.0);
+}
+
+TEST(Assembly, InvertedElementIsReportedNotEvaluated) {
+  const Assembler A = make({3, 1});
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(A.dofs().num_dofs);
+  for (Eigen::Index n = 0; n < A.mesh().num_nodes(); ++n)
+    u[n * 3 + 0] = -2.0 * A.mesh().nodes(n, 0);  // x ↦ −x
+  const Eigen::MatrixXd m0 =
+      Eigen::MatrixXd::Zero(A.mesh().num_elements(), A.geometry().points_per_element());
+  double Pi = 0.0;
+  EXPECT_FALSE(A.evaluate(u, m0, &Pi, nullptr, nullptr));
+  EXPECT_TRUE(std::isinf(Pi));
+  EXPECT_LT(A.min_jacobian(u), 0.0);
+}
+
+// Q1 interpolation reproduces affine fields; from_quadrature is the transpose of
+// to_quadrature; the regularisation gradient matches central differences.
+TEST(Control, InterpolationTransposeAndRegularisation) {
+  for (const Discretisation& s : setups()) {
+    const Assembler A = make(s);
+    for (ControlKind kind : {ControlKind::kVertex, ControlKind::kElement}) {
+      const ControlSpace c(A.mesh(), A.geometry(), kind);
+      const Eigen::MatrixXd P = c.positions(A.mesh());
+      const Eigen::MatrixXd Xq = quadrature_points(A.mesh(), A.geometry());
+      if (kind == ControlKind::kVertex) {
+        const Eigen::VectorXd m = 1.0 + 2.0 * P.col(0).array() - 3.0 * P.col(1).array();
+        const Eigen::MatrixXd mq = c.to_quadrature(m);
+        const int nq = A.geometry().points_per_element();
+        for (Eigen::Index e = 0; e < mq.rows(); ++e)
+          for (int q = 0; q < nq; ++q)
+            EXPECT_NEAR(mq(e, q), 1.0 + 2.0 * Xq(e * nq + q, 0) - 3.0 * Xq(e * nq + q, 1), 1e-13);
+      }
+      const Eigen::VectorXd m = fe_test::random_vector(c.size(), 1.0, 5);
+      const Eigen::MatrixXd v =
+          fe_test::random_vector(A.geometry().weights().size(), 1.0, 6)
+              .reshaped(A.mesh().num_elements(), A.geometry().points_per_element());
+      EXPECT_NEAR(c.to_quadrature(m).cwiseProduct(v).sum(), m.dot(c.from_quadrature(v)), 1e-12);
+      Eigen::VectorXd g;
+      c.regularisation(m, 0.7, 0.3, &g);
+      const Eigen::VectorXd dm = fe_test::random_vector(c.size(), 1.0, 7);
+      const double h = 1e-5;
+      const double fd = (c.regularisation(m + h * dm, 0.7, 0.3, nullptr) -
+                         c.regularisation(m - h * dm, 0.7, 0.3, nullptr)) /
+                        (2 * h);
+      EXPECT_NEAR(fd, g.dot(dm), 1e-8 * (1.0 + std::abs(fd)));
+    }
+  }
+  EXPECT_THROW(parse_control_kind("nodal"), softhd::InvalidArgument);
+}
