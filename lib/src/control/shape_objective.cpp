@@ -1,0 +1,249 @@
+#include "softhd/control/shape_objective.hpp"
+
+#include <chrono>
+#include <deque>
+
+#include "softhd/error.hpp"
+#include "softhd/fe/adjoint.hpp"
+#include "softhd/fe/geometry.hpp"
+#include "softhd/fe/kinematics.hpp"
+
+namespace softhd {
+
+std::string to_string(Particles p) { return p == Particles::nodes ? "nodes" : "quadrature"; }
+std::string to_string(ParticleVolumes v) {
+  return v == ParticleVolumes::reference ? "reference" : "deformed";
+}
+Particles particles_from_string(const std::string& name) {
+  if (name == "nodes") return Particles::nodes;
+  if (name == "quadrature") return Particles::quadrature;
+  throw InvalidArgument("unknown particles '" + name + "' (expected nodes or quadrature)");
+}
+ParticleVolumes particle_volumes_from_string(const std::string& name) {
+  if (name == "reference") return ParticleVolumes::reference;
+  if (name == "deformed") return ParticleVolumes::deformed;
+  throw InvalidArgument("unknown volumes '" + name + "' (expected reference or deformed)");
+}
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+struct ShapeObjective::Impl {
+  Impl(const fe::Assembler& a, const fe::ControlSpace& c, HausdorffTarget t,
+       ShapeObjectiveOptions o)
+      : assembler(a),
+        control(c),
+        target(std::move(t)),
+        options(std::move(o)),
+        newton(a, options.newton) {
+    const fe::Mesh& mesh = a.mesh();
+    const fe::ReferenceGeometry& geo = a.geometry();
+    dim = mesh.dim;
+    reference_volumes =
+        options.particles == Particles::nodes
+            ? fe::lumped_volumes(mesh, geo)
+            : Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(
+                  Eigen::MatrixXd(geo.weights().transpose()).data(), geo.weights().size()));
+    // Clamped nodes (no free dof) are not differentiated.
+    if (options.particles == Particles::nodes) {
+      differentiate.setConstant(mesh.num_nodes(), false);
+      for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n)
+        for (int c = 0; c < dim; ++c)
+          if (a.dofs().free_index[n * dim + c] >= 0) differentiate[n] = true;
+    }
+    cache.push_back({Eigen::VectorXd(), fe::rest_state(a)});
+  }
+
+  struct Cached {
+    Eigen::VectorXd m;  // empty for the rest state
+    fe::State state;
+  };
+
+  const fe::Assembler& assembler;
+  const fe::ControlSpace& control;
+  HausdorffTarget target;
+  ShapeObjectiveOptions options;
+  fe::NewtonSolver newton;
+  int dim = 3;
+  Eigen::VectorXd reference_volumes;
+  Eigen::Array<bool, Eigen::Dynamic, 1> differentiate;
+  std::deque<Cached> cache;  // most recent first
+
+  /// Node positions x = X + u, N by dim.
+  Eigen::MatrixXd node_positions(const Eigen::VectorXd& u) const {
+    const Eigen::MatrixXd& X = assembler.mesh().nodes;
+    return X + Eigen::Map<const Eigen::MatrixXd>(u.data(), dim, X.rows()).transpose();
+  }
+
+  PointCloud particles(const Eigen::VectorXd& u) const {
+    const fe::Mesh& mesh = assembler.mesh();
+    const fe::ReferenceGeometry& geo = assembler.geometry();
+    const Eigen::MatrixXd x = node_positions(u);
+    Eigen::VectorXd volumes = reference_volumes;
+    if (options.volumes == ParticleVolumes::deformed) {
+      const Eigen::MatrixXd J = assembler.jacobians(u);  // E by nq
+      if (options.particles == Particles::nodes) {
+        // V_i = ∫ N_i J dX = Σ_e Σ_q N_i(ξ_q) J_eq w_eq
+        volumes.setZero();
+        for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
+          for (int q = 0; q < geo.points_per_element(); ++q)
+            for (int a = 0; a < geo.nodes_per_element(); ++a)
+              volumes[mesh.elements(e, a)] +=
+                  geo.shape_values()(q, a) * J(e, q) * geo.weights()(e, q);
+      } else {
+        // V_q = w_q det J0 · J_q
+        for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
+          for (int q = 0; q < geo.points_per_element(); ++q)
+            volumes[e * geo.points_per_element() + q] *= J(e, q);
+      }
+    }
+    if (options.particles == Particles::nodes) return PointCloud(x, volumes);
+    // x_q = Σ_a N_a(ξ_q) x_a
+    const int nq = geo.points_per_element();
+    Eigen::MatrixXd xq(mesh.num_elements() * nq, dim);
+    for (Eigen::Index e = 0; e < mesh.num_elements(); ++e) {
+      Eigen::MatrixXd xe(geo.nodes_per_element(), dim);
+      for (int a = 0; a < geo.nodes_per_element(); ++a) xe.row(a) = x.row(mesh.elements(e, a));
+      xq.middleRows(e * nq, nq) = geo.shape_values() * xe;
+    }
+    return PointCloud(xq, volumes);
+  }
+
+  /// ∂ρ̃/∂u (num_dofs) from the cloud gradients w.r.t. particle positions and volumes.
+  Eigen::VectorXd displacement_gradient(const Eigen::VectorXd& u, const HausdorffResult& r) const {
+    const fe::Mesh& mesh = assembler.mesh();
+    const fe::ReferenceGeometry& geo = assembler.geometry();
+    const int nq = geo.points_per_element(), nen = geo.nodes_per_element();
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(assembler.dofs().num_dofs);
+    // Positions: nodes directly; quadrature points through x_q = Σ_a N_a(ξ_q) x_a.
+    if (options.particles == Particles::nodes) {
+      for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n)
+        for (int c = 0; c < dim; ++c) g[n * dim + c] = r.gradient_points(n, c);
+    } else {
+      for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
+        for (int q = 0; q < nq; ++q)
+          for (int a = 0; a < nen; ++a)
+            for (int c = 0; c < dim; ++c)
+              g[mesh.elements(e, a) * dim + c] +=
+                  geo.shape_values()(q, a) * r.gradient_points(e * nq + q, c);
+    }
+    if (options.volumes == ParticleVolumes::reference) return g;
+    // Volumes: ∂J/∂u_{b,c} = H_cJ ∂N_b/∂X_J at each quadrature point, weighted by
+    // s_eq w_eq with s_eq = Σ_i ∂ρ̃/∂V_i N_i(ξ_q) (nodes) or ∂ρ̃/∂V_eq (quadrature).
+    for (Eigen::Index e = 0; e < mesh.num_elements(); ++e) {
+      for (int q = 0; q < nq; ++q) {
+        double s = 0.0;
+        if (options.particles == Particles::nodes) {
+          for (int a = 0; a < nen; ++a)
+            s += r.gradient_volumes[mesh.elements(e, a)] * geo.shape_values()(q, a);
+        } else {
+          s = r.gradient_volumes[e * nq + q];
+        }
+        const double sw = s * geo.weights()(e, q);
+        if (sw == 0.0) continue;
+        const Eigen::Matrix3d H = fe::cofactor(assembler.deformation_gradient(u, e, q));
+        const auto dN = geo.gradients(e, q);  // dim by nen
+        for (int b = 0; b < nen; ++b)
+          for (int c = 0; c < dim; ++c)
+            g[mesh.elements(e, b) * dim + c] += sw * H.row(c).head(dim).dot(dN.col(b));
+      }
+    }
+    return g;
+  }
+
+  /// The cached state whose control is nearest to m (the rest state counts as m = 0).
+  const fe::State& nearest_state(const Eigen::VectorXd& m) const {
+    size_t best = 0;
+    double best_d = INFINITY;
+    for (size_t k = 0; k < cache.size(); ++k) {
+      const double d = cache[k].m.size() ? (cache[k].m - m).norm() : m.norm();
+      if (d < best_d) {
+        best_d = d;
+        best = k;
+      }
+    }
+    return cache[best].state;
+  }
+};
+
+ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::ControlSpace& control,
+                               HausdorffTarget target, ShapeObjectiveOptions options) {
+  if (target.cloud().dim() != assembler.mesh().dim) {
+    throw InvalidArgument("the target cloud is " + std::to_string(target.cloud().dim()) +
+                          "D but the body is " + std::to_string(assembler.mesh().dim) + "D");
+  }
+  if (!(options.tikhonov_mass >= 0.0) || !(options.tikhonov_gradient >= 0.0))
+    throw InvalidArgument("Tikhonov weights M and eps_m must be >= 0");
+  if (options.warm_start_states < 1) throw InvalidArgument("warm_start_states must be >= 1");
+  impl_ = std::make_unique<Impl>(assembler, control, std::move(target), std::move(options));
+}
+ShapeObjective::~ShapeObjective() = default;
+
+PointCloud ShapeObjective::particles(const Eigen::VectorXd& u) const { return impl_->particles(u); }
+const fe::State& ShapeObjective::last_state() const { return impl_->cache.front().state; }
+const HausdorffTarget& ShapeObjective::target() const { return impl_->target; }
+const ShapeObjectiveOptions& ShapeObjective::options() const { return impl_->options; }
+
+HausdorffResult ShapeObjective::fields(const Eigen::VectorXd& u) const {
+  HausdorffRequest req;
+  req.fields = true;
+  return impl_->target.evaluate(impl_->particles(u), req);
+}
+
+ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient) {
+  Impl& d = *impl_;
+  if (m.size() != d.control.size()) {
+    throw InvalidArgument("control has " + std::to_string(m.size()) + " values, expected " +
+                          std::to_string(d.control.size()));
+  }
+  ShapeEvaluation ev;
+  // State: warm start from the cached state with the nearest control.
+  auto t0 = std::chrono::steady_clock::now();
+  fe::State state = d.nearest_state(m);
+  const fe::NewtonSummary ns = d.newton.solve(d.control.to_quadrature(m), &state);
+  ev.newton_iterations = ns.newton_iterations;
+  ev.seconds_state = seconds_since(t0);
+  if (!ns.converged()) {
+    ev.failure = ns.BriefReport();
+    return ev;
+  }
+  d.cache.push_front({m, state});
+  while (static_cast<int>(d.cache.size()) > d.options.warm_start_states) d.cache.pop_back();
+
+  // Distance (and its gradient w.r.t. the particles).
+  t0 = std::chrono::steady_clock::now();
+  HausdorffRequest req;
+  req.gradient_points = gradient;
+  req.gradient_volumes = gradient && d.options.volumes == ParticleVolumes::deformed;
+  // Clamped nodes do not move: skip their position gradients. Their deformed volumes do
+  // change with the neighbouring nodes, so with deformed volumes every node is needed.
+  if (gradient && d.options.volumes == ParticleVolumes::reference)
+    req.differentiate = d.differentiate;
+  const HausdorffResult r = d.target.evaluate(d.particles(state.u), req);
+  ev.seconds_distance = seconds_since(t0);
+  ev.rho = r.rho;
+  ev.A = r.A;
+  ev.B = r.B;
+  Eigen::VectorXd reg_gradient;
+  ev.regularisation = d.control.regularisation(
+      m, d.options.tikhonov_mass, d.options.tikhonov_gradient, gradient ? &reg_gradient : nullptr);
+  ev.J = ev.rho + ev.regularisation;
+  if (gradient) {
+    // Adjoint: K λ = ∂ρ̃/∂u, then dJ/dm = ∂J_reg/∂m + ∫ M_k (F a₀)·(∇λ a₀) dX.
+    t0 = std::chrono::steady_clock::now();
+    const Eigen::VectorXd g = d.displacement_gradient(state.u, r);
+    const Eigen::VectorXd lambda =
+        fe::solve_adjoint(d.assembler, d.newton.converged_factorization(), g);
+    ev.gradient = reg_gradient + fe::control_gradient(d.assembler, d.control, state.u, lambda);
+    ev.seconds_adjoint = seconds_since(t0);
+  }
+  ev.ok = true;
+  return ev;
+}
+
+}  // namespace softhd
