@@ -8,5 +8,6 @@
 namespace softhd::cli {
 
 int run_distance(const std::vector<std::string>& args);
+int run_optimise(const std::vector<std::string>& args);
 
 }  // namespace softhd::cli

@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   cmake make g++ pkg-config
   libeigen3-dev libnanoflann-dev libnlopt-cxx-dev libgtest-dev nlohmann-json3-dev
-  libsuitesparse-dev
+  libsuitesparse-dev libopenblas0-pthread
   python3 python3-matplotlib python3-numpy
 )
 

@@ -1,0 +1,398 @@
+// softhd optimise: track a target point cloud with the fiber tension m (SPEC §4, §5).
+// Progress one line per iteration; history.csv, control.csv, VTU/PVD, summary.json
+// and a checkpoint written atomically every iteration (resumable with --resume).
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+
+#include "cli.hpp"
+#include "commands.hpp"
+#include "softhd/control/bounded_optimizer.hpp"
+#include "softhd/control/shape_objective.hpp"
+#include "softhd/control/targets.hpp"
+#include "softhd/fe/scene.hpp"
+#include "softhd/io/cloud_io.hpp"
+#include "softhd/io/vtu.hpp"
+#include "softhd/samplers.hpp"
+
+namespace softhd::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* kUsage = R"(usage: softhd optimise SCENE [options]
+
+Finds the fiber tension m, within the scene's bounds, whose equilibrium shape best
+matches the target cloud under the regularised Hausdorff distance (SPEC section 4).
+
+options:
+  --out DIR          output directory (default results/<scene name>)
+  --target FILE      target cloud (text or PLY) instead of the scene's own target
+  --max-iter N       iterations (default 200)
+  --max-seconds S    wall-clock limit (default none)
+  --rel-tol R        stop when J changes by less than R relative (default 1e-6)
+  --algorithm A      mma | ccsaq | lbfgs | slsqp (default mma)
+  --particles P      nodes | quadrature: the moving cloud (default nodes)
+  --volumes V        reference | deformed particle volumes (default reference)
+  --alpha A --beta B --gamma G --eps E   functional parameters (default 4 4 2 1e-3)
+  --tikhonov-mass M  (M/2) int m^2 (default 0)
+  --tikhonov-grad E  (E/2) int |grad m|^2 (default 0)
+  --vtu-every K      VTU output every K iterations (default 10; 0: start and end only)
+  --threads T        OpenMP threads (default: all)
+  --resume           continue from DIR/checkpoint.json
+  --json             print summary.json on stdout at the end
+  --quiet            no progress lines
+  --help             this text
+
+writes: history.csv, control.csv (readable by 'softhd forward --control'),
+body_NNNN.vtu, target.vtu, body.pvd, summary.json, checkpoint.json, and
+convergence.png when python3 with matplotlib is available.
+)";
+
+/// Nodal values of the control (for VTU): vertex controls interpolated bilinearly at
+/// every node (Q2 mid-nodes included), element controls as cell data elsewhere.
+Eigen::VectorXd control_at_nodes(const fe::Mesh& mesh, const fe::ControlSpace& space,
+                                 const Eigen::VectorXd& m) {
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(mesh.num_nodes());
+  if (space.kind() != fe::ControlKind::kVertex) return out;
+  for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n) {
+    Eigen::VectorXd xi;
+    const int e = fe::locate(mesh, mesh.nodes.row(n).transpose(), &xi);
+    if (e < 0) continue;
+    double value = 0.0;
+    for (int c = 0; c < mesh.element_vertices.cols(); ++c) {
+      double w = 1.0;
+      for (int k = 0; k < mesh.dim; ++k) {
+        const int bit = (c >> k) & 1;  // tensor-product corner order
+        w *= bit ? 0.5 * (1.0 + xi[k]) : 0.5 * (1.0 - xi[k]);
+      }
+      value += w * m[mesh.element_vertices(e, c)];
+    }
+    out[n] = value;
+  }
+  return out;
+}
+
+struct Target {
+  PointCloud cloud;
+  std::optional<Eigen::VectorXd> map_displacement;  // u_T at the nodes, if T is known
+  std::string description;
+};
+
+Target make_target(const fe::Scene& scene, const fe::Mesh& mesh,
+                   const std::optional<std::string>& file, int dim_hint) {
+  if (file) return {read_cloud(*file, dim_hint), std::nullopt, "cloud file " + *file};
+  if (scene.target_json.empty())
+    throw InvalidArgument(scene.source + ": the scene has no \"target\"; give --target FILE");
+  const nlohmann::json t = nlohmann::json::parse(scene.target_json);
+  const std::string kind = t.value("kind", "");
+  if (kind == "arc") {
+    if (scene.dim() != 3) throw InvalidArgument(scene.source + ": target.kind arc needs a 3D body");
+    ArcMap T;
+    T.length = scene.upper[0] - scene.lower[0];
+    T.thickness = scene.upper[2] - scene.lower[2];
+    if (t.contains("angle")) {
+      if (!t["angle"].is_number())
+        throw InvalidArgument(scene.source + ": target.angle must be a number (radians)");
+      T.angle = t["angle"].get<double>();
+    }
+    T.validate();
+    // Default resolution: a cell-centred grid twice as fine as the mesh's nodes.
+    Eigen::Vector3i counts = (2 * scene.order * scene.cells).head<3>();
+    if (t.contains("cells")) {
+      if (!t["cells"].is_array() || t["cells"].size() != 3)
+        throw InvalidArgument(scene.source + ": target.cells must be an array of 3 integers");
+      for (int k = 0; k < 3; ++k) counts[k] = t["cells"][k].get<int>();
+    }
+    const PointCloud grid = sample_box_grid(scene.lower, scene.upper, counts);
+    std::ostringstream d;
+    d << "arc of " << T.angle * 180.0 / M_PI << " degrees, " << counts[0] << "x" << counts[1] << "x"
+      << counts[2] << " cell-centred grid";
+    return {T.apply(grid), T.displacement(mesh), d.str()};
+  }
+  if (kind == "cloud") {
+    if (!t.contains("file") || !t["file"].is_string())
+      throw InvalidArgument(scene.source + ": target.file must be a path string");
+    const fs::path f = fs::path(scene.source).parent_path() / t["file"].get<std::string>();
+    return {read_cloud(f.string(), scene.dim()), std::nullopt, "cloud file " + f.string()};
+  }
+  throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\", got \"" + kind +
+                        "\"");
+}
+
+std::string csv_row(const std::vector<double>& v) {
+  std::ostringstream s;
+  s.precision(10);
+  for (size_t k = 0; k < v.size(); ++k) s << (k ? "," : "") << v[k];
+  return s.str();
+}
+
+const char* kHistoryHeader =
+    "iteration,evaluation,J,rho,A,B,rho_over_floor,projected_gradient_norm,newton_iterations,"
+    "seconds_state,seconds_distance,seconds_adjoint,seconds";
+
+}  // namespace
+
+int run_optimise(const std::vector<std::string>& tokens) {
+  Args args(tokens);
+  if (args.flag("--help")) {
+    std::cout << kUsage;
+    return 0;
+  }
+  const std::optional<std::string> out_opt = args.value("--out");
+  const std::optional<std::string> target_file = args.value("--target");
+  BoundedOptimizerOptions opt;
+  opt.max_iterations = static_cast<int>(args.integer("--max-iter", 200));
+  opt.max_evaluations = 5 * opt.max_iterations + 20;
+  opt.max_seconds = args.number("--max-seconds", 0.0);
+  opt.relative_change = args.number("--rel-tol", 1e-6);
+  opt.algorithm = algorithm_from_string(args.value("--algorithm").value_or("mma"));
+  ShapeObjectiveOptions so;
+  so.particles = particles_from_string(args.value("--particles").value_or("nodes"));
+  so.volumes = particle_volumes_from_string(args.value("--volumes").value_or("reference"));
+  so.hausdorff.params.alpha = args.number("--alpha", so.hausdorff.params.alpha);
+  so.hausdorff.params.beta = args.number("--beta", so.hausdorff.params.beta);
+  so.hausdorff.params.gamma = args.number("--gamma", so.hausdorff.params.gamma);
+  so.hausdorff.params.epsilon = args.number("--eps", so.hausdorff.params.epsilon);
+  so.tikhonov_mass = args.number("--tikhonov-mass", 0.0);
+  so.tikhonov_gradient = args.number("--tikhonov-grad", 0.0);
+  const long threads = args.integer("--threads", 0);
+  if (threads < 0 || threads > 4096) throw UsageError("--threads must be >= 0");
+  so.hausdorff.threads = static_cast<int>(threads);
+  const long vtu_every = args.integer("--vtu-every", 10);
+  if (vtu_every < 0) throw UsageError("--vtu-every must be >= 0");
+  const bool resume = args.flag("--resume"), json = args.flag("--json"),
+             quiet = args.flag("--quiet");
+  const std::vector<std::string> pos = args.finish();
+  if (pos.size() != 1) throw UsageError("expected one scene file (see --help)");
+  opt.validate();
+  so.hausdorff.params.validate();
+
+  // The problem: scene, mesh, control space, target.
+  const fe::Scene scene = fe::load_scene(pos[0]);
+  const fe::Assembler assembler = scene.make_assembler();
+  const fe::Mesh& mesh = assembler.mesh();
+  const fe::ControlSpace space(mesh, assembler.geometry(), scene.control_kind);
+  const Target target = make_target(scene, mesh, target_file, scene.dim());
+  if (target.cloud.dim() != scene.dim())
+    throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
+                          "D but the scene's body is " + std::to_string(scene.dim()) + "D");
+  const fs::path out = out_opt ? fs::path(*out_opt) : fs::path("results") / scene.name;
+  fs::create_directories(out);
+
+  ShapeObjective objective(assembler, space, HausdorffTarget(target.cloud, so.hausdorff), so);
+  const HausdorffTarget& Y = objective.target();
+
+  // Floors (SPEC §2, §5): the target against itself, and the body deformed exactly
+  // by the known map at this discretisation.
+  const double floor_self = Y.evaluate(Y.cloud()).rho;
+  std::optional<double> floor_matched;
+  if (target.map_displacement)
+    floor_matched = Y.evaluate(objective.particles(*target.map_displacement)).rho;
+  const double floor = floor_matched.value_or(floor_self);
+  auto shape_errors = [&](const Eigen::VectorXd& u) -> std::optional<std::pair<double, double>> {
+    if (!target.map_displacement) return std::nullopt;
+    double mx = 0.0, sum = 0.0;
+    for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n) {
+      const double e = (u - *target.map_displacement).segment(n * mesh.dim, mesh.dim).norm();
+      mx = std::max(mx, e);
+      sum += e * e;
+    }
+    return std::pair{mx, std::sqrt(sum / static_cast<double>(mesh.num_nodes()))};
+  };
+
+  // Start: the scene's initial control, or the checkpoint.
+  Eigen::VectorXd m0 = Eigen::VectorXd::Constant(space.size(), scene.control_initial);
+  std::vector<std::string> history_rows;
+  int iteration_offset = 0, evaluation_offset = 0;
+  double seconds_offset = 0.0;
+  const fs::path checkpoint = out / "checkpoint.json";
+  if (resume) {
+    std::ifstream in(checkpoint);
+    if (!in) throw FileError("--resume: cannot open '" + checkpoint.string() + "'");
+    nlohmann::json c;
+    try {
+      in >> c;
+      const std::vector<double> m = c.at("control").get<std::vector<double>>();
+      if (static_cast<Eigen::Index>(m.size()) != space.size())
+        throw FileError(checkpoint.string() + ": control has " + std::to_string(m.size()) +
+                        " values, the scene has " + std::to_string(space.size()));
+      m0 = Eigen::Map<const Eigen::VectorXd>(m.data(), space.size());
+      iteration_offset = c.at("iteration").get<int>();
+      evaluation_offset = c.at("evaluations").get<int>();
+      seconds_offset = c.at("seconds").get<double>();
+      history_rows = c.at("history").get<std::vector<std::string>>();
+    } catch (const nlohmann::json::exception& e) {
+      throw FileError(checkpoint.string() + ": not a softhd checkpoint (" + e.what() + ")");
+    }
+  }
+  const Eigen::VectorXd lower = Eigen::VectorXd::Constant(space.size(), scene.control_lower);
+  const Eigen::VectorXd upper = Eigen::VectorXd::Constant(space.size(), scene.control_upper);
+  m0 = m0.cwiseMax(lower).cwiseMin(upper);
+
+  // The objective for NLopt, remembering the last evaluation for the records.
+  ShapeEvaluation last;
+  double total_state = 0, total_distance = 0, total_adjoint = 0;
+  int total_newton = 0;
+  const BoundedObjective f = [&](const Eigen::VectorXd& m, double& value, Eigen::VectorXd* g) {
+    last = objective.evaluate(m, g != nullptr);
+    total_state += last.seconds_state;
+    total_distance += last.seconds_distance;
+    total_adjoint += last.seconds_adjoint;
+    total_newton += last.newton_iterations;
+    if (!last.ok) {
+      if (!quiet)
+        std::fprintf(stderr, "  state solve failed (step rejected): %s\n", last.failure.c_str());
+      return false;
+    }
+    value = last.J;
+    if (g) *g = last.gradient;
+    return true;
+  };
+
+  std::vector<std::pair<double, std::string>> pvd;
+  auto write_body = [&](int iteration, const Eigen::VectorXd& m, const Eigen::VectorXd& u) {
+    const HausdorffResult r = objective.fields(u);
+    std::vector<VtuField> point{{"m", control_at_nodes(mesh, space, m)}};
+    std::vector<VtuField> cell;
+    if (so.particles == Particles::nodes) point.push_back({"d_tilde", r.field_moving});
+    const Eigen::MatrixXd J = assembler.jacobians(u);
+    cell.push_back({"J", J.rowwise().mean()});
+    if (space.kind() == fe::ControlKind::kElement) cell.push_back({"m", m});
+    char name[32];
+    std::snprintf(name, sizeof name, "body_%04d.vtu", iteration);
+    write_vtu_mesh((out / name).string(), mesh, u, point, cell);
+    pvd.emplace_back(iteration, name);
+    write_pvd((out / "body.pvd").string(), pvd);
+    return r;
+  };
+
+  std::string body_line = target.description;
+  if (!quiet) {
+    std::fprintf(stderr, "softhd optimise %s: %ld nodes, %ld controls, target %ld points (%s)\n",
+                 scene.name.c_str(), static_cast<long>(mesh.num_nodes()),
+                 static_cast<long>(space.size()), static_cast<long>(target.cloud.size()),
+                 body_line.c_str());
+  }
+  const auto t_start = std::chrono::steady_clock::now();
+  ShapeEvaluation start = objective.evaluate(m0, false);
+  if (!start.ok) throw Error("the state solve at the starting control failed: " + start.failure);
+  const double rho_start = start.rho;
+  if (!quiet) {
+    std::fprintf(stderr, "  rho start %.6g, floor self %.6g, floor matched %s\n", rho_start,
+                 floor_self,
+                 floor_matched ? std::to_string(*floor_matched).c_str() : "n/a (no known map)");
+    std::fprintf(stderr, "  %5s %12s %12s %10s %10s %7s %8s\n", "iter", "J", "rho", "rho/floor",
+                 "|P grad|", "newton", "seconds");
+  }
+  if (vtu_every >= 0 && !resume) write_body(0, m0, objective.last_state().u);
+
+  auto on_iteration = [&](const IterationRecord& rec, const Eigen::VectorXd& m) {
+    const int it = iteration_offset + rec.iteration;
+    const double secs = seconds_offset + rec.seconds;
+    history_rows.push_back(csv_row(
+        {double(it), double(evaluation_offset + rec.evaluation), last.J, last.rho, last.A, last.B,
+         last.rho / floor, rec.projected_gradient_norm, double(last.newton_iterations),
+         last.seconds_state, last.seconds_distance, last.seconds_adjoint, secs}));
+    if (!quiet)
+      std::fprintf(stderr, "  %5d %12.6g %12.6g %10.4g %10.3g %7d %8.1f\n", it, last.J, last.rho,
+                   last.rho / floor, rec.projected_gradient_norm, last.newton_iterations, secs);
+    nlohmann::json c;
+    c["scene"] = pos[0];
+    c["iteration"] = it;
+    c["evaluations"] = evaluation_offset + rec.evaluation;
+    c["seconds"] = secs;
+    c["control"] = std::vector<double>(m.data(), m.data() + m.size());
+    c["history"] = history_rows;
+    write_file_atomically(checkpoint.string(), c.dump());
+    if (vtu_every > 0 && it % vtu_every == 0) write_body(it, m, objective.last_state().u);
+  };
+
+  const BoundedOptimizerSummary s = minimise(f, m0, lower, upper, opt, on_iteration);
+
+  // The final state: the best control's (re-solved from the nearest cached state).
+  ShapeEvaluation final_eval = objective.evaluate(s.x, false);
+  if (!final_eval.ok)
+    throw Error("the state solve at the best control failed: " + final_eval.failure);
+  const Eigen::VectorXd u = objective.last_state().u;
+  const int iterations = iteration_offset + s.iterations;
+  const HausdorffResult fields = write_body(iterations, s.x, u);
+  write_vtu_cloud((out / "target.vtu").string(), target.cloud, {{"d_tilde", fields.field_target}});
+  {
+    std::ostringstream h;
+    h << kHistoryHeader << '\n';
+    for (const std::string& r : history_rows) h << r << '\n';
+    write_file_atomically((out / "history.csv").string(), h.str());
+    std::ostringstream c;
+    c.precision(17);
+    const Eigen::MatrixXd P = space.positions(mesh);
+    c << "# " << (space.kind() == fe::ControlKind::kVertex ? "vertex" : "element")
+      << " controls of " << pos[0] << ": " << (scene.dim() == 3 ? "X1 X2 X3 m" : "X1 X2 m") << '\n';
+    for (Eigen::Index k = 0; k < space.size(); ++k) {
+      for (int d = 0; d < scene.dim(); ++d) c << P(k, d) << ' ';
+      c << s.x[k] << '\n';
+    }
+    write_file_atomically((out / "control.csv").string(), c.str());
+  }
+  const double seconds =
+      seconds_offset +
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  const auto err = shape_errors(u);
+  nlohmann::json sum;
+  sum["scene"] = pos[0];
+  sum["target"] = target.description;
+  sum["target_points"] = target.cloud.size();
+  sum["nodes"] = mesh.num_nodes();
+  sum["controls"] = space.size();
+  sum["algorithm"] = to_string(opt.algorithm);
+  sum["particles"] = to_string(so.particles);
+  sum["volumes"] = to_string(so.volumes);
+  sum["rho_start"] = rho_start;
+  sum["floor_self"] = floor_self;
+  sum["floor_matched"] = floor_matched ? nlohmann::json(*floor_matched) : nlohmann::json(nullptr);
+  sum["rho_final"] = final_eval.rho;
+  sum["J_final"] = final_eval.J;
+  sum["rho_final_over_floor"] = final_eval.rho / floor;
+  sum["iterations"] = iterations;
+  sum["evaluations"] = evaluation_offset + s.evaluations;
+  sum["failed_evaluations"] = s.failed_evaluations;
+  sum["termination"] = s.termination;
+  sum["converged"] = s.converged;
+  sum["shape_error_max"] = err ? nlohmann::json(err->first) : nlohmann::json(nullptr);
+  sum["shape_error_rms"] = err ? nlohmann::json(err->second) : nlohmann::json(nullptr);
+  sum["seconds"] = seconds;
+  sum["newton_iterations"] = total_newton;
+  sum["seconds_state"] = total_state;
+  sum["seconds_distance"] = total_distance;
+  sum["seconds_adjoint"] = total_adjoint;
+  sum["seconds_optimizer"] =
+      std::max(0.0, seconds - seconds_offset - total_state - total_distance - total_adjoint);
+  write_file_atomically((out / "summary.json").string(), sum.dump(2) + "\n");
+
+#ifdef SOFTHD_PLOT_SCRIPT
+  const std::string plot = std::string("/usr/bin/python3 ") + SOFTHD_PLOT_SCRIPT + " " +
+                           out.string() + " >/dev/null 2>&1";
+  if (std::system(plot.c_str()) != 0 && !quiet)
+    std::fprintf(stderr, "  (convergence.png not drawn: needs python3-matplotlib)\n");
+#endif
+  if (!quiet) {
+    std::fprintf(stderr, "  %s after %d iterations, %.1f s\n", s.termination.c_str(), iterations,
+                 seconds);
+    std::fprintf(stderr, "  rho %.6g -> %.6g (%.3g x floor)", rho_start, final_eval.rho,
+                 final_eval.rho / floor);
+    if (err) std::fprintf(stderr, ", shape error max %.4g rms %.4g", err->first, err->second);
+    std::fprintf(stderr, "\n  results in %s\n", out.string().c_str());
+  }
+  if (json) std::cout << sum.dump(2) << '\n';
+  return 0;
+}
+
+}  // namespace softhd::cli

@@ -1,0 +1,39 @@
+#pragma once
+/// \file targets.hpp
+/// Targets with a known map T (SPEC §5): the bending scene's circular arc, analytic at
+/// any resolution. A known map gives the matched floor ρ̃(T(Ω₀), Ω_d) and the true
+/// shape error |x_i − T(X_i)|.
+
+#include <Eigen/Core>
+
+#include "softhd/fe/mesh.hpp"
+#include "softhd/point_cloud.hpp"
+
+namespace softhd {
+
+/// The plate [0, length] × [0, width] × [0, thickness], clamped at X1 = 0, bent about
+/// the X2 axis through the total angle θ, curling towards +X3 (SPEC §5). With
+/// R = length/θ and z = X3 − thickness/2:
+///
+///     T(X) = ((R − z) sin(X1/R), X2, thickness/2 + R − (R − z) cos(X1/R)),
+///     det ∇T = 1 − z/R.
+///
+/// T is the identity on the clamped face X1 = 0 and preserves the mid-surface's length.
+struct ArcMap {
+  double length = 10.0;
+  double thickness = 0.1;
+  double angle = 3.141592653589793;  ///< θ in (0, 2π]
+
+  /// Throws InvalidArgument for a non-positive length or thickness, θ outside
+  /// (0, 2π], or R ≤ thickness/2 (the inner surface would fold).
+  void validate() const;
+  Eigen::Vector3d operator()(const Eigen::Vector3d& X) const;
+  double jacobian(const Eigen::Vector3d& X) const;
+  /// The cloud mapped by T, volumes multiplied by det ∇T (exact for a cell-centred
+  /// cloud to second order in the cell size; the mapped volumes sum to ∫ det ∇T).
+  PointCloud apply(const PointCloud& reference) const;
+  /// Nodal displacements u = T(X) − X of a 3D mesh (num_nodes · 3, node-major).
+  Eigen::VectorXd displacement(const fe::Mesh& mesh) const;
+};
+
+}  // namespace softhd

@@ -1,0 +1,51 @@
+#include "softhd/control/targets.hpp"
+
+#include <cmath>
+
+#include "softhd/error.hpp"
+
+namespace softhd {
+
+void ArcMap::validate() const {
+  if (!(length > 0.0) || !(thickness > 0.0) || !std::isfinite(length) || !std::isfinite(thickness))
+    throw InvalidArgument("arc target: length and thickness must be finite and > 0");
+  if (!(angle > 0.0) || !(angle <= 2.0 * M_PI + 1e-12))
+    throw InvalidArgument("arc target: angle must be in (0, 2 pi], got " + std::to_string(angle));
+  if (!(length / angle > 0.5 * thickness))
+    throw InvalidArgument("arc target: the radius length/angle must exceed half the thickness");
+}
+
+Eigen::Vector3d ArcMap::operator()(const Eigen::Vector3d& X) const {
+  const double R = length / angle, z = X[2] - 0.5 * thickness;
+  return {(R - z) * std::sin(X[0] / R), X[1], 0.5 * thickness + R - (R - z) * std::cos(X[0] / R)};
+}
+
+double ArcMap::jacobian(const Eigen::Vector3d& X) const {
+  return 1.0 - (X[2] - 0.5 * thickness) / (length / angle);
+}
+
+PointCloud ArcMap::apply(const PointCloud& reference) const {
+  validate();
+  if (reference.dim() != 3) throw InvalidArgument("arc target: the cloud must be 3D");
+  Eigen::MatrixXd p(reference.size(), 3);
+  Eigen::VectorXd v(reference.size());
+  for (Eigen::Index i = 0; i < reference.size(); ++i) {
+    const Eigen::Vector3d X = reference.points().row(i).transpose();
+    p.row(i) = (*this)(X).transpose();
+    v[i] = reference.volumes()[i] * jacobian(X);
+  }
+  return PointCloud(p, v);
+}
+
+Eigen::VectorXd ArcMap::displacement(const fe::Mesh& mesh) const {
+  validate();
+  if (mesh.dim != 3) throw InvalidArgument("arc target: the mesh must be 3D");
+  Eigen::VectorXd u(mesh.num_nodes() * 3);
+  for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n) {
+    const Eigen::Vector3d X = mesh.nodes.row(n).transpose();
+    u.segment<3>(3 * n) = (*this)(X)-X;
+  }
+  return u;
+}
+
+}  // namespace softhd
