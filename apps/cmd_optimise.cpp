@@ -53,8 +53,8 @@ options:
   --help             this text
 
 writes: history.csv, control.csv (readable by 'softhd forward --control'),
-body_NNNN.vtu, target.vtu, body.pvd, summary.json, checkpoint.json, and
-convergence.png when python3 with matplotlib is available.
+body_NNNN.vtu, target.vtu, body.pvd, body_final.ply, target.ply, summary.json,
+checkpoint.json, and convergence.png when python3 with matplotlib is available.
 )";
 
 /// Nodal values of the control (for VTU): vertex controls interpolated bilinearly at
@@ -326,6 +326,8 @@ int run_optimise(const std::vector<std::string>& tokens) {
   const int iterations = iteration_offset + s.iterations;
   const HausdorffResult fields = write_body(iterations, s.x, u);
   write_vtu_cloud((out / "target.vtu").string(), target.cloud, {{"d_tilde", fields.field_target}});
+  write_ply_cloud((out / "target.ply").string(), target.cloud);
+  write_ply_cloud((out / "body_final.ply").string(), objective.particles(u));
   {
     std::ostringstream h;
     h << kHistoryHeader << '\n';

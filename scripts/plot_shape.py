@@ -1,0 +1,61 @@
+#!/usr/bin/env python3
+"""Draws shape.png from a softhd optimise output directory: the final deformed body
+(body_final.ply) against the target cloud (target.ply), side view and 3D view."""
+import os
+import struct
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def read_ply(path):
+    """Reads the vertex x, y, z of a PLY written by softhd (ascii or binary double)."""
+    with open(path, "rb") as f:
+        header = []
+        while True:
+            line = f.readline().decode("ascii").strip()
+            header.append(line)
+            if line == "end_header":
+                break
+        fmt = [h.split()[1] for h in header if h.startswith("format")][0]
+        n = int([h.split()[2] for h in header if h.startswith("element vertex")][0])
+        props = [h.split()[2] for h in header if h.startswith("property")]
+        if fmt == "ascii":
+            rows = [list(map(float, f.readline().split())) for _ in range(n)]
+        else:
+            rows = list(struct.iter_unpack("<" + "d" * len(props), f.read(8 * len(props) * n)))
+    ix = props.index("x"), props.index("y"), props.index("z") if "z" in props else None
+    return [[r[ix[0]] for r in rows], [r[ix[1]] for r in rows],
+            [r[ix[2]] for r in rows] if ix[2] is not None else [0.0] * n]
+
+
+def main(directory):
+    body = read_ply(os.path.join(directory, "body_final.ply"))
+    target = read_ply(os.path.join(directory, "target.ply"))
+    fig = plt.figure(figsize=(12, 5))
+    side = fig.add_subplot(1, 2, 1)
+    side.scatter(target[0], target[2], s=1, c="0.7", label="target cloud")
+    side.scatter(body[0], body[2], s=2, c="C0", label="optimised body (nodes)")
+    side.set_aspect("equal")
+    side.set_xlabel("x1")
+    side.set_ylabel("x3")
+    side.set_title("side view")
+    side.legend(loc="best", markerscale=5)
+    view = fig.add_subplot(1, 2, 2, projection="3d")
+    view.scatter(target[0], target[1], target[2], s=0.5, c="0.7")
+    view.scatter(body[0], body[1], body[2], s=1, c="C0")
+    view.set_xlabel("x1")
+    view.set_ylabel("x2")
+    view.set_zlabel("x3")
+    view.set_title("3D view")
+    fig.tight_layout()
+    fig.savefig(os.path.join(directory, "shape.png"), dpi=110)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        sys.exit("usage: plot_shape.py OUTPUT_DIR")
+    main(sys.argv[1])
