@@ -14,6 +14,7 @@
 #include <random>
 #include <string>
 
+#include "expect_error.hpp"
 #include "softhd/error.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/point_cloud.hpp"
@@ -22,6 +23,7 @@ namespace fs = std::filesystem;
 using softhd::FileError;
 using softhd::InvalidArgument;
 using softhd::PointCloud;
+using softhd::test::expect_error;
 
 namespace {
 
@@ -48,20 +50,6 @@ class CloudIo : public ::testing::Test {
 
   fs::path dir_;
 };
-
-// Checks that `f()` throws E whose message contains `needle`.
-template <class E = FileError, class F>
-void expect_error(F&& f, const std::string& needle) {
-  try {
-    f();
-    ADD_FAILURE() << "no exception; expected one mentioning '" << needle << "'";
-  } catch (const E& e) {
-    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos)
-        << "message: " << e.what() << "\nexpected to contain: " << needle;
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "wrong exception type: " << e.what();
-  }
-}
 
 // Bitwise equality of two clouds (distinguishes -0.0 from 0.0).
 void expect_bit_equal(const PointCloud& a, const PointCloud& b) {
@@ -199,9 +187,10 @@ TEST_F(CloudIo, TextWriterFormat) {
 
 TEST_F(CloudIo, TextErrors) {
   const std::string missing = path("missing.txt");
-  expect_error([&] { softhd::read_cloud(missing); },
-               "cannot open '" + missing + "': No such file or directory");
-  expect_error([&] { softhd::read_cloud(dir_.string()); }, "cannot read '" + dir_.string() + "'");
+  expect_error<FileError>([&] { softhd::read_cloud(missing); },
+                          "cannot open '" + missing + "': No such file or directory");
+  expect_error<FileError>([&] { softhd::read_cloud(dir_.string()); },
+                          "cannot read '" + dir_.string() + "'");
   expect_error<InvalidArgument>([&] { softhd::read_cloud(missing, 4); }, "dim must be 0");
 
   struct Case {
@@ -236,20 +225,23 @@ TEST_F(CloudIo, TextErrors) {
   for (const Case& c : cases) {
     const std::string file = write("bad" + std::to_string(i++) + ".txt", c.content);
     SCOPED_TRACE(c.content);
-    expect_error([&] { softhd::read_cloud(file, c.dim); }, file + ":" + c.message);
+    expect_error<FileError>([&] { softhd::read_cloud(file, c.dim); }, file + ":" + c.message);
   }
 
   const std::string empty = write("empty.txt", "");
-  expect_error([&] { softhd::read_cloud(empty); }, empty + ": no points in the file");
+  expect_error<FileError>([&] { softhd::read_cloud(empty); }, empty + ": no points in the file");
   const std::string comments = write("comments.txt", "# x y z\n\n   # nothing\n");
-  expect_error([&] { softhd::read_cloud(comments); }, comments + ": no points in the file");
+  expect_error<FileError>([&] { softhd::read_cloud(comments); },
+                          comments + ": no points in the file");
 }
 
 TEST_F(CloudIo, WriteErrors) {
   const PointCloud c(Eigen::MatrixXd::Zero(2, 3));
   const std::string bad = path("no_such_dir/out.txt");
-  expect_error([&] { softhd::write_text_cloud(bad, c); }, "cannot open '" + bad + "' for writing");
-  expect_error([&] { softhd::write_ply_cloud(bad, c); }, "cannot open '" + bad + "' for writing");
+  expect_error<FileError>([&] { softhd::write_text_cloud(bad, c); },
+                          "cannot open '" + bad + "' for writing");
+  expect_error<FileError>([&] { softhd::write_ply_cloud(bad, c); },
+                          "cannot open '" + bad + "' for writing");
 }
 
 // ----------------------------------------------------------------------------
@@ -306,8 +298,8 @@ TEST_F(CloudIo, PlyAscii2DWithoutVolume) {
   EXPECT_EQ(c.points(), p);
   EXPECT_EQ(c.volumes(), Eigen::VectorXd::Ones(2));
   EXPECT_EQ(softhd::read_cloud(file, 2).dim(), 2);
-  expect_error([&] { softhd::read_cloud(file, 3); },
-               file + ": the file holds a 2D cloud but dim=3 was requested");
+  expect_error<FileError>([&] { softhd::read_cloud(file, 3); },
+                          file + ": the file holds a 2D cloud but dim=3 was requested");
   // The extension decides the format, case-insensitively: this is a text file.
   const std::string text = write("cloud.ply.txt", "1 2\n");
   EXPECT_EQ(softhd::read_cloud(text).dim(), 2);
@@ -487,7 +479,7 @@ TEST_F(CloudIo, PlyErrors) {
   for (const Case& c : cases) {
     const std::string file = write("bad" + std::to_string(i++) + ".ply", c.content);
     SCOPED_TRACE(c.message);
-    expect_error([&] { softhd::read_cloud(file); }, file + c.message);
+    expect_error<FileError>([&] { softhd::read_cloud(file); }, file + c.message);
   }
   // The binary variants must also work with a binary that is otherwise valid.
   EXPECT_EQ(softhd::read_cloud(write("ok.ply", binary + xyz + two_points)).size(), 2);

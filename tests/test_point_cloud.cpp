@@ -2,11 +2,13 @@
 
 #include <limits>
 
+#include "expect_error.hpp"
 #include "softhd/error.hpp"
 #include "softhd/point_cloud.hpp"
 
 using softhd::InvalidArgument;
 using softhd::PointCloud;
+using softhd::test::expect_error;
 
 TEST(PointCloud, StoresPointsVolumesAndTotal) {
   Eigen::MatrixXd p(3, 2);
@@ -21,38 +23,29 @@ TEST(PointCloud, StoresPointsVolumesAndTotal) {
   EXPECT_DOUBLE_EQ(unit.total_volume(), 4.0);
 }
 
-// Checks that constructing throws InvalidArgument whose message contains `needle`.
-template <class F>
-void expect_invalid(F&& make, const std::string& needle) {
-  try {
-    make();
-    ADD_FAILURE() << "no exception; expected one mentioning '" << needle << "'";
-  } catch (const InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-  }
-}
-
 TEST(PointCloud, RejectsBadInput) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  expect_invalid([] { PointCloud(Eigen::MatrixXd::Zero(3, 4)); }, "dimension must be 2 or 3");
-  expect_invalid([] { PointCloud(Eigen::MatrixXd::Zero(0, 3)); }, "no points");
-  expect_invalid([] { PointCloud(Eigen::MatrixXd::Zero(2, 3), Eigen::VectorXd::Ones(3)); },
-                 "2 points but 3 volumes");
-  expect_invalid(
+  expect_error<InvalidArgument>([] { PointCloud(Eigen::MatrixXd::Zero(3, 4)); },
+                                "dimension must be 2 or 3");
+  expect_error<InvalidArgument>([] { PointCloud(Eigen::MatrixXd::Zero(0, 3)); }, "no points");
+  expect_error<InvalidArgument>(
+      [] { PointCloud(Eigen::MatrixXd::Zero(2, 3), Eigen::VectorXd::Ones(3)); },
+      "2 points but 3 volumes");
+  expect_error<InvalidArgument>(
       [&] {
         Eigen::MatrixXd p = Eigen::MatrixXd::Zero(3, 3);
         p(1, 2) = nan;
         PointCloud c(p);
       },
       "point 1 has a non-finite coordinate");
-  expect_invalid(
+  expect_error<InvalidArgument>(
       [] {
         Eigen::VectorXd v = Eigen::VectorXd::Ones(3);
         v[2] = 0.0;
         PointCloud c(Eigen::MatrixXd::Zero(3, 3), v);
       },
       "point 2 has volume 0");
-  expect_invalid(
+  expect_error<InvalidArgument>(
       [] {
         Eigen::VectorXd v = Eigen::VectorXd::Ones(3);
         v[0] = -1.0;

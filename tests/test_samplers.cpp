@@ -9,11 +9,13 @@
 #include <string>
 #include <vector>
 
+#include "expect_error.hpp"
 #include "softhd/error.hpp"
 #include "softhd/samplers.hpp"
 
 using softhd::InvalidArgument;
 using softhd::PointCloud;
+using softhd::test::expect_error;
 
 namespace {
 
@@ -31,16 +33,6 @@ Eigen::VectorXi ivec(std::initializer_list<int> v) {
   Eigen::Index i = 0;
   for (int x : v) out[i++] = x;
   return out;
-}
-
-template <class F>
-void expect_invalid(F&& make, const std::string& needle) {
-  try {
-    make();
-    ADD_FAILURE() << "no exception; expected one mentioning '" << needle << "'";
-  } catch (const InvalidArgument& e) {
-    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-  }
 }
 
 bool bit_equal(const PointCloud& a, const PointCloud& b) {
@@ -316,81 +308,110 @@ TEST(Samplers, RejectBadArguments) {
   using softhd::sample_sphere_shell;
   using softhd::sample_uniform_random;
 
-  expect_invalid([&] { sample_box_grid(vec({0}), vec({1}), ivec({1})); },
-                 "sample_box_grid: lo must have size 2 or 3, got 1");
-  expect_invalid(
+  expect_error<InvalidArgument>([&] { sample_box_grid(vec({0}), vec({1}), ivec({1})); },
+                                "sample_box_grid: lo must have size 2 or 3, got 1");
+  expect_error<InvalidArgument>(
       [&] {
         sample_box_grid(vec({0, 0, 0, 0}), vec({1, 1, 1, 1}), ivec({1, 1, 1, 1}));
       },
       "lo must have size 2 or 3, got 4");
-  expect_invalid(
+  expect_error<InvalidArgument>(
       [&] {
         sample_box_grid(lo2, vec({1, 1, 1}), n2);
       },
       "hi has size 3 but lo has size 2");
-  expect_invalid(
+  expect_error<InvalidArgument>(
       [&] {
         sample_box_grid(lo2, vec({1, 0}), n2);
       },
       "need lo < hi, but lo[1] = 0.000000 >= hi[1] = 0.000000");
-  expect_invalid([&] { sample_box_grid(vec({2, 0}), hi2, n2); }, "lo[0] = 2.000000 >= hi[0]");
-  expect_invalid([&] { sample_box_grid(vec({nan, 0}), hi2, n2); }, "lo[0] is not finite");
-  expect_invalid([&] { sample_box_grid(lo2, vec({1, INFINITY}), n2); }, "hi[1] is not finite");
-  expect_invalid(
+  expect_error<InvalidArgument>(
+      [&] {
+        sample_box_grid(vec({2, 0}), hi2, n2);
+      },
+      "lo[0] = 2.000000 >= hi[0]");
+  expect_error<InvalidArgument>(
+      [&] {
+        sample_box_grid(vec({nan, 0}), hi2, n2);
+      },
+      "lo[0] is not finite");
+  expect_error<InvalidArgument>(
+      [&] {
+        sample_box_grid(lo2, vec({1, INFINITY}), n2);
+      },
+      "hi[1] is not finite");
+  expect_error<InvalidArgument>(
       [&] {
         sample_box_grid(vec({-1e300, 0}), vec({1e300, 1e300}), n2);
       },
       "the box volume overflows");
-  expect_invalid([&] { sample_box_grid(lo2, hi2, ivec({2})); },
-                 "counts has size 1 but lo has size 2");
-  expect_invalid([&] { sample_box_grid(lo2, hi2, ivec({2, 0})); }, "counts[1] must be >= 1, got 0");
-  expect_invalid(
+  expect_error<InvalidArgument>([&] { sample_box_grid(lo2, hi2, ivec({2})); },
+                                "counts has size 1 but lo has size 2");
+  expect_error<InvalidArgument>(
+      [&] {
+        sample_box_grid(lo2, hi2, ivec({2, 0}));
+      },
+      "counts[1] must be >= 1, got 0");
+  expect_error<InvalidArgument>(
       [&] {
         sample_box_grid(lo2, hi2, ivec({-3, 1}));
       },
       "counts[0] must be >= 1, got -3");
-  expect_invalid(
+  expect_error<InvalidArgument>(
       [&] {
         sample_box_grid(vec({0, 0, 0}), vec({1, 1, 1}), ivec({1 << 20, 1 << 20, 4}));
       },
       "counts: too many points");
-  expect_invalid(
+  expect_error<InvalidArgument>(
       [&] {
         sample_box_grid(lo2, vec({1e-200, 1e-200}), n2);
       },
       "underflows or overflows");
 
-  expect_invalid(
+  expect_error<InvalidArgument>(
       [&] {
         sample_q2_nodes(lo2, hi2, ivec({1, 0}));
       },
       "sample_q2_nodes: elements[1] must be >= 1, got 0");
-  expect_invalid(
+  expect_error<InvalidArgument>(
       [&] {
         sample_q2_nodes(lo2, hi2, ivec({1, 1, 1}));
       },
       "elements has size 3 but lo has size 2");
-  expect_invalid([&] { sample_q2_nodes(vec({1, 0}), hi2, n2); }, "sample_q2_nodes: need lo < hi");
+  expect_error<InvalidArgument>(
+      [&] {
+        sample_q2_nodes(vec({1, 0}), hi2, n2);
+      },
+      "sample_q2_nodes: need lo < hi");
 
-  expect_invalid([&] { sample_uniform_random(lo2, hi2, 0, 1); },
-                 "sample_uniform_random: n must be >= 1, got 0");
-  expect_invalid([&] { sample_uniform_random(lo2, hi2, -5, 1); }, "n must be >= 1, got -5");
-  expect_invalid(
+  expect_error<InvalidArgument>([&] { sample_uniform_random(lo2, hi2, 0, 1); },
+                                "sample_uniform_random: n must be >= 1, got 0");
+  expect_error<InvalidArgument>([&] { sample_uniform_random(lo2, hi2, -5, 1); },
+                                "n must be >= 1, got -5");
+  expect_error<InvalidArgument>(
       [&] {
         sample_uniform_random(lo2, vec({1, 1, 1}), 3, 1);
       },
       "hi has size 3 but lo has size 2");
 
-  expect_invalid([&] { sample_sphere_shell(vec({0}), 1.0, 3, 1); },
-                 "sample_sphere_shell: center must have size 2 or 3, got 1");
-  expect_invalid([&] { sample_sphere_shell(vec({0, nan}), 1.0, 3, 1); }, "center is not finite");
-  expect_invalid([&] { sample_sphere_shell(lo2, 0.0, 3, 1); }, "radius must be finite and > 0");
-  expect_invalid([&] { sample_sphere_shell(lo2, -1.0, 3, 1); }, "radius must be finite and > 0");
-  expect_invalid([&] { sample_sphere_shell(lo2, nan, 3, 1); }, "radius must be finite and > 0");
-  expect_invalid(
+  expect_error<InvalidArgument>([&] { sample_sphere_shell(vec({0}), 1.0, 3, 1); },
+                                "sample_sphere_shell: center must have size 2 or 3, got 1");
+  expect_error<InvalidArgument>(
+      [&] {
+        sample_sphere_shell(vec({0, nan}), 1.0, 3, 1);
+      },
+      "center is not finite");
+  expect_error<InvalidArgument>([&] { sample_sphere_shell(lo2, 0.0, 3, 1); },
+                                "radius must be finite and > 0");
+  expect_error<InvalidArgument>([&] { sample_sphere_shell(lo2, -1.0, 3, 1); },
+                                "radius must be finite and > 0");
+  expect_error<InvalidArgument>([&] { sample_sphere_shell(lo2, nan, 3, 1); },
+                                "radius must be finite and > 0");
+  expect_error<InvalidArgument>(
       [&] {
         sample_sphere_shell(vec({0, 0, 0}), 1e200, 3, 1);
       },
       "the surface measure overflows");
-  expect_invalid([&] { sample_sphere_shell(lo2, 1.0, 0, 1); }, "n must be >= 1, got 0");
+  expect_error<InvalidArgument>([&] { sample_sphere_shell(lo2, 1.0, 0, 1); },
+                                "n must be >= 1, got 0");
 }
