@@ -40,6 +40,8 @@ options:
   --max-seconds S    wall-clock limit (default none)
   --rel-tol R        stop when J changes by less than R relative (default 1e-6)
   --algorithm A      mma | ccsaq | lbfgs | slsqp (default mma)
+  --move-limit D     each round of 10 evaluations moves m by at most D times the
+                     bound range (default 0.1; 0: no move limit)
   --particles P      nodes | quadrature: the moving cloud (default nodes)
   --volumes V        reference | deformed particle volumes (default reference)
   --alpha A --beta B --gamma G --eps E   functional parameters (default 4 4 2 1e-3)
@@ -155,6 +157,7 @@ int run_optimise(const std::vector<std::string>& tokens) {
   opt.max_seconds = args.number("--max-seconds", 0.0);
   opt.relative_change = args.number("--rel-tol", 1e-6);
   opt.algorithm = algorithm_from_string(args.value("--algorithm").value_or("mma"));
+  opt.move_limit = args.number("--move-limit", 0.1);
   ShapeObjectiveOptions so;
   so.particles = particles_from_string(args.value("--particles").value_or("nodes"));
   so.volumes = particle_volumes_from_string(args.value("--volumes").value_or("reference"));

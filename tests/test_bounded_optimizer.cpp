@@ -99,6 +99,39 @@ TEST(BoundedOptimizer, FailedEvaluationsAreRejectedNotFatal) {
   }
 }
 
+// With a move limit every evaluated point lies within δ (u − l) of the best point known
+// when it was asked for, and the bounded minimiser is still reached.
+TEST(BoundedOptimizer, MoveLimitBoundsEveryStepAndStillConverges) {
+  const int n = 5;
+  Eigen::VectorXd c(n), lo = Eigen::VectorXd::Constant(n, -1e5), hi = Eigen::VectorXd::Zero(n);
+  c << -2e4, -1.5e5, 3e4, -7e4, -9e4;
+  const Eigen::VectorXd expected = c.cwiseMax(lo).cwiseMin(hi);
+  const double delta = 0.05;
+  for (Algorithm a : kAll) {
+    Eigen::VectorXd best = Eigen::VectorXd::Zero(n);
+    double best_f = INFINITY, worst_step = 0.0;
+    const BoundedObjective f = [&](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+      worst_step = std::max(worst_step, (x - best).cwiseAbs().maxCoeff());
+      v = (x - c).squaredNorm();
+      if (g) *g = 2 * (x - c);
+      if (v < best_f) {
+        best_f = v;
+        best = x;
+      }
+      return true;
+    };
+    BoundedOptimizerOptions o;
+    o.algorithm = a;
+    o.move_limit = delta;
+    o.relative_change = 1e-14;
+    o.max_iterations = 1000;
+    o.max_evaluations = 2000;
+    const BoundedOptimizerSummary s = minimise(f, Eigen::VectorXd::Zero(n), lo, hi, o);
+    EXPECT_LE(worst_step, delta * 1e5 * (1 + 1e-12)) << to_string(a) << ": " << s.termination << " its " << s.iterations;
+    EXPECT_LE((s.x - expected).cwiseAbs().maxCoeff(), 1.0) << to_string(a) << ": " << s.termination;
+  }
+}
+
 TEST(BoundedOptimizer, StopsOnIterationsTargetAndFailedStart) {
   const BoundedObjective f = [](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
     v = x.squaredNorm() + 1.0;

@@ -35,6 +35,9 @@ void BoundedOptimizerOptions::validate() const {
   if (!(relative_change >= 0.0)) throw InvalidArgument("optimizer: relative_change must be >= 0");
   if (std::isnan(target_value)) throw InvalidArgument("optimizer: target_value is NaN");
   if (!(max_seconds >= 0.0)) throw InvalidArgument("optimizer: max_seconds must be >= 0");
+  if (!(move_limit >= 0.0 && move_limit <= 1.0))
+    throw InvalidArgument("optimizer: move_limit must be in [0, 1]");
+  if (round_evaluations < 2) throw InvalidArgument("optimizer: round_evaluations must be >= 2");
   if (!(failure_penalty > 1.0) || !std::isfinite(failure_penalty))
     throw InvalidArgument("optimizer: failure_penalty must be finite and > 1");
 }
@@ -66,17 +69,23 @@ nlopt::algorithm nlopt_algorithm(Algorithm a) {
 enum class Stop { none, iterations, relative_change, target, time };
 
 struct Driver {
+  Driver(const BoundedObjective& f, const BoundedOptimizerOptions& o,
+         const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& cb)
+      : objective(f), options(o), on_iteration(cb) {}
+
   const BoundedObjective& objective;
   const BoundedOptimizerOptions& options;
   const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& on_iteration;
   Eigen::VectorXd scale;     // x = scale ∘ z
   Eigen::VectorXd zlo, zhi;  // bounds on z
   double fscale = 1.0;       // f_nlopt = f / fscale
-  std::chrono::steady_clock::time_point start;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
   BoundedOptimizerSummary summary;
   double largest_abs = 1.0;  // largest |J| seen, for the failure penalty
   Stop stop = Stop::none;
-  // The evaluation at x0, made before NLopt starts, reused for NLopt's first call.
+  int small_changes = 0;  // consecutive iterations with a relative change below tolerance
+  // The best point so far with its value and gradient (x units): NLopt's first call of
+  // every round asks for it again, and gets it without a new evaluation.
   Eigen::VectorXd z0, g0;
   double f0 = 0.0;
   bool first_pending = true;
@@ -110,7 +119,12 @@ struct Driver {
     const Eigen::VectorXd gz =
         want_grad ? Eigen::VectorXd(scale.cwiseProduct(gx) / fscale) : Eigen::VectorXd();
     for (size_t k = 0; k < grad.size(); ++k) grad[k] = gz[static_cast<Eigen::Index>(k)];
-    if (f < summary.final_value) accept(z, f, gz, opt);
+    if (f < summary.final_value) {
+      z0 = z;
+      f0 = f;
+      g0 = gx;
+      accept(z, f, gz, opt);
+    }
     if (options.max_seconds > 0.0 && seconds() > options.max_seconds && stop == Stop::none) {
       stop = Stop::time;
       opt.force_stop();
@@ -133,9 +147,11 @@ struct Driver {
     summary.history.push_back(rec);
     if (on_iteration) on_iteration(rec, summary.x);
     Stop s = Stop::none;
+    if (std::fabs(previous - f) > options.relative_change * std::fabs(f)) small_changes = 0;
     if (f <= options.target_value) {
       s = Stop::target;
-    } else if (std::fabs(previous - f) <= options.relative_change * std::fabs(f)) {
+    } else if (std::fabs(previous - f) <= options.relative_change * std::fabs(f) &&
+               ++small_changes >= 3) {
       s = Stop::relative_change;
     } else if (summary.iterations >= options.max_iterations) {
       s = Stop::iterations;
@@ -183,8 +199,7 @@ BoundedOptimizerSummary minimise(
     }
   }
 
-  Driver d{objective, options, on_iteration, {}, {}, {},  1.0, std::chrono::steady_clock::now(),
-           {},        1.0,     Stop::none,   {}, {}, 0.0, true};
+  Driver d(objective, options, on_iteration);
   d.scale = lower.cwiseAbs().cwiseMax(upper.cwiseAbs());
   for (Eigen::Index k = 0; k < n; ++k)
     if (!(d.scale[k] > 0.0)) d.scale[k] = 1.0;  // bounds [0, 0]
@@ -217,37 +232,62 @@ BoundedOptimizerSummary minimise(
     return d.summary;
   }
 
-  nlopt::opt opt(nlopt_algorithm(options.algorithm), static_cast<unsigned>(n));
-  opt.set_lower_bounds(std::vector<double>(d.zlo.data(), d.zlo.data() + n));
-  opt.set_upper_bounds(std::vector<double>(d.zhi.data(), d.zhi.data() + n));
-  opt.set_maxeval(options.max_evaluations + 1);  // + the reused first call
-  Callback cb{&d, &opt};
-  opt.set_min_objective(nlopt_callback, &cb);
-  std::vector<double> z(d.z0.data(), d.z0.data() + n);
-  double fmin = 0.0;
+  // NLopt on the whole box, or in rounds on a moving box of half-width
+  // move_limit · (upper − lower) around the best point (move limits).
   std::string nlopt_reason;
-  try {
-    const nlopt::result r = opt.optimize(z, fmin);
-    switch (r) {
-      case nlopt::MAXEVAL_REACHED:
-        nlopt_reason = "the evaluation limit was reached";
-        break;
-      case nlopt::FTOL_REACHED:
-      case nlopt::XTOL_REACHED:
-      case nlopt::SUCCESS:
-        nlopt_reason = "NLopt reports convergence";
-        break;
-      default:
-        nlopt_reason = "NLopt stopped (result code " + std::to_string(static_cast<int>(r)) + ")";
+  double delta = options.move_limit;
+  while (true) {
+    Eigen::VectorXd lo = d.zlo, hi = d.zhi;
+    if (delta > 0.0) {
+      lo = d.zlo.cwiseMax(d.z0 - delta * (d.zhi - d.zlo));
+      hi = d.zhi.cwiseMin(d.z0 + delta * (d.zhi - d.zlo));
     }
-  } catch (const nlopt::forced_stop&) {
-    // The driver's own stopping rules; see d.stop.
-  } catch (const nlopt::roundoff_limited&) {
-    nlopt_reason = "NLopt stopped: progress limited by round-off";
-  } catch (const std::invalid_argument& e) {
-    nlopt_reason = std::string("NLopt rejected the problem: ") + e.what();
-  } catch (const std::runtime_error& e) {
-    if (d.stop == Stop::none) nlopt_reason = std::string("NLopt failed: ") + e.what();
+    const int remaining = options.max_evaluations - d.summary.evaluations;
+    if (remaining <= 0) {
+      nlopt_reason = "the evaluation limit was reached";
+      break;
+    }
+    nlopt::opt opt(nlopt_algorithm(options.algorithm), static_cast<unsigned>(n));
+    opt.set_lower_bounds(std::vector<double>(lo.data(), lo.data() + n));
+    opt.set_upper_bounds(std::vector<double>(hi.data(), hi.data() + n));
+    // + 1: the first call of a round returns the cached best point.
+    opt.set_maxeval(1 + (delta > 0.0 ? std::min(remaining, options.round_evaluations) : remaining));
+    Callback cb{&d, &opt};
+    opt.set_min_objective(nlopt_callback, &cb);
+    std::vector<double> z(d.z0.data(), d.z0.data() + n);
+    d.first_pending = d.g0.size() == n;
+    const double round_start = d.summary.final_value;
+    double fmin = 0.0;
+    try {
+      const nlopt::result r = opt.optimize(z, fmin);
+      switch (r) {
+        case nlopt::MAXEVAL_REACHED:
+          nlopt_reason = "the evaluation limit was reached";
+          break;
+        case nlopt::FTOL_REACHED:
+        case nlopt::XTOL_REACHED:
+        case nlopt::SUCCESS:
+          nlopt_reason = "NLopt reports convergence";
+          break;
+        default:
+          nlopt_reason = "NLopt stopped (result code " + std::to_string(static_cast<int>(r)) + ")";
+      }
+    } catch (const nlopt::forced_stop&) {
+      // The driver's own stopping rules; see d.stop.
+    } catch (const nlopt::roundoff_limited&) {
+      nlopt_reason = "NLopt stopped: progress limited by round-off";
+    } catch (const std::invalid_argument& e) {
+      nlopt_reason = std::string("NLopt rejected the problem: ") + e.what();
+    } catch (const std::runtime_error& e) {
+      if (d.stop == Stop::none) nlopt_reason = std::string("NLopt failed: ") + e.what();
+    }
+    if (d.stop != Stop::none || delta <= 0.0) break;
+    // Next round: keep the move limit after progress, halve it otherwise.
+    if (!(d.summary.final_value < round_start)) delta *= 0.5;
+    if (delta < options.move_limit * 1e-3) {
+      nlopt_reason = "no progress within the smallest move limit";
+      break;
+    }
   }
   switch (d.stop) {
     case Stop::iterations:
@@ -266,7 +306,8 @@ BoundedOptimizerSummary minimise(
       break;
     case Stop::none:
       d.summary.termination = nlopt_reason;
-      d.summary.converged = nlopt_reason == "NLopt reports convergence";
+      d.summary.converged = nlopt_reason == "NLopt reports convergence" ||
+                            nlopt_reason == "no progress within the smallest move limit";
   }
   d.summary.seconds = d.seconds();
   return d.summary;

@@ -35,6 +35,13 @@ struct BoundedOptimizerOptions {
   /// Value reported to NLopt for a failed evaluation: this factor times the largest
   /// |J| seen so far (at least 1). Large enough that MMA's conservative step shrinks.
   double failure_penalty = 10.0;
+  /// Move limit: if > 0, NLopt runs in rounds of at most `round_evaluations`
+  /// evaluations on the box [x − δ(u − l), x + δ(u − l)] ∩ [l, u] around the best x,
+  /// δ = move_limit, halved after a round without progress. Keeps MMA's first steps
+  /// (which may span half the bounds) from asking the state solver for huge
+  /// deformations. 0 = one NLopt run on the whole box.
+  double move_limit = 0.0;
+  int round_evaluations = 10;  ///< evaluations per round when move_limit > 0
 
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
