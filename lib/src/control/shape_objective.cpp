@@ -1,6 +1,7 @@
 #include "softhd/control/shape_objective.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <deque>
 
 #include "softhd/error.hpp"
@@ -180,6 +181,16 @@ ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::Control
   if (!(options.tikhonov_mass >= 0.0) || !(options.tikhonov_gradient >= 0.0))
     throw InvalidArgument("Tikhonov weights M and eps_m must be >= 0");
   if (options.warm_start_states < 1) throw InvalidArgument("warm_start_states must be >= 1");
+  if (options.newton.absolute_tolerance == 0.0) {
+    // A floor under the relative residual test: the optimiser's small control changes
+    // make |R(0; m)| tiny, and 1e-9 of a tiny reference lies below the residual's
+    // round-off. 1e-10 × stiffness × |Ω₀|^((d−1)/d) is a force far above round-off and
+    // far below any load that matters.
+    const int d = assembler.mesh().dim;
+    const double volume = fe::lumped_volumes(assembler.mesh(), assembler.geometry()).sum();
+    options.newton.absolute_tolerance = 1e-10 * assembler.material().stiffness_scale() *
+                                        std::pow(volume, (d - 1.0) / d);
+  }
   impl_ = std::make_unique<Impl>(assembler, control, std::move(target), std::move(options));
 }
 ShapeObjective::~ShapeObjective() = default;
