@@ -55,16 +55,7 @@ function(softhd_target_defaults target)
 endfunction()
 
 # CHOLMOD (SuiteSparse) for the sparse Cholesky of the FE tangent, used through Eigen's
-# CholmodSupport. Debian 12's SuiteSparse 5 ships neither CMake configs nor .pc files.
-find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
-find_library(CHOLMOD_LIBRARY cholmod)
-find_library(SUITESPARSECONFIG_LIBRARY suitesparseconfig)
-if(CHOLMOD_INCLUDE_DIR AND CHOLMOD_LIBRARY AND SUITESPARSECONFIG_LIBRARY)
-  set(CHOLMOD_FOUND TRUE)
-endif()
+# CholmodSupport. Debian 12's SuiteSparse 5 ships neither CMake configs nor .pc files;
+# cmake/FindSoftHDCholmod.cmake defines softhd::cholmod (softhdConfig.cmake reuses it).
+include(FindSoftHDCholmod)
 softhd_require(CHOLMOD_FOUND libsuitesparse-dev "CHOLMOD (SuiteSparse)")
-if(NOT TARGET softhd_cholmod)
-  add_library(softhd_cholmod INTERFACE IMPORTED)
-  target_include_directories(softhd_cholmod INTERFACE ${CHOLMOD_INCLUDE_DIR})
-  target_link_libraries(softhd_cholmod INTERFACE ${CHOLMOD_LIBRARY} ${SUITESPARSECONFIG_LIBRARY})
-endif()
