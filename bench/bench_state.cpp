@@ -102,14 +102,14 @@ int newton(const std::string& name, const std::string& solver) {
   NewtonOptions o;
   if (!solver.empty()) o.linear_solver = parse_linear_solver(solver);
   NewtonSolver newton(A, o);
-  // bending: the linear-through-thickness bend; torsion: a fifth of the lower bound on the
+  // bending: the linear-through-thickness bend; torsion: 2 % of the lower bound on the
   // top half, which bends and (through the oblique material direction) twists the beam.
   Eigen::VectorXd m;
   if (name == "bending") {
     m = linear_bend(c, A.mesh());
   } else {
     const Eigen::MatrixXd P = c.positions(A.mesh());
-    m = (P.col(2).array() > 0.5 * s.upper[2]).cast<double>() * 0.2 * s.control_lower;
+    m = (P.col(2).array() > 0.5 * s.upper[2]).cast<double>() * 0.02 * s.control_lower;
   }
   std::printf("scene=%s,dofs=%ld,solver=%s\n", name.c_str(), static_cast<long>(A.dofs().num_free),
               to_string(o.linear_solver).c_str());
