@@ -6,6 +6,7 @@
 //                                  cold start, warm start after +5 % m, adjoint cost, split
 //                                  of the time per Newton iteration; run it with
 //                                  OMP_NUM_THREADS=1 and =2 to compare threads
+//   bench_state assembly SCENE     assembly times, 1 and 2 threads (minimum of 7)
 //   bench_state refine             bending plate, m = -1e4 X3/0.1: tip displacement for Q2
 //                                  and Q1 at refinements
 //   bench_state hard [cells_x]     m = -5e4 on the upper half of the plate thickness
@@ -152,6 +153,36 @@ double tip_z(int order, int nx, int ny, int nz, int* iterations) {
   return probe_displacement(A, st.u, Eigen::Vector3d(10.0, 1.0, 0.05))[2];
 }
 
+// Assembly alone, minimum over 7 repetitions, for 1 and 2 threads (the Newton timings on
+// a shared machine mix in waiting for other processes).
+int assembly(const std::string& name) {
+  const Scene s = scene_file(name);
+  const Assembler A = s.make_assembler();
+  const ControlSpace c(A.mesh(), A.geometry(), s.control_kind);
+  const Eigen::MatrixXd m = c.to_quadrature(Eigen::VectorXd::Constant(c.size(), -1e3));
+  const Eigen::VectorXd u = Eigen::VectorXd::Zero(A.dofs().num_dofs);
+  SparseMatrix K = A.tangent_pattern();
+  Eigen::VectorXd R;
+  double Pi;
+  std::printf("scene,threads,energy_s,energy_residual_tangent_s\n");
+  for (int t : {1, 2}) {
+#ifdef _OPENMP
+    omp_set_num_threads(t);
+#endif
+    double te = 1e300, tk = 1e300;
+    for (int rep = 0; rep < 7; ++rep) {
+      auto t0 = Clock::now();
+      A.evaluate(u, m, &Pi, nullptr, nullptr);
+      te = std::min(te, since(t0));
+      t0 = Clock::now();
+      A.evaluate(u, m, &Pi, &R, &K);
+      tk = std::min(tk, since(t0));
+    }
+    std::printf("%s,%d,%.4f,%.4f\n", name.c_str(), t, te, tk);
+  }
+  return 0;
+}
+
 int refine() {
   std::printf("order,cells,tip_u3,newton_iterations,seconds\n");
   const int base[3] = {10, 1, 1};
@@ -196,9 +227,10 @@ int main(int argc, char** argv) {
   if (mode == "solvers") return solvers(argc > 2 ? std::atof(argv[2]) : 1.0);
   if (mode == "newton" && argc > 2) return newton(argv[2], argc > 3 ? argv[3] : "");
   if (mode == "refine") return refine();
+  if (mode == "assembly" && argc > 2) return assembly(argv[2]);
   if (mode == "hard") return hard(argc > 2 ? std::atoi(argv[2]) : 50);
   std::fprintf(stderr,
                "usage: bench_state solvers [scale] | newton bending|torsion [solver] | "
-               "refine | hard [cells_x]\n");
+               "assembly SCENE | refine | hard [cells_x]\n");
   return 2;
 }
