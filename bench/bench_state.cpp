@@ -13,6 +13,7 @@
 //                                  (element controls): more than a full turn
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -215,8 +216,23 @@ int hard(int nx) {
   const NewtonSummary sum = newton.solve(c.to_quadrature(m), &st);
   print_summary("hard_full_turn", sum);
   const Eigen::VectorXd tip = probe_displacement(A, st.u, Eigen::Vector3d(10.0, 1.0, 0.05));
-  std::printf("cells=%dx%dx%d,tip_u,%.5f,%.5f,%.5f,min_J=%.4f\n", s.cells[0], s.cells[1],
-              s.cells[2], tip[0], tip[1], tip[2], A.min_jacobian(st.u));
+  // Turning angle of the mid-plane line X2 = 1, X3 = 0.05: unwrapped angles of 200 chords.
+  double turn = 0.0, previous = 0.0;
+  Eigen::VectorXd x_prev;
+  for (int i = 0; i <= 200; ++i) {
+    const Eigen::Vector3d X(10.0 * i / 200, 1.0, 0.05);
+    const Eigen::VectorXd x = X + probe_displacement(A, st.u, X);
+    if (i > 0) {
+      double angle = std::atan2(x[2] - x_prev[2], x[0] - x_prev[0]);
+      while (angle - previous > M_PI) angle -= 2 * M_PI;
+      while (angle - previous < -M_PI) angle += 2 * M_PI;
+      turn += angle - previous;
+      previous = angle;
+    }
+    x_prev = x;
+  }
+  std::printf("cells=%dx%dx%d,tip_u,%.5f,%.5f,%.5f,min_J=%.4f,turn_rad=%.4f\n", s.cells[0],
+              s.cells[1], s.cells[2], tip[0], tip[1], tip[2], A.min_jacobian(st.u), turn);
   return sum.converged() ? 0 : 1;
 }
 
