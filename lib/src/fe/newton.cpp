@@ -38,6 +38,7 @@ bool NewtonOptions::IsValid(std::string* error) const {
   if (!(min_load_increment > 0.0 && min_load_increment <= initial_load_increment))
     return fail("min_load_increment must be in (0, initial_load_increment]");
   if (max_load_steps < 1) return fail("max_load_steps must be >= 1");
+  if (max_total_iterations < 1) return fail("max_total_iterations must be >= 1");
   return true;
 }
 
@@ -49,6 +50,8 @@ std::string to_string(NewtonStatus status) {
       return "load increment too small";
     case NewtonStatus::kTooManyLoadSteps:
       return "too many load steps";
+    case NewtonStatus::kTooManyIterations:
+      return "too many Newton iterations";
   }
   return "unknown";
 }
@@ -278,6 +281,10 @@ NewtonSummary NewtonSolver::solve(const Eigen::MatrixXd& m_qp, State* state) {
   while (true) {
     if (summary.load_steps >= options_.max_load_steps) {
       summary.status = NewtonStatus::kTooManyLoadSteps;
+      break;
+    }
+    if (summary.newton_iterations >= options_.max_total_iterations) {
+      summary.status = NewtonStatus::kTooManyIterations;
       break;
     }
     const double t_try = std::min(1.0, t + inc);
