@@ -17,6 +17,7 @@
 #include "softhd/control/bounded_optimizer.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/targets.hpp"
+#include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/io/vtu.hpp"
@@ -336,16 +337,7 @@ int run_optimise(const std::vector<std::string>& tokens) {
     h << kHistoryHeader << '\n';
     for (const std::string& r : history_rows) h << r << '\n';
     write_file_atomically((out / "history.csv").string(), h.str());
-    std::ostringstream c;
-    c.precision(17);
-    const Eigen::MatrixXd P = space.positions(mesh);
-    c << "# " << (space.kind() == fe::ControlKind::kVertex ? "vertex" : "element")
-      << " controls of " << pos[0] << ": " << (scene.dim() == 3 ? "X1 X2 X3 m" : "X1 X2 m") << '\n';
-    for (Eigen::Index k = 0; k < space.size(); ++k) {
-      for (int d = 0; d < scene.dim(); ++d) c << P(k, d) << ' ';
-      c << s.x[k] << '\n';
-    }
-    write_file_atomically((out / "control.csv").string(), c.str());
+    fe::write_control_file((out / "control.csv").string(), space.positions(mesh), s.x);
   }
   const double seconds =
       seconds_offset +

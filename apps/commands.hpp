@@ -11,3 +11,7 @@ int run_distance(const std::vector<std::string>& args);
 int run_optimise(const std::vector<std::string>& args);
 
 }  // namespace softhd::cli
+
+/// softhd forward SCENE [...]: solves the state of a scene (argv[0] is "forward");
+/// 0 success, 1 numerical failure (reported), 2 bad input (one line on stderr).
+int run_forward(int argc, char** argv);

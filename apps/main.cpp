@@ -15,6 +15,7 @@ const char* kUsage = R"(usage: softhd COMMAND [options]
 
 commands:
   distance   regularised Hausdorff distance between two point clouds
+  forward    equilibrium of a scene's body for a given fiber tension
   optimise   fiber tension that makes a body match a target cloud
 
 Run 'softhd COMMAND --help' for the options of a command.
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
   const std::vector<std::string> rest(all.begin() + 1, all.end());
   try {
     if (command == "distance") return softhd::cli::run_distance(rest);
+    if (command == "forward") return run_forward(argc - 1, argv + 1);
     if (command == "optimise" || command == "optimize") return softhd::cli::run_optimise(rest);
     std::cerr << "softhd: unknown command '" << command << "' (see softhd --help)\n";
     return 2;

@@ -52,13 +52,7 @@ function(softhd_target_defaults target)
 endfunction()
 
 # CHOLMOD (SuiteSparse) for the sparse Cholesky of the FE tangent, used through Eigen's
-# CholmodSupport. Debian 12's SuiteSparse 5 ships neither CMake configs nor .pc files.
-find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
-find_library(CHOLMOD_LIBRARY cholmod)
-find_library(SUITESPARSECONFIG_LIBRARY suitesparseconfig)
-if(CHOLMOD_INCLUDE_DIR AND CHOLMOD_LIBRARY AND SUITESPARSECONFIG_LIBRARY)
-  set(CHOLMOD_FOUND TRUE)
-endif()
+# CholmodSupport. Debian 12's SuiteSparse 5 ships neither CMake configs nor .pc files;
+# cmake/FindSoftHDCholmod.cmake defines softhd::cholmod (softhdConfig.cmake reuses it).
+include(FindSoftHDCholmod)
 softhd_require(CHOLMOD_FOUND libsuitesparse-dev "CHOLMOD (SuiteSparse)")
-# (Linked by path, not through a target, so that the exported softhd::softhd of a
-# static build names the libraries a consumer must link.)

@@ -127,7 +127,8 @@ TEST(BoundedOptimizer, MoveLimitBoundsEveryStepAndStillConverges) {
     o.max_iterations = 1000;
     o.max_evaluations = 2000;
     const BoundedOptimizerSummary s = minimise(f, Eigen::VectorXd::Zero(n), lo, hi, o);
-    EXPECT_LE(worst_step, delta * 1e5 * (1 + 1e-12)) << to_string(a) << ": " << s.termination << " its " << s.iterations;
+    EXPECT_LE(worst_step, delta * 1e5 * (1 + 1e-12))
+        << to_string(a) << ": " << s.termination << " its " << s.iterations;
     EXPECT_LE((s.x - expected).cwiseAbs().maxCoeff(), 1.0) << to_string(a) << ": " << s.termination;
   }
 }

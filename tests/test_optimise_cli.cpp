@@ -74,6 +74,12 @@ TEST_F(OptimiseCli, LowersTheDistanceAndWritesEveryFile) {
   while (std::getline(c, line))
     if (!line.empty() && line[0] != '#') ++rows;
   EXPECT_EQ(rows, 7 * 2 * 3);
+  // ... in the format 'softhd forward --control' reads.
+  const std::string forward = std::string(SOFTHD_CLI) + " forward " + scene() + " --control " +
+                              (fs::path(out()) / "control.csv").string() + " --out " +
+                              (dir_ / "fwd").string() + " >/dev/null 2>&1";
+  const int raw = std::system(forward.c_str());
+  EXPECT_TRUE(WIFEXITED(raw) && WEXITSTATUS(raw) == 0) << forward;
 }
 
 TEST_F(OptimiseCli, ResumesFromTheCheckpoint) {

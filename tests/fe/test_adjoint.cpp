@@ -7,6 +7,7 @@
 #include "softhd/error.hpp"
 #include "softhd/fe/adjoint.hpp"
 #include "softhd/fe/newton.hpp"
+#include "softhd/fe/state_solver.hpp"
 
 using namespace softhd::fe;
 
@@ -88,4 +89,38 @@ TEST(Adjoint, MissingFactorizationIsAnError) {
                     Eigen::Vector3d::UnitX(), {{"x0", {}}});
   EXPECT_THROW(solve_adjoint(A, nullptr, Eigen::VectorXd::Zero(A.dofs().num_dofs)),
                softhd::InvalidArgument);
+}
+
+// The optimiser's view: StateSolver with warm starts between solves and the adjoint
+// gradient of J = |u|² over the free end; Taylor remainders fall as h².
+TEST(StateSolver, WarmStartedSolvesAndGradientPassTaylorTest) {
+  Assembler A(fe_test::box(3, 2, {3.0, 1.0, 0.3}, {4, 1, 1}), fe_test::mooney_rivlin(),
+              Eigen::Vector3d::UnitX(), {{"x0", {}}});
+  NewtonOptions o;
+  o.relative_tolerance = 1e-12;
+  StateSolver S(std::move(A), ControlKind::kVertex, o);
+  const Eigen::MatrixXd P = S.control().positions(S.assembler().mesh());
+  const Eigen::VectorXd m = -0.5 * P.col(2) / 0.3;
+  const Eigen::VectorXd dm = fe_test::random_vector(m.size(), 0.2, 21);
+  auto J = [&](Eigen::VectorXd* g) {
+    const Eigen::VectorXd& u = S.displacement();
+    if (g) g->setZero(u.size());
+    double v = 0.0;
+    for (int n : S.assembler().mesh().face("x1")) {
+      v += u.segment(3 * n, 3).squaredNorm();
+      if (g) g->segment(3 * n, 3) = 2.0 * u.segment(3 * n, 3);
+    }
+    return v;
+  };
+  ASSERT_TRUE(S.solve(m).converged());
+  Eigen::VectorXd g;
+  const double J0 = J(&g);
+  const double slope = S.gradient(g).dot(dm);
+  std::vector<double> rem;
+  for (double h : {0.2, 0.1, 0.05}) {
+    ASSERT_TRUE(S.solve(m + h * dm).converged());  // warm start from the previous state
+    rem.push_back(std::abs(J(nullptr) - J0 - h * slope));
+  }
+  for (size_t i = 1; i < rem.size(); ++i) EXPECT_GT(std::log2(rem[i - 1] / rem[i]), 1.9);
+  EXPECT_GT(0.05 * std::abs(slope), 5.0 * rem.back());
 }

@@ -191,6 +191,13 @@ TEST(Newton, FailureIsReportedNotThrown) {
   EXPECT_GT(A.min_jacobian(s.u), 0.0);
   EXPECT_NE(sum.FullReport().find("load"), std::string::npos);
   EXPECT_EQ(newton.converged_factorization(), nullptr);
+  NewtonOptions budget;
+  budget.max_total_iterations = 7;
+  NewtonSolver limited(A, budget);
+  State s2 = rest_state(A);
+  const NewtonSummary sum2 = limited.solve(uniform(A, 6.0 * kA), &s2);
+  EXPECT_EQ(sum2.status, NewtonStatus::kTooManyIterations);
+  EXPECT_LE(sum2.newton_iterations, 7 + budget.max_iterations);
   NewtonOptions bad;
   bad.max_iterations = 0;
   EXPECT_THROW(NewtonSolver(A, bad), softhd::InvalidArgument);

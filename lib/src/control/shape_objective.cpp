@@ -6,8 +6,8 @@
 
 #include "softhd/error.hpp"
 #include "softhd/fe/adjoint.hpp"
+#include "softhd/fe/cloud.hpp"
 #include "softhd/fe/geometry.hpp"
-#include "softhd/fe/kinematics.hpp"
 
 namespace softhd {
 
@@ -43,13 +43,7 @@ struct ShapeObjective::Impl {
         options(std::move(o)),
         newton(a, options.newton) {
     const fe::Mesh& mesh = a.mesh();
-    const fe::ReferenceGeometry& geo = a.geometry();
     dim = mesh.dim;
-    reference_volumes =
-        options.particles == Particles::nodes
-            ? fe::lumped_volumes(mesh, geo)
-            : Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(
-                  Eigen::MatrixXd(geo.weights().transpose()).data(), geo.weights().size()));
     // Clamped nodes (no free dof) are not differentiated.
     if (options.particles == Particles::nodes) {
       differentiate.setConstant(mesh.num_nodes(), false);
@@ -71,90 +65,24 @@ struct ShapeObjective::Impl {
   ShapeObjectiveOptions options;
   fe::NewtonSolver newton;
   int dim = 3;
-  Eigen::VectorXd reference_volumes;
   Eigen::Array<bool, Eigen::Dynamic, 1> differentiate;
   std::deque<Cached> cache;  // most recent first
 
-  /// Node positions x = X + u, N by dim.
-  Eigen::MatrixXd node_positions(const Eigen::VectorXd& u) const {
-    const Eigen::MatrixXd& X = assembler.mesh().nodes;
-    return X + Eigen::Map<const Eigen::MatrixXd>(u.data(), dim, X.rows()).transpose();
+  fe::CloudPoints cloud_points() const {
+    return options.particles == Particles::nodes ? fe::CloudPoints::kNodes
+                                                 : fe::CloudPoints::kQuadraturePoints;
   }
-
+  fe::CloudVolumes cloud_volumes() const {
+    return options.volumes == ParticleVolumes::reference ? fe::CloudVolumes::kReference
+                                                         : fe::CloudVolumes::kDeformed;
+  }
   PointCloud particles(const Eigen::VectorXd& u) const {
-    const fe::Mesh& mesh = assembler.mesh();
-    const fe::ReferenceGeometry& geo = assembler.geometry();
-    const Eigen::MatrixXd x = node_positions(u);
-    Eigen::VectorXd volumes = reference_volumes;
-    if (options.volumes == ParticleVolumes::deformed) {
-      const Eigen::MatrixXd J = assembler.jacobians(u);  // E by nq
-      if (options.particles == Particles::nodes) {
-        // V_i = ∫ N_i J dX = Σ_e Σ_q N_i(ξ_q) J_eq w_eq
-        volumes.setZero();
-        for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
-          for (int q = 0; q < geo.points_per_element(); ++q)
-            for (int a = 0; a < geo.nodes_per_element(); ++a)
-              volumes[mesh.elements(e, a)] +=
-                  geo.shape_values()(q, a) * J(e, q) * geo.weights()(e, q);
-      } else {
-        // V_q = w_q det J0 · J_q
-        for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
-          for (int q = 0; q < geo.points_per_element(); ++q)
-            volumes[e * geo.points_per_element() + q] *= J(e, q);
-      }
-    }
-    if (options.particles == Particles::nodes) return PointCloud(x, volumes);
-    // x_q = Σ_a N_a(ξ_q) x_a
-    const int nq = geo.points_per_element();
-    Eigen::MatrixXd xq(mesh.num_elements() * nq, dim);
-    for (Eigen::Index e = 0; e < mesh.num_elements(); ++e) {
-      Eigen::MatrixXd xe(geo.nodes_per_element(), dim);
-      for (int a = 0; a < geo.nodes_per_element(); ++a) xe.row(a) = x.row(mesh.elements(e, a));
-      xq.middleRows(e * nq, nq) = geo.shape_values() * xe;
-    }
-    return PointCloud(xq, volumes);
+    return fe::deformed_cloud(assembler, u, cloud_points(), cloud_volumes());
   }
-
   /// ∂ρ̃/∂u (num_dofs) from the cloud gradients w.r.t. particle positions and volumes.
   Eigen::VectorXd displacement_gradient(const Eigen::VectorXd& u, const HausdorffResult& r) const {
-    const fe::Mesh& mesh = assembler.mesh();
-    const fe::ReferenceGeometry& geo = assembler.geometry();
-    const int nq = geo.points_per_element(), nen = geo.nodes_per_element();
-    Eigen::VectorXd g = Eigen::VectorXd::Zero(assembler.dofs().num_dofs);
-    // Positions: nodes directly; quadrature points through x_q = Σ_a N_a(ξ_q) x_a.
-    if (options.particles == Particles::nodes) {
-      for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n)
-        for (int c = 0; c < dim; ++c) g[n * dim + c] = r.gradient_points(n, c);
-    } else {
-      for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
-        for (int q = 0; q < nq; ++q)
-          for (int a = 0; a < nen; ++a)
-            for (int c = 0; c < dim; ++c)
-              g[mesh.elements(e, a) * dim + c] +=
-                  geo.shape_values()(q, a) * r.gradient_points(e * nq + q, c);
-    }
-    if (options.volumes == ParticleVolumes::reference) return g;
-    // Volumes: ∂J/∂u_{b,c} = H_cJ ∂N_b/∂X_J at each quadrature point, weighted by
-    // s_eq w_eq with s_eq = Σ_i ∂ρ̃/∂V_i N_i(ξ_q) (nodes) or ∂ρ̃/∂V_eq (quadrature).
-    for (Eigen::Index e = 0; e < mesh.num_elements(); ++e) {
-      for (int q = 0; q < nq; ++q) {
-        double s = 0.0;
-        if (options.particles == Particles::nodes) {
-          for (int a = 0; a < nen; ++a)
-            s += r.gradient_volumes[mesh.elements(e, a)] * geo.shape_values()(q, a);
-        } else {
-          s = r.gradient_volumes[e * nq + q];
-        }
-        const double sw = s * geo.weights()(e, q);
-        if (sw == 0.0) continue;
-        const Eigen::Matrix3d H = fe::cofactor(assembler.deformation_gradient(u, e, q));
-        const auto dN = geo.gradients(e, q);  // dim by nen
-        for (int b = 0; b < nen; ++b)
-          for (int c = 0; c < dim; ++c)
-            g[mesh.elements(e, b) * dim + c] += sw * H.row(c).head(dim).dot(dN.col(b));
-      }
-    }
-    return g;
+    return fe::cloud_pullback(assembler, u, cloud_points(), cloud_volumes(), r.gradient_points,
+                              r.gradient_volumes);
   }
 
   /// The cached state whose control is nearest to m (the rest state counts as m = 0).
@@ -188,8 +116,8 @@ ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::Control
     // far below any load that matters.
     const int d = assembler.mesh().dim;
     const double volume = fe::lumped_volumes(assembler.mesh(), assembler.geometry()).sum();
-    options.newton.absolute_tolerance = 1e-10 * assembler.material().stiffness_scale() *
-                                        std::pow(volume, (d - 1.0) / d);
+    options.newton.absolute_tolerance =
+        1e-10 * assembler.material().stiffness_scale() * std::pow(volume, (d - 1.0) / d);
   }
   impl_ = std::make_unique<Impl>(assembler, control, std::move(target), std::move(options));
 }

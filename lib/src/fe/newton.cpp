@@ -38,6 +38,7 @@ bool NewtonOptions::IsValid(std::string* error) const {
   if (!(min_load_increment > 0.0 && min_load_increment <= initial_load_increment))
     return fail("min_load_increment must be in (0, initial_load_increment]");
   if (max_load_steps < 1) return fail("max_load_steps must be >= 1");
+  if (max_total_iterations < 1) return fail("max_total_iterations must be >= 1");
   return true;
 }
 
@@ -49,6 +50,8 @@ std::string to_string(NewtonStatus status) {
       return "load increment too small";
     case NewtonStatus::kTooManyLoadSteps:
       return "too many load steps";
+    case NewtonStatus::kTooManyIterations:
+      return "too many Newton iterations";
   }
   return "unknown";
 }
@@ -119,6 +122,32 @@ double NewtonSolver::factorize_with_fallback(NewtonSummary* summary) {
   return shift;
 }
 
+double NewtonSolver::backtrack(const Eigen::MatrixXd& m, const Eigen::VectorXd& u0, double Pi0,
+                               double slope, const Eigen::VectorXd& du, double s, double rnorm,
+                               Eigen::VectorXd* u, NewtonSummary* summary) const {
+  // Π(u0 + s du) <= Π(u0) + c s slope, s halving; +inf energy (det F <= 0) never accepted.
+  for (int ls = 0; ls < options_.max_line_search_steps; ++ls, s *= options_.backtrack) {
+    const Eigen::VectorXd trial = u0 + s * du;
+    double Pi_trial;
+    const auto t0 = Clock::now();
+    const bool admissible = assembler_.evaluate(trial, m, &Pi_trial, nullptr, nullptr);
+    summary->seconds_assembly += seconds_since(t0);
+    if (!admissible) continue;
+    bool accept = Pi_trial <= Pi0 + options_.armijo * s * slope;
+    if (!accept && std::abs(Pi_trial - Pi0) <= 1e-13 * std::abs(Pi0)) {
+      // Energy differences at round-off: accept if the residual decreases.
+      Eigen::VectorXd R_trial;
+      assembler_.evaluate(trial, m, nullptr, &R_trial, nullptr);
+      accept = R_trial.norm() < rnorm;
+    }
+    if (accept) {
+      *u = trial;
+      return s;
+    }
+  }
+  return 0.0;
+}
+
 bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, double load,
                                    Eigen::VectorXd* u, NewtonSummary* summary) {
   const DofMap& dofs = assembler_.dofs();
@@ -128,6 +157,16 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
   assembler_.evaluate(Eigen::VectorXd::Zero(dofs.num_dofs), m, nullptr, &R0, nullptr);
   summary->seconds_assembly += seconds_since(t0);
   double R_ref = R0.norm();
+  // Watchdog (nonmonotone) line search: a full step that raises the energy but keeps
+  // det F > 0 is taken tentatively; if the next full step does not bring the energy below
+  // the Armijo line of the saved point, both are undone and the saved step backtracks.
+  // Thin bodies need it: the full Newton step bends them correctly but leaves second-order
+  // membrane strains whose energy the next iteration removes.
+  struct Watch {
+    bool active = false;
+    Eigen::VectorXd u, du;
+    double Pi = 0.0, slope = 0.0, rnorm = 0.0;
+  } watch;
   for (int it = 0; it <= options_.max_iterations; ++it) {
     t0 = Clock::now();
     const bool admissible = assembler_.evaluate(*u, m, &Pi, &R, &K_);
@@ -145,8 +184,10 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
     if (rnorm <= options_.relative_tolerance * R_ref + options_.absolute_tolerance ||
         rnorm == 0.0) {
       summary->iterations.push_back(rec);
-      if (options_.factorize_converged_tangent && dofs.num_free > 0) {
-        factorization_valid_ = factorize_with_fallback(summary) == 0.0;
+      if ((options_.factorize_converged_tangent || options_.path_predictor) && dofs.num_free > 0) {
+        const double shift = factorize_with_fallback(summary);
+        factorization_valid_ = shift == 0.0;
+        have_path_tangent_ = std::isfinite(shift);
       }
       return true;
     }
@@ -156,7 +197,13 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
       return false;
     }
     ++summary->newton_iterations;
-    rec.shift = factorize_with_fallback(summary);
+    if (it == 0 && have_path_tangent_) {
+      rec.shift = 0.0;  // predictor: reuse the previous converged tangent's factorisation
+    } else {
+      rec.shift = factorize_with_fallback(summary);
+    }
+    have_path_tangent_ = false;
+    factorization_valid_ = false;
     if (!std::isfinite(rec.shift)) {
       summary->iterations.push_back(rec);
       summary->message = "tangent could not be factorised";
@@ -166,38 +213,41 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
     const Eigen::VectorXd du = dofs.expand(-solver_->solve(R));
     summary->seconds_solve += seconds_since(t0);
     const double slope = R.dot(dofs.restrict(du));  // dΠ/ds at s = 0, < 0 for descent
-    // Backtracking on the energy; +inf energy (det F <= 0) is never accepted.
-    double s = 1.0;
-    bool accepted = false;
-    for (int ls = 0; ls < options_.max_line_search_steps && !accepted;
-         ++ls, s *= options_.backtrack) {
-      const Eigen::VectorXd trial = *u + s * du;
-      double Pi_trial;
-      t0 = Clock::now();
-      if (!assembler_.evaluate(trial, m, &Pi_trial, nullptr, nullptr)) {
-        summary->seconds_assembly += seconds_since(t0);
-        continue;
+    if (watch.active) {
+      watch.active = false;
+      double Pi_full;
+      const Eigen::VectorXd full = *u + du;
+      if (assembler_.evaluate(full, m, &Pi_full, nullptr, nullptr) &&
+          Pi_full <= watch.Pi + options_.armijo * watch.slope) {
+        *u = full;
+        rec.step = 1.0;
+      } else {
+        rec.step = backtrack(m, watch.u, watch.Pi, watch.slope, watch.du, options_.backtrack,
+                             watch.rnorm, u, summary);
+        if (rec.step == 0.0) *u = watch.u;
       }
-      summary->seconds_assembly += seconds_since(t0);
-      if (Pi_trial <= Pi + options_.armijo * s * slope) {
-        accepted = true;
-      } else if (std::abs(Pi_trial - Pi) <= 1e-13 * std::abs(Pi) + 1e-300) {
-        // Energy differences at round-off: accept if the residual decreases.
-        Eigen::VectorXd R_trial;
-        assembler_.evaluate(trial, m, nullptr, &R_trial, nullptr);
-        accepted = R_trial.norm() < rnorm;
-      }
-      if (accepted) {
-        *u = trial;
-        rec.step = s;
+    } else {
+      double Pi_full;
+      const Eigen::VectorXd full = *u + du;
+      const bool ok = assembler_.evaluate(full, m, &Pi_full, nullptr, nullptr);
+      if (ok && Pi_full <= Pi + options_.armijo * slope) {
+        *u = full;
+        rec.step = 1.0;
+      } else if (ok && options_.watchdog) {
+        watch = {true, *u, du, Pi, slope, rnorm};
+        *u = full;
+        rec.step = 1.0;
+      } else {
+        rec.step = backtrack(m, *u, Pi, slope, du, 1.0, rnorm, u, summary);
       }
     }
     summary->iterations.push_back(rec);
     if (options_.verbose) {
       std::cerr << "newton: step " << load_step << " load " << load << " it " << it << " |R| "
-                << rnorm << " energy " << Pi << " s " << rec.step << " shift " << rec.shift << "\n";
+                << rnorm << " energy " << Pi << " s " << rec.step << " shift " << rec.shift
+                << (watch.active ? " (tentative)" : "") << "\n";
     }
-    if (!accepted) {
+    if (rec.step == 0.0) {
       summary->message = "line search failed at iteration " + std::to_string(it);
       return false;
     }
@@ -218,6 +268,12 @@ NewtonSummary NewtonSolver::solve(const Eigen::MatrixXd& m_qp, State* state) {
     throw InvalidArgument("Newton: the start state has the wrong size (use rest_state())");
   }
   NewtonSummary summary;
+  // The factorisation left by the previous solve is the path tangent of this one only if
+  // this one starts exactly where that one ended.
+  if (!(have_path_tangent_ && last_u_.size() == state->u.size() && last_u_ == state->u &&
+        last_m_ == state->m_qp)) {
+    have_path_tangent_ = false;
+  }
   factorization_valid_ = false;
   const Eigen::MatrixXd m0 = state->m_qp;
   double t = 0.0, inc = options_.initial_load_increment;
@@ -227,8 +283,20 @@ NewtonSummary NewtonSolver::solve(const Eigen::MatrixXd& m_qp, State* state) {
       summary.status = NewtonStatus::kTooManyLoadSteps;
       break;
     }
+    if (summary.newton_iterations >= options_.max_total_iterations) {
+      summary.status = NewtonStatus::kTooManyIterations;
+      break;
+    }
     const double t_try = std::min(1.0, t + inc);
     const Eigen::MatrixXd m = m0 + t_try * (m_qp - m0);
+    if (options_.path_predictor && !have_path_tangent_ && assembler_.dofs().num_free > 0) {
+      // Tangent at the last converged state (u, m_t): its first step is the Euler
+      // predictor along the equilibrium path (K depends on m through the fiber term).
+      const auto t0 = Clock::now();
+      assembler_.evaluate(state->u, state->m_qp, nullptr, nullptr, &K_);
+      summary.seconds_assembly += seconds_since(t0);
+      have_path_tangent_ = std::isfinite(factorize_with_fallback(&summary));
+    }
     const int before = summary.newton_iterations;
     const bool ok = solve_load_step(m, summary.load_steps, t_try, &u, &summary);
     ++summary.load_steps;
@@ -246,6 +314,7 @@ NewtonSummary NewtonSolver::solve(const Eigen::MatrixXd& m_qp, State* state) {
     } else {
       ++summary.failed_load_steps;
       u = state->u;  // back to the last converged state
+      have_path_tangent_ = false;
       inc *= 0.5;
       if (inc < options_.min_load_increment) {
         summary.status = NewtonStatus::kLoadIncrementTooSmall;
@@ -255,6 +324,10 @@ NewtonSummary NewtonSolver::solve(const Eigen::MatrixXd& m_qp, State* state) {
     }
   }
   if (!summary.converged()) factorization_valid_ = false;
+  if (have_path_tangent_) {
+    last_u_ = state->u;
+    last_m_ = state->m_qp;
+  }
   summary.final_load = t;
   summary.seconds_total = seconds_since(t_start);
   return summary;

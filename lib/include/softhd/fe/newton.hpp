@@ -28,14 +28,32 @@ struct NewtonOptions {
   /// Step shrink factor and maximum number of shrinks of the line search.
   double backtrack = 0.5;
   int max_line_search_steps = 40;
+  /// Nonmonotone (watchdog) line search: a full step that raises the energy is taken
+  /// tentatively and kept only if the next full step ends below the Armijo line of the
+  /// point before it; otherwise the line search backtracks from that point.
+  bool watchdog = true;
   /// First load increment (fraction of the change of m from the start state) and the
   /// smallest one tried before giving up; increments halve on failure and double after
   /// a step that converged in fewer than max_iterations / 2 iterations.
   double initial_load_increment = 1.0;
   double min_load_increment = 1.0 / 4096.0;
+  /// Take the first iteration of each load step with the tangent at the last converged
+  /// state (u_t, m_t): the Euler predictor along the equilibrium path. The tangent at
+  /// (u_t, m_{t+Δ}) carries the geometric stiffness of the whole unbalanced fiber tension
+  /// and predicts bending of thin bodies far too stiff. Costs one factorisation per
+  /// load step (shared with the adjoint's) and one at the start unless the previous
+  /// solve ended at the start state.
+  bool path_predictor = true;
   /// Total load steps (successful or not) allowed in one solve.
   int max_load_steps = 400;
-  /// Sparse direct solver (CHOLMOD measured faster on the bending meshes).
+  /// Total Newton iterations allowed in one solve (a time budget for callers such as the
+  /// optimiser; the full-turn plate of issue 4 needs about 420). Checked between load
+  /// steps, so a solve may overrun it by up to max_iterations.
+  int max_total_iterations = 3000;
+  /// Sparse direct solver. CHOLMOD (supernodal, here with Debian's reference BLAS): on the
+  /// bending mesh (16 500 dofs) Eigen's LDLT factorises in 0.31 s CPU against 0.39 s, on
+  /// the mesh 2x finer in each direction (113 400 dofs) CHOLMOD takes 15.8 s against 60.2 s
+  /// (bench_state solvers 1 | 2), so CHOLMOD is the default that scales.
   LinearSolverType linear_solver = LinearSolverType::kCholmod;
   /// Factorise the tangent at the converged state (needed by the adjoint).
   bool factorize_converged_tangent = true;
@@ -50,6 +68,7 @@ enum class NewtonStatus {
   kConverged,
   kLoadIncrementTooSmall,  ///< a load step failed with the smallest increment
   kTooManyLoadSteps,
+  kTooManyIterations,  ///< max_total_iterations reached
 };
 std::string to_string(NewtonStatus status);
 
@@ -115,6 +134,11 @@ class NewtonSolver {
   /// Newton at fixed m from *u; returns true on convergence.
   bool solve_load_step(const Eigen::MatrixXd& m, int load_step, double load, Eigen::VectorXd* u,
                        NewtonSummary* summary);
+  /// Backtracking from u0 along du starting at step s; sets *u and returns the accepted
+  /// step, or 0 (u untouched) if none.
+  double backtrack(const Eigen::MatrixXd& m, const Eigen::VectorXd& u0, double Pi0, double slope,
+                   const Eigen::VectorXd& du, double s, double rnorm, Eigen::VectorXd* u,
+                   NewtonSummary* summary) const;
   /// Factorises K (shifting its diagonal until positive definite); returns the shift.
   double factorize_with_fallback(NewtonSummary* summary);
 
@@ -124,6 +148,10 @@ class NewtonSolver {
   SparseMatrix K_, shifted_;
   std::vector<int> diagonal_;  ///< index of each diagonal entry in K_'s values
   bool factorization_valid_ = false;
+  /// solver_ holds the factorisation at the last converged state (last_u_, last_m_).
+  bool have_path_tangent_ = false;
+  Eigen::VectorXd last_u_;
+  Eigen::MatrixXd last_m_;
 };
 
 }  // namespace softhd::fe

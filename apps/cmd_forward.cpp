@@ -1,0 +1,204 @@
+// softhd forward: solve the hyperelastic state of a scene for a given control.
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "softhd/error.hpp"
+#include "softhd/fe/newton.hpp"
+#include "softhd/fe/output.hpp"
+#include "softhd/fe/scene.hpp"
+
+namespace {
+
+using namespace softhd::fe;
+
+constexpr const char* kUsage =
+    "usage: softhd forward SCENE [--control FILE | --control-uniform V] [--probe X1,X2[,X3]]...\n"
+    "                      [--out DIR] [--json] [--linear-solver NAME] [--verbose]\n"
+    "       softhd forward SCENE --write-control-nodes FILE [--control-uniform V]\n"
+    "\n"
+    "Solves the equilibrium of the scene's body for the active tension m and writes\n"
+    "DIR/forward.vtu (deformed mesh with displacement, m and J; default DIR: out).\n"
+    "  --control FILE         rows 'X1 X2 [X3] m', one per control node (vertex or element\n"
+    "                         centre), matched by coordinates\n"
+    "  --control-uniform V    m = V everywhere (default: the scene's control.initial)\n"
+    "  --probe X1,X2[,X3]     report u at this reference point (FE interpolation); repeatable\n"
+    "  --json                 print a JSON summary (probes, energy, volume, iterations, ...)\n"
+    "  --linear-solver NAME   eigen-llt, eigen-ldlt or cholmod (default cholmod)\n"
+    "  --write-control-nodes FILE  write the control nodes with their current values and stop\n";
+
+struct Args {
+  std::string scene, control_file, out_dir = "out", write_nodes, linear_solver;
+  bool has_uniform = false, json = false, verbose = false;
+  double uniform = 0.0;
+  std::vector<Eigen::VectorXd> probes;
+};
+
+double parse_number(const std::string& text, const std::string& option) {
+  try {
+    size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used == text.size()) return v;
+  } catch (const std::exception&) {
+  }
+  throw softhd::InvalidArgument(option + " expects a number, got '" + text + "'");
+}
+
+Eigen::VectorXd parse_point(const std::string& text) {
+  std::vector<double> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) v.push_back(parse_number(item, "--probe"));
+  if (v.size() < 2 || v.size() > 3)
+    throw softhd::InvalidArgument("--probe expects X1,X2 or X1,X2,X3, got '" + text + "'");
+  return Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+
+// Returns false if --help was asked for.
+bool parse(int argc, char** argv, Args* a) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string s = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw softhd::InvalidArgument(s + " needs a value");
+      return argv[++i];
+    };
+    if (s == "--help" || s == "-h") return false;
+    if (s == "--control") {
+      a->control_file = value();
+    } else if (s == "--control-uniform") {
+      a->uniform = parse_number(value(), s);
+      a->has_uniform = true;
+    } else if (s == "--probe") {
+      a->probes.push_back(parse_point(value()));
+    } else if (s == "--out") {
+      a->out_dir = value();
+    } else if (s == "--json") {
+      a->json = true;
+    } else if (s == "--verbose") {
+      a->verbose = true;
+    } else if (s == "--linear-solver") {
+      a->linear_solver = value();
+    } else if (s == "--write-control-nodes") {
+      a->write_nodes = value();
+    } else if (!s.empty() && s[0] == '-') {
+      throw softhd::InvalidArgument("unknown option " + s + " (see softhd forward --help)");
+    } else if (a->scene.empty()) {
+      a->scene = s;
+    } else {
+      throw softhd::InvalidArgument("unexpected argument '" + s + "'");
+    }
+  }
+  if (a->scene.empty()) throw softhd::InvalidArgument("no scene file given (see --help)");
+  if (!a->control_file.empty() && a->has_uniform)
+    throw softhd::InvalidArgument("--control and --control-uniform exclude each other");
+  return true;
+}
+
+int forward(const Args& args) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Scene scene = load_scene(args.scene);
+  const Assembler assembler = scene.make_assembler();
+  const ControlSpace control(assembler.mesh(), assembler.geometry(), scene.control_kind);
+  const Eigen::MatrixXd positions = control.positions(assembler.mesh());
+  Eigen::VectorXd m = Eigen::VectorXd::Constant(
+      control.size(), args.has_uniform ? args.uniform : scene.control_initial);
+  if (!args.control_file.empty()) m = read_control_file(args.control_file, positions);
+  if (!args.write_nodes.empty()) {
+    write_control_file(args.write_nodes, positions, m);
+    return 0;
+  }
+  for (Eigen::Index k = 0; k < m.size(); ++k) {
+    if (!(m[k] >= scene.control_lower && m[k] <= scene.control_upper)) {
+      std::ostringstream os;
+      os << "control value " << m[k] << " at node " << k << " (" << positions.row(k)
+         << ") is outside the scene's bounds [" << scene.control_lower << ", "
+         << scene.control_upper << "]";
+      throw softhd::InvalidArgument(os.str());
+    }
+  }
+  for (const Eigen::VectorXd& X : args.probes) {
+    Eigen::VectorXd xi;
+    if (X.size() != scene.dim() || locate(assembler.mesh(), X, &xi) < 0) {
+      std::ostringstream os;
+      os << "probe (" << X.transpose() << ") is not a point of the " << scene.dim() << "D body";
+      throw softhd::InvalidArgument(os.str());
+    }
+  }
+  NewtonOptions options;
+  options.verbose = args.verbose;
+  if (!args.linear_solver.empty()) options.linear_solver = parse_linear_solver(args.linear_solver);
+  NewtonSolver newton(assembler, options);
+  State state = rest_state(assembler);
+  const Eigen::MatrixXd m_qp = control.to_quadrature(m);
+  const NewtonSummary summary = newton.solve(m_qp, &state);
+  const Eigen::MatrixXd J = assembler.jacobians(state.u);
+  std::filesystem::create_directories(args.out_dir);
+  const std::string vtu = (std::filesystem::path(args.out_dir) / "forward.vtu").string();
+  write_vtu(vtu, assembler.mesh(), state.u, state.m_qp, J);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (args.json) {
+    nlohmann::json j;
+    j["scene"] = scene.name;
+    j["status"] = to_string(summary.status);
+    j["converged"] = summary.converged();
+    j["load_reached"] = summary.final_load;
+    nlohmann::json probes = nlohmann::json::array();
+    for (const Eigen::VectorXd& X : args.probes) {
+      const Eigen::VectorXd u = probe_displacement(assembler, state.u, X);
+      probes.push_back({{"X", std::vector<double>(X.data(), X.data() + X.size())},
+                        {"u", std::vector<double>(u.data(), u.data() + u.size())}});
+    }
+    j["probes"] = probes;
+    double energy = 0.0;
+    assembler.evaluate(state.u, state.m_qp, &energy, nullptr, nullptr);
+    j["energy"] = energy;
+    j["volume"] = assembler.deformed_volume(state.u);
+    j["min_J"] = J.minCoeff();
+    j["newton_iterations"] = summary.newton_iterations;
+    j["load_steps"] = summary.load_steps;
+    j["dofs"] = assembler.dofs().num_free;
+    j["seconds"] = seconds;
+    j["vtu"] = vtu;
+    std::cout << j.dump(2) << "\n";
+  } else {
+    std::cout << summary.BriefReport() << "\nwrote " << vtu << "\n";
+    for (const Eigen::VectorXd& X : args.probes) {
+      std::cout << "u(" << X.transpose()
+                << ") = " << probe_displacement(assembler, state.u, X).transpose() << "\n";
+    }
+  }
+  if (!summary.converged()) {
+    std::cerr << "softhd forward: the state solve did not converge (the VTU holds the last "
+                 "converged load step)\n"
+              << summary.FullReport();
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int run_forward(int argc, char** argv) {
+  Args args;
+  try {
+    if (!parse(argc, argv, &args)) {
+      std::cout << kUsage;
+      return 0;
+    }
+    return forward(args);
+  } catch (const softhd::Error& e) {
+    std::cerr << "softhd forward: " << e.what() << "\n";
+    return 2;
+  } catch (const std::filesystem::filesystem_error& e) {
+    std::cerr << "softhd forward: " << e.what() << "\n";
+    return 2;
+  }
+}

@@ -1,0 +1,252 @@
+// bench_state: measurements of the FE state solver (issue 4). Prints CSV-like lines.
+//
+//   bench_state solvers [scale]    factorisation/solve times of every linear solver on the
+//                                  bending mesh (cells × scale in each direction)
+//   bench_state newton SCENE [linear-solver]
+//                                  cold start, warm start after +5 % m, adjoint cost, split
+//                                  of the time per Newton iteration; run it with
+//                                  OMP_NUM_THREADS=1 and =2 to compare threads
+//   bench_state assembly SCENE     assembly times, 1 and 2 threads (minimum of 7)
+//   bench_state refine             bending plate, m = -1e4 X3/0.1: tip displacement for Q2
+//                                  and Q1 at refinements
+//   bench_state hard [cells_x]     m = -5e4 on the upper half of the plate thickness
+//                                  (element controls): more than a full turn
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <string>
+
+#include "softhd/fe/adjoint.hpp"
+#include "softhd/fe/newton.hpp"
+#include "softhd/fe/output.hpp"
+#include "softhd/fe/scene.hpp"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+using namespace softhd::fe;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+int threads() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+Scene scene_file(const std::string& name) {
+  return load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/" + name + ".json");
+}
+
+// m = -1e4 X3 / 0.1 at the vertices (the issue's quarter-turn-order bend).
+Eigen::VectorXd linear_bend(const ControlSpace& c, const Mesh& mesh) {
+  const Eigen::MatrixXd P = c.positions(mesh);
+  return -1e4 * P.col(2) / 0.1;
+}
+
+int solvers(double scale) {
+  Scene s = scene_file("bending");
+  s.cells = (s.cells.cast<double>() * scale).cast<int>();
+  const Assembler A = s.make_assembler();
+  const ControlSpace c(A.mesh(), A.geometry(), ControlKind::kVertex);
+  State st = rest_state(A);
+  SparseMatrix K = A.tangent_pattern();
+  Eigen::VectorXd R;
+  // A deformed state (one Newton step of the linear bend) so that K is a real tangent.
+  A.evaluate(st.u, c.to_quadrature(linear_bend(c, A.mesh())), nullptr, &R, &K);
+  // Minimum over 3 repetitions; CPU time (std::clock) as well, since the factorisations
+  // are single-threaded and wall time suffers from other processes on a shared machine.
+  std::printf("mesh,nodes,dofs,nnz_lower,solver,analyze_s,factorize_s,solve_s,factorize_cpu_s\n");
+  for (LinearSolverType t :
+       {LinearSolverType::kEigenLLT, LinearSolverType::kEigenLDLT, LinearSolverType::kCholmod}) {
+    auto ls = make_linear_solver(t);
+    auto t0 = Clock::now();
+    ls->analyze(K);
+    const double ta = since(t0);
+    double tf = 1e300, ts = 1e300, tc = 1e300;
+    for (int rep = 0; rep < 3; ++rep) {
+      t0 = Clock::now();
+      const std::clock_t c0 = std::clock();
+      ls->factorize(K);
+      tc = std::min(tc, static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC);
+      tf = std::min(tf, since(t0));
+      t0 = Clock::now();
+      const Eigen::VectorXd x = ls->solve(R);
+      ts = std::min(ts, since(t0));
+    }
+    std::printf("%dx%dx%d,%ld,%ld,%ld,%s,%.4f,%.4f,%.4f,%.4f\n", s.cells[0], s.cells[1], s.cells[2],
+                static_cast<long>(A.mesh().num_nodes()), static_cast<long>(A.dofs().num_free),
+                static_cast<long>(K.nonZeros()), to_string(t).c_str(), ta, tf, ts, tc);
+  }
+  return 0;
+}
+
+void print_summary(const char* label, const NewtonSummary& s) {
+  const double n = std::max(1, s.newton_iterations);
+  std::printf(
+      "%s,threads=%d,status=%s,iterations=%d,load_steps=%d,failed=%d,factorizations=%d,"
+      "total_s=%.3f,assembly_per_it_s=%.4f,factorization_per_it_s=%.4f,solve_per_it_s=%.4f\n",
+      label, threads(), to_string(s.status).c_str(), s.newton_iterations, s.load_steps,
+      s.failed_load_steps, s.factorizations, s.seconds_total, s.seconds_assembly / n,
+      s.seconds_factorization / n, s.seconds_solve / n);
+}
+
+int newton(const std::string& name, const std::string& solver) {
+  const Scene s = scene_file(name);
+  const Assembler A = s.make_assembler();
+  const ControlSpace c(A.mesh(), A.geometry(), s.control_kind);
+  NewtonOptions o;
+  if (!solver.empty()) o.linear_solver = parse_linear_solver(solver);
+  NewtonSolver newton(A, o);
+  // bending: the linear-through-thickness bend; torsion: 2 % of the lower bound on the
+  // top half, which bends and (through the oblique material direction) twists the beam.
+  Eigen::VectorXd m;
+  if (name == "bending") {
+    m = linear_bend(c, A.mesh());
+  } else {
+    const Eigen::MatrixXd P = c.positions(A.mesh());
+    m = (P.col(2).array() > 0.5 * s.upper[2]).cast<double>() * 0.02 * s.control_lower;
+  }
+  std::printf("scene=%s,dofs=%ld,solver=%s\n", name.c_str(), static_cast<long>(A.dofs().num_free),
+              to_string(o.linear_solver).c_str());
+  State st = rest_state(A);
+  const NewtonSummary cold = newton.solve(c.to_quadrature(m), &st);
+  print_summary("cold", cold);
+  const Eigen::VectorXd tip =
+      probe_displacement(A, st.u, s.upper.cwiseProduct(Eigen::Vector3d(1, 0.5, 0.5)));
+  std::printf("tip_u,%.6f,%.6f,%.6f\n", tip[0], tip[1], tip[2]);
+  // Adjoint for J = |u_tip|^2 at the tip nodes: one solve + the gradient integral.
+  auto t0 = Clock::now();
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(A.dofs().num_dofs);
+  for (int n : A.mesh().face("x1")) g.segment(3 * n, 3) = 2.0 * st.u.segment(3 * n, 3);
+  const Eigen::VectorXd lambda = solve_adjoint(A, newton.converged_factorization(), g);
+  const Eigen::VectorXd grad = control_gradient(A, c, st.u, lambda);
+  const double t_adj = since(t0);
+  std::printf("adjoint_s=%.4f,fraction_of_cold_solve=%.4f,|grad|=%.4e\n", t_adj,
+              t_adj / cold.seconds_total, grad.norm());
+  const NewtonSummary warm = newton.solve(c.to_quadrature(1.05 * m), &st);
+  print_summary("warm_plus5pct", warm);
+  std::printf("adjoint_fraction_of_warm_solve=%.4f\n", t_adj / warm.seconds_total);
+  return cold.converged() && warm.converged() ? 0 : 1;
+}
+
+double tip_z(int order, int nx, int ny, int nz, int* iterations) {
+  Scene s = scene_file("bending");
+  s.order = order;
+  s.cells << nx, ny, nz;
+  const Assembler A = s.make_assembler();
+  const ControlSpace c(A.mesh(), A.geometry(), ControlKind::kVertex);
+  NewtonSolver newton(A);
+  State st = rest_state(A);
+  const NewtonSummary sum = newton.solve(c.to_quadrature(linear_bend(c, A.mesh())), &st);
+  *iterations = sum.converged() ? sum.newton_iterations : -1;
+  return probe_displacement(A, st.u, Eigen::Vector3d(10.0, 1.0, 0.05))[2];
+}
+
+// Assembly alone, minimum over 7 repetitions, for 1 and 2 threads (the Newton timings on
+// a shared machine mix in waiting for other processes).
+int assembly(const std::string& name) {
+  const Scene s = scene_file(name);
+  const Assembler A = s.make_assembler();
+  const ControlSpace c(A.mesh(), A.geometry(), s.control_kind);
+  const Eigen::MatrixXd m = c.to_quadrature(Eigen::VectorXd::Constant(c.size(), -1e3));
+  const Eigen::VectorXd u = Eigen::VectorXd::Zero(A.dofs().num_dofs);
+  SparseMatrix K = A.tangent_pattern();
+  Eigen::VectorXd R;
+  double Pi;
+  std::printf("scene,threads,energy_s,energy_residual_tangent_s\n");
+  for (int t : {1, 2}) {
+#ifdef _OPENMP
+    omp_set_num_threads(t);
+#endif
+    double te = 1e300, tk = 1e300;
+    for (int rep = 0; rep < 7; ++rep) {
+      auto t0 = Clock::now();
+      A.evaluate(u, m, &Pi, nullptr, nullptr);
+      te = std::min(te, since(t0));
+      t0 = Clock::now();
+      A.evaluate(u, m, &Pi, &R, &K);
+      tk = std::min(tk, since(t0));
+    }
+    std::printf("%s,%d,%.4f,%.4f\n", name.c_str(), t, te, tk);
+  }
+  return 0;
+}
+
+int refine() {
+  std::printf("order,cells,tip_u3,newton_iterations,seconds\n");
+  const int base[3] = {10, 1, 1};
+  for (int order : {2, 1})
+    for (int r : {1, 2, 4, 8}) {
+      if (order == 2 && r == 8) continue;
+      const auto t0 = Clock::now();
+      int its = 0;
+      const int nx = base[0] * r * (order == 1 ? 2 : 1), ny = base[1] * r,
+                nz = base[2] * r * (order == 1 ? 2 : 1);
+      const double w = tip_z(order, nx, ny, nz, &its);
+      std::printf("Q%d,%dx%dx%d,%.6f,%d,%.2f\n", order, nx, ny, nz, w, its, since(t0));
+      std::fflush(stdout);
+    }
+  return 0;
+}
+
+int hard(int nx) {
+  Scene s = scene_file("bending");
+  s.cells << nx, std::max(1, nx / 10), 2;
+  s.control_kind = ControlKind::kElement;
+  const Assembler A = s.make_assembler();
+  const ControlSpace c(A.mesh(), A.geometry(), ControlKind::kElement);
+  const Eigen::MatrixXd P = c.positions(A.mesh());
+  const Eigen::VectorXd m = (P.col(2).array() > 0.05).cast<double>() * -5e4;
+  NewtonOptions o;
+  o.max_load_steps = 1000;
+  NewtonSolver newton(A, o);
+  State st = rest_state(A);
+  const NewtonSummary sum = newton.solve(c.to_quadrature(m), &st);
+  print_summary("hard_full_turn", sum);
+  const Eigen::VectorXd tip = probe_displacement(A, st.u, Eigen::Vector3d(10.0, 1.0, 0.05));
+  // Turning angle of the mid-plane line X2 = 1, X3 = 0.05: unwrapped angles of 200 chords.
+  double turn = 0.0, previous = 0.0;
+  Eigen::VectorXd x_prev;
+  for (int i = 0; i <= 200; ++i) {
+    const Eigen::Vector3d X(10.0 * i / 200, 1.0, 0.05);
+    const Eigen::VectorXd x = X + probe_displacement(A, st.u, X);
+    if (i > 0) {
+      double angle = std::atan2(x[2] - x_prev[2], x[0] - x_prev[0]);
+      while (angle - previous > M_PI) angle -= 2 * M_PI;
+      while (angle - previous < -M_PI) angle += 2 * M_PI;
+      turn += angle - previous;
+      previous = angle;
+    }
+    x_prev = x;
+  }
+  std::printf("cells=%dx%dx%d,tip_u,%.5f,%.5f,%.5f,min_J=%.4f,turn_rad=%.4f\n", s.cells[0],
+              s.cells[1], s.cells[2], tip[0], tip[1], tip[2], A.min_jacobian(st.u), turn);
+  return sum.converged() ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::string mode = argc > 1 ? argv[1] : "";
+  if (mode == "solvers") return solvers(argc > 2 ? std::atof(argv[2]) : 1.0);
+  if (mode == "newton" && argc > 2) return newton(argv[2], argc > 3 ? argv[3] : "");
+  if (mode == "refine") return refine();
+  if (mode == "assembly" && argc > 2) return assembly(argv[2]);
+  if (mode == "hard") return hard(argc > 2 ? std::atoi(argv[2]) : 50);
+  std::fprintf(stderr,
+               "usage: bench_state solvers [scale] | newton bending|torsion [solver] | "
+               "assembly SCENE | refine | hard [cells_x]\n");
+  return 2;
+}

@@ -1,0 +1,13 @@
+# Finds CHOLMOD and defines the imported target softhd::cholmod; sets CHOLMOD_FOUND.
+find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
+find_library(CHOLMOD_LIBRARY cholmod)
+find_library(SUITESPARSECONFIG_LIBRARY suitesparseconfig)
+set(CHOLMOD_FOUND FALSE)
+if(CHOLMOD_INCLUDE_DIR AND CHOLMOD_LIBRARY AND SUITESPARSECONFIG_LIBRARY)
+  set(CHOLMOD_FOUND TRUE)
+  if(NOT TARGET softhd::cholmod)
+    add_library(softhd::cholmod INTERFACE IMPORTED)
+    target_include_directories(softhd::cholmod INTERFACE ${CHOLMOD_INCLUDE_DIR})
+    target_link_libraries(softhd::cholmod INTERFACE ${CHOLMOD_LIBRARY} ${SUITESPARSECONFIG_LIBRARY})
+  endif()
+endif()

@@ -1,0 +1,30 @@
+#pragma once
+/// \file cloud.hpp
+/// The moving point cloud of the deformed body (SPEC §1, §4) and the chain rule back to the
+/// displacement: the particles are the mesh nodes (x_i = X_i + u_i) or the quadrature points
+/// (x_q = Σ_a N_a(X_q) x_a); the volumes are the reference ones (V_i = ∫ N_i dX, or w_q det J0)
+/// or the deformed ones (V_i = ∫ N_i J dX, or w_q det J0 J_q).
+
+#include <Eigen/Core>
+
+#include "softhd/fe/assembly.hpp"
+#include "softhd/point_cloud.hpp"
+
+namespace softhd::fe {
+
+enum class CloudPoints { kNodes, kQuadraturePoints };
+enum class CloudVolumes { kReference, kDeformed };
+
+/// The deformed cloud for displacement u.
+PointCloud deformed_cloud(const Assembler& assembler, const Eigen::VectorXd& u, CloudPoints points,
+                          CloudVolumes volumes);
+
+/// g = ∂J/∂u (num_dofs entries) from dJ/dx (N by dim) and dJ/dV (N entries; ignored for
+/// reference volumes) of the cloud deformed_cloud(assembler, u, points, volumes):
+///   g_a = Σ_i (∂x_i/∂u_a)ᵀ dJ/dx_i + Σ_i dJ/dV_i ∂V_i/∂u_a,  ∂V_i/∂u_a = ∫ N_i H ∇N_a dX
+/// (∂J/∂F = H = cof F). Entries of fixed dofs are included; solve_adjoint ignores them.
+Eigen::VectorXd cloud_pullback(const Assembler& assembler, const Eigen::VectorXd& u,
+                               CloudPoints points, CloudVolumes volumes,
+                               const Eigen::MatrixXd& dJ_dx, const Eigen::VectorXd& dJ_dV);
+
+}  // namespace softhd::fe

@@ -1,0 +1,33 @@
+#pragma once
+/// \file output.hpp
+/// Results of a state solve for people and tools: displacement probes by FE
+/// interpolation, VTU files for ParaView, and control files (text rows `X1 X2 [X3] m`).
+
+#include <Eigen/Core>
+#include <string>
+
+#include "softhd/fe/assembly.hpp"
+
+namespace softhd::fe {
+
+/// u(X) = Σ_a N_a(ξ) u_a in the element containing the reference point X (size dim).
+/// Throws InvalidArgument if X is outside the body.
+Eigen::VectorXd probe_displacement(const Assembler& assembler, const Eigen::VectorXd& u,
+                                   const Eigen::VectorXd& X);
+
+/// Writes an ASCII VTU (VTK unstructured grid) of the deformed mesh: points at X + u,
+/// point data "displacement", cell data "m" and "J" (element means, E by nq inputs). Q2
+/// elements are written as 2^dim linear sub-cells. Throws FileError if it cannot write.
+void write_vtu(const std::string& path, const Mesh& mesh, const Eigen::VectorXd& u,
+               const Eigen::MatrixXd& m_qp, const Eigen::MatrixXd& J_qp);
+
+/// Reads rows `X1 X2 [X3] m` ('#' comments, commas allowed) and matches them to
+/// `positions` (size by dim) within 1 % of the smallest spacing of the control grid. Throws
+/// FileError naming the first position without a row, or a malformed line.
+Eigen::VectorXd read_control_file(const std::string& path, const Eigen::MatrixXd& positions);
+
+/// Writes one row `X1 X2 [X3] m` per position. Throws FileError if it cannot write.
+void write_control_file(const std::string& path, const Eigen::MatrixXd& positions,
+                        const Eigen::VectorXd& values);
+
+}  // namespace softhd::fe

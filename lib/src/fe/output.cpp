@@ -1,0 +1,114 @@
+#include "softhd/fe/output.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "softhd/error.hpp"
+#include "softhd/fe/shape.hpp"
+#include "softhd/io/vtu.hpp"
+
+namespace softhd::fe {
+
+Eigen::VectorXd probe_displacement(const Assembler& assembler, const Eigen::VectorXd& u,
+                                   const Eigen::VectorXd& X) {
+  const Mesh& mesh = assembler.mesh();
+  Eigen::VectorXd xi;
+  const int e = locate(mesh, X, &xi);
+  if (e < 0) {
+    std::ostringstream os;
+    os << "probe (" << X.transpose() << ") is outside the body";
+    throw InvalidArgument(os.str());
+  }
+  Eigen::VectorXd N;
+  Eigen::MatrixXd dN;
+  lagrange_shape(mesh.dim, mesh.order, xi, &N, &dN);
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(mesh.dim);
+  for (int a = 0; a < mesh.nodes_per_element(); ++a)
+    v += N[a] * u.segment(static_cast<Eigen::Index>(mesh.elements(e, a)) * mesh.dim, mesh.dim);
+  return v;
+}
+
+void write_vtu(const std::string& path, const Mesh& mesh, const Eigen::VectorXd& u,
+               const Eigen::MatrixXd& m_qp, const Eigen::MatrixXd& J_qp) {
+  // Element means of m and J as cell data.
+  write_vtu_mesh(path, mesh, u, {}, {{"m", m_qp.rowwise().mean()}, {"J", J_qp.rowwise().mean()}});
+}
+
+Eigen::VectorXd read_control_file(const std::string& path, const Eigen::MatrixXd& positions) {
+  std::ifstream in(path);
+  if (!in) throw FileError("control file " + path + ": cannot open");
+  const int dim = static_cast<int>(positions.cols());
+  // Tolerance: 1 % of the smallest gap between distinct control coordinates along an axis,
+  // so rows written with ~6 significant digits still match their node.
+  double gap = std::numeric_limits<double>::infinity();
+  for (int d = 0; d < dim; ++d) {
+    std::vector<double> c(positions.col(d).data(), positions.col(d).data() + positions.rows());
+    std::sort(c.begin(), c.end());
+    for (size_t i = 1; i < c.size(); ++i)
+      if (c[i] - c[i - 1] > 1e-12 * (std::abs(c[i]) + 1.0)) gap = std::min(gap, c[i] - c[i - 1]);
+  }
+  const double tol = std::isfinite(gap) ? 0.01 * gap : 1e-9;
+  std::vector<Eigen::VectorXd> rows;
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    const size_t hash = line.find('#');
+    if (hash != std::string::npos) line.erase(hash);
+    for (char& ch : line)
+      if (ch == ',') ch = ' ';
+    std::istringstream ls(line);
+    std::vector<double> v;
+    double x;
+    while (ls >> x) v.push_back(x);
+    if (!ls.eof()) {
+      throw FileError("control file " + path + ": line " + std::to_string(line_no) +
+                      " has a non-numeric entry");
+    }
+    if (v.empty()) continue;
+    if (static_cast<int>(v.size()) != dim + 1) {
+      throw FileError("control file " + path + ": line " + std::to_string(line_no) + " has " +
+                      std::to_string(v.size()) + " numbers, expected " + std::to_string(dim + 1) +
+                      " (X1 X2" + (dim == 3 ? " X3" : "") + " m)");
+    }
+    rows.push_back(Eigen::Map<Eigen::VectorXd>(v.data(), dim + 1));
+  }
+  // Linear search per control node: O(N rows), fine for the control meshes of the scenes.
+  std::vector<char> used(rows.size(), 0);
+  Eigen::VectorXd m(positions.rows());
+  for (Eigen::Index k = 0; k < positions.rows(); ++k) {
+    bool found = false;
+    for (size_t r = 0; r < rows.size() && !found; ++r) {
+      if ((rows[r].head(dim) - positions.row(k).transpose()).norm() <= tol) {
+        m[k] = rows[r][dim];
+        found = true;
+      }
+    }
+    if (!found) {
+      std::ostringstream os;
+      os << "control file " << path << ": no row for control node " << k << " at ("
+         << positions.row(k) << ")";
+      throw FileError(os.str());
+    }
+  }
+  return m;
+}
+
+void write_control_file(const std::string& path, const Eigen::MatrixXd& positions,
+                        const Eigen::VectorXd& values) {
+  std::ofstream out(path);
+  if (!out) throw FileError("cannot write " + path);
+  out << "# control nodes: X1 X2" << (positions.cols() == 3 ? " X3" : "") << " m\n";
+  out.precision(17);
+  for (Eigen::Index k = 0; k < positions.rows(); ++k) {
+    for (Eigen::Index d = 0; d < positions.cols(); ++d) out << positions(k, d) << ' ';
+    out << values[k] << '\n';
+  }
+  if (!out) throw FileError("error while writing " + path);
+}
+
+}  // namespace softhd::fe

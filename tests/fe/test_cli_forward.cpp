@@ -1,0 +1,97 @@
+// The `softhd forward` subcommand (apps/cmd_forward.cpp), called in-process.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+
+namespace {
+
+const std::string kDir = std::string(SOFTHD_BINARY_DIR) + "/test_cli_forward";
+
+// Runs `forward args...`, returns the exit code; stdout/stderr captured.
+int run(std::vector<std::string> args, std::string* out = nullptr, std::string* err = nullptr) {
+  args.insert(args.begin(), "forward");
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  testing::internal::CaptureStdout();
+  testing::internal::CaptureStderr();
+  const int rc = run_forward(static_cast<int>(argv.size()), argv.data());
+  const std::string o = testing::internal::GetCapturedStdout();
+  const std::string e = testing::internal::GetCapturedStderr();
+  if (out) *out = o;
+  if (err) *err = e;
+  return rc;
+}
+
+// A small plate scene (the bending scene's material and bounds on a coarse mesh).
+std::string small_scene() {
+  std::ifstream in(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/bending.json");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string from = "\"cells\": [50, 5, 2]";
+  text.replace(text.find(from), from.size(), "\"cells\": [6, 1, 1]");
+  const std::string path = kDir + "_scene.json";
+  std::ofstream(path) << text;
+  return path;
+}
+
+}  // namespace
+
+TEST(CliForward, SolvesAndReportsJson) {
+  std::string out;
+  ASSERT_EQ(run({small_scene(), "--control-uniform", "-2000", "--probe", "10,1,0.05", "--probe",
+                 "4.3,0.2,0.1", "--json", "--out", kDir},
+                &out),
+            0);
+  const nlohmann::json j = nlohmann::json::parse(out);
+  for (const char* key : {"probes", "energy", "volume", "newton_iterations", "dofs", "seconds"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  ASSERT_EQ(j["probes"].size(), 2u);
+  EXPECT_EQ(j["probes"][1]["X"][0].get<double>(), 4.3);
+  // Uniform contraction along X1: the free end moves back, the body shrinks.
+  EXPECT_LT(j["probes"][0]["u"][0].get<double>(), 0.0);
+  EXPECT_LT(j["volume"].get<double>(), 2.0);
+  EXPECT_TRUE(j["converged"].get<bool>());
+  std::ifstream vtu(kDir + "/forward.vtu");
+  EXPECT_TRUE(vtu.good());
+}
+
+TEST(CliForward, ControlNodesRoundTrip) {
+  const std::string scene = small_scene(), nodes = kDir + "_nodes.txt";
+  ASSERT_EQ(run({scene, "--write-control-nodes", nodes, "--control-uniform", "-1500"}), 0);
+  std::string uniform, from_file;
+  ASSERT_EQ(
+      run({scene, "--control-uniform", "-1500", "--probe", "10,2,0.1", "--json", "--out", kDir},
+          &uniform),
+      0);
+  ASSERT_EQ(
+      run({scene, "--control", nodes, "--probe", "10,2,0.1", "--json", "--out", kDir}, &from_file),
+      0);
+  EXPECT_EQ(nlohmann::json::parse(uniform)["probes"], nlohmann::json::parse(from_file)["probes"]);
+  std::remove(nodes.c_str());
+}
+
+TEST(CliForward, BadInputExitsWithTwoAndOneLine) {
+  const std::string scene = small_scene();
+  std::string err;
+  for (const std::vector<std::string>& args :
+       std::vector<std::vector<std::string>>{{"/nonexistent.json"},
+                                             {scene, "--probe", "11,0,0"},
+                                             {scene, "--probe", "a,b"},
+                                             {scene, "--control-uniform", "1e9"},
+                                             {scene, "--control", "/nonexistent.txt"},
+                                             {scene, "--frobnicate"},
+                                             {}}) {
+    EXPECT_EQ(run(args, nullptr, &err), 2) << (args.empty() ? "" : args.back());
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  }
+  std::string out;
+  EXPECT_EQ(run({"--help"}, &out), 0);
+  EXPECT_NE(out.find("usage"), std::string::npos);
+}
