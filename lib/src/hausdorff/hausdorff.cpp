@@ -3,6 +3,7 @@
 
 #include "softhd/hausdorff.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -232,6 +233,8 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
     x_v = x_kd->permute(v);
     x_moments = detail::node_moments(*x_kd, x_v.data(), nullptr, power);
   }
+  // Every exact S is ≤ 1 (each term ≤ its weight, the weights sum to 1), so clipping a
+  // tree sum at 1 only moves it towards the exact value and keeps d̃ ≥ r_min ≥ 0.
   const std::vector<Eigen::Index>& visit_y = use_tree ? kd->order() : natural;
   const std::vector<Eigen::Index>& visit_x = use_tree ? x_kd->order() : natural;
   auto tree_sources = [&](const detail::KdTree& t) {
@@ -260,7 +263,7 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   evaluations += sweep(
       Y, scale_y, visit_y, pass_x, power, eps, tau, threads, [&](Eigen::Index) { return pass1; },
       [&](Eigen::Index j, const detail::PairSums& s) {
-        S_y[j] = s.S;
+        S_y[j] = use_tree ? std::min(s.S, 1.0) : s.S;  // exact S ≤ 1 (tree: see below)
         if (req.gradient_target)
           for (int k = 0; k < d; ++k) G_y(j, k) = s.G[k];
       });
@@ -320,7 +323,7 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
       X, scale_x, visit_x, pass_y, power, eps, tau, threads,
       [&](Eigen::Index i) { return differentiated(i) ? pass2_grad : unsigned{kOuterSum}; },
       [&](Eigen::Index i, const detail::PairSums& s) {
-        S_x[i] = s.S;
+        S_x[i] = use_tree ? std::min(s.S, 1.0) : s.S;
         if (!differentiated(i)) return;
         if (req.gradient_points) {
           for (int k = 0; k < d; ++k) {
