@@ -5,6 +5,7 @@
 //   bench_hausdorff [--min-n 1000] [--max-n 1000000] [--repeats 3] [--csv FILE]
 //                   [--exact-max 100000] [--shapes cube,shell,clusters,plate]
 //                   [--taus 1e-2,1e-4,1e-6,1e-8,1e-10] [--modes value,value+grad]
+//                   [--methods nearest,exact,tree]
 //                   [--budget 300] [--threads 0] [--quick]
 //
 // Errors are measured against method exact: the full evaluation when N ≤ --exact-max,
@@ -18,6 +19,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -45,6 +47,7 @@ struct Config {
   std::vector<std::string> shapes = {"cube", "shell", "clusters", "plate"};
   std::vector<double> taus = {1e-2, 1e-4, 1e-6, 1e-8, 1e-10};
   std::vector<std::string> modes = {"value", "value+grad"};
+  std::vector<std::string> methods = {"nearest", "exact", "tree"};
   double budget = 300.0;
   int threads = 0;
 };
@@ -135,22 +138,26 @@ std::pair<PointCloud, PointCloud> make_pair_of(const std::string& shape, Eigen::
 // ---- timing and errors -------------------------------------------------------------
 
 struct Timed {
-  double median = 0, min = 0;
+  double median = 0, min = 0, cpu = 0;  // wall median, wall min, CPU-time median (all threads)
   HausdorffResult last;
 };
 
 Timed run(const softhd::HausdorffTarget& target, const PointCloud& X, const HausdorffRequest& req,
           int repeats) {
-  std::vector<double> t;
+  std::vector<double> t, cpu;
   Timed out;
   for (int r = 0; r < repeats; ++r) {
     const auto start = std::chrono::steady_clock::now();
+    const std::clock_t cpu_start = std::clock();
     out.last = target.evaluate(X, req);
+    cpu.push_back(static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC);
     t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
   std::sort(t.begin(), t.end());
+  std::sort(cpu.begin(), cpu.end());
   out.median = t[t.size() / 2];
   out.min = t.front();
+  out.cpu = cpu[cpu.size() / 2];
   return out;
 }
 
@@ -239,7 +246,8 @@ std::string num(double x) {
 void usage() {
   std::cout << "usage: bench_hausdorff [--min-n N] [--max-n N] [--repeats R] [--csv FILE]\n"
                "       [--exact-max N] [--shapes a,b,...] [--taus t1,t2,...]\n"
-               "       [--modes value,value+grad] [--budget SECONDS]\n"
+               "       [--modes value,value+grad] [--methods nearest,exact,tree]\n"
+               "       [--budget SECONDS]\n"
                "       [--threads T] [--quick]\n"
                "  --quick: sizes 1e3..1e4, one repeat, shapes cube,plate, taus 1e-2,1e-6\n";
 }
@@ -272,6 +280,8 @@ int main(int argc, char** argv) {
     } else if (arg == "--taus") {
       cfg.taus.clear();
       for (const std::string& t : split(value())) cfg.taus.push_back(std::stod(t));
+    } else if (arg == "--methods") {
+      cfg.methods = split(value());
     } else if (arg == "--modes") {
       cfg.modes = split(value());
     } else if (arg == "--budget") {
@@ -295,7 +305,7 @@ int main(int argc, char** argv) {
     std::cerr << "bench_hausdorff: cannot write " << cfg.csv << "\n";
     return 1;
   }
-  csv << "shape,N,M,method,tau,mode,threads,median_s,min_s,runs,kernel_evaluations,rho,"
+  csv << "shape,N,M,method,tau,mode,threads,median_s,min_s,cpu_s,runs,kernel_evaluations,rho,"
          "err_rho,err_S,err_field,err_grad,error_reference\n";
   const int threads = cfg.threads;
   std::vector<double> sizes;
@@ -322,9 +332,9 @@ int main(int argc, char** argv) {
                      const Errors& e, const std::string& reference) {
         csv << shape << ',' << X.size() << ',' << Y.size() << ',' << method << ',' << num(tau)
             << ',' << mode << ',' << (threads > 0 ? threads : 0) << ',' << num(t.median) << ','
-            << num(t.min) << ',' << cfg.repeats << ',' << t.last.kernel_evaluations << ','
-            << num(t.last.rho) << ',' << num(e.rho) << ',' << num(e.S) << ',' << num(e.field) << ','
-            << num(e.grad) << ',' << reference << '\n';
+            << num(t.min) << ',' << num(t.cpu) << ',' << cfg.repeats << ','
+            << t.last.kernel_evaluations << ',' << num(t.last.rho) << ',' << num(e.rho) << ','
+            << num(e.S) << ',' << num(e.field) << ',' << num(e.grad) << ',' << reference << '\n';
         csv.flush();
         std::cerr << "  " << method << " tau=" << num(tau) << " " << mode << " " << t.median
                   << " s, err_S " << num(e.S) << " err_grad " << num(e.grad) << "\n";
@@ -334,8 +344,11 @@ int main(int argc, char** argv) {
       grad_req.fields = true;
       grad_req.gradient_points = true;
 
+      auto wanted = [&](const std::string& m) {
+        return std::find(cfg.methods.begin(), cfg.methods.end(), m) != cfg.methods.end();
+      };
       // nearest: value only (it has no gradient).
-      {
+      if (wanted("nearest")) {
         HausdorffOptions o = base;
         o.method = Method::nearest;
         const std::string key = "nearest";
@@ -355,7 +368,7 @@ int main(int argc, char** argv) {
         const softhd::HausdorffTarget target(Y, o);
         for (const std::string& mode : cfg.modes) {
           const std::string key = "exact " + mode;
-          if (full || !skip(key, 2.0)) {
+          if (wanted("exact") && (full || !skip(key, 2.0))) {
             const Timed t = run(target, X, mode == "value" ? value_req : grad_req, cfg.repeats);
             last[key] = {t.median, N};
             if (mode == "value+grad" && full) {
@@ -368,6 +381,7 @@ int main(int argc, char** argv) {
         if (!ref.full) ref = subset_reference(X, Y, 500, o);
       }
       for (double tau : cfg.taus) {
+        if (!wanted("tree")) break;
         HausdorffOptions o = base;
         o.method = Method::tree;
         o.tolerance = tau;

@@ -274,8 +274,8 @@ TEST(HausdorffTree, TinyToleranceEqualsExact) {
   }
 }
 
-// Gradients of ρ̃ by method tree approach method exact as τ falls, and a mask and
-// the thread count change nothing.
+// Assembled gradients of ρ̃ (no closed bound is claimed for them, docs/tree_tolerance.md
+// §5) approach method exact as τ falls; the thread count changes nothing.
 TEST(HausdorffTree, GradientsConvergeToExactAndAreDeterministic) {
   const PointCloud X = make_cloud(Shape::sphere, 2000, 3, 41);
   const PointCloud Y = make_cloud(Shape::sphere, 1500, 3, 42);
@@ -286,8 +286,7 @@ TEST(HausdorffTree, GradientsConvergeToExactAndAreDeterministic) {
   for (double tau : {1e-2, 1e-4, 1e-6, 1e-8}) {
     const HausdorffResult tr = hausdorff(X, Y, tree_options(tau), req);
     const double err = (tr.gradient_points - ex.gradient_points).norm() / ex.gradient_points.norm();
-    EXPECT_LE(err, std::max(100 * tau, 1e-13)) << tau;
-    EXPECT_LE(err, previous);
+    EXPECT_TRUE(err < previous || err == 0.0) << tau << ": " << err << " after " << previous;
     previous = err;
   }
   const HausdorffResult t1 = hausdorff(X, Y, tree_options(1e-4, 1), req);
