@@ -10,7 +10,7 @@ B="$BUILD/bench/bench_hausdorff"
 "$B" --min-n 1e3 --max-n 1e6 --exact-max 3.2e4 --budget 25 --repeats 3 \
   --csv docs/bench_hausdorff_ladder.csv
 # Goal 1: N = M = 1e5 uniform cube, value + gradient, exact against tree.
-"$B" --shapes cube --min-n 1e5 --max-n 1e5 --modes value+grad --taus 1e-2,1e-6 \
+"$B" --shapes cube --min-n 1e5 --max-n 1e5 --modes value+grad --taus 1e-2,1e-4,1e-6 \
   --exact-max 1e5 --repeats 3 --budget 1e9 --csv docs/bench_hausdorff_goal1.csv
 
 /usr/bin/python3 bench/plot_hausdorff.py docs/bench_hausdorff_ladder.csv \
