@@ -37,7 +37,7 @@ detail::PairSources sources_of(const PointCloud& cloud) {
   return s;
 }
 
-constexpr int kLeafSize = 32;  // points per tree leaf (measured: fewer evaluations than 64 or 128)
+constexpr int kLeafSize = 32;  // points per leaf: fewest kernel evaluations (docs/benchmarks.md)
 
 /// The sources of one pair pass: all of them (method exact), or a tree over them with
 /// node moments (method tree, `tree.tree` set).
