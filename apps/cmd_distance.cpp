@@ -25,8 +25,10 @@ options:
   --beta B         mean exponent beta > 0 (default 4)
   --gamma G        combining exponent gamma > 0 (default 2)
   --eps E          kernel offset epsilon > 0, a length (default 1e-3)
-  --method M       exact | nearest (default exact); nearest gives the exact
+  --method M       exact | tree | nearest (default exact); nearest gives the exact
                    (unregularised) Hausdorff distance and the two directed ones
+  --tol T          tree: relative error bound on every kernel sum, 0 < T < 1
+                   (default 1e-6)
   --dim D          2 or 3: dimension of text clouds (default: from the columns:
                    2 -> x y, 3 -> x y z, 4 -> x y z V)
   --threads T      OpenMP threads (default: all)
@@ -66,6 +68,7 @@ int run_distance(const std::vector<std::string>& tokens) {
   opt.params.gamma = args.number("--gamma", opt.params.gamma);
   opt.params.epsilon = args.number("--eps", opt.params.epsilon);
   opt.method = method_from_string(args.value("--method").value_or("exact"));
+  opt.tolerance = args.number("--tol", opt.tolerance);
   const long threads = args.integer("--threads", 0);
   if (threads < 0 || threads > 4096) throw UsageError("--threads must be >= 0");
   opt.threads = static_cast<int>(threads);
@@ -105,6 +108,7 @@ int run_distance(const std::vector<std::string>& tokens) {
     j["beta"] = opt.params.beta;
     j["gamma"] = opt.params.gamma;
     j["eps"] = opt.params.epsilon;
+    if (opt.method == Method::tree) j["tolerance"] = opt.tolerance;
     j["kernel_evaluations"] = r.kernel_evaluations;
     j["seconds"] = r.seconds;
     std::cout << j.dump(2) << '\n';

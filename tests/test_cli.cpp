@@ -80,6 +80,24 @@ TEST_F(Cli, JsonMatchesTheLibrary) {
   EXPECT_GE(j["seconds"].get<double>(), 0.0);
 }
 
+TEST_F(Cli, TreeReportsItsToleranceAndStaysWithinIt) {
+  const PointCloud X = random_cloud(400, 3, 5), Y = random_cloud(500, 3, 6, 0.3, 1.2);
+  write_text_cloud(path("x.txt"), X);
+  write_text_cloud(path("y.txt"), Y);
+  const Outcome r =
+      run("distance " + path("x.txt") + " " + path("y.txt") + " --method tree --tol 1e-3 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["method"].get<std::string>(), "tree");
+  EXPECT_EQ(j["tolerance"].get<double>(), 1e-3);
+  EXPECT_GT(j["kernel_evaluations"].get<long>(), 0);
+  // |Δρ̃| ≤ e (ρ̃ + ε), e = (1 − τ)^(−1/α) − 1 (docs/tree_tolerance.md).
+  const double rho = hausdorff(X, Y).rho, e = std::pow(1 - 1e-3, -1.0 / 4) - 1;
+  EXPECT_LE(std::fabs(j["rho"].get<double>() - rho), e * (rho + 1e-3));
+  expect_bad_input("distance " + path("x.txt") + " " + path("y.txt") + " --method tree --tol 2",
+                   "tolerance");
+}
+
 TEST_F(Cli, NearestGivesTheHausdorffDistance) {
   write("x.txt", "0 0 0\n1 0 0\n");
   write("y.txt", "0 0 0.5\n1 0 0.5\n0.5 0.5 0.5\n");

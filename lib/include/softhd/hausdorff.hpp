@@ -33,11 +33,12 @@ struct HausdorffParams {
 
 /// How the pair sums are evaluated.
 enum class Method {
-  exact,   ///< all N·M pairs (the reference)
-  nearest  ///< the unregularised Hausdorff distance by nearest-neighbour queries
+  exact,    ///< all N·M pairs (the reference)
+  tree,     ///< k-d-tree far-field approximation with guaranteed relative tolerance τ
+  nearest,  ///< the unregularised Hausdorff distance by nearest-neighbour queries
 };
 
-/// "exact" / "nearest"; method_from_string throws InvalidArgument for other names.
+/// "exact" / "tree" / "nearest"; method_from_string throws InvalidArgument for other names.
 std::string to_string(Method method);
 Method method_from_string(const std::string& name);
 
@@ -46,6 +47,16 @@ struct HausdorffOptions {
   HausdorffParams params;         ///< α, β, γ, ε (paper defaults)
   Method method = Method::exact;  ///< pair-sum evaluation method
   int threads = 0;                ///< OpenMP threads; 0 uses OpenMP's default
+  /// Method tree only: guaranteed bound τ ∈ (0, 1) on the relative error of every
+  /// kernel sum, |S − S_exact| ≤ τ S_exact (likewise the volume-gradient sums H), and of
+  /// every vector gradient sum relative to the sum of its terms' norms,
+  /// ‖G − G_exact‖ ≤ τ Σ‖terms‖ (G itself may cancel). Up to rounding of the sums.
+  /// Consequences (docs/tree_tolerance.md), with e = (1 − τ)^(−1/α) − 1 ≈ τ/α:
+  ///     |Δd̃| ≤ e (d̃ + ε) for every field value,
+  ///     |ΔA| ≤ e (A + ε), |ΔB| ≤ e (B + ε) for β ≥ 1,
+  ///     |Δρ̃| ≤ e (ρ̃ + ε) for β, γ ≥ 1.
+  /// Validated (InvalidArgument naming `tolerance`) for every method.
+  double tolerance = 1e-6;
 };
 
 /// What to compute beyond ρ̃, A and B. Nothing is computed that is not asked for.
@@ -71,12 +82,15 @@ struct HausdorffResult {
   Eigen::MatrixXd gradient_points;   ///< N by d: ∂ρ̃/∂x_i
   Eigen::VectorXd gradient_volumes;  ///< N: ∂ρ̃/∂V_i (volumes of X, Y held otherwise fixed)
   Eigen::MatrixXd gradient_target;   ///< M by d: ∂ρ̃/∂y_j
-  std::int64_t kernel_evaluations = 0;  ///< pair kernel evaluations made
-  double seconds = 0.0;                 ///< wall time of the evaluation
+  /// Pair kernel evaluations made: exact N·M per pass; tree counts one per source
+  /// point summed exactly and one per node replaced by its one-term approximation.
+  std::int64_t kernel_evaluations = 0;
+  double seconds = 0.0;  ///< wall time of the evaluation
 };
 
 /// A target cloud prepared for repeated evaluations: it owns a copy of the cloud and
-/// its k-d tree, built once in the constructor.
+/// its k-d trees (and, for method tree, the node moments of the target weights), built
+/// once in the constructor.
 class HausdorffTarget {
  public:
   /// Throws InvalidArgument for invalid options.

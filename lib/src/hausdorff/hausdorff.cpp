@@ -3,14 +3,17 @@
 
 #include "softhd/hausdorff.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
 
+#include "kd_tree.hpp"
 #include "nearest_index.hpp"
 #include "pair_kernel.hpp"
 #include "scaled_means.hpp"
 #include "softhd/error.hpp"
+#include "tree_sums.hpp"
 
 namespace softhd {
 
@@ -34,23 +37,46 @@ detail::PairSources sources_of(const PointCloud& cloud) {
   return s;
 }
 
-/// Runs pair_sums for every point of `outer` (OpenMP over the outer points; each
-/// result depends on its own point only, so any thread count gives the same bits).
-/// `flags_of(i)` selects the sums needed for outer point i.
+constexpr int kLeafSize = 32;  // points per leaf: fewest kernel evaluations (docs/benchmarks.md)
+
+/// The sources of one pair pass: all of them (method exact), or a tree over them with
+/// node moments (method tree, `tree.tree` set).
+struct PassSources {
+  detail::PairSources src;  // caller's order (exact) or tree order (tree)
+  detail::TreePass tree;
+};
+
+/// Computes the pair sums of every point of `outer` (OpenMP over the outer points; each
+/// result depends on its own point only, so any thread count gives the same bits), in
+/// the order `visit` (empty: 0..n−1; tree order keeps neighbouring points together).
+/// `flags_of(i)` selects the sums needed for outer point i. Returns the number of
+/// kernel evaluations made.
 template <class Flags, class Store>
-void sweep(const PointCloud& outer, const Eigen::VectorXd& outer_scale,
-           const detail::PairSources& src, const detail::KernelPower& power, double eps,
-           int threads, Flags flags_of, Store store) {
+std::int64_t sweep(const PointCloud& outer, const Eigen::VectorXd& outer_scale,
+                   const std::vector<Eigen::Index>& visit, const PassSources& pass,
+                   const detail::KernelPower& power, double eps, double tau, int threads,
+                   Flags flags_of, Store store) {
   const Eigen::Index n = outer.size();
   const int d = outer.dim();
   const Eigen::MatrixXd& P = outer.points();
-  const bool parallel = static_cast<double>(n) * static_cast<double>(src.size) > 2.0e4;
-#pragma omp parallel for schedule(dynamic, 16) num_threads(threads) if (parallel)
-  for (Eigen::Index i = 0; i < n; ++i) {
+  const bool use_tree = pass.tree.tree != nullptr;
+  const double work = static_cast<double>(n) * static_cast<double>(pass.src.size);
+  const bool parallel = use_tree ? n > 64 : work > 2.0e4;
+  std::int64_t evaluations = 0;
+#pragma omp parallel for schedule(dynamic, 16) num_threads(threads) if (parallel) \
+    reduction(+ : evaluations)
+  for (Eigen::Index q = 0; q < n; ++q) {
+    const Eigen::Index i = visit.empty() ? q : visit[static_cast<size_t>(q)];
     double o[3] = {0.0, 0.0, 0.0};
     for (int k = 0; k < d; ++k) o[k] = P(i, k);
-    store(i, detail::pair_sums(o, outer_scale[i], src, power, eps, flags_of(i)));
+    if (use_tree) {
+      store(i, detail::tree_sums(o, outer_scale[i], pass.tree, power, eps, tau, flags_of(i),
+                                 evaluations));
+    } else {
+      store(i, detail::pair_sums(o, outer_scale[i], pass.src, power, eps, flags_of(i)));
+    }
   }
+  return use_tree ? evaluations : static_cast<std::int64_t>(n) * pass.src.size;
 }
 
 }  // namespace
@@ -62,10 +88,24 @@ void HausdorffParams::validate() const {
   check_positive(epsilon, "epsilon");
 }
 
+namespace {
+void validate_options(const HausdorffOptions& options) {
+  options.params.validate();
+  if (options.threads < 0) throw InvalidArgument("threads must be >= 0 (0: OpenMP default)");
+  if (!(options.tolerance > 0.0 && options.tolerance < 1.0)) {
+    std::ostringstream msg;
+    msg << "Hausdorff option tolerance must be in (0, 1), got " << options.tolerance;
+    throw InvalidArgument(msg.str());
+  }
+}
+}  // namespace
+
 std::string to_string(Method method) {
   switch (method) {
     case Method::exact:
       return "exact";
+    case Method::tree:
+      return "tree";
     case Method::nearest:
       return "nearest";
   }
@@ -74,26 +114,37 @@ std::string to_string(Method method) {
 
 Method method_from_string(const std::string& name) {
   if (name == "exact") return Method::exact;
+  if (name == "tree") return Method::tree;
   if (name == "nearest") return Method::nearest;
-  throw InvalidArgument("unknown method '" + name + "' (expected exact or nearest)");
+  throw InvalidArgument("unknown method '" + name + "' (expected exact, tree or nearest)");
 }
 
 struct HausdorffTarget::Impl {
   Impl(PointCloud c, HausdorffOptions o) : cloud(std::move(c)), options(o), tree(cloud.points()) {
     weights = cloud.volumes() / cloud.total_volume();  // W_j/|Y|
+    if (options.method == Method::tree) {
+      // Pass-2 sources are the target: its tree and the moments of W_j/|Y|, once.
+      kd = std::make_unique<detail::KdTree>(cloud.points(), kLeafSize);
+      kd_weights = kd->permute(weights);
+      kd_moments = detail::node_moments(*kd, kd_weights.data(), nullptr,
+                                        detail::KernelPower(options.params.alpha));
+    }
   }
   PointCloud cloud;
   HausdorffOptions options;
   detail::NearestIndex tree;  // over cloud.points(): must be declared after cloud
   Eigen::VectorXd weights;
+  // Method tree only.
+  std::unique_ptr<detail::KdTree> kd;
+  Eigen::VectorXd kd_weights;                   // weights in kd's order
+  std::vector<detail::NodeMoments> kd_moments;  // of kd_weights
 
   HausdorffResult evaluate_nearest(const PointCloud& X, const HausdorffRequest& req) const;
-  HausdorffResult evaluate_exact(const PointCloud& X, const HausdorffRequest& req) const;
+  HausdorffResult evaluate_sums(const PointCloud& X, const HausdorffRequest& req) const;
 };
 
 HausdorffTarget::HausdorffTarget(PointCloud target, HausdorffOptions options) {
-  options.params.validate();
-  if (options.threads < 0) throw InvalidArgument("threads must be >= 0 (0: OpenMP default)");
+  validate_options(options);
   impl_ = std::make_unique<Impl>(std::move(target), options);
 }
 HausdorffTarget::~HausdorffTarget() = default;
@@ -117,11 +168,11 @@ HausdorffResult HausdorffTarget::evaluate(const PointCloud& moving,
   HausdorffResult result;
   if (impl_->options.method == Method::nearest) {
     if (request.any_gradient()) {
-      throw InvalidArgument("method nearest computes no gradient (use method exact)");
+      throw InvalidArgument("method nearest computes no gradient (use method exact or tree)");
     }
     result = impl_->evaluate_nearest(moving, request);
   } else {
-    result = impl_->evaluate_exact(moving, request);
+    result = impl_->evaluate_sums(moving, request);  // exact or tree
   }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
@@ -145,8 +196,8 @@ HausdorffResult HausdorffTarget::Impl::evaluate_nearest(const PointCloud& X,
   return r;
 }
 
-HausdorffResult HausdorffTarget::Impl::evaluate_exact(const PointCloud& X,
-                                                      const HausdorffRequest& req) const {
+HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
+                                                     const HausdorffRequest& req) const {
   using detail::kInner;
   using detail::kOuterGrad;
   using detail::kOuterSum;
@@ -168,18 +219,51 @@ HausdorffResult HausdorffTarget::Impl::evaluate_exact(const PointCloud& X,
   const Eigen::VectorXd scale_y = moving_tree.distances(Y.points(), threads).array() + eps;
   const Eigen::VectorXd scale_x = tree.distances(X.points(), threads).array() + eps;
 
+  // Method tree: the moving cloud's tree and the moments of V_i/|X|, per evaluation (the
+  // target's were built with the target). Source arrays are then in tree order, and the
+  // outer points are visited in the other cloud's tree order.
+  const bool use_tree = options.method == Method::tree;
+  const double tau = options.tolerance;
+  std::unique_ptr<detail::KdTree> x_kd;
+  Eigen::VectorXd x_v;
+  std::vector<detail::NodeMoments> x_moments;
+  const std::vector<Eigen::Index> natural;
+  if (use_tree) {
+    x_kd = std::make_unique<detail::KdTree>(X.points(), kLeafSize);
+    x_v = x_kd->permute(v);
+    x_moments = detail::node_moments(*x_kd, x_v.data(), nullptr, power);
+  }
+  // Every exact S is ≤ 1 (each term ≤ its weight, the weights sum to 1), so clipping a
+  // tree sum at 1 only moves it towards the exact value and keeps d̃ ≥ r_min ≥ 0.
+  const std::vector<Eigen::Index>& visit_y = use_tree ? kd->order() : natural;
+  const std::vector<Eigen::Index>& visit_x = use_tree ? x_kd->order() : natural;
+  auto tree_sources = [&](const detail::KdTree& t) {
+    detail::PairSources s;
+    s.dim = t.dim();
+    s.size = t.size();
+    for (int k = 0; k < s.dim; ++k) s.coord[k] = t.points().col(k).data();
+    return s;
+  };
+  std::int64_t evaluations = 0;
+
   // Pass 1, targets over sources: S_j = Σ_i (V_i/|X|) ((r_min(y_j)+ε)/(r_ij+ε))^α, and for
   // target gradients G_j = Σ_i (V_i/|X|) p_ij t_ij (y_j − x_i)/r_ij.
-  detail::PairSources src_x = sources_of(X);
-  src_x.weight = v.data();
+  PassSources pass_x;
+  pass_x.src = use_tree ? tree_sources(*x_kd) : sources_of(X);
+  pass_x.src.weight = use_tree ? x_v.data() : v.data();
+  if (use_tree) {
+    pass_x.tree.tree = x_kd.get();
+    pass_x.tree.src = pass_x.src;
+    pass_x.tree.outer = x_moments.data();
+  }
   Eigen::VectorXd S_y(M);
   Eigen::MatrixXd G_y;
   if (req.gradient_target) G_y.resize(M, d);
   const unsigned pass1 = req.gradient_target ? (kOuterSum | kOuterGrad) : kOuterSum;
-  sweep(
-      Y, scale_y, src_x, power, eps, threads, [&](Eigen::Index) { return pass1; },
+  evaluations += sweep(
+      Y, scale_y, visit_y, pass_x, power, eps, tau, threads, [&](Eigen::Index) { return pass1; },
       [&](Eigen::Index j, const detail::PairSums& s) {
-        S_y[j] = s.S;
+        S_y[j] = use_tree ? std::min(s.S, 1.0) : s.S;  // exact S ≤ 1 (tree: see below)
         if (req.gradient_target)
           for (int k = 0; k < d; ++k) G_y(j, k) = s.G[k];
       });
@@ -202,10 +286,29 @@ HausdorffResult HausdorffTarget::Impl::evaluate_exact(const PointCloud& X,
   // Pass 2, sources over targets: S_i = Σ_j (W_j/|Y|) ((r_min(x_i)+ε)/(r_ij+ε))^α, with
   // G_i = Σ_j (W_j/|Y|) p_ij t_ij (x_i − y_j)/r_ij, and the pass-1 terms scaled by y_j's
   // own scale: H_i = Σ_j g_j p'_ij, G2_i = Σ_j g_j p'_ij t_ij (x_i − y_j)/r_ij.
-  detail::PairSources src_y = sources_of(Y);
-  src_y.weight = w.data();
-  src_y.coef = need_inner ? g_y.data() : nullptr;
-  src_y.scale = scale_y.data();
+  PassSources pass_y;
+  Eigen::VectorXd g_kd, scale_kd;  // g_y, scale_y in the target tree's order
+  std::vector<detail::NodeMoments> g_moments;
+  if (use_tree) {
+    pass_y.src = tree_sources(*kd);
+    pass_y.src.weight = kd_weights.data();
+    pass_y.tree.tree = kd.get();
+    pass_y.tree.outer = kd_moments.data();
+    if (need_inner) {
+      g_kd = kd->permute(g_y);
+      scale_kd = kd->permute(scale_y);
+      g_moments = detail::node_moments(*kd, g_kd.data(), scale_kd.data(), power);
+      pass_y.src.coef = g_kd.data();
+      pass_y.src.scale = scale_kd.data();
+      pass_y.tree.inner = g_moments.data();
+    }
+    pass_y.tree.src = pass_y.src;
+  } else {
+    pass_y.src = sources_of(Y);
+    pass_y.src.weight = w.data();
+    pass_y.src.coef = need_inner ? g_y.data() : nullptr;
+    pass_y.src.scale = scale_y.data();
+  }
   Eigen::VectorXd S_x(N), H_x;
   Eigen::MatrixXd G_x, G2_x;
   if (req.gradient_points) {
@@ -216,11 +319,11 @@ HausdorffResult HausdorffTarget::Impl::evaluate_exact(const PointCloud& X,
   unsigned pass2_grad = kOuterSum;
   if (req.gradient_points) pass2_grad |= kOuterGrad | kInner;
   if (req.gradient_volumes) pass2_grad |= kInner;
-  sweep(
-      X, scale_x, src_y, power, eps, threads,
+  evaluations += sweep(
+      X, scale_x, visit_x, pass_y, power, eps, tau, threads,
       [&](Eigen::Index i) { return differentiated(i) ? pass2_grad : unsigned{kOuterSum}; },
       [&](Eigen::Index i, const detail::PairSums& s) {
-        S_x[i] = s.S;
+        S_x[i] = use_tree ? std::min(s.S, 1.0) : s.S;
         if (!differentiated(i)) return;
         if (req.gradient_points) {
           for (int k = 0; k < d; ++k) {
@@ -240,7 +343,7 @@ HausdorffResult HausdorffTarget::Impl::evaluate_exact(const PointCloud& X,
   r.A = A;
   r.B = B;
   r.rho = rho;
-  r.kernel_evaluations = 2 * static_cast<std::int64_t>(N) * M;
+  r.kernel_evaluations = evaluations;
   if (req.fields) {
     r.field_target = dt_y;
     r.field_moving = dt_x;
@@ -276,18 +379,30 @@ HausdorffResult HausdorffTarget::Impl::evaluate_exact(const PointCloud& X,
   if (req.gradient_target) {
     // Pass 3, targets over sources with x_i's own scales: G3_j = Σ_i f_i p'_ij t_ij
     // (y_j − x_i)/r_ij. Then ∂ρ̃/∂y_j = ρ̃_A a_j (d̃_j+ε)/S_j G_j + ρ̃_B (W_j/|Y|) G3_j.
-    src_x.coef = f_x.data();
-    src_x.scale = scale_x.data();
+    Eigen::VectorXd f_kd, sx_kd;  // f_x, scale_x in the moving tree's order
+    std::vector<detail::NodeMoments> f_moments;
+    if (use_tree) {
+      f_kd = x_kd->permute(f_x);
+      sx_kd = x_kd->permute(scale_x);
+      f_moments = detail::node_moments(*x_kd, f_kd.data(), sx_kd.data(), power);
+      pass_x.src.coef = f_kd.data();
+      pass_x.src.scale = sx_kd.data();
+      pass_x.tree.src = pass_x.src;
+      pass_x.tree.inner = f_moments.data();
+    } else {
+      pass_x.src.coef = f_x.data();
+      pass_x.src.scale = scale_x.data();
+    }
     Eigen::MatrixXd G3(M, d);
-    sweep(
-        Y, scale_y, src_x, power, eps, threads, [](Eigen::Index) { return unsigned{kInner}; },
+    r.kernel_evaluations += sweep(
+        Y, scale_y, visit_y, pass_x, power, eps, tau, threads,
+        [](Eigen::Index) { return unsigned{kInner}; },
         [&](Eigen::Index j, const detail::PairSums& s) {
           for (int k = 0; k < d; ++k) G3(j, k) = s.G2[k];
         });
     r.gradient_target.resize(M, d);
     for (Eigen::Index j = 0; j < M; ++j)
       r.gradient_target.row(j) = rho_A * g_y[j] * G_y.row(j) + rho_B * w[j] * G3.row(j);
-    r.kernel_evaluations += static_cast<std::int64_t>(N) * M;
   }
   return r;
 }

@@ -1,7 +1,9 @@
 #include "pair_kernel.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <utility>
 
 namespace softhd::detail {
 
@@ -39,6 +41,18 @@ void KernelPower::apply(const double* q, double* p, int len) const {
   }
 }
 
+double KernelPower::scalar(double q) const {
+  if (integer_ == 0) return std::exp(alpha_ * std::log(q));
+  double p = 1.0, base = q;
+  for (unsigned long long n = integer_;;) {
+    if (n & 1u) p *= base;
+    n >>= 1;
+    if (n == 0) break;
+    base *= base;
+  }
+  return p;
+}
+
 namespace {
 
 template <int D, unsigned F>
@@ -47,10 +61,12 @@ PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
   constexpr bool kSum = (F & kOuterSum) != 0;
   constexpr bool kGrad = (F & kOuterGrad) != 0;
   constexpr bool kIn = (F & kInner) != 0;
+  constexpr bool kMag = (F & kMagnitude) != 0;
   PairSums out;
   const double* x[3] = {src.coord[0], src.coord[1], D == 3 ? src.coord[2] : src.coord[1]};
   const double ox = o[0], oy = o[1], oz = D == 3 ? o[2] : 0.0;
   double S = 0.0, Gx = 0.0, Gy = 0.0, Gz = 0.0, H = 0.0, Hx = 0.0, Hy = 0.0, Hz = 0.0;
+  double Gm = 0.0, G2m = 0.0;
   alignas(64) double tinv[kBlock], trinv[kBlock], q[kBlock], p[kBlock];
 
   for (Eigen::Index n0 = 0; n0 < src.size; n0 += kBlock) {
@@ -85,7 +101,7 @@ PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
     if constexpr (kSum || kGrad) {
       power.apply(q, p, len);  // p = (c_o t)^α
       const double* w = src.weight + n0;
-#pragma omp simd reduction(+ : S, Gx, Gy, Gz)
+#pragma omp simd reduction(+ : S, Gx, Gy, Gz, Gm)
       for (int k = 0; k < len; ++k) {
         const double wp = w[k] * p[k];
         if constexpr (kSum) S += wp;
@@ -94,6 +110,7 @@ PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
           Gx += g * (ox - bx[k]);
           Gy += g * (oy - by[k]);
           if constexpr (D == 3) Gz += g * (oz - bz[k]);
+          if constexpr (kMag) Gm += trinv[k] > 0.0 ? wp * tinv[k] : 0.0;
         }
       }
     }
@@ -103,7 +120,7 @@ PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
       for (int k = 0; k < len; ++k) q[k] = c[k] * tinv[k];
       power.apply(q, p, len);  // p' = (c_n t)^α
       const double* h = src.coef + n0;
-#pragma omp simd reduction(+ : H, Hx, Hy, Hz)
+#pragma omp simd reduction(+ : H, Hx, Hy, Hz, G2m)
       for (int k = 0; k < len; ++k) {
         const double hp = h[k] * p[k];
         H += hp;
@@ -111,6 +128,7 @@ PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
         Hx += g * (ox - bx[k]);
         Hy += g * (oy - by[k]);
         if constexpr (D == 3) Hz += g * (oz - bz[k]);
+        if constexpr (kMag) G2m += trinv[k] > 0.0 ? hp * tinv[k] : 0.0;
       }
     }
   }
@@ -122,26 +140,25 @@ PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
   out.G2[0] = Hx;
   out.G2[1] = Hy;
   out.G2[2] = Hz;
+  out.Gm = Gm;
+  out.G2m = G2m;
   return out;
+}
+
+using PairFn = PairSums (*)(const double*, double, const PairSources&, const KernelPower&, double);
+
+// One instantiation per combination of the four flags, indexed by the flag bits.
+template <int D, unsigned... F>
+constexpr std::array<PairFn, sizeof...(F)> table(std::integer_sequence<unsigned, F...>) {
+  return {&pair_sums_impl<D, F>...};
 }
 
 template <int D>
 PairSums dispatch_flags(const double* o, double c_o, const PairSources& src,
                         const KernelPower& power, double eps, unsigned flags) {
-  switch (flags) {
-    case kOuterSum:
-      return pair_sums_impl<D, kOuterSum>(o, c_o, src, power, eps);
-    case kOuterSum | kOuterGrad:
-      return pair_sums_impl<D, kOuterSum | kOuterGrad>(o, c_o, src, power, eps);
-    case kOuterSum | kInner:
-      return pair_sums_impl<D, kOuterSum | kInner>(o, c_o, src, power, eps);
-    case kOuterSum | kOuterGrad | kInner:
-      return pair_sums_impl<D, kOuterSum | kOuterGrad | kInner>(o, c_o, src, power, eps);
-    case kInner:
-      return pair_sums_impl<D, kInner>(o, c_o, src, power, eps);
-    default:
-      return PairSums{};  // no sum requested
-  }
+  static constexpr auto kTable = table<D>(std::make_integer_sequence<unsigned, 16>{});
+  if ((flags & (kOuterSum | kOuterGrad | kInner)) == 0) return PairSums{};  // nothing requested
+  return kTable[flags & 15u](o, c_o, src, power, eps);
 }
 
 }  // namespace

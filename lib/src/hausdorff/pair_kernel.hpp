@@ -11,6 +11,9 @@
 //     p'_n = (c_n t_n)^α
 //     H   = Σ_n h_n p'_n,   G2 = Σ_n h_n p'_n t_n (o − x_n)/r_n   (kInner)
 // A coincident pair (r_n = 0) contributes zero to G and G2 (symmetric subgradient).
+// With kMagnitude, also the sums of the norms of the vector terms (method tree's
+// error budget for G and G2 is relative to them):
+//     Gm = Σ_{r_n>0} w_n p_n t_n,   G2m = Σ_{r_n>0} h_n p'_n t_n
 
 #include <Eigen/Core>
 
@@ -22,6 +25,9 @@ class KernelPower {
  public:
   explicit KernelPower(double alpha);
   void apply(const double* q, double* p, int len) const;
+  /// q^α for one q ≥ 0 (the same arithmetic as apply).
+  double scalar(double q) const;
+  double alpha() const { return alpha_; }
 
  private:
   double alpha_;
@@ -38,13 +44,15 @@ struct PairSources {
   const double* scale = nullptr;                         ///< c_n (kInner)
 };
 
-enum PairFlags : unsigned { kOuterSum = 1u, kOuterGrad = 2u, kInner = 4u };
+enum PairFlags : unsigned { kOuterSum = 1u, kOuterGrad = 2u, kInner = 4u, kMagnitude = 8u };
 
 struct PairSums {
   double S = 0.0;
   double G[3] = {0.0, 0.0, 0.0};
   double H = 0.0;
   double G2[3] = {0.0, 0.0, 0.0};
+  double Gm = 0.0;   ///< Σ of |term| of G (kMagnitude with kOuterGrad)
+  double G2m = 0.0;  ///< Σ of |term| of G2 (kMagnitude with kInner)
 };
 
 /// The sums above for one outer point `o` (dim coordinates) and the requested flags.
