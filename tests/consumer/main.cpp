@@ -1,8 +1,7 @@
 // Links against an installed softhd: two single-point clouds 0.5 apart have ρ̃ = 0.5.
-#include <softhd/hausdorff.hpp>
-
 #include <cmath>
 #include <cstdio>
+#include <softhd/hausdorff.hpp>
 
 int main() {
   const softhd::PointCloud x(Eigen::RowVector3d(0.0, 0.0, 0.0));
