@@ -204,9 +204,10 @@ int run_optimise(const std::vector<std::string>& tokens) {
   const double floor = floor_matched.value_or(floor_self);
   auto shape_errors = [&](const Eigen::VectorXd& u) -> std::optional<std::pair<double, double>> {
     if (!target.map_displacement) return std::nullopt;
+    const Eigen::VectorXd diff = u - *target.map_displacement;  // x_i − T(X_i), node-major
     double mx = 0.0, sum = 0.0;
     for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n) {
-      const double e = (u - *target.map_displacement).segment(n * mesh.dim, mesh.dim).norm();
+      const double e = diff.segment(n * mesh.dim, mesh.dim).norm();
       mx = std::max(mx, e);
       sum += e * e;
     }
@@ -279,12 +280,11 @@ int run_optimise(const std::vector<std::string>& tokens) {
     return r;
   };
 
-  std::string body_line = target.description;
   if (!quiet) {
     std::fprintf(stderr, "softhd optimise %s: %ld nodes, %ld controls, target %ld points (%s)\n",
                  scene.name.c_str(), static_cast<long>(mesh.num_nodes()),
                  static_cast<long>(space.size()), static_cast<long>(target.cloud.size()),
-                 body_line.c_str());
+                 target.description.c_str());
   }
   const auto t_start = std::chrono::steady_clock::now();
   ShapeEvaluation start = objective.evaluate(m0, false);
