@@ -11,9 +11,11 @@
 
 #include "commands.hpp"
 #include "softhd/error.hpp"
+#include "softhd/fe/cloud.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
+#include "softhd/io/cloud_io.hpp"
 
 namespace {
 
@@ -21,7 +23,8 @@ using namespace softhd::fe;
 
 constexpr const char* kUsage =
     "usage: softhd forward SCENE [--control FILE | --control-uniform V] [--probe X1,X2[,X3]]...\n"
-    "                      [--out DIR] [--json] [--linear-solver NAME] [--verbose]\n"
+    "                      [--out DIR] [--write-cloud FILE] [--json] [--linear-solver NAME]\n"
+    "                      [--verbose]\n"
     "       softhd forward SCENE --write-control-nodes FILE [--control-uniform V]\n"
     "\n"
     "Solves the equilibrium of the scene's body for the active tension m and writes\n"
@@ -30,12 +33,15 @@ constexpr const char* kUsage =
     "                         centre), matched by coordinates\n"
     "  --control-uniform V    m = V everywhere (default: the scene's control.initial)\n"
     "  --probe X1,X2[,X3]     report u at this reference point (FE interpolation); repeatable\n"
+    "  --write-cloud FILE     also write the deformed nodes with their deformed volumes\n"
+    "                         V_i = int N_i J dX as a point cloud (.ply binary, else text), in\n"
+    "                         node order: a target for softhd optimise\n"
     "  --json                 print a JSON summary (probes, energy, volume, iterations, ...)\n"
     "  --linear-solver NAME   eigen-llt, eigen-ldlt or cholmod (default cholmod)\n"
     "  --write-control-nodes FILE  write the control nodes with their current values and stop\n";
 
 struct Args {
-  std::string scene, control_file, out_dir = "out", write_nodes, linear_solver;
+  std::string scene, control_file, out_dir = "out", write_nodes, linear_solver, write_cloud;
   bool has_uniform = false, json = false, verbose = false;
   double uniform = 0.0;
   std::vector<Eigen::VectorXd> probes;
@@ -85,6 +91,8 @@ bool parse(int argc, char** argv, Args* a) {
       a->verbose = true;
     } else if (s == "--linear-solver") {
       a->linear_solver = value();
+    } else if (s == "--write-cloud") {
+      a->write_cloud = value();
     } else if (s == "--write-control-nodes") {
       a->write_nodes = value();
     } else if (!s.empty() && s[0] == '-') {
@@ -142,6 +150,14 @@ int forward(const Args& args) {
   std::filesystem::create_directories(args.out_dir);
   const std::string vtu = (std::filesystem::path(args.out_dir) / "forward.vtu").string();
   write_vtu(vtu, assembler.mesh(), state.u, state.m_qp, J);
+  if (!args.write_cloud.empty() && summary.converged()) {
+    const softhd::PointCloud cloud =
+        deformed_cloud(assembler, state.u, CloudPoints::kNodes, CloudVolumes::kDeformed);
+    if (std::filesystem::path(args.write_cloud).extension() == ".ply")
+      softhd::write_ply_cloud(args.write_cloud, cloud);
+    else
+      softhd::write_text_cloud(args.write_cloud, cloud);
+  }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (args.json) {
@@ -170,6 +186,8 @@ int forward(const Args& args) {
     std::cout << j.dump(2) << "\n";
   } else {
     std::cout << summary.BriefReport() << "\nwrote " << vtu << "\n";
+    if (!args.write_cloud.empty() && summary.converged())
+      std::cout << "wrote " << args.write_cloud << "\n";
     for (const Eigen::VectorXd& X : args.probes) {
       std::cout << "u(" << X.transpose()
                 << ") = " << probe_displacement(assembler, state.u, X).transpose() << "\n";

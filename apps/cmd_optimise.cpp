@@ -55,6 +55,13 @@ options:
   --quiet            no progress lines
   --help             this text
 
+scene targets ("target" in the scene file):
+  {"kind": "arc", "angle": RAD [, "cells": [n1, n2, n3]]}  the plate bent into a
+      circular arc (SPEC section 5), sampled on its own cell-centred grid
+  {"kind": "cloud", "file": PATH [, "solved_on": SCENE]}  a cloud file; with solved_on
+      it holds the deformed nodes of a state solved on SCENE's mesh ('softhd forward
+      --write-cloud'), which gives the known map for the matched floor and shape error
+
 writes: history.csv, control.csv (readable by 'softhd forward --control'),
 body_NNNN.vtu, target.vtu, body.pvd, body_final.ply, target.ply, summary.json,
 checkpoint.json, and convergence.png when python3 with matplotlib is available.
@@ -124,8 +131,17 @@ Target make_target(const fe::Scene& scene, const fe::Mesh& mesh,
   if (kind == "cloud") {
     if (!t.contains("file") || !t["file"].is_string())
       throw InvalidArgument(scene.source + ": target.file must be a path string");
-    const fs::path f = fs::path(scene.source).parent_path() / t["file"].get<std::string>();
-    return {read_cloud(f.string(), scene.dim()), std::nullopt, "cloud file " + f.string()};
+    const fs::path dir = fs::path(scene.source).parent_path();
+    const fs::path f = dir / t["file"].get<std::string>();
+    PointCloud cloud = read_cloud(f.string(), scene.dim());
+    if (!t.contains("solved_on")) return {cloud, std::nullopt, "cloud file " + f.string()};
+    // A manufactured target: the deformed nodes of a state solved on another scene's mesh.
+    if (!t["solved_on"].is_string())
+      throw InvalidArgument(scene.source + ": target.solved_on must be a scene path string");
+    const fs::path source = dir / t["solved_on"].get<std::string>();
+    const NodalMap T(fe::load_scene(source.string()).make_mesh(), cloud);
+    return {cloud, T.displacement(mesh),
+            "cloud file " + f.string() + " (deformed nodes of " + source.string() + ")"};
   }
   throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\", got \"" + kind +
                         "\"");

@@ -1,8 +1,11 @@
 #include "softhd/control/targets.hpp"
 
 #include <cmath>
+#include <sstream>
+#include <utility>
 
 #include "softhd/error.hpp"
+#include "softhd/fe/shape.hpp"
 
 namespace softhd {
 
@@ -45,6 +48,45 @@ Eigen::VectorXd ArcMap::displacement(const fe::Mesh& mesh) const {
     const Eigen::Vector3d X = mesh.nodes.row(n).transpose();
     u.segment<3>(3 * n) = (*this)(X)-X;
   }
+  return u;
+}
+
+NodalMap::NodalMap(fe::Mesh source, const PointCloud& deformed) : source_(std::move(source)) {
+  if (deformed.dim() != source_.dim || deformed.size() != source_.num_nodes()) {
+    std::ostringstream os;
+    os << "manufactured target: the cloud has " << deformed.size() << " points in "
+       << deformed.dim() << "D, the mesh it was solved on has " << source_.num_nodes()
+       << " nodes in " << source_.dim << "D";
+    throw InvalidArgument(os.str());
+  }
+  u_ = deformed.points() - source_.nodes;
+}
+
+Eigen::VectorXd NodalMap::displacement_at(const Eigen::VectorXd& X) const {
+  Eigen::VectorXd xi;
+  const int e = fe::locate(source_, X, &xi);
+  if (e < 0) {
+    std::ostringstream os;
+    os << "manufactured target: the point (" << X.transpose()
+       << ") is outside the body the target was solved on";
+    throw InvalidArgument(os.str());
+  }
+  Eigen::VectorXd N;
+  Eigen::MatrixXd dN;
+  fe::lagrange_shape(source_.dim, source_.order, xi, &N, &dN);
+  // u_T(X) = Σ_a N_a(ξ) (y_a − X_a)
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(source_.dim);
+  for (int a = 0; a < source_.nodes_per_element(); ++a)
+    u += N[a] * u_.row(source_.elements(e, a)).transpose();
+  return u;
+}
+
+Eigen::VectorXd NodalMap::displacement(const fe::Mesh& mesh) const {
+  if (mesh.dim != source_.dim) throw InvalidArgument("manufactured target: dimensions differ");
+  const int d = mesh.dim;
+  Eigen::VectorXd u(mesh.num_nodes() * d);
+  for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n)
+    u.segment(n * d, d) = displacement_at(mesh.nodes.row(n).transpose());
   return u;
 }
 

@@ -1,8 +1,9 @@
 #pragma once
 /// \file targets.hpp
 /// Targets with a known map T (SPEC §5): the bending scene's circular arc, analytic at
-/// any resolution. A known map gives the matched floor ρ̃(T(Ω₀), Ω_d) and the true
-/// shape error |x_i − T(X_i)|.
+/// any resolution, and a manufactured state (the torsion target: the deformed nodes of a
+/// state solved on a finer mesh, interpolated by that mesh's shape functions). A known map gives
+/// the matched floor ρ̃(T(Ω₀), Ω_d) and the true shape error |x_i − T(X_i)|.
 
 #include <Eigen/Core>
 
@@ -34,6 +35,28 @@ struct ArcMap {
   PointCloud apply(const PointCloud& reference) const;
   /// Nodal displacements u = T(X) − X of a 3D mesh (num_nodes · 3, node-major).
   Eigen::VectorXd displacement(const fe::Mesh& mesh) const;
+};
+
+/// The map of a manufactured target: `deformed` holds the deformed nodes of a state solved
+/// on `source`, in `source`'s node order. Between nodes T is the FE interpolant,
+///
+///     T(X) = X + Σ_a N_a(ξ) (y_a − X_a)   in the source element containing X,
+///
+/// exact at every source node (so at every node of a mesh the source refines).
+class NodalMap {
+ public:
+  /// Throws InvalidArgument if the counts or dimensions of `source` and `deformed` differ.
+  NodalMap(fe::Mesh source, const PointCloud& deformed);
+  const fe::Mesh& source() const { return source_; }
+  /// u_T(X) = T(X) − X at one reference point. Throws InvalidArgument outside the source body.
+  Eigen::VectorXd displacement_at(const Eigen::VectorXd& X) const;
+  /// Nodal displacements u = T(X) − X of a mesh (num_nodes · dim, node-major). Throws
+  /// InvalidArgument naming the first node outside the source body.
+  Eigen::VectorXd displacement(const fe::Mesh& mesh) const;
+
+ private:
+  fe::Mesh source_;
+  Eigen::MatrixXd u_;  // source nodes by dim: y_a − X_a
 };
 
 }  // namespace softhd

@@ -1,0 +1,121 @@
+// Targets with a known map (SPEC §5): the arc map against its geometric properties, and the
+// manufactured-state map against a displacement field its shape functions reproduce exactly.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
+#include <cmath>
+
+#include "expect_error.hpp"
+#include "softhd/control/targets.hpp"
+#include "softhd/samplers.hpp"
+
+namespace softhd::test {
+namespace {
+
+Eigen::Matrix3d jacobian_by_differences(const ArcMap& T, const Eigen::Vector3d& X) {
+  const double h = 1e-6;
+  Eigen::Matrix3d D;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d e = h * Eigen::Vector3d::Unit(k);
+    D.col(k) = (T(X + e) - T(X - e)) / (2 * h);
+  }
+  return D;
+}
+
+TEST(ArcMap, IsTheIdentityOnTheClampedFaceAndCurlsTowardsPlusX3) {
+  const ArcMap T;  // 10 × 2 × 0.1 plate, 180°
+  for (double x2 : {0.0, 1.3, 2.0})
+    for (double x3 : {0.0, 0.05, 0.1}) {
+      const Eigen::Vector3d X(0.0, x2, x3);
+      EXPECT_LT((T(X) - X).norm(), 1e-15);
+    }
+  // Half a turn: the mid-surface tip lands above the clamped end at height 2R.
+  const double R = 10.0 / M_PI;
+  const Eigen::Vector3d tip = T(Eigen::Vector3d(10.0, 1.0, 0.05));
+  EXPECT_NEAR(tip[0], 0.0, 1e-13);
+  EXPECT_NEAR(tip[1], 1.0, 1e-15);
+  EXPECT_NEAR(tip[2], 0.05 + 2 * R, 1e-13);
+  // A quarter of the way: above the plate, ahead of the clamp.
+  const Eigen::Vector3d q = T(Eigen::Vector3d(2.5, 1.0, 0.05));
+  EXPECT_GT(q[2], 0.05);
+  EXPECT_GT(q[0], 0.0);
+}
+
+TEST(ArcMap, JacobianMatchesDifferencesAndTheMidSurfaceKeepsItsLength) {
+  ArcMap T;
+  T.angle = 2.0;
+  for (const Eigen::Vector3d& X : {Eigen::Vector3d(0.3, 0.2, 0.01), Eigen::Vector3d(7.1, 1.9, 0.09),
+                                   Eigen::Vector3d(9.9, 1.0, 0.05)}) {
+    const Eigen::Matrix3d D = jacobian_by_differences(T, X);
+    EXPECT_NEAR(D.determinant(), T.jacobian(X), 1e-8);
+    if (std::abs(X[2] - 0.05) < 1e-15) {
+      EXPECT_NEAR(D.col(0).norm(), 1.0, 1e-8);
+    }
+  }
+}
+
+TEST(ArcMap, MappedVolumesSumToTheIntegralOfTheJacobian) {
+  // ∫ (1 − z/R) dX over a plate symmetric in z is its volume, 10 · 2 · 0.1 = 2.
+  const ArcMap T;
+  const PointCloud grid = sample_box_grid(Eigen::Vector3d::Zero(), Eigen::Vector3d(10, 2, 0.1),
+                                          Eigen::Vector3i(40, 4, 3));
+  const PointCloud mapped = T.apply(grid);
+  EXPECT_NEAR(mapped.volumes().sum(), 2.0, 1e-13);
+  EXPECT_EQ(mapped.size(), grid.size());
+}
+
+TEST(ArcMap, RejectsBadGeometry) {
+  ArcMap T;
+  T.angle = 7.0;
+  expect_error<InvalidArgument>([&] { T.validate(); }, "angle must be in (0, 2 pi]");
+  T.angle = 1.0;
+  T.thickness = 25.0;
+  expect_error<InvalidArgument>([&] { T.validate(); }, "radius");
+}
+
+// A quadratic displacement, which Q2 elements interpolate exactly.
+Eigen::Vector3d quadratic(const Eigen::Vector3d& X) {
+  return {0.1 * X[0] * X[0] - 0.3 * X[1] * X[2], 0.2 * X[0] * X[1] + X[2], -0.05 * X[2] * X[2]};
+}
+
+PointCloud deformed_nodes(const fe::Mesh& mesh) {
+  Eigen::MatrixXd y(mesh.num_nodes(), 3);
+  for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n) {
+    const Eigen::Vector3d X = mesh.nodes.row(n).transpose();
+    y.row(n) = (X + quadratic(X)).transpose();
+  }
+  return PointCloud(y, Eigen::VectorXd::Ones(mesh.num_nodes()));
+}
+
+TEST(NodalMap, ReproducesAFieldItsShapeFunctionsSpanAtAnyPointAndAtCoarserNodes) {
+  const Eigen::Vector3d lo(0, 0, 0), hi(5, 1, 0.5);
+  const fe::Mesh fine = fe::make_box_mesh(lo, hi, Eigen::Vector3i(8, 4, 2), 2);
+  const NodalMap T(fine, deformed_nodes(fine));
+  for (const Eigen::Vector3d& X : {Eigen::Vector3d(0.123, 0.77, 0.31),
+                                   Eigen::Vector3d(4.99, 0, 0.5), Eigen::Vector3d(2.5, 0.5, 0.25)})
+    EXPECT_LT((T.displacement_at(X) - quadratic(X)).norm(), 1e-13) << X.transpose();
+  const fe::Mesh coarse = fe::make_box_mesh(lo, hi, Eigen::Vector3i(4, 2, 1), 2);
+  const Eigen::VectorXd u = T.displacement(coarse);
+  for (Eigen::Index n = 0; n < coarse.num_nodes(); ++n) {
+    const Eigen::Vector3d X = coarse.nodes.row(n).transpose();
+    EXPECT_LT((u.segment<3>(3 * n) - quadratic(X)).norm(), 1e-13);
+  }
+}
+
+TEST(NodalMap, RejectsMismatchedCloudsAndPointsOutsideTheBody) {
+  const fe::Mesh mesh = fe::make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(),
+                                          Eigen::Vector3i(2, 2, 2), 1);
+  PointCloud cloud = deformed_nodes(mesh);
+  const PointCloud short_cloud(cloud.points().topRows(5), cloud.volumes().head(5));
+  expect_error<InvalidArgument>([&] { NodalMap(mesh, short_cloud); }, "has 5 points in 3D");
+  const NodalMap T(mesh, cloud);
+  expect_error<InvalidArgument>([&] { T.displacement_at(Eigen::Vector3d(2, 0, 0)); },
+                                "outside the body");
+  const fe::Mesh bigger = fe::make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d(2, 1, 1),
+                                            Eigen::Vector3i(2, 1, 1), 1);
+  expect_error<InvalidArgument>([&] { T.displacement(bigger); }, "outside the body");
+}
+
+}  // namespace
+}  // namespace softhd::test
