@@ -16,6 +16,7 @@
 #include "commands.hpp"
 #include "softhd/control/bounded_optimizer.hpp"
 #include "softhd/control/shape_objective.hpp"
+#include "softhd/control/shape_tracking.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
@@ -147,6 +148,10 @@ Target make_target(const fe::Scene& scene, const fe::Mesh& mesh,
                         "\"");
 }
 
+nlohmann::json optional_json(const std::optional<double>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
 std::string csv_row(const std::vector<double>& v) {
   std::ostringstream s;
   s.precision(10);
@@ -209,32 +214,12 @@ int run_optimise(const std::vector<std::string>& tokens) {
   fs::create_directories(out);
 
   ShapeObjective objective(assembler, space, HausdorffTarget(target.cloud, so.hausdorff), so);
-  const HausdorffTarget& Y = objective.target();
-
-  // Floors (SPEC §2, §5): the target against itself, and the body deformed exactly
-  // by the known map at this discretisation.
-  const double floor_self = Y.evaluate(Y.cloud()).rho;
-  std::optional<double> floor_matched;
-  if (target.map_displacement)
-    floor_matched = Y.evaluate(objective.particles(*target.map_displacement)).rho;
-  const double floor = floor_matched.value_or(floor_self);
-  auto shape_errors = [&](const Eigen::VectorXd& u) -> std::optional<std::pair<double, double>> {
-    if (!target.map_displacement) return std::nullopt;
-    const Eigen::VectorXd diff = u - *target.map_displacement;  // x_i − T(X_i), node-major
-    double mx = 0.0, sum = 0.0;
-    for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n) {
-      const double e = diff.segment(n * mesh.dim, mesh.dim).norm();
-      mx = std::max(mx, e);
-      sum += e * e;
-    }
-    return std::pair{mx, std::sqrt(sum / static_cast<double>(mesh.num_nodes()))};
-  };
 
   // Start: the scene's initial control, or the checkpoint.
   Eigen::VectorXd m0 = Eigen::VectorXd::Constant(space.size(), scene.control_initial);
   std::vector<std::string> history_rows;
-  int iteration_offset = 0, evaluation_offset = 0;
-  double seconds_offset = 0.0;
+  ShapeTrackingOptions to;
+  to.optimizer = opt;
   const fs::path checkpoint = out / "checkpoint.json";
   if (resume) {
     std::ifstream in(checkpoint);
@@ -247,9 +232,9 @@ int run_optimise(const std::vector<std::string>& tokens) {
         throw FileError(checkpoint.string() + ": control has " + std::to_string(m.size()) +
                         " values, the scene has " + std::to_string(space.size()));
       m0 = Eigen::Map<const Eigen::VectorXd>(m.data(), space.size());
-      iteration_offset = c.at("iteration").get<int>();
-      evaluation_offset = c.at("evaluations").get<int>();
-      seconds_offset = c.at("seconds").get<double>();
+      to.iteration_offset = c.at("iteration").get<int>();
+      to.evaluation_offset = c.at("evaluations").get<int>();
+      to.seconds_offset = c.at("seconds").get<double>();
       history_rows = c.at("history").get<std::vector<std::string>>();
     } catch (const nlohmann::json::exception& e) {
       throw FileError(checkpoint.string() + ": not a softhd checkpoint (" + e.what() + ")");
@@ -257,27 +242,6 @@ int run_optimise(const std::vector<std::string>& tokens) {
   }
   const Eigen::VectorXd lower = Eigen::VectorXd::Constant(space.size(), scene.control_lower);
   const Eigen::VectorXd upper = Eigen::VectorXd::Constant(space.size(), scene.control_upper);
-  m0 = m0.cwiseMax(lower).cwiseMin(upper);
-
-  // The objective for NLopt, remembering the last evaluation for the records.
-  ShapeEvaluation last;
-  double total_state = 0, total_distance = 0, total_adjoint = 0;
-  int total_newton = 0;
-  const BoundedObjective f = [&](const Eigen::VectorXd& m, double& value, Eigen::VectorXd* g) {
-    last = objective.evaluate(m, g != nullptr);
-    total_state += last.seconds_state;
-    total_distance += last.seconds_distance;
-    total_adjoint += last.seconds_adjoint;
-    total_newton += last.newton_iterations;
-    if (!last.ok) {
-      if (!quiet)
-        std::fprintf(stderr, "  state solve failed (step rejected): %s\n", last.failure.c_str());
-      return false;
-    }
-    value = last.J;
-    if (g) *g = last.gradient;
-    return true;
-  };
 
   std::vector<std::pair<double, std::string>> pvd;
   auto write_body = [&](int iteration, const Eigen::VectorXd& m, const Eigen::VectorXd& u) {
@@ -302,49 +266,47 @@ int run_optimise(const std::vector<std::string>& tokens) {
                  static_cast<long>(space.size()), static_cast<long>(target.cloud.size()),
                  target.description.c_str());
   }
-  const auto t_start = std::chrono::steady_clock::now();
-  ShapeEvaluation start = objective.evaluate(m0, false);
-  if (!start.ok) throw Error("the state solve at the starting control failed: " + start.failure);
-  const double rho_start = start.rho;
-  if (!quiet) {
-    std::fprintf(stderr, "  rho start %.6g, floor self %.6g, floor matched %s\n", rho_start,
-                 floor_self,
-                 floor_matched ? std::to_string(*floor_matched).c_str() : "n/a (no known map)");
-    std::fprintf(stderr, "  %5s %12s %12s %10s %10s %7s %8s\n", "iter", "J", "rho", "rho/floor",
-                 "|P grad|", "newton", "seconds");
-  }
-  if (vtu_every >= 0 && !resume) write_body(0, m0, objective.last_state().u);
-
-  auto on_iteration = [&](const IterationRecord& rec, const Eigen::VectorXd& m) {
-    const int it = iteration_offset + rec.iteration;
-    const double secs = seconds_offset + rec.seconds;
-    history_rows.push_back(csv_row(
-        {double(it), double(evaluation_offset + rec.evaluation), last.J, last.rho, last.A, last.B,
-         last.rho / floor, rec.projected_gradient_norm, double(last.newton_iterations),
-         last.seconds_state, last.seconds_distance, last.seconds_adjoint, secs}));
+  ShapeTrackingCallbacks cb;
+  cb.on_start = [&](const ShapeTrackingSummary& start) {
+    if (!quiet) {
+      std::fprintf(stderr, "  rho start %.6g, floor self %.6g, floor matched %s\n", start.rho_start,
+                   start.floor_self,
+                   start.floor_matched ? std::to_string(*start.floor_matched).c_str()
+                                       : "n/a (no known map)");
+      std::fprintf(stderr, "  %5s %12s %12s %10s %10s %7s %8s\n", "iter", "J", "rho", "rho/floor",
+                   "|P grad|", "newton", "seconds");
+    }
+    if (!resume) write_body(0, m0.cwiseMax(lower).cwiseMin(upper), objective.last_state().u);
+  };
+  cb.on_failure = [&](const std::string& report) {
+    if (!quiet) std::fprintf(stderr, "  state solve failed (step rejected): %s\n", report.c_str());
+  };
+  cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd& m) {
+    history_rows.push_back(
+        csv_row({double(it.iteration), double(it.evaluation), it.J, it.rho, it.A, it.B,
+                 it.rho_over_floor, it.projected_gradient_norm, double(it.newton_iterations),
+                 it.seconds_state, it.seconds_distance, it.seconds_adjoint, it.seconds}));
     if (!quiet)
-      std::fprintf(stderr, "  %5d %12.6g %12.6g %10.4g %10.3g %7d %8.1f\n", it, last.J, last.rho,
-                   last.rho / floor, rec.projected_gradient_norm, last.newton_iterations, secs);
+      std::fprintf(stderr, "  %5d %12.6g %12.6g %10.4g %10.3g %7d %8.1f\n", it.iteration, it.J,
+                   it.rho, it.rho_over_floor, it.projected_gradient_norm, it.newton_iterations,
+                   it.seconds);
     nlohmann::json c;
     c["scene"] = pos[0];
-    c["iteration"] = it;
-    c["evaluations"] = evaluation_offset + rec.evaluation;
-    c["seconds"] = secs;
+    c["iteration"] = it.iteration;
+    c["evaluations"] = it.evaluation;
+    c["seconds"] = it.seconds;
     c["control"] = std::vector<double>(m.data(), m.data() + m.size());
     c["history"] = history_rows;
     write_file_atomically(checkpoint.string(), c.dump());
-    if (vtu_every > 0 && it % vtu_every == 0) write_body(it, m, objective.last_state().u);
+    if (vtu_every > 0 && it.iteration % vtu_every == 0)
+      write_body(it.iteration, m, objective.last_state().u);
   };
 
-  const BoundedOptimizerSummary s = minimise(f, m0, lower, upper, opt, on_iteration);
-
-  // The final state: the best control's (re-solved from the nearest cached state).
-  ShapeEvaluation final_eval = objective.evaluate(s.x, false);
-  if (!final_eval.ok)
-    throw Error("the state solve at the best control failed: " + final_eval.failure);
-  const Eigen::VectorXd u = objective.last_state().u;
-  const int iterations = iteration_offset + s.iterations;
-  const HausdorffResult fields = write_body(iterations, s.x, u);
+  const ShapeTrackingSummary s =
+      track_shape(objective, lower, upper, m0, target.map_displacement, to, cb);
+  const Eigen::VectorXd& u = s.displacement;
+  const int iterations = s.iterations;
+  const HausdorffResult fields = write_body(iterations, s.control, u);
   write_vtu_cloud((out / "target.vtu").string(), target.cloud, {{"d_tilde", fields.field_target}});
   write_ply_cloud((out / "target.ply").string(), target.cloud);
   write_ply_cloud((out / "body_final.ply").string(), objective.particles(u));
@@ -353,12 +315,8 @@ int run_optimise(const std::vector<std::string>& tokens) {
     h << kHistoryHeader << '\n';
     for (const std::string& r : history_rows) h << r << '\n';
     write_file_atomically((out / "history.csv").string(), h.str());
-    fe::write_control_file((out / "control.csv").string(), space.positions(mesh), s.x);
+    fe::write_control_file((out / "control.csv").string(), space.positions(mesh), s.control);
   }
-  const double seconds =
-      seconds_offset +
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  const auto err = shape_errors(u);
   nlohmann::json sum;
   sum["scene"] = pos[0];
   sum["target"] = target.description;
@@ -368,26 +326,25 @@ int run_optimise(const std::vector<std::string>& tokens) {
   sum["algorithm"] = to_string(opt.algorithm);
   sum["particles"] = to_string(so.particles);
   sum["volumes"] = to_string(so.volumes);
-  sum["rho_start"] = rho_start;
-  sum["floor_self"] = floor_self;
-  sum["floor_matched"] = floor_matched ? nlohmann::json(*floor_matched) : nlohmann::json(nullptr);
-  sum["rho_final"] = final_eval.rho;
-  sum["J_final"] = final_eval.J;
-  sum["rho_final_over_floor"] = final_eval.rho / floor;
-  sum["iterations"] = iterations;
-  sum["evaluations"] = evaluation_offset + s.evaluations;
+  sum["rho_start"] = s.rho_start;
+  sum["floor_self"] = s.floor_self;
+  sum["floor_matched"] = optional_json(s.floor_matched);
+  sum["rho_final"] = s.rho_final;
+  sum["J_final"] = s.J_final;
+  sum["rho_final_over_floor"] = s.rho_final / s.floor();
+  sum["iterations"] = s.iterations;
+  sum["evaluations"] = s.evaluations;
   sum["failed_evaluations"] = s.failed_evaluations;
   sum["termination"] = s.termination;
   sum["converged"] = s.converged;
-  sum["shape_error_max"] = err ? nlohmann::json(err->first) : nlohmann::json(nullptr);
-  sum["shape_error_rms"] = err ? nlohmann::json(err->second) : nlohmann::json(nullptr);
-  sum["seconds"] = seconds;
-  sum["newton_iterations"] = total_newton;
-  sum["seconds_state"] = total_state;
-  sum["seconds_distance"] = total_distance;
-  sum["seconds_adjoint"] = total_adjoint;
-  sum["seconds_optimizer"] =
-      std::max(0.0, seconds - seconds_offset - total_state - total_distance - total_adjoint);
+  sum["shape_error_max"] = optional_json(s.shape_error_max);
+  sum["shape_error_rms"] = optional_json(s.shape_error_rms);
+  sum["seconds"] = s.seconds;
+  sum["newton_iterations"] = s.newton_iterations;
+  sum["seconds_state"] = s.seconds_state;
+  sum["seconds_distance"] = s.seconds_distance;
+  sum["seconds_adjoint"] = s.seconds_adjoint;
+  sum["seconds_optimizer"] = s.seconds_optimizer;
   write_file_atomically((out / "summary.json").string(), sum.dump(2) + "\n");
 
 #ifdef SOFTHD_PLOT_SCRIPT
@@ -397,11 +354,13 @@ int run_optimise(const std::vector<std::string>& tokens) {
     std::fprintf(stderr, "  (convergence.png not drawn: needs python3-matplotlib)\n");
 #endif
   if (!quiet) {
-    std::fprintf(stderr, "  %s after %d iterations, %.1f s\n", s.termination.c_str(), iterations,
-                 seconds);
-    std::fprintf(stderr, "  rho %.6g -> %.6g (%.3g x floor)", rho_start, final_eval.rho,
-                 final_eval.rho / floor);
-    if (err) std::fprintf(stderr, ", shape error max %.4g rms %.4g", err->first, err->second);
+    std::fprintf(stderr, "  %s after %d iterations, %.1f s\n", s.termination.c_str(), s.iterations,
+                 s.seconds);
+    std::fprintf(stderr, "  rho %.6g -> %.6g (%.3g x floor)", s.rho_start, s.rho_final,
+                 s.rho_final / s.floor());
+    if (s.shape_error_max)
+      std::fprintf(stderr, ", shape error max %.4g rms %.4g", *s.shape_error_max,
+                   *s.shape_error_rms);
     std::fprintf(stderr, "\n  results in %s\n", out.string().c_str());
   }
   if (json) std::cout << sum.dump(2) << '\n';

@@ -127,6 +127,7 @@ PointCloud ShapeObjective::particles(const Eigen::VectorXd& u) const { return im
 const fe::State& ShapeObjective::last_state() const { return impl_->cache.front().state; }
 const HausdorffTarget& ShapeObjective::target() const { return impl_->target; }
 const ShapeObjectiveOptions& ShapeObjective::options() const { return impl_->options; }
+const fe::Assembler& ShapeObjective::assembler() const { return impl_->assembler; }
 
 HausdorffResult ShapeObjective::fields(const Eigen::VectorXd& u) const {
   HausdorffRequest req;

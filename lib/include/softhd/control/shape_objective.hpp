@@ -75,6 +75,7 @@ class ShapeObjective {
   const fe::State& last_state() const;
   const HausdorffTarget& target() const;
   const ShapeObjectiveOptions& options() const;
+  const fe::Assembler& assembler() const;
   /// Per-point fields d̃ of the last converged state (moving cloud, target cloud).
   HausdorffResult fields(const Eigen::VectorXd& u) const;
 

@@ -1,0 +1,85 @@
+#pragma once
+/// \file shape_tracking.hpp
+/// One shape-tracking run (SPEC §4, issue 5): the floors, the optimisation of J(m) on the
+/// bounded optimiser, per-iteration records with stage timings, and the true shape error
+/// where the target comes from a known map T. The CLI `softhd optimise` and the
+/// benchmarks both run through here.
+
+#include <Eigen/Core>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "softhd/control/bounded_optimizer.hpp"
+#include "softhd/control/shape_objective.hpp"
+#include "softhd/fe/mesh.hpp"
+
+namespace softhd {
+
+/// One accepted iteration, with the stage timings of the evaluation that produced it.
+struct TrackingIteration {
+  int iteration = 0, evaluation = 0;
+  double J = 0.0, rho = 0.0, A = 0.0, B = 0.0;
+  double rho_over_floor = 0.0;  ///< ρ̃ / matched floor (self floor without a known map)
+  double projected_gradient_norm = 0.0;
+  int newton_iterations = 0;
+  double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
+  double seconds = 0.0;  ///< wall time since the start of the run (plus a resumed offset)
+};
+
+struct ShapeTrackingOptions {
+  BoundedOptimizerOptions optimizer;  ///< algorithm, stopping, move limit
+  /// A resumed run continues counting from these (checkpoint values).
+  int iteration_offset = 0, evaluation_offset = 0;
+  double seconds_offset = 0.0;
+};
+
+struct ShapeTrackingSummary {
+  double rho_start = 0.0;
+  double floor_self = 0.0;              ///< ρ̃(Ω_d, Ω_d)
+  std::optional<double> floor_matched;  ///< ρ̃(T(Ω₀), Ω_d), with a known map
+  double floor() const { return floor_matched.value_or(floor_self); }
+  double rho_final = 0.0, J_final = 0.0;
+  int iterations = 0, evaluations = 0, failed_evaluations = 0;  ///< including offsets
+  std::string termination;
+  bool converged = false;
+  std::optional<double> shape_error_max, shape_error_rms;  ///< |x_i − T(X_i)| over the nodes
+  double seconds = 0.0;                                    ///< this run's wall time plus the offset
+  double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
+  double seconds_optimizer = 0.0;  ///< the rest: NLopt, records, callbacks
+  int newton_iterations = 0;
+  Eigen::VectorXd control;                 ///< the best m found
+  Eigen::VectorXd displacement;            ///< its state u
+  std::vector<TrackingIteration> history;  ///< this run's accepted iterations
+};
+
+/// Max and RMS over the nodes of |x_i − T(X_i)| = |u_i − u_T,i| (node-major vectors).
+std::pair<double, double> shape_error(const fe::Mesh& mesh, const Eigen::VectorXd& u,
+                                      const Eigen::VectorXd& u_T);
+
+/// Optional observers of a run.
+struct ShapeTrackingCallbacks {
+  /// After the start state is solved and the floors are known (history still empty).
+  std::function<void(const ShapeTrackingSummary&)> on_start;
+  /// After each accepted iteration, with the best control so far.
+  std::function<void(const TrackingIteration&, const Eigen::VectorXd& m)> on_iteration;
+  /// A failed state solve (the step is rejected and the run goes on).
+  std::function<void(const std::string& report)> on_failure;
+};
+
+/// Minimises J(m) over lower ≤ m ≤ upper from m0 (clamped into the bounds).
+/// `map_displacement` (optional) is u_T = T(X) − X at the nodes, for the matched floor and
+/// the shape error. Throws Error if the state solve fails at m0 or at the best control.
+ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorXd& lower,
+                                 const Eigen::VectorXd& upper, const Eigen::VectorXd& m0,
+                                 const std::optional<Eigen::VectorXd>& map_displacement,
+                                 const ShapeTrackingOptions& options = {},
+                                 const ShapeTrackingCallbacks& callbacks = {});
+
+/// Time (seconds of the history) and iteration at which ρ̃ first fell to k × floor, or
+/// nullopt if it never did.
+std::optional<TrackingIteration> first_below(const std::vector<TrackingIteration>& history,
+                                             double k);
+
+}  // namespace softhd
