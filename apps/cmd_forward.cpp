@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/cloud.hpp"
 #include "softhd/fe/newton.hpp"
@@ -24,7 +25,7 @@ using namespace softhd::fe;
 constexpr const char* kUsage =
     "usage: softhd forward SCENE [--control FILE | --control-uniform V] [--probe X1,X2[,X3]]...\n"
     "                      [--out DIR] [--write-cloud FILE] [--json] [--linear-solver NAME]\n"
-    "                      [--verbose]\n"
+    "                      [--coarse-levels K] [--verbose]\n"
     "       softhd forward SCENE --write-control-nodes FILE [--control-uniform V]\n"
     "\n"
     "Solves the equilibrium of the scene's body for the active tension m and writes\n"
@@ -36,6 +37,10 @@ constexpr const char* kUsage =
     "  --write-cloud FILE     also write the deformed nodes with their deformed volumes\n"
     "                         V_i = int N_i J dX as a point cloud (.ply binary, else text), in\n"
     "                         node order: a target for softhd optimise\n"
+    "  --coarse-levels K      grid sequencing: first solve on the mesh with half the cells\n"
+    "                         (K times, coarsest first; cell counts must stay even) and start\n"
+    "                         each finer Newton solve from the coarser state interpolated\n"
+    "                         onto its nodes (default 0: start from rest)\n"
     "  --json                 print a JSON summary (probes, energy, volume, iterations, ...)\n"
     "  --linear-solver NAME   eigen-llt, eigen-ldlt or cholmod (default cholmod)\n"
     "  --write-control-nodes FILE  write the control nodes with their current values and stop\n";
@@ -43,6 +48,7 @@ constexpr const char* kUsage =
 struct Args {
   std::string scene, control_file, out_dir = "out", write_nodes, linear_solver, write_cloud;
   bool has_uniform = false, json = false, verbose = false;
+  int coarse_levels = 0;
   double uniform = 0.0;
   std::vector<Eigen::VectorXd> probes;
 };
@@ -91,6 +97,11 @@ bool parse(int argc, char** argv, Args* a) {
       a->verbose = true;
     } else if (s == "--linear-solver") {
       a->linear_solver = value();
+    } else if (s == "--coarse-levels") {
+      const double k = parse_number(value(), s);
+      if (!(k >= 0 && k <= 8 && k == static_cast<int>(k)))
+        throw softhd::InvalidArgument("--coarse-levels expects an integer from 0 to 8");
+      a->coarse_levels = static_cast<int>(k);
     } else if (s == "--write-cloud") {
       a->write_cloud = value();
     } else if (s == "--write-control-nodes") {
@@ -109,15 +120,59 @@ bool parse(int argc, char** argv, Args* a) {
   return true;
 }
 
+/// The control values on `control` from the arguments (file rows matched by coordinates).
+Eigen::VectorXd control_values(const Scene& scene, const ControlSpace& control, const Mesh& mesh,
+                               const Args& args) {
+  Eigen::VectorXd m = Eigen::VectorXd::Constant(
+      control.size(), args.has_uniform ? args.uniform : scene.control_initial);
+  if (!args.control_file.empty()) m = read_control_file(args.control_file, control.positions(mesh));
+  return m;
+}
+
+/// The starting state for `assembler` (the scene's mesh) and m_qp: the rest state, or with
+/// levels > 0 the equilibrium on the mesh with half the cells (itself started with
+/// levels − 1) interpolated onto this mesh's nodes by the coarse shape functions.
+State start_state(const Scene& scene, const Assembler& assembler, const Eigen::MatrixXd& m_qp,
+                  const Args& args, int levels, const NewtonOptions& options) {
+  State state = rest_state(assembler);
+  if (levels == 0) return state;
+  Scene coarse = scene;
+  for (Eigen::Index k = 0; k < coarse.cells.size(); ++k) {
+    if (coarse.cells[k] % 2 != 0)
+      throw softhd::InvalidArgument("--coarse-levels: " + std::to_string(coarse.cells[k]) +
+                                    " cells along axis " + std::to_string(k + 1) +
+                                    " cannot be halved");
+    coarse.cells[k] /= 2;
+  }
+  const Assembler ca = coarse.make_assembler();
+  const ControlSpace cc(ca.mesh(), ca.geometry(), coarse.control_kind);
+  const Eigen::MatrixXd mq = cc.to_quadrature(control_values(coarse, cc, ca.mesh(), args));
+  State cs = start_state(coarse, ca, mq, args, levels - 1, options);
+  NewtonSolver newton(ca, options);
+  const NewtonSummary summary = newton.solve(mq, &cs);
+  std::ostringstream cells;
+  cells << coarse.cells.transpose();
+  std::cerr << "coarse level (cells " << cells.str() << "): " << summary.BriefReport() << "\n";
+  if (!summary.converged())
+    throw softhd::Error("--coarse-levels: the state on the coarser mesh did not converge");
+  // Prolongation: u(X) = Σ_a N_a(ξ) u_a of the coarse element containing each node.
+  const Mesh& cm = ca.mesh();
+  Eigen::MatrixXd y = cm.nodes;
+  for (Eigen::Index n = 0; n < cm.num_nodes(); ++n)
+    for (int c = 0; c < cm.dim; ++c) y(n, c) += cs.u[n * cm.dim + c];
+  const softhd::NodalMap P(cm, softhd::PointCloud(y, Eigen::VectorXd::Ones(cm.num_nodes())));
+  state.u = P.displacement(assembler.mesh());
+  state.m_qp = m_qp;  // Newton starts at full load from the interpolated state
+  return state;
+}
+
 int forward(const Args& args) {
   const auto t0 = std::chrono::steady_clock::now();
   const Scene scene = load_scene(args.scene);
   const Assembler assembler = scene.make_assembler();
   const ControlSpace control(assembler.mesh(), assembler.geometry(), scene.control_kind);
   const Eigen::MatrixXd positions = control.positions(assembler.mesh());
-  Eigen::VectorXd m = Eigen::VectorXd::Constant(
-      control.size(), args.has_uniform ? args.uniform : scene.control_initial);
-  if (!args.control_file.empty()) m = read_control_file(args.control_file, positions);
+  const Eigen::VectorXd m = control_values(scene, control, assembler.mesh(), args);
   if (!args.write_nodes.empty()) {
     write_control_file(args.write_nodes, positions, m);
     return 0;
@@ -143,8 +198,8 @@ int forward(const Args& args) {
   options.verbose = args.verbose;
   if (!args.linear_solver.empty()) options.linear_solver = parse_linear_solver(args.linear_solver);
   NewtonSolver newton(assembler, options);
-  State state = rest_state(assembler);
   const Eigen::MatrixXd m_qp = control.to_quadrature(m);
+  State state = start_state(scene, assembler, m_qp, args, args.coarse_levels, options);
   const NewtonSummary summary = newton.solve(m_qp, &state);
   const Eigen::MatrixXd J = assembler.jacobians(state.u);
   std::filesystem::create_directories(args.out_dir);

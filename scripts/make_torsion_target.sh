@@ -3,6 +3,7 @@
 # the equilibrium of the torsion beam for the known control m*(X) = -1e6 * X3 / 2, solved on a
 # mesh 2x finer in each direction (data/targets/torsion_fine.json); its deformed nodes, in
 # node order, with their deformed volumes V_i = ∫ N_i J dX.
+# Grid sequencing (--coarse-levels 2: 25x2x1, then 50x4x2, then 100x8x4) makes it ~1 minute.
 # Usage: scripts/make_torsion_target.sh [SOFTHD_BINARY]   (default build/apps/softhd)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -15,4 +16,4 @@ trap 'rm -rf "$work"' EXIT
 awk '/^#/ {next} NF {printf "%s %s %s %.17g\n", $1, $2, $3, -1e6 * $3 / 2}' \
   "$work/nodes.txt" >"$work/m_star.txt"
 "$softhd" forward "$scene" --control "$work/m_star.txt" --out "$work" \
-  --write-cloud data/targets/torsion_target.ply --probe 50,4,2 --probe 50,0,0
+  --coarse-levels 2 --write-cloud data/targets/torsion_target.ply --probe 50,4,2 --probe 50,0,0
