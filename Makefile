@@ -19,6 +19,14 @@ test: build
 demo: build
 	@scripts/demo.sh $(BUILD_DIR)
 
+# All benchmarks (about 1.5-2 hours on 2 cores): CSVs and plots in docs/bench/, the report
+# docs/benchmarks.md. bench-quick is the smoke variant (about a minute; CTest runs it too).
+bench: build
+	@scripts/run_benchmarks.sh $(BUILD_DIR) docs/bench docs/benchmarks.md
+
+bench-quick: build
+	@scripts/run_benchmarks.sh --quick $(BUILD_DIR) $(BUILD_DIR)/bench-quick $(BUILD_DIR)/bench-quick/benchmarks.md
+
 format:
 	@git ls-files '*.cpp' '*.hpp' | xargs clang-format -i
 

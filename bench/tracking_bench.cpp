@@ -245,7 +245,7 @@ void write_csv(const std::string& path, const std::vector<Run>& runs) {
          "it_1.25,t_1.25,finite,converged,termination\n";
   for (const Run& r : runs) {
     const ShapeTrackingSummary& s = r.summary;
-    for (const auto& kv : r.params) out << kv.second << ',';
+    for (const auto& kv : r.params) out << csv_quote(kv.second) << ',';
     out << r.nodes << ',' << r.controls << ',' << r.target_points << ',' << fmt(s.floor_self, 10)
         << ',' << opt(s.floor_matched) << ',' << fmt(s.rho_start, 10) << ',' << fmt(s.rho_final, 10)
         << ',' << fmt(s.rho_final / s.floor(), 6) << ',' << opt(s.shape_error_max) << ','
