@@ -133,13 +133,13 @@ Target make_target(const fe::Scene& scene, const fe::Mesh& mesh,
     if (!t.contains("file") || !t["file"].is_string())
       throw InvalidArgument(scene.source + ": target.file must be a path string");
     const fs::path dir = fs::path(scene.source).parent_path();
-    const fs::path f = dir / t["file"].get<std::string>();
+    const fs::path f = (dir / t["file"].get<std::string>()).lexically_normal();
     PointCloud cloud = read_cloud(f.string(), scene.dim());
     if (!t.contains("solved_on")) return {cloud, std::nullopt, "cloud file " + f.string()};
     // A manufactured target: the deformed nodes of a state solved on another scene's mesh.
     if (!t["solved_on"].is_string())
       throw InvalidArgument(scene.source + ": target.solved_on must be a scene path string");
-    const fs::path source = dir / t["solved_on"].get<std::string>();
+    const fs::path source = (dir / t["solved_on"].get<std::string>()).lexically_normal();
     const NodalMap T(fe::load_scene(source.string()).make_mesh(), cloud);
     return {cloud, T.displacement(mesh),
             "cloud file " + f.string() + " (deformed nodes of " + source.string() + ")"};
