@@ -155,7 +155,10 @@ nlohmann::json optional_json(const std::optional<double>& v) {
 std::string csv_row(const std::vector<double>& v) {
   std::ostringstream s;
   s.precision(10);
-  for (size_t k = 0; k < v.size(); ++k) s << (k ? "," : "") << v[k];
+  for (size_t k = 0; k < v.size(); ++k) {
+    if (k) s << ',';
+    if (std::isfinite(v[k])) s << v[k];  // a ratio without a floor stays empty
+  }
   return s.str();
 }
 
@@ -269,8 +272,9 @@ int run_optimise(const std::vector<std::string>& tokens) {
   ShapeTrackingCallbacks cb;
   cb.on_start = [&](const ShapeTrackingSummary& start) {
     if (!quiet) {
-      std::fprintf(stderr, "  rho start %.6g, floor self %.6g, floor matched %s\n", start.rho_start,
-                   start.floor_self,
+      std::fprintf(stderr, "  rho start %.6g, floor self %s, floor matched %s\n", start.rho_start,
+                   start.floor_self ? std::to_string(*start.floor_self).c_str()
+                                    : "n/a (skipped: target too large)",
                    start.floor_matched ? std::to_string(*start.floor_matched).c_str()
                                        : "n/a (no known map)");
       std::fprintf(stderr, "  %5s %12s %12s %10s %10s %7s %8s\n", "iter", "J", "rho", "rho/floor",
@@ -327,11 +331,12 @@ int run_optimise(const std::vector<std::string>& tokens) {
   sum["particles"] = to_string(so.particles);
   sum["volumes"] = to_string(so.volumes);
   sum["rho_start"] = s.rho_start;
-  sum["floor_self"] = s.floor_self;
+  sum["floor_self"] = optional_json(s.floor_self);
   sum["floor_matched"] = optional_json(s.floor_matched);
   sum["rho_final"] = s.rho_final;
   sum["J_final"] = s.J_final;
-  sum["rho_final_over_floor"] = s.rho_final / s.floor();
+  sum["rho_final_over_floor"] =
+      optional_json(s.floor() ? std::optional<double>(s.rho_final / *s.floor()) : std::nullopt);
   sum["iterations"] = s.iterations;
   sum["evaluations"] = s.evaluations;
   sum["failed_evaluations"] = s.failed_evaluations;
@@ -357,7 +362,7 @@ int run_optimise(const std::vector<std::string>& tokens) {
     std::fprintf(stderr, "  %s after %d iterations, %.1f s\n", s.termination.c_str(), s.iterations,
                  s.seconds);
     std::fprintf(stderr, "  rho %.6g -> %.6g (%.3g x floor)", s.rho_start, s.rho_final,
-                 s.rho_final / s.floor());
+                 s.floor() ? s.rho_final / *s.floor() : std::nan(""));
     if (s.shape_error_max)
       std::fprintf(stderr, ", shape error max %.4g rms %.4g", *s.shape_error_max,
                    *s.shape_error_rms);

@@ -163,9 +163,10 @@ RunSettings::RunSettings() {
 
 bool Run::finite() const {
   const ShapeTrackingSummary& s = summary;
-  bool ok = std::isfinite(s.rho_start) && std::isfinite(s.floor_self) &&
-            std::isfinite(s.rho_final) && std::isfinite(s.J_final) && std::isfinite(s.seconds) &&
-            s.control.allFinite() && s.displacement.allFinite();
+  bool ok = std::isfinite(s.rho_start) && s.floor().has_value() && std::isfinite(s.rho_final) &&
+            std::isfinite(s.J_final) && std::isfinite(s.seconds) && s.control.allFinite() &&
+            s.displacement.allFinite();
+  if (s.floor_self) ok = ok && std::isfinite(*s.floor_self);
   if (s.floor_matched) ok = ok && std::isfinite(*s.floor_matched);
   if (s.shape_error_max) ok = ok && std::isfinite(*s.shape_error_max);
   for (const TrackingIteration& it : s.history)
@@ -208,8 +209,9 @@ Run run_tracking(std::vector<std::pair<std::string, std::string>> params, Body& 
   if (settings.progress) {
     const ShapeTrackingSummary& s = run.summary;
     std::fprintf(stderr, "  %s: rho %.4g -> %.4g (%.3g x floor), %d it, %.1f s, %s\n",
-                 label.c_str(), s.rho_start, s.rho_final, s.rho_final / s.floor(), s.iterations,
-                 s.seconds, s.termination.c_str());
+                 label.c_str(), s.rho_start, s.rho_final,
+                 s.rho_final / s.floor().value_or(std::nan("")), s.iterations, s.seconds,
+                 s.termination.c_str());
   }
   return run;
 }
@@ -246,10 +248,10 @@ void write_csv(const std::string& path, const std::vector<Run>& runs) {
   for (const Run& r : runs) {
     const ShapeTrackingSummary& s = r.summary;
     for (const auto& kv : r.params) out << csv_quote(kv.second) << ',';
-    out << r.nodes << ',' << r.controls << ',' << r.target_points << ',' << fmt(s.floor_self, 10)
-        << ',' << opt(s.floor_matched) << ',' << fmt(s.rho_start, 10) << ',' << fmt(s.rho_final, 10)
-        << ',' << fmt(s.rho_final / s.floor(), 6) << ',' << opt(s.shape_error_max) << ','
-        << opt(s.shape_error_rms) << ',' << s.iterations << ',' << s.evaluations << ','
+    out << r.nodes << ',' << r.controls << ',' << r.target_points << ',' << opt(s.floor_self) << ','
+        << opt(s.floor_matched) << ',' << fmt(s.rho_start, 10) << ',' << fmt(s.rho_final, 10) << ','
+        << fmt(s.rho_final / s.floor().value_or(std::nan("")), 6) << ',' << opt(s.shape_error_max)
+        << ',' << opt(s.shape_error_rms) << ',' << s.iterations << ',' << s.evaluations << ','
         << s.failed_evaluations << ',' << s.newton_iterations << ',' << fmt(s.seconds, 6) << ','
         << fmt(s.seconds_state, 6) << ',' << fmt(s.seconds_distance, 6) << ','
         << fmt(s.seconds_adjoint, 6) << ',' << fmt(s.seconds_optimizer, 6) << ','

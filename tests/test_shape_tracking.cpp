@@ -47,11 +47,16 @@ TEST(ShapeTracking, StartingAtTheManufacturedControlSitsOnTheMatchedFloor) {
   const Eigen::VectorXd hi = Eigen::VectorXd::Zero(space.size());
   const ShapeTrackingSummary s = track_shape(J, lo, hi, t.m_true, t.u_true, to);
   // The body at m_true is the target: every floor and the start coincide, shape error ~ 0.
-  ASSERT_TRUE(s.floor_matched.has_value());
-  EXPECT_NEAR(*s.floor_matched, s.floor_self, 1e-12 * s.floor_self);
-  EXPECT_NEAR(s.rho_start, s.floor_self, 1e-8 * s.floor_self);
+  ASSERT_TRUE(s.floor_matched.has_value() && s.floor_self.has_value());
+  EXPECT_NEAR(*s.floor_matched, *s.floor_self, 1e-12 * *s.floor_self);
+  EXPECT_NEAR(s.rho_start, *s.floor_self, 1e-8 * *s.floor_self);
   EXPECT_LE(s.rho_final, s.rho_start * (1 + 1e-12));
   EXPECT_LT(*s.shape_error_max, 1e-3);
+  // A target too large for its M² self floor: skipped, progress judged on the matched floor.
+  to.self_floor_max_pairs = 0.0;
+  const ShapeTrackingSummary t2 = track_shape(J, lo, hi, t.m_true, t.u_true, to);
+  EXPECT_FALSE(t2.floor_self.has_value());
+  EXPECT_EQ(t2.floor(), s.floor_matched);
 }
 
 TEST(ShapeTracking, RecordsAreConsistentAndTheShapeErrorFalls) {

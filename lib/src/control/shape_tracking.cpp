@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "softhd/error.hpp"
 
@@ -47,9 +48,10 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   // Floors (SPEC §2, §5): the target against itself, and the body deformed exactly by
   // the known map at this discretisation.
   const HausdorffTarget& Y = objective.target();
-  s.floor_self = Y.evaluate(Y.cloud()).rho;
+  const double m_points = static_cast<double>(Y.cloud().size());
+  if (m_points * m_points <= options.self_floor_max_pairs) s.floor_self = Y.evaluate(Y.cloud()).rho;
   if (map_displacement) s.floor_matched = Y.evaluate(objective.particles(*map_displacement)).rho;
-  const double floor = s.floor();
+  const std::optional<double> floor = s.floor();
 
   const ShapeEvaluation start = objective.evaluate(m0, false);
   if (!start.ok) throw Error("the state solve at the starting control failed: " + start.failure);
@@ -80,7 +82,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     it.rho = last.rho;
     it.A = last.A;
     it.B = last.B;
-    it.rho_over_floor = last.rho / floor;
+    it.rho_over_floor = floor ? last.rho / *floor : std::numeric_limits<double>::quiet_NaN();
     it.projected_gradient_norm = rec.projected_gradient_norm;
     it.newton_iterations = last.newton_iterations;
     it.seconds_state = last.seconds_state;

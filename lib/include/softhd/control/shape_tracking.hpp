@@ -21,7 +21,9 @@ namespace softhd {
 struct TrackingIteration {
   int iteration = 0, evaluation = 0;
   double J = 0.0, rho = 0.0, A = 0.0, B = 0.0;
-  double rho_over_floor = 0.0;  ///< ρ̃ / matched floor (self floor without a known map)
+  /// ρ̃ / matched floor (self floor without a known map); NaN if neither is known (no
+  /// map, and the self floor skipped for a huge target).
+  double rho_over_floor = 0.0;
   double projected_gradient_norm = 0.0;
   int newton_iterations = 0;
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
@@ -30,6 +32,9 @@ struct TrackingIteration {
 
 struct ShapeTrackingOptions {
   BoundedOptimizerOptions optimizer;  ///< algorithm, stopping, move limit
+  /// The self floor ρ̃(Ω_d, Ω_d) costs M² pairs: skipped (nullopt) above this many, e.g. for a
+  /// 1e6-point scan (1e12 pairs, ~20 minutes on 2 cores). The default costs ~15 s.
+  double self_floor_max_pairs = 1e10;
   /// A resumed run continues counting from these (checkpoint values).
   int iteration_offset = 0, evaluation_offset = 0;
   double seconds_offset = 0.0;
@@ -37,9 +42,10 @@ struct ShapeTrackingOptions {
 
 struct ShapeTrackingSummary {
   double rho_start = 0.0;
-  double floor_self = 0.0;              ///< ρ̃(Ω_d, Ω_d)
+  std::optional<double> floor_self;     ///< ρ̃(Ω_d, Ω_d), unless skipped (see options)
   std::optional<double> floor_matched;  ///< ρ̃(T(Ω₀), Ω_d), with a known map
-  double floor() const { return floor_matched.value_or(floor_self); }
+  /// The floor progress is judged against: matched, else self, else none.
+  std::optional<double> floor() const { return floor_matched ? floor_matched : floor_self; }
   double rho_final = 0.0, J_final = 0.0;
   int iterations = 0, evaluations = 0, failed_evaluations = 0;  ///< including offsets
   std::string termination;
