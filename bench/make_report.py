@@ -122,6 +122,10 @@ def section_resolution(rows, out, report):
                  "error RMS lies in [%s, %s].\n" % (
                      len(every), every[0]["mesh"], min(int(num(r, "target_points")) for r in every),
                      max(int(num(r, "target_points")) for r in every), g(min(e)), g(max(e))))
+        s.append("\nWhy the shape error stops falling with resolution (a study against a "
+                 "reachable target of the same curl): "
+                 "[bending_reachability.md](%s).\n"
+                 % rel(os.path.join(HERE, "..", "docs", "bending_reachability.md"), report))
     # Plot: shape error against target spacing and against mesh nodes.
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
     if grid:
