@@ -125,6 +125,11 @@ ShapeObjective::~ShapeObjective() = default;
 
 PointCloud ShapeObjective::particles(const Eigen::VectorXd& u) const { return impl_->particles(u); }
 const fe::State& ShapeObjective::last_state() const { return impl_->cache.front().state; }
+void ShapeObjective::remember_state(const Eigen::VectorXd& m, const fe::State& state) {
+  impl_->cache.push_front({m, state});
+  while (static_cast<int>(impl_->cache.size()) > impl_->options.warm_start_states)
+    impl_->cache.pop_back();
+}
 const HausdorffTarget& ShapeObjective::target() const { return impl_->target; }
 const ShapeObjectiveOptions& ShapeObjective::options() const { return impl_->options; }
 const fe::Assembler& ShapeObjective::assembler() const { return impl_->assembler; }
@@ -152,8 +157,7 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
     ev.failure = ns.BriefReport();
     return ev;
   }
-  d.cache.push_front({m, state});
-  while (static_cast<int>(d.cache.size()) > d.options.warm_start_states) d.cache.pop_back();
+  remember_state(m, state);
 
   // Distance (and its gradient w.r.t. the particles).
   t0 = std::chrono::steady_clock::now();
@@ -177,8 +181,7 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
     // Adjoint: K λ = ∂ρ̃/∂u, then dJ/dm = ∂J_reg/∂m + ∫ M_k (F a₀)·(∇λ a₀) dX.
     t0 = std::chrono::steady_clock::now();
     const Eigen::VectorXd g = d.displacement_gradient(state.u, r);
-    const Eigen::VectorXd lambda =
-        fe::solve_adjoint(d.assembler, d.newton.converged_factorization(), g);
+    const Eigen::VectorXd lambda = fe::solve_adjoint(d.assembler, d.newton, g);
     ev.gradient = reg_gradient + fe::control_gradient(d.assembler, d.control, state.u, lambda);
     ev.seconds_adjoint = seconds_since(t0);
   }

@@ -74,7 +74,9 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     if (g) *g = last.gradient;
     return true;
   };
+  fe::State best_state = objective.last_state();  // the state of the best control so far
   const auto on_iteration = [&](const IterationRecord& rec, const Eigen::VectorXd& m) {
+    best_state = objective.last_state();
     TrackingIteration it;
     it.iteration = options.iteration_offset + rec.iteration;
     it.evaluation = options.evaluation_offset + rec.evaluation;
@@ -95,7 +97,9 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   };
   const BoundedOptimizerSummary r = minimise(f, m0, lower, upper, options.optimizer, on_iteration);
 
-  // The final state: the best control's (re-solved from the nearest cached state).
+  // The final state: the best control's, evaluated again from its own state (Newton stops
+  // at once there, so the final ρ̃ is the one the optimiser saw).
+  objective.remember_state(r.x, best_state);
   const ShapeEvaluation final_eval = objective.evaluate(r.x, false);
   if (!final_eval.ok)
     throw Error("the state solve at the best control failed: " + final_eval.failure);

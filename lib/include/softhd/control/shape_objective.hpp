@@ -73,6 +73,9 @@ class ShapeObjective {
   PointCloud particles(const Eigen::VectorXd& u) const;
   /// The last converged state (the rest state before any evaluation).
   const fe::State& last_state() const;
+  /// Puts a converged state for the control m first among the warm starts (e.g. the best
+  /// one, so that evaluating m again starts, and stays, exactly there).
+  void remember_state(const Eigen::VectorXd& m, const fe::State& state);
   const HausdorffTarget& target() const;
   const ShapeObjectiveOptions& options() const;
   const fe::Assembler& assembler() const;
