@@ -22,6 +22,7 @@
 #include "softhd/fe/scene.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/io/vtu.hpp"
+#include "softhd/parallel.hpp"
 #include "softhd/samplers.hpp"
 
 namespace softhd::cli {
@@ -195,6 +196,7 @@ int run_optimise(const std::vector<std::string>& tokens) {
   const long threads = args.integer("--threads", 0);
   if (threads < 0 || threads > 4096) throw UsageError("--threads must be >= 0");
   so.hausdorff.threads = static_cast<int>(threads);
+  set_threads(static_cast<int>(threads));  // the FE assembly too
   const long vtu_every = args.integer("--vtu-every", 10);
   if (vtu_every < 0) throw UsageError("--vtu-every must be >= 0");
   const bool resume = args.flag("--resume"), json = args.flag("--json"),

@@ -9,6 +9,7 @@
 
 #include "line_search.hpp"
 #include "softhd/error.hpp"
+#include "softhd/parallel.hpp"
 
 namespace softhd::fe {
 
@@ -41,6 +42,9 @@ bool NewtonOptions::IsValid(std::string* error) const {
   if (max_load_steps < 1) return fail("max_load_steps must be >= 1");
   if (max_total_iterations < 1) return fail("max_total_iterations must be >= 1");
   if (!(forcing > 0.0 && forcing < 1.0)) return fail("forcing must be in (0, 1)");
+  if (!(displacement_tolerance >= 0.0)) return fail("displacement_tolerance must be >= 0");
+  if (!(intermediate_tolerance > 0.0 && intermediate_tolerance < 1.0))
+    return fail("intermediate_tolerance must be in (0, 1)");
   if (!(adjoint_tolerance > 0.0 && adjoint_tolerance < 1.0))
     return fail("adjoint_tolerance must be in (0, 1)");
   if (tangent.max_krylov_iterations < 1) return fail("tangent.max_krylov_iterations must be >= 1");
@@ -110,7 +114,9 @@ NewtonSolver::NewtonSolver(const Assembler& assembler, NewtonOptions options)
       options_(validated(options)),
       tangent_(assembler.tangent_pattern(), options_.tangent),
       K_(assembler.tangent_pattern()),
-      K_path_(K_) {}
+      K_path_(K_) {
+  limit_blas_threads();
+}
 
 bool NewtonSolver::assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m, double* energy,
                             Eigen::VectorXd* residual, SparseMatrix* tangent,
@@ -134,6 +140,7 @@ bool NewtonSolver::direction(const SparseMatrix& K, const Eigen::VectorXd& R, do
   rec->shift = r.shift;
   rec->krylov = r.krylov_iterations;
   rec->factorized = r.factorized;
+  rec->truncated = r.truncated;
   if (!r.ok) return false;
   *du = assembler_.dofs().expand(x);
   return true;
@@ -156,6 +163,11 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
         assemble(v, m, nullptr, &Rv, nullptr, summary);
         return Rv.norm();
       });
+  double last_step = 0.0;  // |Δu|_∞ of the last iteration
+  const bool final = load >= 1.0;
+  const double tolerance_factor =
+      final ? options_.relative_tolerance
+            : std::max(options_.relative_tolerance, options_.intermediate_tolerance);
   for (int it = 0; it <= options_.max_iterations; ++it) {
     // The predictor's first direction uses K_path_: K at u is not needed then.
     const bool use_path = predictor && it == 0 && have_path_tangent_;
@@ -168,8 +180,12 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
     summary->residual = rnorm;
     summary->residual_reference = R_ref;
     summary->energy = Pi;
-    NewtonIteration rec{load_step, load, it, rnorm, Pi, 0.0, 0.0, 0, false};
-    if (rnorm <= options_.relative_tolerance * R_ref + options_.absolute_tolerance ||
+    NewtonIteration rec{load_step, load, it, rnorm, Pi, 0.0, 0.0, 0, false, false};
+    const bool small_step =
+        options_.displacement_tolerance == 0.0 || it == 0 ||
+        last_step <= options_.displacement_tolerance * u->lpNorm<Eigen::Infinity>();
+    if ((rnorm <= tolerance_factor * R_ref + options_.absolute_tolerance &&
+         (small_step || !final)) ||
         rnorm == 0.0) {
       summary->iterations.push_back(rec);
       if (use_path) assemble(*u, m, nullptr, nullptr, &K_, summary);
@@ -186,7 +202,7 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
     // Forcing term η = min(forcing, |R|/R_ref, 1e-3 tol/|R|): falls like the residual
     // (quadratic convergence), and the last direction is solved to 1e-3 of the tolerance so
     // that the converged state is as accurate as after an exact Newton step.
-    const double tol = options_.relative_tolerance * R_ref + options_.absolute_tolerance;
+    const double tol = tolerance_factor * R_ref + options_.absolute_tolerance;
     const double eta =
         std::max(1e-14, std::min({options_.forcing, rnorm / R_ref, 1e-3 * tol / rnorm}));
     Eigen::VectorXd du;
@@ -205,11 +221,13 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
       if (direction(K, R, eta, &du, &rec, summary))
         rec.step = line_search.step(du, Pi, R.dot(dofs.restrict(du)), rnorm, u);
     }
+    last_step = (*u - u_before).lpNorm<Eigen::Infinity>();
     summary->iterations.push_back(rec);
     if (options_.verbose) {
       std::cerr << "newton: step " << load_step << " load " << load << " it " << it << " |R| "
                 << rnorm << " energy " << Pi << " s " << rec.step << " shift " << rec.shift
                 << " pcg " << rec.krylov << (rec.factorized ? " factorised" : "")
+                << (rec.truncated ? " truncated" : "")
                 << (line_search.tentative() ? " (tentative)" : "") << "\n";
     }
     if (rec.step == 0.0) {

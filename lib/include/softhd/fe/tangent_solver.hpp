@@ -30,6 +30,10 @@ struct TangentSolverOptions {
   /// stale: the next solve factorises its K first. A factorisation costs about as much as
   /// 15 PCG iterations on the paper's meshes.
   int refactor_after_iterations = 12;
+  /// Newton directions (solves that allow a shift): when PCG meets negative curvature
+  /// after its first iteration, return the iterate so far (a descent direction, as in
+  /// line-search Newton–CG) instead of factorising the indefinite K with a shift.
+  bool truncate_on_negative_curvature = true;
 
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
@@ -42,6 +46,7 @@ struct TangentSolveReport {
   int factorizations = 0;     ///< numeric factorisations made (shift search included)
   int krylov_iterations = 0;  ///< PCG iterations (0 after a direct solve)
   double shift = 0.0;         ///< μ of a direct solve with K + μ I (0 if none)
+  bool truncated = false;     ///< PCG stopped at negative curvature (a descent direction)
   double seconds_factorization = 0.0;
   double seconds_solve = 0.0;
 };
@@ -71,7 +76,7 @@ class TangentSolver {
   /// PCG on K from x = 0 with the kept factorisation; false on negative curvature or no
   /// convergence within max_krylov_iterations.
   bool pcg(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& K, const Eigen::VectorXd& b,
-           double tolerance, Eigen::VectorXd* x, int* iterations) const;
+           double tolerance, Eigen::VectorXd* x, int* iterations, bool* negative_curvature) const;
 
   TangentSolverOptions options_;
   std::unique_ptr<LinearSolver> factor_;
