@@ -272,6 +272,8 @@ int forward(const Args& args) {
     j["volume"] = assembler.deformed_volume(state.u);
     j["min_J"] = J.minCoeff();
     j["newton_iterations"] = summary.newton_iterations;
+    j["factorizations"] = summary.factorizations;
+    j["krylov_iterations"] = summary.krylov_iterations;
     j["load_steps"] = summary.load_steps;
     j["dofs"] = assembler.dofs().num_free;
     j["seconds"] = seconds;

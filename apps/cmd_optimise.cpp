@@ -275,8 +275,9 @@ int run_optimise(const std::vector<std::string>& tokens) {
   cb.on_start = [&](const ShapeTrackingSummary& start) {
     if (!quiet) {
       std::fprintf(stderr, "  rho start %.6g, floor self %s, floor matched %s\n", start.rho_start,
-                   start.floor_self ? std::to_string(*start.floor_self).c_str()
-                                    : "n/a (skipped: target too large)",
+                   start.floor_self      ? std::to_string(*start.floor_self).c_str()
+                   : start.floor_matched ? "computed at the end"
+                                         : "n/a (skipped: target too large)",
                    start.floor_matched ? std::to_string(*start.floor_matched).c_str()
                                        : "n/a (no known map)");
       std::fprintf(stderr, "  %5s %12s %12s %10s %10s %7s %8s\n", "iter", "J", "rho", "rho/floor",

@@ -94,10 +94,12 @@ struct Driver {
   const BoundedObjective& objective;
   const BoundedOptimizerOptions& options;
   const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& on_iteration;
-  Eigen::VectorXd scale;     // x = scale ∘ z
-  Eigen::VectorXd zlo, zhi;  // bounds on z
-  double fscale = 1.0;       // f_nlopt = f / fscale (set per round, see round_scale)
-  double report_scale = 1.0;  // |f(x0)|: records give gradients of f / |f(x0)|
+  Eigen::VectorXd scale;           // x = scale ∘ z
+  Eigen::VectorXd zlo, zhi;        // bounds on z
+  Eigen::VectorXd box_lo, box_hi;  // the current round's move-limit box (empty: none)
+  bool recentre = false;           // the best point reached a side of the box
+  double fscale = 1.0;             // f_nlopt = f / fscale (set per round, see round_scale)
+  double report_scale = 1.0;       // |f(x0)|: records give gradients of f / |f(x0)|
   std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
   BoundedOptimizerSummary summary;
   double largest_abs = 1.0;  // largest |J| seen, for the failure penalty
@@ -179,7 +181,25 @@ struct Driver {
     if (s != Stop::none && stop == Stop::none) {
       stop = s;
       opt.force_stop();
+    } else if (stop == Stop::none && on_box_side(z)) {
+      // Within a round MMA would now converge to the box's constrained optimum, taking
+      // tiny steps along its side until the round's evaluations are spent: start the next
+      // round around this point instead.
+      recentre = true;
+      opt.force_stop();
     }
+  }
+
+  /// True if z lies on a side of the current move-limit box that is not a bound.
+  bool on_box_side(const Eigen::Ref<const Eigen::VectorXd>& z) const {
+    if (box_lo.size() != z.size()) return false;
+    for (Eigen::Index k = 0; k < z.size(); ++k) {
+      const double tiny = 1e-9 * (zhi[k] - zlo[k]);
+      if ((z[k] <= box_lo[k] + tiny && box_lo[k] > zlo[k] + tiny) ||
+          (z[k] >= box_hi[k] - tiny && box_hi[k] < zhi[k] - tiny))
+        return true;
+    }
+    return false;
   }
 };
 
@@ -267,6 +287,11 @@ BoundedOptimizerSummary minimise(
       nlopt_reason = "the evaluation limit was reached";
       break;
     }
+    if (delta > 0.0) {
+      d.box_lo = lo;
+      d.box_hi = hi;
+    }
+    d.recentre = false;
     d.fscale = round_scale(d.scale.cwiseProduct(d.g0), d.report_scale, options);
     nlopt::opt opt(nlopt_algorithm(options.algorithm), static_cast<unsigned>(n));
     opt.set_lower_bounds(std::vector<double>(lo.data(), lo.data() + n));
@@ -303,6 +328,7 @@ BoundedOptimizerSummary minimise(
       if (d.stop == Stop::none) nlopt_reason = std::string("NLopt failed: ") + e.what();
     }
     if (d.stop != Stop::none || delta <= 0.0) break;
+    if (d.recentre) continue;  // progress up to the box's side: same move limit, new centre
     // Next round: keep the move limit after progress, halve it otherwise.
     if (!(d.summary.final_value < round_start)) delta *= 0.5;
     if (delta < options.move_limit * 1e-3) {

@@ -49,7 +49,10 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   // the known map at this discretisation.
   const HausdorffTarget& Y = objective.target();
   const double m_points = static_cast<double>(Y.cloud().size());
-  if (m_points * m_points <= options.self_floor_max_pairs) s.floor_self = Y.evaluate(Y.cloud()).rho;
+  const bool self_floor = m_points * m_points <= options.self_floor_max_pairs;
+  // With a known map the matched floor judges progress, and the self floor (M² pairs, often
+  // the most expensive evaluation of the run) is only reported: computed after the run.
+  if (self_floor && !map_displacement) s.floor_self = Y.evaluate(Y.cloud()).rho;
   if (map_displacement) s.floor_matched = Y.evaluate(objective.particles(*map_displacement)).rho;
   const std::optional<double> floor = s.floor();
 
@@ -103,6 +106,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   const ShapeEvaluation final_eval = objective.evaluate(r.x, false);
   if (!final_eval.ok)
     throw Error("the state solve at the best control failed: " + final_eval.failure);
+  if (self_floor && map_displacement) s.floor_self = Y.evaluate(Y.cloud()).rho;
   s.control = r.x;
   s.displacement = objective.last_state().u;
   s.rho_final = final_eval.rho;

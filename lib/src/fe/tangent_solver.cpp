@@ -42,7 +42,8 @@ bool TangentSolver::pcg(const Sparse& K, const Eigen::VectorXd& b, double tolera
   double rz = r.dot(z);
   *iterations = 0;
   *negative_curvature = false;
-  if (r.norm() <= target) return true;
+  const double r0 = r.norm();
+  if (r0 <= target) return true;
   for (int k = 1; k <= options_.max_krylov_iterations; ++k) {
     Kp.noalias() = K.selfadjointView<Eigen::Lower>() * p;
     const double curvature = p.dot(Kp);
@@ -54,7 +55,16 @@ bool TangentSolver::pcg(const Sparse& K, const Eigen::VectorXd& b, double tolera
     const double step = rz / curvature;
     x->noalias() += step * p;
     r.noalias() -= step * Kp;
-    if (r.norm() <= target) return true;
+    const double rnorm = r.norm();
+    if (rnorm <= target) return true;
+    // A factor too stale to converge within the budget: stop early. The residual falls
+    // about geometrically, so after k iterations the rate (|r_k|/|r_0|)^(1/k) predicts the
+    // iterations still needed (pessimistically: PCG accelerates, hence the 1.5).
+    if (k >= 6 && rnorm < r0) {
+      const double rate = std::pow(rnorm / r0, 1.0 / k);
+      if (k + std::log(target / rnorm) / std::log(rate) > 1.5 * options_.max_krylov_iterations)
+        return false;
+    }
     z = factor_->solve(r);
     const double rz_next = r.dot(z);
     p = z + (rz_next / rz) * p;
