@@ -26,7 +26,8 @@ using namespace softhd::fe;
 constexpr const char* kUsage =
     "usage: softhd forward SCENE [--control FILE | --control-uniform V] [--probe X1,X2[,X3]]...\n"
     "                      [--out DIR] [--write-cloud FILE] [--json] [--linear-solver NAME]\n"
-    "                      [--coarse-levels K] [--step-tol T] [--factorize-every-step]\n"
+    "                      [--coarse-levels K] [--step-tol T] [--load-increment F]\n"
+    "                      [--intermediate-tol T] [--factorize-every-step]\n"
     "                      [--threads N] [--verbose]\n"
     "       softhd forward SCENE --write-control-nodes FILE [--control-uniform V]\n"
     "\n"
@@ -47,6 +48,10 @@ constexpr const char* kUsage =
     "  --linear-solver NAME   eigen-llt, eigen-ldlt or cholmod (default cholmod)\n"
     "  --step-tol T           converged also needs the last Newton correction\n"
     "                         |du|_inf <= T |u|_inf (default 1e-10; 0: residual test only)\n"
+    "  --load-increment F     first load step, a fraction of m (default 0.1; doubled after\n"
+    "                         quick steps, halved after failed ones)\n"
+    "  --intermediate-tol T   relative residual accepting a load step before the last\n"
+    "                         (default 1e-3; the last one needs 1e-9)\n"
     "  --factorize-every-step classical Newton: factorise every tangent instead of\n"
     "                         reusing a factorisation as a PCG preconditioner\n"
     "  --threads N            threads of the assembly (default 0: OMP_NUM_THREADS or all cores)\n"
@@ -58,8 +63,8 @@ struct Args {
   int coarse_levels = 0;
   int threads = 0;
   double step_tol = 1e-10;
-  double load_increment = 1.0;
-  double intermediate_tol = 1e-9;
+  double load_increment = 0.1;
+  double intermediate_tol = 1e-3;
   bool factorize_every_step = false;
   double uniform = 0.0;
   std::vector<Eigen::VectorXd> probes;

@@ -128,11 +128,15 @@ bool NewtonSolver::assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m, 
   return ok;
 }
 
-bool NewtonSolver::direction(const SparseMatrix& K, const Eigen::VectorXd& R, double eta,
-                             Eigen::VectorXd* du, NewtonIteration* rec, NewtonSummary* summary) {
+bool NewtonSolver::direction(const SparseMatrix& K, const Eigen::VectorXd& R, double reference,
+                             double eta, Eigen::VectorXd* du, NewtonIteration* rec,
+                             NewtonSummary* summary) {
   // K du = −R on the free dofs, to ‖K du + R‖ <= η ‖R‖.
   Eigen::VectorXd x;
-  const TangentSolveReport r = tangent_.solve(K, -R, eta, /*allow_shift=*/true, &x);
+  // Truncated (Newton–CG) directions escape indefinite regions far from equilibrium; near
+  // it they stall on a saddle's flat mode, where a shifted factorisation converges.
+  const bool far = R.norm() > 1e-3 * reference;
+  const TangentSolveReport r = tangent_.solve(K, -R, eta, /*allow_shift=*/true, &x, far);
   summary->factorizations += r.factorizations;
   summary->krylov_iterations += r.krylov_iterations;
   summary->seconds_factorization += r.seconds_factorization;
@@ -184,14 +188,16 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
     const bool small_step =
         options_.displacement_tolerance == 0.0 || it == 0 ||
         last_step <= options_.displacement_tolerance * u->lpNorm<Eigen::Infinity>();
-    if ((rnorm <= tolerance_factor * R_ref + options_.absolute_tolerance &&
-         (small_step || !final)) ||
-        rnorm == 0.0) {
-      summary->iterations.push_back(rec);
+    const bool residual_ok = rnorm <= tolerance_factor * R_ref + options_.absolute_tolerance;
+    const auto converge = [&] {
       if (use_path) assemble(*u, m, nullptr, nullptr, &K_, summary);
       std::swap(K_path_, K_);  // the tangent at the converged state, kept
       have_path_tangent_ = true;
       return true;
+    };
+    if ((residual_ok && (small_step || !final)) || rnorm == 0.0) {
+      summary->iterations.push_back(rec);
+      return converge();
     }
     if (it == options_.max_iterations) {
       summary->iterations.push_back(rec);
@@ -207,7 +213,17 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
         std::max(1e-14, std::min({options_.forcing, rnorm / R_ref, 1e-3 * tol / rnorm}));
     Eigen::VectorXd du;
     const SparseMatrix& K = use_path ? K_path_ : K_;
-    if (!direction(K, R, eta, &du, &rec, summary)) {
+    const bool direction_ok = direction(K, R, R_ref, eta, &du, &rec, summary);
+    if (residual_ok && (!direction_ok || rec.shift != 0.0 || rec.truncated)) {
+      // Only the step test is pending, and K is not positive definite here (an unstable
+      // equilibrium, e.g. a compressed plate before it buckles): a Newton step would leave
+      // it along a descent direction instead of confirming it. Converged at the residual.
+      --summary->newton_iterations;
+      rec.shift = 0.0;
+      summary->iterations.push_back(rec);
+      return converge();
+    }
+    if (!direction_ok) {
       summary->iterations.push_back(rec);
       summary->message = "tangent could not be factorised";
       return false;
@@ -218,7 +234,7 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
       // The direction came from PCG with a kept factorisation: retry with K factorised.
       tangent_.drop_factorization();
       *u = u_before;
-      if (direction(K, R, eta, &du, &rec, summary))
+      if (direction(K, R, R_ref, eta, &du, &rec, summary))
         rec.step = line_search.step(du, Pi, R.dot(dofs.restrict(du)), rnorm, u);
     }
     last_step = (*u - u_before).lpNorm<Eigen::Infinity>();

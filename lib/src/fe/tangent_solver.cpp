@@ -74,7 +74,8 @@ bool TangentSolver::pcg(const Sparse& K, const Eigen::VectorXd& b, double tolera
 }
 
 TangentSolveReport TangentSolver::solve(const Sparse& K, const Eigen::VectorXd& b, double tolerance,
-                                        bool allow_shift, Eigen::VectorXd* x) {
+                                        bool allow_shift, Eigen::VectorXd* x,
+                                        bool allow_truncation) {
   TangentSolveReport report;
   if (K.rows() != b.size()) throw InvalidArgument("tangent solver: K and b differ in size");
   if (b.size() == 0) {
@@ -89,7 +90,7 @@ TangentSolveReport TangentSolver::solve(const Sparse& K, const Eigen::VectorXd& 
     report.seconds_solve += seconds_since(t0);
     // Newton–CG: at negative curvature after some progress, the iterate so far is a
     // descent direction of the energy (its slope is −xᵀb < 0); the line search takes it.
-    if (negative && allow_shift && options_.truncate_on_negative_curvature &&
+    if (negative && allow_shift && allow_truncation && options_.truncate_on_negative_curvature &&
         report.krylov_iterations > 1) {
       report.ok = true;
       report.truncated = true;

@@ -159,9 +159,10 @@ class NewtonSolver {
   /// direction with K_path_ (the tangent at the last converged state).
   bool solve_load_step(const Eigen::MatrixXd& m, int load_step, double load, bool predictor,
                        Eigen::VectorXd* u, NewtonSummary* summary);
-  /// Newton direction du (num_dofs) from K du = −R to the relative residual eta.
-  bool direction(const SparseMatrix& K, const Eigen::VectorXd& R, double eta, Eigen::VectorXd* du,
-                 NewtonIteration* rec, NewtonSummary* summary);
+  /// Newton direction du (num_dofs) from K du = −R to the relative residual eta
+  /// (`reference`: the load step's R_ref).
+  bool direction(const SparseMatrix& K, const Eigen::VectorXd& R, double reference, double eta,
+                 Eigen::VectorXd* du, NewtonIteration* rec, NewtonSummary* summary);
   /// Energy and/or residual and/or tangent at (u, m), timed and counted.
   bool assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m, double* energy,
                 Eigen::VectorXd* residual, SparseMatrix* tangent, NewtonSummary* summary) const;

@@ -62,9 +62,11 @@ class TangentSolver {
   /// μ = 0 unless K is not positive definite and `allow_shift` is set (Newton directions;
   /// the report gives μ). Returns ok = false if K cannot be factorised (with μ = 0 when
   /// shifts are not allowed). K stores its lower triangle.
+  /// `allow_truncation`: with allow_shift, PCG may stop at negative curvature (see
+  /// TangentSolverOptions::truncate_on_negative_curvature).
   TangentSolveReport solve(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& K,
                            const Eigen::VectorXd& b, double tolerance, bool allow_shift,
-                           Eigen::VectorXd* x);
+                           Eigen::VectorXd* x, bool allow_truncation = true);
 
   /// True if a factorisation is kept.
   bool has_factorization() const { return have_factor_; }
