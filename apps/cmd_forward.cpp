@@ -48,10 +48,10 @@ constexpr const char* kUsage =
     "  --linear-solver NAME   eigen-llt, eigen-ldlt or cholmod (default cholmod)\n"
     "  --step-tol T           converged also needs the last Newton correction\n"
     "                         |du|_inf <= T |u|_inf (default 1e-10; 0: residual test only)\n"
-    "  --load-increment F     first load step, a fraction of m (default 0.1; doubled after\n"
+    "  --load-increment F     first load step, a fraction of m (default 1; doubled after\n"
     "                         quick steps, halved after failed ones)\n"
     "  --intermediate-tol T   relative residual accepting a load step before the last\n"
-    "                         (default 1e-3; the last one needs 1e-9)\n"
+    "                         (default 1e-9, as the last one)\n"
     "  --factorize-every-step classical Newton: factorise every tangent instead of\n"
     "                         reusing a factorisation as a PCG preconditioner\n"
     "  --threads N            threads of the assembly (default 0: OMP_NUM_THREADS or all cores)\n"
@@ -63,8 +63,8 @@ struct Args {
   int coarse_levels = 0;
   int threads = 0;
   double step_tol = 1e-10;
-  double load_increment = 0.1;
-  double intermediate_tol = 1e-3;
+  double load_increment = 1.0;
+  double intermediate_tol = 1e-9;
   bool factorize_every_step = false;
   double uniform = 0.0;
   std::vector<Eigen::VectorXd> probes;

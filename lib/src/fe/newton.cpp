@@ -133,10 +133,14 @@ bool NewtonSolver::direction(const SparseMatrix& K, const Eigen::VectorXd& R, do
                              NewtonSummary* summary) {
   // K du = −R on the free dofs, to ‖K du + R‖ <= η ‖R‖.
   Eigen::VectorXd x;
-  // Truncated (Newton–CG) directions escape indefinite regions far from equilibrium; near
-  // it they stall on a saddle's flat mode, where a shifted factorisation converges.
-  const bool far = R.norm() > 1e-3 * reference;
-  const TangentSolveReport r = tangent_.solve(K, -R, eta, /*allow_shift=*/true, &x, far);
+  // Truncated (Newton–CG) directions escape indefinite regions cheaply, but in a row they
+  // can stall on a flat unstable mode (the residual oscillating at constant energy, as on a
+  // compressed 3x1x1 plate) and near equilibrium a shifted factorisation converges better:
+  // truncate only far from equilibrium and never twice in a row.
+  const bool allow_truncation = R.norm() > 1e-3 * reference && !last_truncated_;
+  const TangentSolveReport r =
+      tangent_.solve(K, -R, eta, /*allow_shift=*/true, &x, allow_truncation);
+  last_truncated_ = r.truncated;
   summary->factorizations += r.factorizations;
   summary->krylov_iterations += r.krylov_iterations;
   summary->seconds_factorization += r.seconds_factorization;

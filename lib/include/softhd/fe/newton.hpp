@@ -173,6 +173,7 @@ class NewtonSolver {
   SparseMatrix K_;       ///< tangent at the current iterate
   SparseMatrix K_path_;  ///< tangent at the last converged state (last_u_, last_m_)
   bool have_path_tangent_ = false;
+  bool last_truncated_ = false;  ///< the last direction was a truncated PCG one
   bool converged_ = false;
   Eigen::VectorXd last_u_;
   Eigen::MatrixXd last_m_;
