@@ -69,6 +69,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     s.seconds_distance += last.seconds_distance;
     s.seconds_adjoint += last.seconds_adjoint;
     s.newton_iterations += last.newton_iterations;
+    s.factorizations += last.factorizations;
     if (!last.ok) {
       if (callbacks.on_failure) callbacks.on_failure(last.failure);
       return false;
@@ -90,6 +91,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     it.rho_over_floor = floor ? last.rho / *floor : std::numeric_limits<double>::quiet_NaN();
     it.projected_gradient_norm = rec.projected_gradient_norm;
     it.newton_iterations = last.newton_iterations;
+    it.factorizations = last.factorizations;
     it.seconds_state = last.seconds_state;
     it.seconds_distance = last.seconds_distance;
     it.seconds_adjoint = last.seconds_adjoint;
