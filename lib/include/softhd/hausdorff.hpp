@@ -1,6 +1,6 @@
 #pragma once
 /// \file hausdorff.hpp
-/// The regularised Hausdorff distance between two weighted point clouds (SPEC §2).
+/// The regularised Hausdorff distance between two weighted point clouds (docs/formulation.md §2).
 ///
 /// Moving cloud X = {x_i, V_i} (N points), target cloud Y = {y_j, W_j} (M points):
 ///

@@ -1,6 +1,6 @@
 #pragma once
 /// \file point_cloud.hpp
-/// A weighted point cloud (SPEC §1): N points in R^d (d = 2 or 3) with volumes
+/// A weighted point cloud (docs/formulation.md §1.1): N points in R^d (d = 2 or 3) with volumes
 /// V_i > 0 (areas in 2D).
 
 #include <Eigen/Core>

@@ -1,6 +1,6 @@
 #pragma once
 /// \file bounded_optimizer.hpp
-/// Bound-constrained minimisation on NLopt (SPEC §4 "Optimiser"): MMA by default,
+/// Bound-constrained minimisation on NLopt (docs/formulation.md §4.5): MMA by default,
 /// CCSAQ, L-BFGS and SLSQP selectable, variables scaled to O(1), stopping on
 /// iterations, relative change, a target value and wall-clock time, and failed
 /// evaluations turned into rejected steps instead of crashes.

@@ -1,6 +1,6 @@
 #pragma once
 /// \file shape_objective.hpp
-/// The shape-tracking objective of SPEC §4 and its adjoint gradient:
+/// The shape-tracking objective of docs/formulation.md §4.2 and its adjoint gradient:
 ///
 ///     J(m) = ρ̃_H(Φ_m(Ω₀), Ω_d) + (M/2)∫m² + (ε_m/2)∫|∇m|²
 ///

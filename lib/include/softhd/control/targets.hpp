@@ -1,8 +1,8 @@
 #pragma once
 /// \file targets.hpp
-/// Targets with a known map T (SPEC §5): the bending scene's circular arc, analytic at
-/// any resolution, and a manufactured state (the torsion target: the deformed nodes of a
-/// state solved on a finer mesh, interpolated by that mesh's shape functions). A known map gives
+/// Targets with a known map T (docs/formulation.md §5.2): the bending scene's circular arc,
+/// analytic at any resolution, and a manufactured state (the torsion target: the deformed nodes of
+/// a state solved on a finer mesh, interpolated by that mesh's shape functions). A known map gives
 /// the matched floor ρ̃(T(Ω₀), Ω_d) and the true shape error |x_i − T(X_i)|.
 
 #include <Eigen/Core>
@@ -13,7 +13,7 @@
 namespace softhd {
 
 /// The plate [0, length] × [0, width] × [0, thickness], clamped at X1 = 0, bent about
-/// the X2 axis through the total angle θ, curling towards +X3 (SPEC §5). With
+/// the X2 axis through the total angle θ, curling towards +X3 (docs/formulation.md §5.2). With
 /// R = length/θ and z = X3 − thickness/2:
 ///
 ///     T(X) = ((R − z) sin(X1/R), X2, thickness/2 + R − (R − z) cos(X1/R)),

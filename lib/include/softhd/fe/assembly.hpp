@@ -1,7 +1,7 @@
 #pragma once
 /// \file assembly.hpp
 /// Energy Π(u; m) = ∫ W(F) + W_m(F) dX, residual R = ∫ P ∇N dX and tangent
-/// K = ∫ ∇N C ∇N dX on the free dofs (SPEC §3), assembled in parallel with OpenMP.
+/// K = ∫ ∇N C ∇N dX on the free dofs (docs/formulation.md §3.5), assembled in parallel with OpenMP.
 ///
 /// Determinism: elements are coloured so that no two elements of one colour share a
 /// node; colours are processed in a fixed order and each nonzero receives its element
@@ -58,7 +58,7 @@ class Assembler {
   /// det F at every quadrature point, E by nq.
   Eigen::MatrixXd jacobians(const Eigen::VectorXd& u) const;
   /// w_q det J0 (F a₀)·(∇λ a₀) at every quadrature point (E by nq), ∇λ = Σ_a λ_a ⊗ ∇N_a:
-  /// the integrand of the adjoint control gradient (SPEC §4).
+  /// the integrand of the adjoint control gradient (docs/formulation.md §4.4).
   Eigen::MatrixXd fiber_sensitivity(const Eigen::VectorXd& u, const Eigen::VectorXd& lambda) const;
 
   /// Deformation gradient (3 by 3, plane strain in 2D) at point q of element e.

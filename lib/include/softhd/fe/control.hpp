@@ -1,6 +1,6 @@
 #pragma once
 /// \file control.hpp
-/// Discretisations of the active tension m(X) (SPEC §4): nodal values on the mesh
+/// Discretisations of the active tension m(X) (docs/formulation.md §4.1): nodal values on the mesh
 /// vertices interpolated with Q1 (bi/trilinear) shape functions on every element (also on
 /// Q2 meshes), so bounds hold pointwise, or one value per element.
 
@@ -31,7 +31,8 @@ class ControlSpace {
   Eigen::VectorXd from_quadrature(const Eigen::MatrixXd& v) const;
   /// Reference positions of the controls (vertices, or element centres): size by dim.
   Eigen::MatrixXd positions(const Mesh& mesh) const;
-  /// (M/2) ∫ m² + (ε/2) ∫ |∇m|² and its gradient w.r.t. m (SPEC §4); `gradient` may be null.
+  /// (M/2) ∫ m² + (ε/2) ∫ |∇m|² and its gradient w.r.t. m (docs/formulation.md §4.2); `gradient`
+  /// may be null.
   double regularisation(const Eigen::VectorXd& m, double M, double eps,
                         Eigen::VectorXd* gradient) const;
 

@@ -2,7 +2,7 @@
 /// \file geometry.hpp
 /// Reference-configuration data at the quadrature points of a mesh, computed once:
 /// shape values, gradients dN/dX and weights w_q det(dX/dxi). Also the lumped nodal
-/// volumes V_i = ∫ N_i dX (SPEC §1).
+/// volumes V_i = ∫ N_i dX (docs/formulation.md §1.2).
 
 #include <Eigen/Core>
 

@@ -1,7 +1,7 @@
 #pragma once
 /// \file kinematics.hpp
 /// The tensor cross product and the map from W(F, H, J) derivatives to the first
-/// Piola-Kirchhoff stress P and the tangent C (SPEC §3). Second-order tensors are
+/// Piola-Kirchhoff stress P and the tangent C (docs/formulation.md §3.4). Second-order tensors are
 /// 3 by 3; fourth-order ones are 9 by 9 acting on vec(A) (column-major: entry (i, I)
 /// at index i + 3 I), so that δF : C : ΔF = vec(δF)ᵀ C vec(ΔF).
 

@@ -1,6 +1,6 @@
 #pragma once
 /// \file mesh.hpp
-/// Structured Lagrange meshes of a box (SPEC §3): 8-node (Q1) and 27-node (Q2)
+/// Structured Lagrange meshes of a box (docs/formulation.md §3.5): 8-node (Q1) and 27-node (Q2)
 /// hexahedra in 3D, 4-node and 9-node quadrilaterals in 2D (plane strain).
 
 #include <Eigen/Core>

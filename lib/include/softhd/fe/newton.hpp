@@ -1,8 +1,8 @@
 #pragma once
 /// \file newton.hpp
-/// Newton–Raphson for the equilibrium R(u; m) = 0 (SPEC §3): energy-based backtracking
-/// line search that never accepts det F <= 0 at a quadrature point, adaptive load stepping
-/// on m when a load step fails, warm start from any state, and the factorisation of the
+/// Newton–Raphson for the equilibrium R(u; m) = 0 (docs/formulation.md §3.6): energy-based
+/// backtracking line search that never accepts det F <= 0 at a quadrature point, adaptive load
+/// stepping on m when a load step fails, warm start from any state, and the factorisation of the
 /// converged tangent kept for the adjoint. Non-convergence is a status in the summary,
 /// never an exception; misuse (wrong sizes, invalid options) throws InvalidArgument.
 

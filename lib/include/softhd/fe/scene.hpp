@@ -1,7 +1,7 @@
 #pragma once
 /// \file scene.hpp
-/// Scene files (JSON, SPEC §5/§6): the body (structured box mesh), material, fibers,
-/// clamp, control space and bounds. The "target" object belongs to the optimiser and is
+/// Scene files (JSON, docs/formulation.md §5.1/§6.2): the body (structured box mesh), material,
+/// fibers, clamp, control space and bounds. The "target" object belongs to the optimiser and is
 /// kept as raw JSON text. Invalid files throw FileError naming the key and what was
 /// expected.
 ///

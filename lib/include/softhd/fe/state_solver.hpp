@@ -1,6 +1,6 @@
 #pragma once
 /// \file state_solver.hpp
-/// The state equation as the optimiser sees it (SPEC §4): a control vector m in, the
+/// The state equation as the optimiser sees it (docs/formulation.md §4): a control vector m in, the
 /// equilibrium displacement out, warm-started from the previous solve, and the adjoint
 /// gradient dJ/dm for any ∂J/∂u at the last converged state, reusing the factorisation of
 /// its tangent.

@@ -1,9 +1,9 @@
 #pragma once
 /// \file vtu.hpp
-/// ParaView output (SPEC §6): VTK XML unstructured grids (.vtu, ascii) of a deformed
-/// mesh or a point cloud, and .pvd collections that make a series of them a time line.
-/// Q2 elements are written as 2^dim linear sub-cells through their nodes, so nodal
-/// data are shown exactly.
+/// ParaView output (docs/formulation.md §6.2): VTK XML unstructured grids (.vtu, ascii) of a
+/// deformed mesh or a point cloud, and .pvd collections that make a series of them a time line. Q2
+/// elements are written as 2^dim linear sub-cells through their nodes, so nodal data are shown
+/// exactly.
 
 #include <Eigen/Core>
 #include <string>
