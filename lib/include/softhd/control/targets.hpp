@@ -21,14 +21,16 @@ namespace softhd {
 ///
 /// T is the identity on the clamped face X1 = 0 and preserves the mid-surface's length.
 struct ArcMap {
-  double length = 10.0;
-  double thickness = 0.1;
+  double length = 10.0;              ///< L, along X1 (the clamp is at X1 = 0)
+  double thickness = 0.1;            ///< t, along X3
   double angle = 3.141592653589793;  ///< θ in (0, 2π]
 
   /// Throws InvalidArgument for a non-positive length or thickness, θ outside
   /// (0, 2π], or R ≤ thickness/2 (the inner surface would fold).
   void validate() const;
+  /// T(X).
   Eigen::Vector3d operator()(const Eigen::Vector3d& X) const;
+  /// det ∇T(X) = 1 − z/R.
   double jacobian(const Eigen::Vector3d& X) const;
   /// The cloud mapped by T, volumes multiplied by det ∇T (exact for a cell-centred
   /// cloud to second order in the cell size; the mapped volumes sum to ∫ det ∇T).
@@ -47,6 +49,7 @@ class NodalMap {
  public:
   /// Throws InvalidArgument if the counts or dimensions of `source` and `deformed` differ.
   NodalMap(fe::Mesh source, const PointCloud& deformed);
+  /// The mesh the state was solved on.
   const fe::Mesh& source() const { return source_; }
   /// u_T(X) = T(X) − X at one reference point. Throws InvalidArgument outside the source body.
   Eigen::VectorXd displacement_at(const Eigen::VectorXd& X) const;

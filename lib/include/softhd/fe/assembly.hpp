@@ -32,10 +32,15 @@ class Assembler {
   Assembler(Mesh mesh, std::shared_ptr<const Material> material, const Eigen::Vector3d& a0,
             const std::vector<DirichletConstraint>& constraints);
 
+  /// The mesh.
   const Mesh& mesh() const { return mesh_; }
+  /// Its quadrature data.
   const ReferenceGeometry& geometry() const { return geometry_; }
+  /// The numbering of the free dofs.
   const DofMap& dofs() const { return dofs_; }
+  /// The stored energy.
   const Material& material() const { return *material_; }
+  /// The unit fiber direction a₀.
   const Eigen::Vector3d& fiber() const { return a0_; }
   /// Number of element colours (for reports).
   int num_colours() const { return static_cast<int>(colours_.size()); }

@@ -12,7 +12,9 @@
 
 namespace softhd::fe {
 
+/// The particles of the moving cloud: mesh nodes or quadrature points.
 enum class CloudPoints { kNodes, kQuadraturePoints };
+/// The particles' volumes: reference ones, or deformed ones (times J).
 enum class CloudVolumes { kReference, kDeformed };
 
 /// The deformed cloud for displacement u.

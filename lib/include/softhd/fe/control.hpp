@@ -12,6 +12,7 @@
 
 namespace softhd::fe {
 
+/// Where the control values live: mesh vertices (Q1 interpolation) or elements (constant).
 enum class ControlKind { kVertex, kElement };
 
 /// Parses "vertex" / "element"; throws InvalidArgument otherwise.
@@ -20,8 +21,10 @@ ControlKind parse_control_kind(const std::string& name);
 /// The linear map m ↦ m(X_q) at the quadrature points, m(X_q) = Σ_k M_k(X_q) m_k.
 class ControlSpace {
  public:
+  /// The control space of `kind` on `mesh`, with `geometry` its quadrature data.
   ControlSpace(const Mesh& mesh, const ReferenceGeometry& geometry, ControlKind kind);
 
+  /// Vertex or element controls.
   ControlKind kind() const { return kind_; }
   /// Number of control values: vertices or elements.
   Eigen::Index size() const { return size_; }

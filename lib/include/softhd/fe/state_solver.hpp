@@ -13,15 +13,19 @@
 
 namespace softhd::fe {
 
+/// The state equation m ↦ u(m) with warm starts and the adjoint gradient, for one body.
 class StateSolver {
  public:
+  /// A solver for `assembler`'s body with controls of kind `control`.
   StateSolver(Assembler assembler, ControlKind control, NewtonOptions options = {});
   /// The scene's body, material, clamp and control space.
   explicit StateSolver(const Scene& scene, NewtonOptions options = {});
   StateSolver(const StateSolver&) = delete;  // the Newton solver refers to the assembler
   StateSolver& operator=(const StateSolver&) = delete;
 
+  /// The body's assembler.
   const Assembler& assembler() const { return assembler_; }
+  /// The control space.
   const ControlSpace& control() const { return control_; }
 
   /// Equilibrium for the control m (control().size() values), starting from the last

@@ -17,8 +17,8 @@ namespace softhd {
 
 /// A named field: one row per point (or per cell), one column per component.
 struct VtuField {
-  std::string name;
-  Eigen::MatrixXd values;
+  std::string name;        ///< the field's name in ParaView
+  Eigen::MatrixXd values;  ///< rows: points or cells; columns: components
 };
 
 /// The mesh moved by the displacement u (num_nodes · dim entries, node-major), with
