@@ -3,7 +3,7 @@
 BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: deps build test demo bench bench-quick clean format
+.PHONY: deps build test demo bench bench-quick docs clean format
 
 deps:
 	@scripts/install-deps.sh
@@ -30,6 +30,10 @@ bench: build
 
 bench-quick: build
 	@scripts/run_benchmarks.sh --quick $(BUILD_DIR) $(BUILD_DIR)/bench-quick $(BUILD_DIR)/bench-quick/benchmarks.md
+
+# The API reference of the public headers (Doxygen): $(BUILD_DIR)/docs/html/index.html.
+docs: deps
+	@scripts/docs.sh $(BUILD_DIR)/docs
 
 format:
 	@git ls-files '*.cpp' '*.hpp' | xargs clang-format -i

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs the Debian packages softhd needs to build, test, run the demo and draw
-# its plots, and only those that are missing. Safe to run again.
+# Installs the Debian packages softhd needs to build, test, run the demo, draw its
+# plots and build the API reference (doxygen), and only those that are missing.
+# Safe to run again.
 set -euo pipefail
 
 packages=(
@@ -8,6 +9,7 @@ packages=(
   libeigen3-dev libnanoflann-dev libnlopt-cxx-dev libgtest-dev nlohmann-json3-dev
   libsuitesparse-dev libopenblas0-pthread
   python3 python3-matplotlib python3-numpy
+  doxygen
 )
 
 missing=()

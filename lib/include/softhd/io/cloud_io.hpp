@@ -1,6 +1,6 @@
 #pragma once
 /// \file cloud_io.hpp
-/// Reading and writing point clouds (SPEC §1, §6) as text or PLY files.
+/// Reading and writing point clouds (docs/formulation.md §1.1, §6.1) as text or PLY files.
 ///
 /// Every problem with a file (missing, unreadable, malformed, a non-finite
 /// coordinate, a volume <= 0, ...) throws softhd::FileError with a one-line
