@@ -294,14 +294,15 @@ def section_forward(rows):
             best[code] = r
     text = ("## Forward solve against FEniCS (issue 12)\n\n"
             "Torsion beam, Q2 50x4x2 (13 635 dofs), uniform m = -5e5 from rest; softhd "
-            "(Newton with PCG on a kept Cholesky factorisation), softhd with a factorisation "
+            "(Newton with PCG on a kept Cholesky factorisation; `loadsteps`: with "
+            "`--load-increment 0.1 --intermediate-tol 1e-3`), softhd with a factorisation "
             "of every tangent, and the independent FEniCS 2019 solver "
             "`bench/peers/fenics_forward.py` (Q2, MUMPS, load stepping), run alternately. "
             "Best solve time of the repeats (FEniCS: its `wall_solve_s`, JIT excluded), and "
             "the largest displacement difference from FEniCS at three probes.\n\n")
     f = best.get("fenics")
     rows_out = []
-    for code in ("softhd", "softhd-classical", "fenics"):
+    for code in ("softhd", "softhd-loadsteps", "softhd-classical", "fenics"):
         if code not in best:
             continue
         r = best[code]
