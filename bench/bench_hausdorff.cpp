@@ -243,18 +243,176 @@ std::string num(double x) {
   return buf;
 }
 
+// ---- goal cases of issue 13: one configuration, ratios against exact in one run ------
+
+// A 101×11×5 grid of the plate [0,10]×[0,2]×[0,0.1]: the 5 555 nodes of the bending mesh.
+PointCloud plate_nodes() { return plate(5555.0, 0.0); }
+
+// m random points on the six faces of the plate bent by the arc map (θ = 1), area-weighted
+// (the faces are mapped from the flat plate; the arc map nearly preserves area here).
+PointCloud arc_faces(Eigen::Index m, unsigned seed) {
+  std::mt19937_64 gen(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double L = 10.0, W = 2.0, T = 0.1, R = L / 1.0;
+  const double areas[3] = {L * W, L * T, W * T};  // top/bottom, front/back, ends
+  const double total = 2.0 * (areas[0] + areas[1] + areas[2]);
+  Eigen::MatrixXd p(m, 3);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    double pick = u(gen) * total, X1 = u(gen) * L, X2 = u(gen) * W, X3 = u(gen) * T;
+    const double side = u(gen) < 0.5 ? 0.0 : 1.0;
+    if ((pick -= 2.0 * areas[0]) < 0.0) {
+      X3 = side * T;
+    } else if ((pick -= 2.0 * areas[1]) < 0.0) {
+      X2 = side * W;
+    } else {
+      X1 = side * L;
+    }
+    const double z = X3 - 0.05;
+    p.row(i) << (R - z) * std::sin(X1 / R), X2, 0.05 + R - (R - z) * std::cos(X1 / R);
+  }
+  return PointCloud(p);
+}
+
+struct GoalConfig {
+  std::string name = "cube";  // cube | asym
+  double n = 1e5, m = 1e5, tau = 1e-4, alpha = 4.0;
+  int exact_sample = 0;  // 0: time exact on the full clouds; K: on K target points, scaled
+  int error_sample = 500;
+  std::vector<std::string> methods = {"nearest", "exact", "tree"};
+  std::string csv = "bench_hausdorff_goal.csv";
+  int threads = 0;
+  bool fallback = true;  // --no-fallback: method tree never sums a pass exactly
+};
+
+PointCloud first_rows(const PointCloud& c, Eigen::Index k) {
+  return PointCloud(c.points().topRows(k), c.volumes().head(k));
+}
+
+int run_goal(const GoalConfig& g) {
+  const auto [X, Y] =
+      g.name == "asym"
+          ? std::pair<PointCloud, PointCloud>{plate_nodes(),
+                                              arc_faces(static_cast<Eigen::Index>(g.m), 8)}
+          : std::pair<PointCloud, PointCloud>{
+                uniform_cube(static_cast<Eigen::Index>(g.n), 0.0, 1),
+                uniform_cube(static_cast<Eigen::Index>(g.m), 0.05, 2)};
+  HausdorffOptions base;
+  base.threads = g.threads;
+  base.params.alpha = g.alpha;
+  base.tolerance = g.tau;
+  base.tree_fallback = g.fallback;
+  std::ofstream csv(g.csv, std::ios::app);
+  csv << "case,N,M,alpha,tau,method,seconds,exact_seconds,exact_basis,speedup,err_S_sample,"
+         "near_pairs,far_kernel,far_basis,node_pairs,plan_s,exact_passes,passes\n";
+  std::cerr << g.name << " N=" << X.size() << " M=" << Y.size() << " alpha=" << g.alpha
+            << " tau=" << g.tau << "\n";
+  HausdorffOptions exact = base;
+  exact.method = Method::exact;
+  const ExactReference ref = subset_reference(X, Y, g.error_sample, exact);
+  double exact_s = NAN;
+  std::string exact_basis = "full";
+  for (const std::string& method : g.methods) {
+    HausdorffOptions o = base;
+    o.method = softhd::method_from_string(method);
+    HausdorffRequest r;  // value + gradient w.r.t. the moving points, with fields
+    r.fields = true;
+    r.gradient_points = o.method != Method::nearest;
+    double seconds;
+    HausdorffResult res;
+    if (o.method == Method::exact && g.exact_sample > 0) {
+      // Pair work is 2·N·M (value + gradient of the points): time it on K target points.
+      const PointCloud Ys = first_rows(Y, g.exact_sample);
+      const softhd::HausdorffTarget target(Ys, o);
+      res = target.evaluate(X, r);
+      seconds = res.seconds * static_cast<double>(Y.size()) / g.exact_sample;
+      exact_basis = "sample:" + std::to_string(g.exact_sample);
+    } else {
+      const softhd::HausdorffTarget target(Y, o);
+      res = target.evaluate(X, r);
+      seconds = res.seconds;
+    }
+    if (o.method == Method::exact) exact_s = seconds;
+    Errors e;
+    if (o.method == Method::tree) e = measure(res, ref, base.params.epsilon, g.alpha);
+    const softhd::SumWork& w = res.work;
+    csv << g.name << ',' << X.size() << ',' << Y.size() << ',' << g.alpha << ',' << num(g.tau)
+        << ',' << method << ',' << num(seconds) << ',' << num(exact_s) << ',' << exact_basis << ','
+        << num(exact_s / seconds) << ',' << num(e.S) << ',' << w.near_pairs << ',' << w.far_kernel
+        << ',' << w.far_basis << ',' << w.node_pairs << ',' << num(w.plan_seconds) << ','
+        << w.exact_passes << ',' << w.passes << '\n';
+    std::cerr << "  " << method << " " << seconds << " s"
+              << (std::isnan(exact_s) ? "" : ", exact/this " + num(exact_s / seconds))
+              << (std::isnan(e.S) ? "" : ", err_S " + num(e.S)) << ", near " << w.near_pairs
+              << " far " << w.far_kernel << " basis " << w.far_basis << " node pairs "
+              << w.node_pairs << " plan " << num(w.plan_seconds) << " s, exact passes "
+              << w.exact_passes << "/" << w.passes << "\n";
+  }
+  return 0;
+}
+
+int goal_main(int argc, char** argv) {
+  GoalConfig g;
+  for (int a = 1; a < argc; ++a) {
+    const std::string arg = argv[a];
+    auto value = [&]() -> std::string {
+      if (a + 1 >= argc) throw std::runtime_error("missing value after " + arg);
+      return argv[++a];
+    };
+    if (arg == "--goal")
+      g.name = value();
+    else if (arg == "--n")
+      g.n = std::stod(value());
+    else if (arg == "--m")
+      g.m = std::stod(value());
+    else if (arg == "--tau")
+      g.tau = std::stod(value());
+    else if (arg == "--alpha")
+      g.alpha = std::stod(value());
+    else if (arg == "--exact-sample")
+      g.exact_sample = std::stoi(value());
+    else if (arg == "--error-sample")
+      g.error_sample = std::stoi(value());
+    else if (arg == "--methods")
+      g.methods = split(value());
+    else if (arg == "--csv")
+      g.csv = value();
+    else if (arg == "--threads")
+      g.threads = std::stoi(value());
+    else if (arg == "--no-fallback")
+      g.fallback = false;
+    else
+      throw std::runtime_error("unknown argument " + arg);
+  }
+  if (g.name != "cube" && g.name != "asym") throw std::runtime_error("--goal cube|asym");
+  return run_goal(g);
+}
+
 void usage() {
   std::cout << "usage: bench_hausdorff [--min-n N] [--max-n N] [--repeats R] [--csv FILE]\n"
                "       [--exact-max N] [--shapes a,b,...] [--taus t1,t2,...]\n"
                "       [--modes value,value+grad] [--methods nearest,exact,tree]\n"
                "       [--budget SECONDS]\n"
                "       [--threads T] [--quick]\n"
-               "  --quick: sizes 1e3..1e4, one repeat, shapes cube,plate, taus 1e-2,1e-6\n";
+               "  --quick: sizes 1e3..1e4, one repeat, shapes cube,plate, taus 1e-2,1e-6\n"
+               "   or: bench_hausdorff --goal cube|asym [--n N] [--m M] [--tau T] [--alpha A]\n"
+               "       [--exact-sample K] [--error-sample K] [--methods ...] [--csv FILE]\n"
+               "  --goal: one case of issue 13 (asym: the 5 555 plate nodes against M points\n"
+               "  on the arc's faces), value + gradient; exact timed on K target points and\n"
+               "  scaled by M/K when --exact-sample K is given; the work split per method.\n";
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  for (int a = 1; a < argc; ++a)
+    if (std::string(argv[a]) == "--goal") {
+      try {
+        return goal_main(argc, argv);
+      } catch (const std::exception& e) {
+        std::cerr << "bench_hausdorff: " << e.what() << "\n";
+        return 2;
+      }
+    }
   Config cfg;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];

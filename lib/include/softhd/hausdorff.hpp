@@ -34,7 +34,8 @@ struct HausdorffParams {
 /// How the pair sums are evaluated.
 enum class Method {
   exact,    ///< all N·M pairs (the reference)
-  tree,     ///< k-d-tree far-field approximation with guaranteed relative tolerance τ
+  tree,     ///< dual-tree far field (Chebyshev interpolation, pruning) within relative
+            ///< tolerance τ; sums a pass exactly where that is cheaper
   nearest,  ///< the unregularised Hausdorff distance by nearest-neighbour queries
 };
 
@@ -58,6 +59,10 @@ struct HausdorffOptions {
   ///     |Δρ̃| ≤ e (ρ̃ + ε) for β, γ ≥ 1.
   /// Validated (InvalidArgument naming `tolerance`) for every method.
   double tolerance = 1e-6;
+  /// Method tree only: sum a pass over all pairs, as method exact does, when its cost
+  /// model predicts that is cheaper than the tree (small clouds, tight τ; see
+  /// docs/tree_tolerance.md §8). false forces the tree (tests, measurements).
+  bool tree_fallback = true;
 };
 
 /// What to compute beyond ρ̃, A and B. Nothing is computed that is not asked for.
@@ -74,6 +79,18 @@ struct HausdorffRequest {
   bool any_gradient() const { return gradient_points || gradient_volumes || gradient_target; }
 };
 
+/// Where the pair-sum work of one evaluation went, summed over its passes (2 or 3).
+struct SumWork {
+  std::int64_t near_pairs = 0;  ///< source–outer pairs summed directly (near field, or all)
+  std::int64_t far_kernel = 0;  ///< method tree: kernel evaluations at interpolation points
+  std::int64_t far_basis = 0;   ///< method tree: point–interpolation-point basis products
+  std::int64_t node_pairs = 0;  ///< method tree: node pairs visited by the traversal
+  double plan_seconds = 0.0;    ///< method tree: traversal wall time
+  double run_seconds = 0.0;     ///< wall time of the sums (including the traversal)
+  int passes = 0;               ///< pair passes made
+  int exact_passes = 0;         ///< method tree: passes its cost model summed exactly
+};
+
 /// The result of one evaluation. Optional members are empty unless requested.
 struct HausdorffResult {
   double rho = 0.0;                  ///< ρ̃_H (method nearest: the Hausdorff distance)
@@ -87,6 +104,7 @@ struct HausdorffResult {
   /// Pair kernel evaluations made: exact N·M per pass; tree counts one per source
   /// point summed exactly and one per node replaced by its one-term approximation.
   std::int64_t kernel_evaluations = 0;
+  SumWork work;          ///< the split of the pair-sum work
   double seconds = 0.0;  ///< wall time of the evaluation
 };
 

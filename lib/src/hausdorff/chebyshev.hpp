@@ -1,0 +1,59 @@
+#pragma once
+// Tensor Chebyshev interpolation of the pair kernel over boxes, with a rigorous bound
+// on the interpolation error (internal; docs/tree_tolerance.md §7 derives it).
+//
+// On [c − a, c + a] the n Chebyshev points of the second kind are c + a ξ_i,
+// ξ_i = cos(π i/(n − 1)); the interpolant of degree n − 1 is evaluated in barycentric
+// form. For f analytic inside the Bernstein ellipse E_ρ (foci c ± a, semi-axes
+// A = a(ρ + 1/ρ)/2 and B = a(ρ − 1/ρ)/2) with |f| ≤ M there,
+//     ‖f − I_n f‖ ≤ 4 M ρ^(1−n)/(ρ − 1),                  (Trefethen, ATAP Thm 8.2)
+// also for vector-valued f (norm ‖·‖₂). The Lebesgue constant of these points is
+// Λ_n ≤ (2/π) ln n + 1 (ATAP Thm 15.2), so interpolating m variables one after the other,
+//     ‖f − I_1⋯I_m f‖ ≤ Σ_j Λ^(j−1) e_j,   e_j: the bound for variable j, others real.
+//
+// The kernel. With r = |o − x| and one coordinate of o or x complex (z = ξ + iη, |η| ≤ B),
+// s = r² has Re s = D² − η² ≥ Dmin² − B² where D is the distance between the real parts
+// and Dmin the distance between the two boxes with the interpolated box widened to A
+// along that axis. Then Re √s ≥ δ = √(Dmin² − B²), so u(r) = (r + ε)^(−α) is analytic
+// (Re s > 0) with |u| ≤ (δ + ε)^(−α), and the gradient kernel u t (o − x)/r, t = 1/(r + ε),
+// has ‖·‖ ≤ (δ + ε)^(−α−1) √((Dmin² + B²)/(Dmin² − B²)).
+
+namespace softhd::detail {
+
+constexpr int kMaxChebyshev = 16;  ///< most points per axis
+
+/// The n points ξ_i on [−1, 1] and their barycentric weights.
+struct ChebyshevRule {
+  explicit ChebyshevRule(int n);
+  int n;
+  double xi[kMaxChebyshev];
+  double bw[kMaxChebyshev];
+  /// The n Lagrange basis values at u ∈ [−1, 1] (exactly δ_i at a node).
+  void basis(double u, double* L) const;
+};
+
+/// Λ_n ≤ (2/π) ln n + 1.
+double lebesgue_bound(int n);
+
+/// An axis-aligned box: centre and half-widths.
+struct Box {
+  double c[3] = {0.0, 0.0, 0.0};
+  double a[3] = {0.0, 0.0, 0.0};
+};
+
+/// The box [lo, hi] padded so that every half-width is > 0 (at least 1e-3 of the
+/// largest, or a tiny absolute width for a single point): interpolation boxes.
+Box interpolation_box(const double* lo, const double* hi, int d);
+
+/// Natural logarithms of bounds, per unit source weight, on the interpolation error of
+/// u and of the gradient kernel (above), for o in box T and x in box S, when the d
+/// coordinates of o (interp_t) and/or of x (interp_s) are interpolated at n points per
+/// axis. +∞ when the boxes are too close for any ellipse.
+struct LogBounds {
+  double value;
+  double grad;
+};
+LogBounds interpolation_log_bound(const Box& T, bool interp_t, const Box& S, bool interp_s, int d,
+                                  int n, double alpha, double eps);
+
+}  // namespace softhd::detail

@@ -1,0 +1,657 @@
+#include "dual_tree.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "chebyshev.hpp"
+
+namespace softhd::detail {
+
+int degree_for(double tau) {
+  const int n = static_cast<int>(std::lround(2.0 + std::log10(1.0 / tau)));
+  return std::clamp(n, 3, 12);
+}
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+enum Op : std::uint8_t { kP2P, kM2P, kP2L, kM2L, kPrune, kNone };
+enum Kind { kS = 0, kG = 1, kH = 2, kG2 = 3 };  // the four sums; budgets per kind
+
+// Cost model: work per unit relative to one pair of the all-pairs kernel (docs/tree_tolerance.md
+// §8).
+constexpr double kCostNear = 1.3;   // direct pairs in short slices (leaf pairs)
+constexpr double kCostFar = 1.0;    // kernel evaluations at interpolation points
+constexpr double kCostBasis = 0.3;  // point-interpolation-point basis products
+constexpr double kFallBack = 0.8;   // the plan must cost < 80 % of all pairs
+
+struct Interaction {
+  int t, s;
+  Op op;
+};
+
+/// Sums accumulated for one outer point or one interpolation point of an outer box.
+struct Acc {
+  double S = 0.0, G[3] = {0.0, 0.0, 0.0}, H = 0.0, G2[3] = {0.0, 0.0, 0.0};
+  void add(const PairSums& s, double f = 1.0) {
+    S += f * s.S;
+    H += s.H;
+    for (int k = 0; k < 3; ++k) {
+      G[k] += f * s.G[k];
+      G2[k] += s.G2[k];
+    }
+  }
+};
+
+/// The interpolation points of one box (tree slot) and, for a source box, their weights.
+struct ProxySet {
+  std::vector<double> coord;             // d blocks of P coordinates
+  std::vector<double> weight, coef, sc;  // P each (source boxes)
+  std::vector<Acc> local;                // P (outer boxes)
+};
+
+Box bounds_box(const KdNode& n, int d) {
+  Box b;
+  for (int k = 0; k < d; ++k) {
+    b.c[k] = 0.5 * (n.lo[k] + n.hi[k]);
+    b.a[k] = 0.5 * (n.hi[k] - n.lo[k]);
+  }
+  return b;
+}
+
+double node_gap(const KdNode& a, const KdNode& b, int d) {
+  double g2 = 0.0;
+  for (int k = 0; k < d; ++k) {
+    const double gap = std::max({a.lo[k] - b.hi[k], b.lo[k] - a.hi[k], 0.0});
+    g2 += gap * gap;
+  }
+  return std::sqrt(g2);
+}
+
+double node_radius2(const KdNode& a, int d) {
+  double r2 = 0.0;
+  for (int k = 0; k < d; ++k) r2 += (a.hi[k] - a.lo[k]) * (a.hi[k] - a.lo[k]);
+  return r2;
+}
+
+Eigen::Index size_of(const KdNode& n) { return n.end - n.begin; }
+
+/// Everything one pass needs, in the trees' orders.
+struct Pass {
+  const KdTree* ot = nullptr;  // outer tree
+  const KdTree* st = nullptr;  // source tree
+  DualTreeConfig cfg;
+  int d = 3, n = 8, P = 512;
+  unsigned flags = 0;
+  bool want[4] = {false, false, false, false};
+  double alpha = 4.0, eps = 1e-3, log_tau = 0.0;
+  const KernelPower* power = nullptr;
+  Eigen::VectorXd w, h, c, oc;  // source weights, coefficients, scales; outer scales
+  std::vector<NodeMoments> mw, mh;
+  PairSources src;
+  std::vector<double> log_low;  // 4 per outer node: log min_{o∈T} of the unscaled lower bound
+  std::vector<double> kappa;    // per outer node: max c_o (scale of its locals)
+  std::vector<char> has_local, has_proxy;
+  std::vector<Box> obox, sbox;  // interpolation boxes (eligible nodes)
+  double log_total[4] = {0.0, 0.0, 0.0, 0.0};
+  ChebyshevRule rule{2};
+
+  bool outer_kinds() const { return want[kS] || want[kG]; }
+  PairSources slice(const KdNode& s) const {
+    PairSources sub = src;
+    sub.size = size_of(s);
+    for (int k = 0; k < d; ++k) sub.coord[k] += s.begin;
+    if (sub.weight != nullptr) sub.weight += s.begin;
+    if (sub.coef != nullptr) sub.coef += s.begin;
+    if (sub.scale != nullptr) sub.scale += s.begin;
+    return sub;
+  }
+};
+
+/// Source data in tree order, node moments, and the totals of the budget shares.
+void prepare_sources(Pass& p, const PassSources& in) {
+  const KdTree& st = *p.st;
+  p.src.dim = p.d;
+  p.src.size = st.size();
+  for (int k = 0; k < p.d; ++k) p.src.coord[k] = st.points().col(k).data();
+  const Eigen::Index m = st.size();
+  if (p.outer_kinds()) {
+    p.w = st.permute(Eigen::Map<const Eigen::VectorXd>(in.weight, m));
+    p.mw = node_moments(st, p.w.data(), nullptr, *p.power);
+    p.src.weight = p.w.data();
+    p.log_total[kS] = p.log_total[kG] = std::log(p.mw[0].mass);
+  }
+  if (p.want[kH]) {
+    p.h = st.permute(Eigen::Map<const Eigen::VectorXd>(in.coef, m));
+    p.c = st.permute(Eigen::Map<const Eigen::VectorXd>(in.scale, m));
+    p.mh = node_moments(st, p.h.data(), p.c.data(), *p.power);
+    p.src.coef = p.h.data();
+    p.src.scale = p.c.data();
+    p.log_total[kH] = p.log_total[kG2] = std::log(p.mh[0].mass);
+  }
+  const bool interp = p.alpha <= p.cfg.max_interp_alpha;
+  const std::vector<KdNode>& nodes = st.nodes();
+  p.has_proxy.assign(nodes.size(), 0);
+  p.sbox.resize(nodes.size());
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    if (!interp || size_of(nodes[i]) <= p.P) continue;
+    p.has_proxy[i] = 1;
+    p.sbox[i] = interpolation_box(nodes[i].lo, nodes[i].hi, p.d);
+  }
+}
+
+constexpr int kCutDepth = 5;  // the lower bounds' coarse partition: source nodes at this depth
+
+/// Greedy descent to a source leaf near q (any leaf gives a valid lower bound); `cut`
+/// receives its ancestor at depth kCutDepth (or the leaf, if shallower).
+int leaf_near(const KdTree& st, const double* q, int d, int& cut) {
+  const std::vector<KdNode>& nodes = st.nodes();
+  int id = 0, depth = 0;
+  cut = 0;
+  while (nodes[static_cast<size_t>(id)].right >= 0) {
+    if (depth == kCutDepth) cut = id;
+    const int l = id + 1, r = nodes[static_cast<size_t>(id)].right;
+    double dl = 0.0, dr = 0.0;
+    for (int k = 0; k < d; ++k) {
+      const KdNode& a = nodes[static_cast<size_t>(l)];
+      const KdNode& b = nodes[static_cast<size_t>(r)];
+      const double ga = std::max({a.lo[k] - q[k], q[k] - a.hi[k], 0.0});
+      const double gb = std::max({b.lo[k] - q[k], q[k] - b.hi[k], 0.0});
+      dl += ga * ga;
+      dr += gb * gb;
+    }
+    id = dl <= dr ? l : r;
+    ++depth;
+  }
+  if (depth <= kCutDepth) cut = id;
+  return id;
+}
+
+/// The source nodes at depth kCutDepth, and the leaves above it: a partition.
+void cut_nodes(const KdTree& st, int id, int depth, std::vector<int>& out) {
+  const KdNode& n = st.nodes()[static_cast<size_t>(id)];
+  if (depth == kCutDepth || n.right < 0) {
+    out.push_back(id);
+    return;
+  }
+  cut_nodes(st, id + 1, depth + 1, out);
+  cut_nodes(st, n.right, depth + 1, out);
+}
+
+/// Lower bounds (scaled, as pair_sums returns them) of the four sums at o: over the
+/// partition `cut`, each node contributes W k(R_max) (every term is ≥ its value at the
+/// farthest corner; the vector sums only from boxes not containing o, whose terms all
+/// have r > 0), except the node `near_cut` holding `leaf`, which contributes the larger
+/// of that and the exact sum over `leaf`.
+PairSums lower_sums(const Pass& p, const double* o, double c_o, const std::vector<int>& cut,
+                    int near_cut, const PairSums& leaf) {
+  PairSums low;
+  const std::vector<KdNode>& nodes = p.st->nodes();
+  for (int id : cut) {
+    const KdNode& n = nodes[static_cast<size_t>(id)];
+    double near2 = 0.0, far2 = 0.0;
+    for (int k = 0; k < p.d; ++k) {
+      const double gap = std::max({n.lo[k] - o[k], o[k] - n.hi[k], 0.0});
+      const double span = std::max(std::fabs(o[k] - n.lo[k]), std::fabs(o[k] - n.hi[k]));
+      near2 += gap * gap;
+      far2 += span * span;
+    }
+    const double t = 1.0 / (std::sqrt(far2) + p.eps), inside = near2 > 0.0 ? 1.0 : 0.0;
+    PairSums b;
+    if (p.outer_kinds()) {
+      b.S = p.mw[static_cast<size_t>(id)].weight * p.power->scalar(c_o * t);
+      b.Gm = inside * b.S * t;
+    }
+    if (p.want[kH]) {
+      const NodeMoments& m = p.mh[static_cast<size_t>(id)];
+      b.H = m.weight * p.power->scalar(m.scale * t);
+      b.G2m = inside * b.H * t;
+    }
+    if (id == near_cut) {
+      b.S = std::max(b.S, leaf.S);
+      b.Gm = std::max(b.Gm, leaf.Gm);
+      b.H = std::max(b.H, leaf.H);
+      b.G2m = std::max(b.G2m, leaf.G2m);
+    }
+    low.S += b.S;
+    low.Gm += b.Gm;
+    low.H += b.H;
+    low.G2m += b.G2m;
+  }
+  return low;
+}
+
+/// Lower bounds of every outer point's sums (lower_sums with a source leaf near each
+/// outer leaf's centre), their minima per outer node, and the locals' scales.
+void prepare_outer(Pass& p, const PassOuter& in, int threads) {
+  const KdTree& ot = *p.ot;
+  const std::vector<KdNode>& nodes = ot.nodes();
+  const size_t nn = nodes.size();
+  p.oc = ot.permute(Eigen::Map<const Eigen::VectorXd>(in.scale, ot.size()));
+  p.log_low.assign(4 * nn, kInf);
+  p.kappa.assign(nn, 0.0);
+  std::vector<double> cmin(nn, kInf);
+  std::vector<int> cut;
+  cut_nodes(*p.st, 0, 0, cut);
+  const Eigen::MatrixXd& X = ot.points();
+  const unsigned flags = p.flags | kMagnitude;
+#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
+  for (size_t id = 0; id < nn; ++id) {
+    const KdNode& T = nodes[id];
+    if (T.right >= 0) continue;
+    double centre[3] = {0.0, 0.0, 0.0};
+    for (int k = 0; k < p.d; ++k) centre[k] = 0.5 * (T.lo[k] + T.hi[k]);
+    int near_cut = 0;
+    const int leaf_id = leaf_near(*p.st, centre, p.d, near_cut);
+    const PairSources leaf = p.slice(p.st->nodes()[static_cast<size_t>(leaf_id)]);
+    for (Eigen::Index q = T.begin; q < T.end; ++q) {
+      double o[3] = {0.0, 0.0, 0.0};
+      for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
+      const PairSums exact = pair_sums(o, p.oc[q], leaf, *p.power, p.eps, flags);
+      const PairSums s = lower_sums(p, o, p.oc[q], cut, near_cut, exact);
+      const double lc = p.alpha * std::log(p.oc[q]);
+      const double v[4] = {std::log(s.S) - lc, std::log(s.Gm) - lc, std::log(s.H), std::log(s.G2m)};
+      for (int k = 0; k < 4; ++k) p.log_low[4 * id + k] = std::min(p.log_low[4 * id + k], v[k]);
+      p.kappa[id] = std::max(p.kappa[id], p.oc[q]);
+      cmin[id] = std::min(cmin[id], p.oc[q]);
+    }
+  }
+  for (size_t id = nn; id-- > 0;) {  // children follow their parents
+    const KdNode& T = nodes[id];
+    if (T.right < 0) continue;
+    const size_t l = id + 1, r = static_cast<size_t>(T.right);
+    for (int k = 0; k < 4; ++k)
+      p.log_low[4 * id + k] = std::min(p.log_low[4 * l + k], p.log_low[4 * r + k]);
+    p.kappa[id] = std::max(p.kappa[l], p.kappa[r]);
+    cmin[id] = std::min(cmin[l], cmin[r]);
+  }
+  const bool interp = p.alpha <= p.cfg.max_interp_alpha;
+  p.has_local.assign(nn, 0);
+  p.obox.resize(nn);
+  for (size_t id = 0; id < nn; ++id) {
+    // Locals carry (κ_T t)^α; the factor (c_o/κ_T)^α must not underflow.
+    const bool scales_ok = p.alpha * (std::log(p.kappa[id]) - std::log(cmin[id])) <= 300.0;
+    if (!interp || size_of(nodes[id]) <= p.P || !scales_ok) continue;
+    p.has_local[id] = 1;
+    p.obox[id] = interpolation_box(nodes[id].lo, nodes[id].hi, p.d);
+  }
+}
+
+/// The cheapest admissible approximation of pair (t, s), or kNone.
+Op choose(const Pass& p, int t, int s, double gap) {
+  const KdNode& T = p.ot->nodes()[static_cast<size_t>(t)];
+  const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
+  double lb[4], lw[4];
+  for (int k = 0; k < 4; ++k) {
+    lb[k] = kInf;
+    lw[k] = -kInf;
+    if (!p.want[k]) continue;
+    const NodeMoments& m = k < 2 ? p.mw[static_cast<size_t>(s)] : p.mh[static_cast<size_t>(s)];
+    if (!(m.mass > 0.0)) continue;
+    lb[k] =
+        p.log_tau + p.log_low[4 * static_cast<size_t>(t) + k] + std::log(m.mass) - p.log_total[k];
+    lw[k] = std::log(m.weight) + (k < 2 ? 0.0 : p.alpha * std::log(m.scale));
+  }
+  auto fits = [&](double lv, double lg) {
+    for (int k = 0; k < 4; ++k)
+      if (p.want[k] && !(lw[k] + ((k == kS || k == kH) ? lv : lg) <= lb[k])) return false;
+    return true;
+  };
+  const double l = std::log(gap + p.eps);
+  if (fits(-p.alpha * l, -(p.alpha + 1.0) * l)) return kPrune;
+  const double nT = static_cast<double>(size_of(T)), nS = static_cast<double>(size_of(S));
+  const double P = p.P, direct = nT * nS;
+  struct Option {
+    double cost;
+    Op op;
+  } options[3];
+  int count = 0;
+  const bool m_ok = p.has_proxy[static_cast<size_t>(s)], l_ok = p.has_local[static_cast<size_t>(t)];
+  if (m_ok && l_ok && P * P < direct) options[count++] = {P * P, kM2L};
+  if (m_ok && nT * P < direct) options[count++] = {nT * P, kM2P};
+  if (l_ok && P * nS < direct) options[count++] = {P * nS, kP2L};
+  std::sort(options, options + count,
+            [](const Option& a, const Option& b) { return a.cost < b.cost; });
+  const Box tb = bounds_box(T, p.d), sb = bounds_box(S, p.d);
+  for (int i = 0; i < count; ++i) {
+    const bool it = options[i].op != kM2P, is = options[i].op != kP2L;
+    const LogBounds e = interpolation_log_bound(it ? p.obox[static_cast<size_t>(t)] : tb, it,
+                                                is ? p.sbox[static_cast<size_t>(s)] : sb, is, p.d,
+                                                p.n, p.alpha, p.eps);
+    if (fits(e.value, e.grad)) return options[i].op;
+  }
+  return kNone;
+}
+
+/// Depth-first dual traversal from (t, s): appends the interactions to `out`.
+void plan(const Pass& p, int t, int s, std::vector<Interaction>& out, std::int64_t& visits) {
+  ++visits;
+  const KdNode& T = p.ot->nodes()[static_cast<size_t>(t)];
+  const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
+  const bool outer_mass = p.outer_kinds() && p.mw[static_cast<size_t>(s)].mass > 0.0;
+  const bool inner_mass = p.want[kH] && p.mh[static_cast<size_t>(s)].mass > 0.0;
+  if (!outer_mass && !inner_mass) return;  // every term is zero
+  const double gap = node_gap(T, S, p.d);
+  if (gap > 0.0) {
+    const Op op = choose(p, t, s, gap);
+    if (op != kNone) {
+      out.push_back({t, s, op});
+      return;
+    }
+  }
+  const bool tl = T.right < 0, sl = S.right < 0;
+  if ((tl && sl) || size_of(T) * size_of(S) <= p.cfg.small_pairs) {
+    out.push_back({t, s, kP2P});
+    return;
+  }
+  if (sl || (!tl && node_radius2(T, p.d) >= node_radius2(S, p.d))) {
+    plan(p, t + 1, s, out, visits);
+    plan(p, T.right, s, out, visits);
+  } else {
+    plan(p, t, s + 1, out, visits);
+    plan(p, t, S.right, out, visits);
+  }
+}
+
+/// Outer subtrees processed as independent tasks (they partition the outer points):
+/// nodes of at most `limit` points. The partition depends on the tree only, so that the
+/// plan, hence every bit of the result, does not depend on the thread count.
+void task_roots(const KdTree& ot, int id, Eigen::Index limit, std::vector<int>& out) {
+  const KdNode& n = ot.nodes()[static_cast<size_t>(id)];
+  if (size_of(n) <= limit || n.right < 0) {
+    out.push_back(id);
+    return;
+  }
+  task_roots(ot, id + 1, limit, out);
+  task_roots(ot, n.right, limit, out);
+}
+
+/// The tensor grid of interpolation points of box b (d blocks of P coordinates).
+std::vector<double> grid_points(const Pass& p, const Box& b) {
+  std::vector<double> x(static_cast<size_t>(p.d * p.P));
+  for (int q = 0; q < p.P; ++q) {
+    int rest = q;
+    for (int k = p.d - 1; k >= 0; --k) {
+      x[static_cast<size_t>(k * p.P + q)] = b.c[k] + b.a[k] * p.rule.xi[rest % p.n];
+      rest /= p.n;
+    }
+  }
+  return x;
+}
+
+/// The tensor basis values L_q(x) of box b at point x (P values, same order as grid_points).
+void tensor_basis(const Pass& p, const Box& b, const double* x, double* L) {
+  double axis[3][kMaxChebyshev];
+  for (int k = 0; k < p.d; ++k) p.rule.basis((x[k] - b.c[k]) / b.a[k], axis[k]);
+  if (p.d == 2) {
+    for (int i = 0; i < p.n; ++i)
+      for (int j = 0; j < p.n; ++j) L[i * p.n + j] = axis[0][i] * axis[1][j];
+    return;
+  }
+  for (int i = 0; i < p.n; ++i)
+    for (int j = 0; j < p.n; ++j) {
+      const double lij = axis[0][i] * axis[1][j];
+      double* row = L + (i * p.n + j) * p.n;
+      for (int l = 0; l < p.n; ++l) row[l] = lij * axis[2][l];
+    }
+}
+
+/// Anterpolation: the weights of source box s at its interpolation points,
+/// W_q = Σ_x w_x L_q(x) and, for inner sums, Σ_x h̃_x L_q(x) with h̃ = h (c/C)^α.
+void source_proxies(const Pass& p, int s, ProxySet& ps) {
+  const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
+  const Box& b = p.sbox[static_cast<size_t>(s)];
+  ps.coord = grid_points(p, b);
+  const size_t P = static_cast<size_t>(p.P);
+  std::vector<double> L(P);
+  if (p.outer_kinds()) ps.weight.assign(P, 0.0);
+  if (p.want[kH]) {
+    ps.coef.assign(P, 0.0);
+    ps.sc.assign(P, p.mh[static_cast<size_t>(s)].scale);
+  }
+  const Eigen::MatrixXd& X = p.st->points();
+  for (Eigen::Index q = S.begin; q < S.end; ++q) {
+    double x[3] = {0.0, 0.0, 0.0};
+    for (int k = 0; k < p.d; ++k) x[k] = X(q, k);
+    tensor_basis(p, b, x, L.data());
+    if (p.outer_kinds())
+      for (size_t j = 0; j < P; ++j) ps.weight[j] += p.w[q] * L[j];
+    if (p.want[kH]) {
+      const double ht = p.h[q] * p.power->scalar(p.c[q] / ps.sc[0]);
+      for (size_t j = 0; j < P; ++j) ps.coef[j] += ht * L[j];
+    }
+  }
+}
+
+PairSources proxy_sources(const Pass& p, const ProxySet& ps) {
+  PairSources src;
+  src.dim = p.d;
+  src.size = p.P;
+  for (int k = 0; k < p.d; ++k) src.coord[k] = ps.coord.data() + k * p.P;
+  src.weight = ps.weight.empty() ? nullptr : ps.weight.data();
+  src.coef = ps.coef.empty() ? nullptr : ps.coef.data();
+  src.scale = ps.sc.empty() ? nullptr : ps.sc.data();
+  return src;
+}
+
+/// Runs one task's interactions, then interpolates its boxes' locals to their points.
+void execute(const Pass& p, const std::vector<Interaction>& list, const std::vector<int>& sslot,
+             const std::vector<ProxySet>& sprox, const std::vector<int>& oslot,
+             std::vector<ProxySet>& oprox, std::vector<Acc>& acc) {
+  const Eigen::MatrixXd& X = p.ot->points();
+  std::vector<int> touched;
+  for (const Interaction& it : list) {
+    const KdNode& T = p.ot->nodes()[static_cast<size_t>(it.t)];
+    const KdNode& S = p.st->nodes()[static_cast<size_t>(it.s)];
+    if (it.op == kPrune) continue;
+    const bool to_points = it.op == kP2P || it.op == kM2P;
+    const PairSources src =
+        (it.op == kP2P || it.op == kP2L)
+            ? p.slice(S)
+            : proxy_sources(p, sprox[static_cast<size_t>(sslot[static_cast<size_t>(it.s)])]);
+    if (to_points) {
+      for (Eigen::Index q = T.begin; q < T.end; ++q) {
+        double o[3] = {0.0, 0.0, 0.0};
+        for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
+        acc[static_cast<size_t>(q)].add(pair_sums(o, p.oc[q], src, *p.power, p.eps, p.flags));
+      }
+      continue;
+    }
+    ProxySet& loc = oprox[static_cast<size_t>(oslot[static_cast<size_t>(it.t)])];
+    if (loc.local.empty()) {
+      loc.coord = grid_points(p, p.obox[static_cast<size_t>(it.t)]);
+      loc.local.assign(static_cast<size_t>(p.P), Acc{});
+      touched.push_back(it.t);
+    }
+    const double kappa = p.kappa[static_cast<size_t>(it.t)];
+    for (int j = 0; j < p.P; ++j) {
+      double o[3] = {0.0, 0.0, 0.0};
+      for (int k = 0; k < p.d; ++k) o[k] = loc.coord[static_cast<size_t>(k * p.P + j)];
+      loc.local[static_cast<size_t>(j)].add(pair_sums(o, kappa, src, *p.power, p.eps, p.flags));
+    }
+  }
+  // L2P: outer sums rescaled from κ_T to each point's own scale, (c_o/κ_T)^α ≤ 1.
+  std::vector<double> L(static_cast<size_t>(p.P));
+  for (int t : touched) {
+    const KdNode& T = p.ot->nodes()[static_cast<size_t>(t)];
+    const ProxySet& loc = oprox[static_cast<size_t>(oslot[static_cast<size_t>(t)])];
+    const Box& b = p.obox[static_cast<size_t>(t)];
+    for (Eigen::Index q = T.begin; q < T.end; ++q) {
+      double o[3] = {0.0, 0.0, 0.0};
+      for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
+      tensor_basis(p, b, o, L.data());
+      PairSums s;
+      for (int j = 0; j < p.P; ++j) {
+        const Acc& a = loc.local[static_cast<size_t>(j)];
+        const double lj = L[static_cast<size_t>(j)];
+        s.S += lj * a.S;
+        s.H += lj * a.H;
+        for (int k = 0; k < p.d; ++k) {
+          s.G[k] += lj * a.G[k];
+          s.G2[k] += lj * a.G2[k];
+        }
+      }
+      acc[static_cast<size_t>(q)].add(s,
+                                      p.power->scalar(p.oc[q] / p.kappa[static_cast<size_t>(t)]));
+    }
+  }
+}
+
+/// Counts of the planned work: per-operation counts and the stats' kernel and basis work.
+void count_work(const Pass& p, const std::vector<std::vector<Interaction>>& lists,
+                const std::vector<int>& sslot_nodes, const std::vector<int>& oslot_nodes,
+                PassStats& st, DualTreeOps& ops) {
+  const double P = p.P;
+  for (const auto& list : lists)
+    for (const Interaction& it : list) {
+      const double nT = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(it.t)]));
+      const double nS = static_cast<double>(size_of(p.st->nodes()[static_cast<size_t>(it.s)]));
+      switch (it.op) {
+        case kP2P:
+          ops.p2p++, st.near_pairs += static_cast<std::int64_t>(nT * nS);
+          break;
+        case kM2P:
+          ops.m2p++, st.far_kernel += static_cast<std::int64_t>(nT * P);
+          break;
+        case kP2L:
+          ops.p2l++, st.far_kernel += static_cast<std::int64_t>(P * nS);
+          break;
+        case kM2L:
+          ops.m2l++, st.far_kernel += static_cast<std::int64_t>(P * P);
+          break;
+        default:
+          ops.prune++;
+          break;
+      }
+    }
+  for (int s : sslot_nodes) st.far_basis += size_of(p.st->nodes()[static_cast<size_t>(s)]) * p.P;
+  for (int t : oslot_nodes) st.far_basis += size_of(p.ot->nodes()[static_cast<size_t>(t)]) * p.P;
+}
+
+class DualTreeBackend final : public PairSumBackend {
+ public:
+  DualTreeBackend(const DualTreeConfig& cfg, DualTreeOps* ops) : cfg_(cfg), ops_(ops) {}
+  bool uses_trees() const override { return true; }
+  PassSums sums(const PassSources& src, const PassOuter& outer,
+                const PassSettings& set) const override;
+
+ private:
+  DualTreeConfig cfg_;
+  DualTreeOps* ops_;
+};
+
+PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
+                               const PassSettings& set) const {
+  const auto start = std::chrono::steady_clock::now();
+  auto since = [](std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  const double all_pairs =
+      static_cast<double>(outer.points->rows()) * static_cast<double>(src.points->rows());
+  if (cfg_.cost_model && all_pairs < cfg_.min_pairs) {
+    PassSums out = make_exact_backend()->sums(src, outer, set);
+    out.stats.fell_back = true;
+    return out;
+  }
+  Pass p;
+  p.ot = outer.tree;
+  p.st = src.tree;
+  p.cfg = cfg_;
+  p.d = p.ot->dim();
+  p.n = cfg_.degree > 0 ? cfg_.degree : degree_for(set.tau);
+  p.rule = ChebyshevRule(p.n);
+  p.P = p.d == 2 ? p.n * p.n : p.n * p.n * p.n;
+  p.flags = outer.flags;
+  p.want[kS] = (p.flags & kOuterSum) != 0;
+  p.want[kG] = (p.flags & kOuterGrad) != 0;
+  p.want[kH] = p.want[kG2] = (p.flags & kInner) != 0;
+  p.alpha = set.power->alpha();
+  p.eps = set.eps;
+  p.log_tau = std::log(set.tau);
+  p.power = set.power;
+  prepare_sources(p, src);
+  prepare_outer(p, outer, set.threads);
+
+  // Plan every task.
+  std::vector<int> roots;
+  task_roots(*p.ot, 0, std::max<Eigen::Index>(4096, p.ot->size() / 32), roots);
+  std::vector<std::vector<Interaction>> lists(roots.size());
+  std::int64_t visits = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits)
+  for (size_t r = 0; r < roots.size(); ++r) plan(p, roots[r], 0, lists[r], visits);
+
+  // Slots of the boxes that carry interpolation points.
+  std::vector<int> sslot(p.st->nodes().size(), -1), oslot(p.ot->nodes().size(), -1);
+  std::vector<int> snodes, onodes;
+  for (const auto& list : lists)
+    for (const Interaction& it : list) {
+      if ((it.op == kM2P || it.op == kM2L) && sslot[static_cast<size_t>(it.s)] < 0) {
+        sslot[static_cast<size_t>(it.s)] = static_cast<int>(snodes.size());
+        snodes.push_back(it.s);
+      }
+      if ((it.op == kP2L || it.op == kM2L) && oslot[static_cast<size_t>(it.t)] < 0) {
+        oslot[static_cast<size_t>(it.t)] = static_cast<int>(onodes.size());
+        onodes.push_back(it.t);
+      }
+    }
+  PassStats stats;
+  DualTreeOps ops;
+  count_work(p, lists, snodes, onodes, stats, ops);
+  stats.node_pairs = visits;
+  stats.plan_seconds = since(start);
+  if (ops_ != nullptr) *ops_ = ops;
+  // Cost model (docs/tree_tolerance.md §8): weights per unit of work measured against
+  // the all-pairs kernel; fall back unless the plan is clearly cheaper.
+  const double planned = kCostNear * static_cast<double>(stats.near_pairs) +
+                         kCostFar * static_cast<double>(stats.far_kernel) +
+                         kCostBasis * static_cast<double>(stats.far_basis);
+  if (cfg_.cost_model && planned > kFallBack * all_pairs) {
+    PassSums out = make_exact_backend()->sums(src, outer, set);
+    out.stats.fell_back = true;
+    out.stats.node_pairs = visits;
+    out.stats.plan_seconds = stats.plan_seconds;
+    out.stats.run_seconds += stats.plan_seconds;
+    return out;
+  }
+
+  std::vector<ProxySet> sprox(snodes.size()), oprox(onodes.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads)
+  for (size_t i = 0; i < snodes.size(); ++i) source_proxies(p, snodes[i], sprox[i]);
+  std::vector<Acc> acc(static_cast<size_t>(p.ot->size()));
+#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads)
+  for (size_t r = 0; r < roots.size(); ++r) execute(p, lists[r], sslot, sprox, oslot, oprox, acc);
+
+  const int d = p.d;
+  PassSums out = allocate_sums(p.ot->size(), d, p.flags);
+  const std::vector<Eigen::Index>& order = p.ot->order();
+  for (size_t q = 0; q < acc.size(); ++q) {
+    PairSums s;
+    s.S = acc[q].S;
+    s.H = acc[q].H;
+    for (int k = 0; k < d; ++k) {
+      s.G[k] = acc[q].G[k];
+      s.G2[k] = acc[q].G2[k];
+    }
+    store_sums(out, order[q], s, p.flags, d);
+  }
+  out.stats = stats;
+  out.kernel_evaluations = stats.near_pairs + stats.far_kernel;
+  out.stats.run_seconds = since(start);
+  return out;
+}
+
+}  // namespace
+
+std::unique_ptr<PairSumBackend> make_dual_tree_backend(const DualTreeConfig& config,
+                                                       DualTreeOps* ops) {
+  return std::make_unique<DualTreeBackend>(config, ops);
+}
+
+std::unique_ptr<PairSumBackend> make_dual_tree_backend() {
+  return make_dual_tree_backend(DualTreeConfig{}, nullptr);
+}
+
+}  // namespace softhd::detail

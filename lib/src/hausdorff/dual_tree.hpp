@@ -1,0 +1,52 @@
+#pragma once
+// Method tree's pair-sum backend (internal): a dual-tree traversal over the outer and
+// the source k-d trees with a far field of tensor Chebyshev interpolation
+// (chebyshev.hpp) and rigorous pruning, each sum within relative tolerance τ
+// (docs/tree_tolerance.md §7).
+//
+// Node pair (T outer, S source), cheapest admissible of
+//     prune  drop S: error ≤ W_S sup k                                  cost 0
+//     M2P    S's interpolation points (weights Σ w L_p(x)) to each o ∈ T  cost |T| P
+//     P2L    S's points to T's interpolation points (locals)             cost P |S|
+//     M2L    S's interpolation points to T's                             cost P²
+// (P = n^d points per box); otherwise the larger node is split, and leaf pairs (or
+// small pairs) are summed directly (P2P) with the vectorised kernel. After the
+// traversal each box's locals are interpolated to its points (L2P).
+//
+// Budget. Before the traversal, a lower bound L(o) of every sum is computed from one
+// source leaf near o (all terms ≥ 0). Pair (T, S) may use an approximation with error
+// bound e only if e ≤ τ · min_{o∈T} L(o) · mass(S)/mass(all), for every requested sum
+// (in the unscaled form, k = c_o^α (r + ε)^(−α), so the bound is uniform over T). The
+// far nodes of one outer point are disjoint, so their shares sum to ≤ 1 and every sum
+// is within τ of exact.
+//
+// Cost model: the planned work (kernel evaluations weighted per operation) is compared
+// with N·M; if the plan is not clearly cheaper, the pass is summed exactly.
+
+#include <cstdint>
+#include <memory>
+
+#include "pair_backend.hpp"
+
+namespace softhd::detail {
+
+struct DualTreeConfig {
+  int degree = 0;                  ///< points per axis n; 0: from τ (degree_for)
+  double min_pairs = 4.0e6;        ///< passes with fewer N·M pairs are summed exactly
+  bool cost_model = true;          ///< false: never fall back to exact (tests)
+  double max_interp_alpha = 16.0;  ///< above: pruning only (the far field is negligible)
+  int small_pairs = 4096;          ///< node pairs with |T||S| ≤ this are summed directly
+};
+
+/// n from τ: 4 at τ = 1e-2, 6 at 1e-4, 8 at 1e-6, at most 12.
+int degree_for(double tau);
+
+/// Counts of each operation of the last pass (tests check that each one was used).
+struct DualTreeOps {
+  std::int64_t p2p = 0, m2p = 0, p2l = 0, m2l = 0, prune = 0;
+};
+
+std::unique_ptr<PairSumBackend> make_dual_tree_backend(const DualTreeConfig& config,
+                                                       DualTreeOps* ops);
+
+}  // namespace softhd::detail

@@ -1,0 +1,342 @@
+// Method tree's dual-tree backend (docs/tree_tolerance.md §7): the Chebyshev
+// interpolation bound against the sampled worst case of the kernel, and every sum of
+// every outer point within τ of a long-double all-pairs reference, with each far-field
+// operation (pruning, M2P, P2L, M2L) exercised.
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "hausdorff/chebyshev.hpp"
+#include "hausdorff/dual_tree.hpp"
+#include "hausdorff_reference.hpp"
+
+namespace softhd::test {
+namespace {
+
+// ---------------------------------------------------------------------------------
+// The interpolation bound. Interpolation here is written independently of the library
+// (Lagrange products at cos(π i/(n−1)), no barycentric formula).
+
+double lagrange(int n, int i, double u) {
+  double v = 1.0;
+  const double xi = std::cos(M_PI * i / (n - 1));
+  for (int j = 0; j < n; ++j)
+    if (j != i) v *= (u - std::cos(M_PI * j / (n - 1))) / (xi - std::cos(M_PI * j / (n - 1)));
+  return v;
+}
+
+/// Value kernel u = (r + ε)^(−α) and the gradient kernel u t (o − x)/r (3D).
+void kernel(const double* o, const double* x, double alpha, double eps, double& u, double* g) {
+  double diff[3], r2 = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    diff[k] = o[k] - x[k];
+    r2 += diff[k] * diff[k];
+  }
+  const double r = std::sqrt(r2), t = 1.0 / (r + eps);
+  u = std::pow(t, alpha);
+  for (int k = 0; k < 3; ++k) g[k] = u * t * diff[k] / r;
+}
+
+struct Grid {
+  std::vector<std::array<double, 3>> pts;
+};
+
+Grid grid(const detail::Box& b, int n) {
+  Grid gr;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int l = 0; l < n; ++l) {
+        const int idx[3] = {i, j, l};
+        std::array<double, 3> p{};
+        for (int k = 0; k < 3; ++k) p[k] = b.c[k] + b.a[k] * std::cos(M_PI * idx[k] / (n - 1));
+        gr.pts.push_back(p);
+      }
+  return gr;
+}
+
+double tensor_lagrange(const detail::Box& b, int n, size_t q, const double* x) {
+  const int idx[3] = {static_cast<int>(q) / (n * n), (static_cast<int>(q) / n) % n,
+                      static_cast<int>(q) % n};
+  double v = 1.0;
+  for (int k = 0; k < 3; ++k) v *= lagrange(n, idx[k], (x[k] - b.c[k]) / b.a[k]);
+  return v;
+}
+
+/// A sample of a box: its corners, face centres and random points.
+std::vector<std::array<double, 3>> samples(const detail::Box& b, std::mt19937_64& gen, int random) {
+  std::vector<std::array<double, 3>> out;
+  for (int m = 0; m < 27; ++m) {
+    std::array<double, 3> p{};
+    int rest = m;
+    for (int k = 0; k < 3; ++k, rest /= 3) p[k] = b.c[k] + b.a[k] * (rest % 3 - 1);
+    out.push_back(p);
+  }
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int m = 0; m < random; ++m) {
+    std::array<double, 3> p{};
+    for (int k = 0; k < 3; ++k) p[k] = b.c[k] + b.a[k] * u(gen);
+    out.push_back(p);
+  }
+  return out;
+}
+
+struct BoundCase {
+  double separation;  // centre distance / (half-diagonal sum)
+  int n;
+  bool interp_t, interp_s;
+  double alpha;
+};
+
+class ChebyshevBound : public ::testing::TestWithParam<BoundCase> {};
+
+// Largest sampled error of the interpolated kernel ≤ the bound, for value and gradient;
+// the bound is also not vacuous (below the kernel's own size).
+TEST_P(ChebyshevBound, HoldsAtTheSampledWorstCase) {
+  const BoundCase bc = GetParam();
+  const double eps = 1e-3;
+  std::mt19937_64 gen(5);
+  detail::Box T, S;
+  T.a[0] = 0.3, T.a[1] = 0.2, T.a[2] = 0.05;  // a flat box
+  S.a[0] = 0.1, S.a[1] = 0.25, S.a[2] = 0.2;
+  const double half = std::sqrt(0.3 * 0.3 + 0.2 * 0.2 + 0.05 * 0.05) +
+                      std::sqrt(0.1 * 0.1 + 0.25 * 0.25 + 0.2 * 0.2);
+  S.c[0] = bc.separation * half * 0.8, S.c[1] = bc.separation * half * 0.6;
+  const detail::LogBounds lb =
+      detail::interpolation_log_bound(T, bc.interp_t, S, bc.interp_s, 3, bc.n, bc.alpha, eps);
+  ASSERT_TRUE(std::isfinite(lb.value)) << "no bound for separated boxes";
+  const Grid gt = grid(T, bc.n), gs = grid(S, bc.n);
+  double worst_v = 0.0, worst_g = 0.0, size_v = 0.0;
+  const auto ot = samples(T, gen, 20), xs = samples(S, gen, 20);
+  for (const auto& o : ot)
+    for (const auto& x : xs) {
+      double u, g[3];
+      kernel(o.data(), x.data(), bc.alpha, eps, u, g);
+      size_v = std::max(size_v, u);
+      double iu = 0.0, ig[3] = {0.0, 0.0, 0.0};
+      const size_t nt = bc.interp_t ? gt.pts.size() : 1, ns = bc.interp_s ? gs.pts.size() : 1;
+      for (size_t p = 0; p < nt; ++p) {
+        const double lp = bc.interp_t ? tensor_lagrange(T, bc.n, p, o.data()) : 1.0;
+        const double* op = bc.interp_t ? gt.pts[p].data() : o.data();
+        for (size_t q = 0; q < ns; ++q) {
+          const double lq = bc.interp_s ? tensor_lagrange(S, bc.n, q, x.data()) : 1.0;
+          const double* xq = bc.interp_s ? gs.pts[q].data() : x.data();
+          double uq, gq[3];
+          kernel(op, xq, bc.alpha, eps, uq, gq);
+          iu += lp * lq * uq;
+          for (int k = 0; k < 3; ++k) ig[k] += lp * lq * gq[k];
+        }
+      }
+      worst_v = std::max(worst_v, std::fabs(iu - u));
+      worst_g = std::max(worst_g, std::hypot(ig[0] - g[0], ig[1] - g[1], ig[2] - g[2]));
+    }
+  const double bound_v = std::exp(lb.value), bound_g = std::exp(lb.grad);
+  // Rounding of the interpolation sums themselves: 1e-13 of the kernel's size.
+  EXPECT_LE(worst_v, bound_v + 1e-13 * size_v) << "value";
+  EXPECT_LE(worst_g, bound_g + 1e-13 * size_v) << "gradient";
+  // Measured: the bound is 20-900 times the sampled worst error. It must be useful
+  // (below the kernel's size) once the boxes are well separated.
+  if (bc.separation >= 6.0 || (bc.separation >= 3.0 && bc.n == 6)) {
+    EXPECT_LT(bound_v, size_v) << "vacuous bound";
+  }
+  EXPECT_GT(worst_v, 0.0);
+}
+
+std::vector<BoundCase> bound_cases() {
+  std::vector<BoundCase> out;
+  for (double sep : {1.5, 3.0, 6.0})
+    for (int n : {3, 6})
+      for (double alpha : {4.0, 2.5, 12.0}) {
+        out.push_back({sep, n, false, true, alpha});
+        out.push_back({sep, n, true, false, alpha});
+        if (n == 3) out.push_back({sep, n, true, true, alpha});
+      }
+  return out;
+}
+
+std::string bound_name(const ::testing::TestParamInfo<BoundCase>& info) {
+  const BoundCase& b = info.param;
+  std::string s = "sep" + std::to_string(static_cast<int>(b.separation * 10)) + "_n" +
+                  std::to_string(b.n) + "_a" + std::to_string(static_cast<int>(b.alpha * 10));
+  s += b.interp_t && b.interp_s ? "_M2L" : (b.interp_t ? "_P2L" : "_M2P");
+  return s;
+}
+
+INSTANTIATE_TEST_SUITE_P(Hausdorff, ChebyshevBound, ::testing::ValuesIn(bound_cases()), bound_name);
+
+// ---------------------------------------------------------------------------------
+// The sums against a long-double reference.
+
+enum class Shape { cube, sphere, clusters, plane, pair };
+
+PointCloud shaped_cloud(Shape shape, int n, int d, unsigned seed) {
+  std::mt19937_64 gen(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::MatrixXd p(n, d);
+  Eigen::VectorXd v(n);
+  for (int i = 0; i < n; ++i) {
+    v[i] = 0.5 + u(gen);
+    double r2 = 0.0;
+    const int blob = static_cast<int>(gen() % 3);
+    for (int k = 0; k < d; ++k) {
+      switch (shape) {
+        case Shape::cube:
+          p(i, k) = u(gen);
+          break;
+        case Shape::sphere:
+          p(i, k) = g(gen), r2 += p(i, k) * p(i, k);
+          break;
+        case Shape::clusters:
+          p(i, k) = 2.0 * blob * (k == 0) + 0.1 * g(gen);
+          break;
+        case Shape::plane:
+          p(i, k) = k + 1 < d ? u(gen) : 0.3;
+          break;
+        case Shape::pair:
+          p(i, k) = u(gen) + (k == 0 && i % 2 == 1 ? 3.0 : 0.0);
+          break;
+      }
+    }
+    if (shape == Shape::sphere) p.row(i) /= std::sqrt(r2);
+  }
+  return PointCloud(p, v);
+}
+
+struct LongSums {
+  long double S = 0, H = 0, Gm = 0, G2m = 0, G[3] = {0, 0, 0}, G2[3] = {0, 0, 0};
+};
+
+LongSums reference(const Eigen::VectorXd& o, long double c_o, const PointCloud& src,
+                   const Eigen::VectorXd& w, const Eigen::VectorXd& h, const Eigen::VectorXd& c,
+                   double alpha, double eps) {
+  LongSums s;
+  for (Eigen::Index n = 0; n < src.size(); ++n) {
+    long double diff[3] = {0, 0, 0}, r2 = 0;
+    for (int k = 0; k < src.dim(); ++k) {
+      diff[k] = static_cast<long double>(o[k]) - src.points()(n, k);
+      r2 += diff[k] * diff[k];
+    }
+    const long double r = std::sqrt(r2), t = 1.0L / (r + eps);
+    const long double p = std::pow(c_o * t, static_cast<long double>(alpha));
+    const long double pi = std::pow(c[n] * t, static_cast<long double>(alpha));
+    s.S += w[n] * p;
+    s.H += h[n] * pi;
+    if (r > 0) {
+      s.Gm += w[n] * p * t;
+      s.G2m += h[n] * pi * t;
+      for (int k = 0; k < src.dim(); ++k) {
+        s.G[k] += w[n] * p * t * diff[k] / r;
+        s.G2[k] += h[n] * pi * t * diff[k] / r;
+      }
+    }
+  }
+  return s;
+}
+
+struct SumCase {
+  Shape sources, outer;
+  int dim;
+  double alpha;
+  bool expect_all;  // every operation must occur (else only accuracy is checked)
+};
+
+class DualSums : public ::testing::TestWithParam<SumCase> {};
+
+constexpr double kRounding =
+    1e-13;  // relative rounding of the double sums (see test_hausdorff_tree)
+
+// Every sum of every outer point within τ of the long-double reference (relative to S,
+// H, and the sums of the vector terms' norms), with small boxes and n = 3 or 4 points
+// per axis so that every operation occurs on clouds of a few thousand points.
+TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
+  const SumCase sc = GetParam();
+  const PointCloud X = shaped_cloud(sc.sources, 2400, sc.dim, 7);
+  const PointCloud Y = shaped_cloud(sc.outer, 900, sc.dim, 8);
+  const double eps = 1e-3;
+  const Eigen::VectorXd w = X.volumes() / X.total_volume();
+  Eigen::VectorXd h(X.size()), c(X.size()), scale(Y.size());
+  std::mt19937_64 gen(9);
+  for (Eigen::Index n = 0; n < X.size(); ++n) {
+    h[n] = (gen() % 5 == 0) ? 0.0 : static_cast<double>(gen() >> 11) * 0x1.0p-53;
+    c[n] = brute_nearest(Y, X.points().row(n).transpose()) + eps;
+  }
+  for (Eigen::Index j = 0; j < Y.size(); ++j)
+    scale[j] = brute_nearest(X, Y.points().row(j).transpose()) + eps;
+  const detail::KdTree xt(X.points(), 8), yt(Y.points(), 8);
+  const detail::KernelPower power(sc.alpha);
+  std::vector<LongSums> ref;
+  for (Eigen::Index j = 0; j < Y.size(); ++j)
+    ref.push_back(reference(Y.points().row(j).transpose(), scale[j], X, w, h, c, sc.alpha, eps));
+  detail::DualTreeOps total;
+  for (double tau : {1e-2, 1e-4, 1e-7}) {
+    detail::DualTreeConfig cfg;
+    cfg.degree = tau > 1e-3 ? 3 : 4;
+    cfg.cost_model = false;
+    cfg.small_pairs = 16;
+    detail::DualTreeOps ops;
+    const auto backend = detail::make_dual_tree_backend(cfg, &ops);
+    detail::PassSources src{&X.points(), &xt, w.data(), h.data(), c.data()};
+    detail::PassOuter out{&Y.points(), &yt, scale.data(),
+                          detail::kOuterSum | detail::kOuterGrad | detail::kInner, nullptr};
+    detail::PassSettings set{&power, eps, tau, 2};
+    const detail::PassSums s = backend->sums(src, out, set);
+    for (Eigen::Index j = 0; j < Y.size(); ++j) {
+      const LongSums& r = ref[static_cast<size_t>(j)];
+      long double dG = 0, dG2 = 0;
+      for (int k = 0; k < sc.dim; ++k) {
+        dG += (s.G(j, k) - r.G[k]) * (s.G(j, k) - r.G[k]);
+        dG2 += (s.G2(j, k) - r.G2[k]) * (s.G2(j, k) - r.G2[k]);
+      }
+      const long double bound = tau + kRounding;
+      ASSERT_LE(std::fabs(s.S[j] - r.S), bound * r.S) << "S, tau " << tau << " point " << j;
+      ASSERT_LE(std::fabs(s.H[j] - r.H), bound * r.H) << "H, tau " << tau << " point " << j;
+      ASSERT_LE(std::sqrt(dG), bound * r.Gm) << "G, tau " << tau << " point " << j;
+      ASSERT_LE(std::sqrt(dG2), bound * r.G2m) << "G2, tau " << tau << " point " << j;
+    }
+    total.p2p += ops.p2p, total.m2p += ops.m2p, total.p2l += ops.p2l, total.m2l += ops.m2l;
+    total.prune += ops.prune;
+  }
+  // The operations checked by this case must have occurred (else the test would not
+  // check them); interpolation is off above α = 16 (pruning only).
+  EXPECT_GT(total.p2p, 0);
+  if (sc.alpha > 16.0) {
+    EXPECT_GT(total.prune, 0);
+  }
+  if (sc.expect_all) {
+    EXPECT_GT(total.prune, 0);
+    EXPECT_GT(total.m2p, 0);
+    EXPECT_GT(total.p2l, 0);
+    EXPECT_GT(total.m2l, 0);
+  }
+}
+
+std::vector<SumCase> sum_cases() {
+  std::vector<SumCase> out;
+  for (int d : {2, 3}) {
+    out.push_back({Shape::cube, Shape::cube, d, 4.0, d == 2});
+    out.push_back({Shape::pair, Shape::pair, d, 4.0, true});
+    out.push_back({Shape::pair, Shape::pair, d, 2.5, false});
+    out.push_back({Shape::sphere, Shape::sphere, d, 4.0, false});
+    out.push_back({Shape::clusters, Shape::cube, d, 4.0, false});
+    out.push_back({Shape::plane, Shape::plane, d, 4.0, false});
+    out.push_back({Shape::cube, Shape::cube, d, 40.0, false});
+  }
+  return out;
+}
+
+std::string sum_name(const ::testing::TestParamInfo<SumCase>& info) {
+  const char* names[] = {"cube", "sphere", "clusters", "plane", "pair"};
+  const SumCase& c = info.param;
+  return std::to_string(c.dim) + "D_" + names[static_cast<int>(c.sources)] + "_over_" +
+         names[static_cast<int>(c.outer)] + "_a" + std::to_string(static_cast<int>(c.alpha * 10));
+}
+
+INSTANTIATE_TEST_SUITE_P(Hausdorff, DualSums, ::testing::ValuesIn(sum_cases()), sum_name);
+
+}  // namespace
+}  // namespace softhd::test
