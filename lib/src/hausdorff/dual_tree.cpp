@@ -1,6 +1,7 @@
 #include "dual_tree.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -224,8 +225,8 @@ PairSums lower_sums(const Pass& p, const double* o, double c_o, const std::vecto
   return low;
 }
 
-/// Lower bounds of every outer point's sums (lower_sums with a source leaf near each
-/// outer leaf's centre), their minima per outer node, and the locals' scales.
+/// Lower bounds of every outer point's sums (lower_sums with the source leaf found by
+/// descending towards the point), their minima per outer node, and the locals' scales.
 void prepare_outer(Pass& p, const PassOuter& in, int threads) {
   const KdTree& ot = *p.ot;
   const std::vector<KdNode>& nodes = ot.nodes();
@@ -238,20 +239,23 @@ void prepare_outer(Pass& p, const PassOuter& in, int threads) {
   cut_nodes(*p.st, 0, 0, cut);
   const Eigen::MatrixXd& X = ot.points();
   const unsigned flags = p.flags | kMagnitude;
+  const double w_min = p.outer_kinds() ? p.w.minCoeff() : 0.0;
 #pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
   for (size_t id = 0; id < nn; ++id) {
     const KdNode& T = nodes[id];
     if (T.right >= 0) continue;
-    double centre[3] = {0.0, 0.0, 0.0};
-    for (int k = 0; k < p.d; ++k) centre[k] = 0.5 * (T.lo[k] + T.hi[k]);
-    int near_cut = 0;
-    const int leaf_id = leaf_near(*p.st, centre, p.d, near_cut);
-    const PairSources leaf = p.slice(p.st->nodes()[static_cast<size_t>(leaf_id)]);
     for (Eigen::Index q = T.begin; q < T.end; ++q) {
       double o[3] = {0.0, 0.0, 0.0};
       for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
+      int near_cut = 0;
+      const int leaf_id = leaf_near(*p.st, o, p.d, near_cut);
+      const PairSources leaf = p.slice(p.st->nodes()[static_cast<size_t>(leaf_id)]);
       const PairSums exact = pair_sums(o, p.oc[q], leaf, *p.power, p.eps, flags);
-      const PairSums s = lower_sums(p, o, p.oc[q], cut, near_cut, exact);
+      PairSums s = lower_sums(p, o, p.oc[q], cut, near_cut, exact);
+      // The nearest source (r = r_min, so p = 1) alone gives S ≥ w_min, and, when
+      // r_min > 0, Gm ≥ w_min/c_o: the bound that matters at large α.
+      s.S = std::max(s.S, w_min);
+      if (p.oc[q] > p.eps) s.Gm = std::max(s.Gm, w_min / p.oc[q]);
       const double lc = p.alpha * std::log(p.oc[q]);
       const double v[4] = {std::log(s.S) - lc, std::log(s.Gm) - lc, std::log(s.H), std::log(s.G2m)};
       for (int k = 0; k < 4; ++k) p.log_low[4 * id + k] = std::min(p.log_low[4 * id + k], v[k]);
@@ -326,34 +330,61 @@ Op choose(const Pass& p, int t, int s, double gap) {
   return kNone;
 }
 
-/// Depth-first dual traversal from (t, s): appends the interactions to `out`.
-void plan(const Pass& p, int t, int s, std::vector<Interaction>& out, std::int64_t& visits) {
-  ++visits;
+/// One task's planning state. `spent` is shared by the tasks: the planned near and far
+/// work so far (in pair units, kCost weights). It is a lower bound of the plan's total,
+/// so once it exceeds `limit` the pass will be summed exactly whatever the order of the
+/// tasks, and planning stops.
+struct PlanState {
+  std::vector<Interaction> out;
+  std::int64_t visits = 0;
+  double pending = 0.0;  // work not yet added to `spent`
+  std::atomic<double>* spent = nullptr;
+  double limit = kInf;
+  bool stop() {
+    if (pending < 1e6) return false;
+    double now = spent->load(std::memory_order_relaxed);
+    while (!spent->compare_exchange_weak(now, now + pending, std::memory_order_relaxed)) {
+    }
+    pending = 0.0;
+    return now > limit;
+  }
+  void add(const Pass& p, int t, int s, Op op) {
+    out.push_back({t, s, op});
+    const double nT = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(t)]));
+    const double nS = static_cast<double>(size_of(p.st->nodes()[static_cast<size_t>(s)]));
+    const double P = p.P;
+    if (op == kP2P) pending += kCostNear * nT * nS;
+    if (op == kM2P) pending += kCostFar * nT * P;
+    if (op == kP2L) pending += kCostFar * P * nS;
+    if (op == kM2L) pending += kCostFar * P * P;
+  }
+};
+
+/// Depth-first dual traversal from (t, s): appends the interactions to `st.out`. Returns
+/// false when planning was stopped (the plan costs more than the limit).
+bool plan(const Pass& p, int t, int s, PlanState& st) {
+  ++st.visits;
   const KdNode& T = p.ot->nodes()[static_cast<size_t>(t)];
   const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
   const bool outer_mass = p.outer_kinds() && p.mw[static_cast<size_t>(s)].mass > 0.0;
   const bool inner_mass = p.want[kH] && p.mh[static_cast<size_t>(s)].mass > 0.0;
-  if (!outer_mass && !inner_mass) return;  // every term is zero
+  if (!outer_mass && !inner_mass) return true;  // every term is zero
   const double gap = node_gap(T, S, p.d);
   if (gap > 0.0) {
     const Op op = choose(p, t, s, gap);
     if (op != kNone) {
-      out.push_back({t, s, op});
-      return;
+      st.add(p, t, s, op);
+      return !st.stop();
     }
   }
   const bool tl = T.right < 0, sl = S.right < 0;
   if ((tl && sl) || size_of(T) * size_of(S) <= p.cfg.small_pairs) {
-    out.push_back({t, s, kP2P});
-    return;
+    st.add(p, t, s, kP2P);
+    return !st.stop();
   }
-  if (sl || (!tl && node_radius2(T, p.d) >= node_radius2(S, p.d))) {
-    plan(p, t + 1, s, out, visits);
-    plan(p, T.right, s, out, visits);
-  } else {
-    plan(p, t, s + 1, out, visits);
-    plan(p, t, S.right, out, visits);
-  }
+  if (sl || (!tl && node_radius2(T, p.d) >= node_radius2(S, p.d)))
+    return plan(p, t + 1, s, st) && plan(p, T.right, s, st);
+  return plan(p, t, s + 1, st) && plan(p, t, S.right, st);
 }
 
 /// Outer subtrees processed as independent tasks (they partition the outer points):
@@ -543,6 +574,17 @@ class DualTreeBackend final : public PairSumBackend {
   DualTreeOps* ops_;
 };
 
+/// All pairs, after a plan that did not pay; the stats keep the planning's cost.
+PassSums fall_back(const PassSources& src, const PassOuter& outer, const PassSettings& set,
+                   std::int64_t visits, double plan_seconds) {
+  PassSums out = make_exact_backend()->sums(src, outer, set);
+  out.stats.fell_back = true;
+  out.stats.node_pairs = visits;
+  out.stats.plan_seconds = plan_seconds;
+  out.stats.run_seconds += plan_seconds;
+  return out;
+}
+
 PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
                                const PassSettings& set) const {
   const auto start = std::chrono::steady_clock::now();
@@ -580,8 +622,19 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   task_roots(*p.ot, 0, std::max<Eigen::Index>(4096, p.ot->size() / 32), roots);
   std::vector<std::vector<Interaction>> lists(roots.size());
   std::int64_t visits = 0;
+  std::atomic<double> spent{0.0};
+  std::atomic<bool> stopped{false};
 #pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits)
-  for (size_t r = 0; r < roots.size(); ++r) plan(p, roots[r], 0, lists[r], visits);
+  for (size_t r = 0; r < roots.size(); ++r) {
+    if (stopped.load()) continue;
+    PlanState st;
+    st.spent = &spent;
+    st.limit = cfg_.cost_model ? kFallBack * all_pairs : kInf;
+    if (!plan(p, roots[r], 0, st)) stopped = true;
+    visits += st.visits;
+    lists[r] = std::move(st.out);
+  }
+  if (stopped) return fall_back(src, outer, set, visits, since(start));
 
   // Slots of the boxes that carry interpolation points.
   std::vector<int> sslot(p.st->nodes().size(), -1), oslot(p.ot->nodes().size(), -1);
@@ -608,14 +661,8 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   const double planned = kCostNear * static_cast<double>(stats.near_pairs) +
                          kCostFar * static_cast<double>(stats.far_kernel) +
                          kCostBasis * static_cast<double>(stats.far_basis);
-  if (cfg_.cost_model && planned > kFallBack * all_pairs) {
-    PassSums out = make_exact_backend()->sums(src, outer, set);
-    out.stats.fell_back = true;
-    out.stats.node_pairs = visits;
-    out.stats.plan_seconds = stats.plan_seconds;
-    out.stats.run_seconds += stats.plan_seconds;
-    return out;
-  }
+  if (cfg_.cost_model && planned > kFallBack * all_pairs)
+    return fall_back(src, outer, set, visits, stats.plan_seconds);
 
   std::vector<ProxySet> sprox(snodes.size()), oprox(onodes.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads)
