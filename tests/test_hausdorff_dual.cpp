@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cmath>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -337,6 +338,48 @@ std::string sum_name(const ::testing::TestParamInfo<SumCase>& info) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Hausdorff, DualSums, ::testing::ValuesIn(sum_cases()), sum_name);
+
+// The three backends behind the one interface, on the same pass: exact to rounding, the
+// single-tree and dual-tree backends within τ (the dual tree forced, no fall-back).
+TEST(PairBackends, AllAgreeWithTheReferenceThroughOneInterface) {
+  const PointCloud X = shaped_cloud(Shape::pair, 3000, 3, 11);
+  const PointCloud Y = shaped_cloud(Shape::cube, 700, 3, 12);
+  const double eps = 1e-3, tau = 1e-5;
+  const Eigen::VectorXd w = X.volumes() / X.total_volume();
+  Eigen::VectorXd scale(Y.size());
+  for (Eigen::Index j = 0; j < Y.size(); ++j)
+    scale[j] = brute_nearest(X, Y.points().row(j).transpose()) + eps;
+  const detail::KdTree xt(X.points(), detail::kLeafSize), yt(Y.points(), detail::kLeafSize);
+  const detail::KernelPower power(4.0);
+  detail::DualTreeConfig cfg;
+  cfg.cost_model = false;
+  std::vector<std::unique_ptr<detail::PairSumBackend>> backends;
+  backends.push_back(detail::make_exact_backend());
+  backends.push_back(detail::make_single_tree_backend());
+  backends.push_back(detail::make_dual_tree_backend(cfg, nullptr));
+  const detail::PassSources src{&X.points(), &xt, w.data(), nullptr, nullptr};
+  const detail::PassOuter out{&Y.points(), &yt, scale.data(),
+                              detail::kOuterSum | detail::kOuterGrad, nullptr};
+  const detail::PassSettings set{&power, eps, tau, 2};
+  const Eigen::VectorXd none = Eigen::VectorXd::Zero(X.size()), ones = none.array() + 1.0;
+  std::vector<LongSums> ref;
+  for (Eigen::Index j = 0; j < Y.size(); ++j)
+    ref.push_back(reference(Y.points().row(j).transpose(), scale[j], X, w, none, ones, 4.0, eps));
+  for (size_t b = 0; b < backends.size(); ++b) {
+    const detail::PassSums s = backends[b]->sums(src, out, set);
+    const double allowed = (b == 0 ? 0.0 : tau) + kRounding;
+    for (Eigen::Index j = 0; j < Y.size(); ++j) {
+      const LongSums& r = ref[static_cast<size_t>(j)];
+      long double dG = 0;
+      for (int k = 0; k < 3; ++k) dG += (s.G(j, k) - r.G[k]) * (s.G(j, k) - r.G[k]);
+      ASSERT_LE(std::fabs(s.S[j] - r.S), allowed * r.S) << "backend " << b << " point " << j;
+      ASSERT_LE(std::sqrt(dG), allowed * r.Gm) << "backend " << b << " point " << j;
+    }
+    if (b > 0) {
+      EXPECT_LT(s.kernel_evaluations, X.size() * Y.size()) << "backend " << b;
+    }
+  }
+}
 
 }  // namespace
 }  // namespace softhd::test

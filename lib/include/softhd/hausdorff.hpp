@@ -101,8 +101,9 @@ struct HausdorffResult {
   Eigen::MatrixXd gradient_points;   ///< N by d: ∂ρ̃/∂x_i
   Eigen::VectorXd gradient_volumes;  ///< N: ∂ρ̃/∂V_i (volumes of X, Y held otherwise fixed)
   Eigen::MatrixXd gradient_target;   ///< M by d: ∂ρ̃/∂y_j
-  /// Pair kernel evaluations made: exact N·M per pass; tree counts one per source
-  /// point summed exactly and one per node replaced by its one-term approximation.
+  /// Pair kernel evaluations made: exact N·M per pass; tree counts the pairs summed
+  /// directly plus the evaluations at interpolation points (N·M for a pass it sums
+  /// exactly; docs/tree_tolerance.md §6).
   std::int64_t kernel_evaluations = 0;
   SumWork work;          ///< the split of the pair-sum work
   double seconds = 0.0;  ///< wall time of the evaluation

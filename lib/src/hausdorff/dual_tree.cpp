@@ -24,10 +24,11 @@ enum Kind { kS = 0, kG = 1, kH = 2, kG2 = 3 };  // the four sums; budgets per ki
 
 // Cost model: work per unit relative to one pair of the all-pairs kernel (docs/tree_tolerance.md
 // §8).
-constexpr double kCostNear = 1.3;   // direct pairs in short slices (leaf pairs)
-constexpr double kCostFar = 1.0;    // kernel evaluations at interpolation points
-constexpr double kCostBasis = 0.3;  // point-interpolation-point basis products
-constexpr double kFallBack = 0.8;   // the plan must cost < 80 % of all pairs
+constexpr double kCostNear = 1.3;    // direct pairs in short slices (leaf pairs)
+constexpr double kCostFar = 1.0;     // kernel evaluations at interpolation points
+constexpr double kCostBasis = 0.3;   // point-interpolation-point basis products
+constexpr double kFallBack = 0.8;    // the plan must cost < 80 % of all pairs
+constexpr size_t kSampleStride = 8;  // planning tasks sampled to predict the plan's work
 
 struct Interaction {
   int t, s;
@@ -96,7 +97,8 @@ struct Pass {
   std::vector<double> log_low;  // 4 per outer node: log min_{o∈T} of the unscaled lower bound
   std::vector<double> kappa;    // per outer node: max c_o (scale of its locals)
   std::vector<char> has_local, has_proxy;
-  std::vector<Box> obox, sbox;  // interpolation boxes (eligible nodes)
+  std::vector<double> log_weight, log_share;  // 4 per source node (prepare_sources)
+  std::vector<Box> obox, sbox;                // interpolation boxes (eligible nodes)
   double log_total[4] = {0.0, 0.0, 0.0, 0.0};
   ChebyshevRule rule{2};
 
@@ -135,6 +137,18 @@ void prepare_sources(Pass& p, const PassSources& in) {
   }
   const bool interp = p.alpha <= p.cfg.max_interp_alpha;
   const std::vector<KdNode>& nodes = st.nodes();
+  // Per node and kind: log of the weight in the unscaled bounds (−∞: no such sum or no
+  // mass) and log of the budget share mass/total.
+  p.log_weight.assign(4 * nodes.size(), -kInf);
+  p.log_share.assign(4 * nodes.size(), -kInf);
+  for (size_t i = 0; i < nodes.size(); ++i)
+    for (int k = 0; k < 4; ++k) {
+      if (!p.want[k]) continue;
+      const NodeMoments& m = k < 2 ? p.mw[i] : p.mh[i];
+      if (!(m.mass > 0.0)) continue;
+      p.log_weight[4 * i + k] = std::log(m.weight) + (k < 2 ? 0.0 : p.alpha * std::log(m.scale));
+      p.log_share[4 * i + k] = std::log(m.mass) - p.log_total[k];
+    }
   p.has_proxy.assign(nodes.size(), 0);
   p.sbox.resize(nodes.size());
   for (size_t i = 0; i < nodes.size(); ++i) {
@@ -290,14 +304,10 @@ Op choose(const Pass& p, int t, int s, double gap) {
   const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
   double lb[4], lw[4];
   for (int k = 0; k < 4; ++k) {
-    lb[k] = kInf;
-    lw[k] = -kInf;
-    if (!p.want[k]) continue;
-    const NodeMoments& m = k < 2 ? p.mw[static_cast<size_t>(s)] : p.mh[static_cast<size_t>(s)];
-    if (!(m.mass > 0.0)) continue;
-    lb[k] =
-        p.log_tau + p.log_low[4 * static_cast<size_t>(t) + k] + std::log(m.mass) - p.log_total[k];
-    lw[k] = std::log(m.weight) + (k < 2 ? 0.0 : p.alpha * std::log(m.scale));
+    lw[k] = p.log_weight[4 * static_cast<size_t>(s) + k];
+    lb[k] = lw[k] == -kInf ? kInf
+                           : p.log_tau + p.log_low[4 * static_cast<size_t>(t) + k] +
+                                 p.log_share[4 * static_cast<size_t>(s) + k];
   }
   auto fits = [&](double lv, double lg) {
     for (int k = 0; k < 4; ++k)
@@ -322,6 +332,18 @@ Op choose(const Pass& p, int t, int s, double gap) {
   const Box tb = bounds_box(T, p.d), sb = bounds_box(S, p.d);
   for (int i = 0; i < count; ++i) {
     const bool it = options[i].op != kM2P, is = options[i].op != kP2L;
+    // Cheap necessary condition: every bound of the operation is at least the
+    // one-axis bound of its widest interpolated axis with |u| ≥ (gap + ε)^(−α) and the
+    // largest ellipse (B = gap).
+    double a_max = 0.0;
+    for (int k = 0; k < p.d; ++k) {
+      if (it) a_max = std::max(a_max, p.obox[static_cast<size_t>(t)].a[k]);
+      if (is) a_max = std::max(a_max, p.sbox[static_cast<size_t>(s)].a[k]);
+    }
+    const double u = gap / a_max, rho = u + std::sqrt(u * u + 1.0);
+    const double least =
+        std::log(4.0) - p.alpha * l - (p.n - 1) * std::log(rho) - std::log(rho - 1.0);
+    if (!fits(least, least - l)) continue;
     const LogBounds e = interpolation_log_bound(it ? p.obox[static_cast<size_t>(t)] : tb, it,
                                                 is ? p.sbox[static_cast<size_t>(s)] : sb, is, p.d,
                                                 p.n, p.alpha, p.eps);
@@ -338,6 +360,7 @@ struct PlanState {
   std::vector<Interaction> out;
   std::int64_t visits = 0;
   double pending = 0.0;  // work not yet added to `spent`
+  double total = 0.0;    // all work planned by this task
   std::atomic<double>* spent = nullptr;
   double limit = kInf;
   bool stop() {
@@ -353,10 +376,13 @@ struct PlanState {
     const double nT = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(t)]));
     const double nS = static_cast<double>(size_of(p.st->nodes()[static_cast<size_t>(s)]));
     const double P = p.P;
-    if (op == kP2P) pending += kCostNear * nT * nS;
-    if (op == kM2P) pending += kCostFar * nT * P;
-    if (op == kP2L) pending += kCostFar * P * nS;
-    if (op == kM2L) pending += kCostFar * P * P;
+    double w = 0.0;
+    if (op == kP2P) w = kCostNear * nT * nS;
+    if (op == kM2P) w = kCostFar * nT * P;
+    if (op == kP2L) w = kCostFar * P * nS;
+    if (op == kM2L) w = kCostFar * P * P;
+    pending += w;
+    total += w;
   }
 };
 
@@ -378,7 +404,10 @@ bool plan(const Pass& p, int t, int s, PlanState& st) {
     }
   }
   const bool tl = T.right < 0, sl = S.right < 0;
-  if ((tl && sl) || size_of(T) * size_of(S) <= p.cfg.small_pairs) {
+  // Small pairs at low α are summed at once (their children would not be pruned either);
+  // at large α leaf pairs are worth pruning one by one.
+  const std::int64_t small = p.alpha <= p.cfg.max_interp_alpha ? p.cfg.small_pairs : 0;
+  if ((tl && sl) || size_of(T) * size_of(S) <= small) {
     st.add(p, t, s, kP2P);
     return !st.stop();
   }
@@ -617,22 +646,37 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   prepare_sources(p, src);
   prepare_outer(p, outer, set.threads);
 
-  // Plan every task.
+  // Plan every task: first every kSampleStride-th task, whose planned work, scaled by
+  // the share of outer points it covers, predicts the whole plan (a fall-back then costs
+  // about 1/kSampleStride of the planning), then the others.
   std::vector<int> roots;
-  task_roots(*p.ot, 0, std::max<Eigen::Index>(4096, p.ot->size() / 32), roots);
+  task_roots(*p.ot, 0, std::max<Eigen::Index>(1024, p.ot->size() / 64), roots);
   std::vector<std::vector<Interaction>> lists(roots.size());
+  std::vector<double> work(roots.size(), 0.0);
   std::int64_t visits = 0;
   std::atomic<double> spent{0.0};
   std::atomic<bool> stopped{false};
+  const double limit = cfg_.cost_model ? kFallBack * all_pairs : kInf;
+  for (int phase = 0; phase < 2 && !stopped; ++phase) {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits)
-  for (size_t r = 0; r < roots.size(); ++r) {
-    if (stopped.load()) continue;
-    PlanState st;
-    st.spent = &spent;
-    st.limit = cfg_.cost_model ? kFallBack * all_pairs : kInf;
-    if (!plan(p, roots[r], 0, st)) stopped = true;
-    visits += st.visits;
-    lists[r] = std::move(st.out);
+    for (size_t r = 0; r < roots.size(); ++r) {
+      if ((r % kSampleStride == 0) != (phase == 0) || stopped.load()) continue;
+      PlanState st;
+      st.spent = &spent;
+      st.limit = limit;
+      if (!plan(p, roots[r], 0, st)) stopped = true;
+      visits += st.visits;
+      work[r] = st.total;
+      lists[r] = std::move(st.out);
+    }
+    if (phase == 0 && cfg_.cost_model && !stopped) {
+      double sampled = 0.0, covered = 0.0;
+      for (size_t r = 0; r < roots.size(); r += kSampleStride) {
+        sampled += work[r];
+        covered += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
+      }
+      if (sampled * static_cast<double>(p.ot->size()) / covered > limit) stopped = true;
+    }
   }
   if (stopped) return fall_back(src, outer, set, visits, since(start));
 

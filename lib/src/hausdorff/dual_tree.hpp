@@ -35,7 +35,7 @@ struct DualTreeConfig {
   double min_pairs = 4.0e6;        ///< passes with fewer N·M pairs are summed exactly
   bool cost_model = true;          ///< false: never fall back to exact (tests)
   double max_interp_alpha = 16.0;  ///< above: pruning only (the far field is negligible)
-  int small_pairs = 0;             ///< node pairs with |T||S| ≤ this are summed directly
+  int small_pairs = 4096;  ///< α ≤ max_interp_alpha: pairs with |T||S| ≤ this are summed directly
 };
 
 /// n from τ: 4 at τ = 1e-2, 6 at 1e-4, 8 at 1e-6, at most 12.
