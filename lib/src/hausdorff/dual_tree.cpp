@@ -591,6 +591,61 @@ void count_work(const Pass& p, const std::vector<std::vector<Interaction>>& list
   for (int t : oslot_nodes) st.far_basis += size_of(p.ot->nodes()[static_cast<size_t>(t)]) * p.P;
 }
 
+/// The pass's settings, source data and outer lower bounds.
+void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const PassOuter& outer,
+             const PassSettings& set) {
+  p.ot = outer.tree;
+  p.st = src.tree;
+  p.cfg = cfg;
+  p.d = p.ot->dim();
+  p.n = cfg.degree > 0 ? cfg.degree : degree_for(set.tau);
+  p.rule = ChebyshevRule(p.n);
+  p.P = p.d == 2 ? p.n * p.n : p.n * p.n * p.n;
+  p.flags = outer.flags;
+  p.want[kS] = (p.flags & kOuterSum) != 0;
+  p.want[kG] = (p.flags & kOuterGrad) != 0;
+  p.want[kH] = p.want[kG2] = (p.flags & kInner) != 0;
+  p.alpha = set.power->alpha();
+  p.eps = set.eps;
+  p.log_tau = std::log(set.tau);
+  p.power = set.power;
+  prepare_sources(p, src);
+  prepare_outer(p, outer, set.threads);
+}
+
+/// Plans every task: first every kSampleStride-th task, whose planned work, scaled by the
+/// share of outer points it covers, predicts the whole plan (a fall-back then costs about
+/// 1/kSampleStride of the planning), then the others. Returns false (fall back to all
+/// pairs) when the predicted or the planned work exceeds `limit`.
+bool plan_tasks(const Pass& p, const std::vector<int>& roots, double limit, int threads,
+                std::vector<std::vector<Interaction>>& lists, std::int64_t& visits) {
+  std::vector<double> work(roots.size(), 0.0);
+  std::atomic<double> spent{0.0};
+  std::atomic<bool> stopped{false};
+  for (int phase = 0; phase < 2 && !stopped; ++phase) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : visits)
+    for (size_t r = 0; r < roots.size(); ++r) {
+      if ((r % kSampleStride == 0) != (phase == 0) || stopped.load()) continue;
+      PlanState st;
+      st.spent = &spent;
+      st.limit = limit;
+      if (!plan(p, roots[r], 0, st)) stopped = true;
+      visits += st.visits;
+      work[r] = st.total;
+      lists[r] = std::move(st.out);
+    }
+    if (phase == 0 && !stopped) {
+      double sampled = 0.0, covered = 0.0;
+      for (size_t r = 0; r < roots.size(); r += kSampleStride) {
+        sampled += work[r];
+        covered += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
+      }
+      if (sampled * static_cast<double>(p.ot->size()) / covered > limit) stopped = true;
+    }
+  }
+  return !stopped;
+}
+
 class DualTreeBackend final : public PairSumBackend {
  public:
   DualTreeBackend(const DualTreeConfig& cfg, DualTreeOps* ops) : cfg_(cfg), ops_(ops) {}
@@ -628,57 +683,15 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
     return out;
   }
   Pass p;
-  p.ot = outer.tree;
-  p.st = src.tree;
-  p.cfg = cfg_;
-  p.d = p.ot->dim();
-  p.n = cfg_.degree > 0 ? cfg_.degree : degree_for(set.tau);
-  p.rule = ChebyshevRule(p.n);
-  p.P = p.d == 2 ? p.n * p.n : p.n * p.n * p.n;
-  p.flags = outer.flags;
-  p.want[kS] = (p.flags & kOuterSum) != 0;
-  p.want[kG] = (p.flags & kOuterGrad) != 0;
-  p.want[kH] = p.want[kG2] = (p.flags & kInner) != 0;
-  p.alpha = set.power->alpha();
-  p.eps = set.eps;
-  p.log_tau = std::log(set.tau);
-  p.power = set.power;
-  prepare_sources(p, src);
-  prepare_outer(p, outer, set.threads);
+  prepare(p, cfg_, src, outer, set);
 
-  // Plan every task: first every kSampleStride-th task, whose planned work, scaled by
-  // the share of outer points it covers, predicts the whole plan (a fall-back then costs
-  // about 1/kSampleStride of the planning), then the others.
   std::vector<int> roots;
   task_roots(*p.ot, 0, std::max<Eigen::Index>(1024, p.ot->size() / 64), roots);
   std::vector<std::vector<Interaction>> lists(roots.size());
-  std::vector<double> work(roots.size(), 0.0);
   std::int64_t visits = 0;
-  std::atomic<double> spent{0.0};
-  std::atomic<bool> stopped{false};
   const double limit = cfg_.cost_model ? kFallBack * all_pairs : kInf;
-  for (int phase = 0; phase < 2 && !stopped; ++phase) {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits)
-    for (size_t r = 0; r < roots.size(); ++r) {
-      if ((r % kSampleStride == 0) != (phase == 0) || stopped.load()) continue;
-      PlanState st;
-      st.spent = &spent;
-      st.limit = limit;
-      if (!plan(p, roots[r], 0, st)) stopped = true;
-      visits += st.visits;
-      work[r] = st.total;
-      lists[r] = std::move(st.out);
-    }
-    if (phase == 0 && cfg_.cost_model && !stopped) {
-      double sampled = 0.0, covered = 0.0;
-      for (size_t r = 0; r < roots.size(); r += kSampleStride) {
-        sampled += work[r];
-        covered += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
-      }
-      if (sampled * static_cast<double>(p.ot->size()) / covered > limit) stopped = true;
-    }
-  }
-  if (stopped) return fall_back(src, outer, set, visits, since(start));
+  if (!plan_tasks(p, roots, limit, set.threads, lists, visits))
+    return fall_back(src, outer, set, visits, since(start));
 
   // Slots of the boxes that carry interpolation points.
   std::vector<int> sslot(p.st->nodes().size(), -1), oslot(p.ot->nodes().size(), -1);
