@@ -27,4 +27,10 @@ class FileError : public Error {
   using Error::Error;
 };
 
+/// A problem larger than the configured limits (memory estimate, index range).
+class ResourceError : public Error {
+ public:
+  using Error::Error;
+};
+
 }  // namespace softhd

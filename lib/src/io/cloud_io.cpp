@@ -487,6 +487,14 @@ void read_ply_binary(const std::string& path, const std::string& data, const Ply
       }
     }
   }
+  // A line break some tools append is tolerated; more data means the header's counts are
+  // too small (a third vertex under "element vertex 2" would otherwise be dropped silently).
+  const bool line_break =
+      end - p <= 2 && std::all_of(p, end, [](char c) { return c == '\n' || c == '\r'; });
+  if (!line_break) {
+    fail(path, std::to_string(end - p) +
+                   " bytes of data after the last element (the header's counts are too small)");
+  }
 }
 
 // Reads whitespace-separated tokens; `line` is that of the last token read.
