@@ -54,11 +54,6 @@ struct ShapeObjective::Impl {
     cache.push_back({Eigen::VectorXd(), fe::rest_state(a)});
   }
 
-  struct Cached {
-    Eigen::VectorXd m;  // empty for the rest state
-    fe::State state;
-  };
-
   const fe::Assembler& assembler;
   const fe::ControlSpace& control;
   HausdorffTarget target;
@@ -66,7 +61,7 @@ struct ShapeObjective::Impl {
   fe::NewtonSolver newton;
   int dim = 3;
   Eigen::Array<bool, Eigen::Dynamic, 1> differentiate;
-  std::deque<Cached> cache;  // most recent first
+  std::deque<WarmStart> cache;  // most recent first
 
   fe::CloudPoints cloud_points() const {
     return options.particles == Particles::nodes ? fe::CloudPoints::kNodes
@@ -128,6 +123,24 @@ const fe::State& ShapeObjective::last_state() const { return impl_->cache.front(
 const HausdorffTarget& ShapeObjective::target() const { return impl_->target; }
 const ShapeObjectiveOptions& ShapeObjective::options() const { return impl_->options; }
 const fe::Assembler& ShapeObjective::assembler() const { return impl_->assembler; }
+
+const std::deque<WarmStart>& ShapeObjective::warm_starts() const { return impl_->cache; }
+
+void ShapeObjective::restore_warm_starts(const std::vector<WarmStart>& states) {
+  Impl& d = *impl_;
+  if (states.empty() || static_cast<int>(states.size()) > d.options.warm_start_states)
+    throw InvalidArgument("warm starts: expected 1 to " +
+                          std::to_string(d.options.warm_start_states) + " states, got " +
+                          std::to_string(states.size()));
+  const fe::State& rest = d.cache.back().state;  // the shapes every state has
+  for (const WarmStart& w : states) {
+    if ((w.m.size() != 0 && w.m.size() != d.control.size()) || w.state.u.size() != rest.u.size() ||
+        w.state.m_qp.rows() != rest.m_qp.rows() || w.state.m_qp.cols() != rest.m_qp.cols() ||
+        !w.state.u.allFinite() || !w.state.m_qp.allFinite() || !w.m.allFinite())
+      throw InvalidArgument("warm starts: a state does not fit this problem");
+  }
+  d.cache.assign(states.begin(), states.end());
+}
 
 HausdorffResult ShapeObjective::fields(const Eigen::VectorXd& u) const {
   HausdorffRequest req;

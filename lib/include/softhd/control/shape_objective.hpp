@@ -13,6 +13,7 @@
 ///     dJ/dm_k = ∂J_reg/∂m_k + ∫ M_k (F a₀)·(∇λ a₀) dX.
 
 #include <Eigen/Core>
+#include <deque>
 #include <memory>
 #include <string>
 
@@ -56,6 +57,12 @@ struct ShapeEvaluation {
   std::string failure;  ///< the Newton report of a failed solve
 };
 
+/// A converged state kept for warm starts, with its control (empty for the rest state).
+struct WarmStart {
+  Eigen::VectorXd m;
+  fe::State state;
+};
+
 /// J(m) and dJ/dm for one body, control space and target. Keeps the last converged
 /// states for warm starts and the target's trees across evaluations. Not thread-safe.
 class ShapeObjective {
@@ -76,6 +83,12 @@ class ShapeObjective {
   const HausdorffTarget& target() const;
   const ShapeObjectiveOptions& options() const;
   const fe::Assembler& assembler() const;
+  /// The warm-start states, most recent first (what the next evaluation starts from).
+  const std::deque<WarmStart>& warm_starts() const;
+  /// Replaces the warm-start states (e.g. from a checkpoint), so that the next evaluation
+  /// is bitwise the one an uninterrupted run would make. Throws InvalidArgument if the
+  /// list is empty, longer than warm_start_states, or a size does not fit the problem.
+  void restore_warm_starts(const std::vector<WarmStart>& states);
   /// Per-point fields d̃ of the last converged state (moving cloud, target cloud).
   HausdorffResult fields(const Eigen::VectorXd& u) const;
 

@@ -1,0 +1,308 @@
+#include "softhd/control/run_log.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "softhd/error.hpp"
+
+namespace softhd {
+
+namespace {
+
+constexpr char kMagic[9] = "SHDLOG01";
+constexpr std::uint64_t kFnvOffset = 1469598103934665603ull, kFnvPrime = 1099511628211ull;
+
+std::uint64_t fnv1a(const void* data, std::size_t bytes, std::uint64_t h = kFnvOffset) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t k = 0; k < bytes; ++k) h = (h ^ p[k]) * kFnvPrime;
+  return h;
+}
+
+// Little-endian encoding (the machines softhd runs on are little-endian; the bytes are
+// copied as they are, so the log is bitwise).
+class Encoder {
+ public:
+  template <class T>
+  void put(T v) {
+    out.append(reinterpret_cast<const char*>(&v), sizeof v);
+  }
+  void put_vector(const double* data, std::uint64_t n) {
+    put<std::uint64_t>(n);
+    out.append(reinterpret_cast<const char*>(data), n * sizeof(double));
+  }
+  void put_string(const std::string& s) {
+    put<std::uint64_t>(s.size());
+    out += s;
+  }
+  std::string out;
+};
+
+// Bounds-checked reading of one record's payload; every failure names the offset.
+class Decoder {
+ public:
+  Decoder(const std::string& bytes, std::size_t begin, std::size_t end, std::string where)
+      : bytes_(bytes), pos_(begin), end_(end), where_(std::move(where)) {}
+  [[noreturn]] void fail(const std::string& what) const {
+    throw FileError(where_ + ": " + what + " at byte " + std::to_string(pos_));
+  }
+  template <class T>
+  T get() {
+    if (end_ - pos_ < sizeof(T)) fail("record too short");
+    T v;
+    std::memcpy(&v, bytes_.data() + pos_, sizeof v);
+    pos_ += sizeof v;
+    return v;
+  }
+  std::uint64_t count(std::uint64_t item_bytes) {
+    const auto n = get<std::uint64_t>();
+    if (n > (end_ - pos_) / item_bytes) fail("a length runs past the record");
+    return n;
+  }
+  Eigen::VectorXd vector() {
+    const std::uint64_t n = count(sizeof(double));
+    Eigen::VectorXd v(static_cast<Eigen::Index>(n));
+    if (n) std::memcpy(v.data(), bytes_.data() + pos_, n * sizeof(double));
+    pos_ += n * sizeof(double);
+    return v;
+  }
+  std::string string() {
+    const std::uint64_t n = count(1);
+    std::string s = bytes_.substr(pos_, n);
+    pos_ += n;
+    return s;
+  }
+  void finish() const {
+    if (pos_ != end_) fail("trailing bytes in a record");
+  }
+
+ private:
+  const std::string& bytes_;
+  std::size_t pos_, end_;
+  std::string where_;
+};
+
+std::string encode_fingerprint(const RunFingerprint& f) {
+  Encoder e;
+  e.put<std::uint64_t>(f.size());
+  for (const auto& [key, value] : f) {
+    e.put_string(key);
+    e.put_string(value);
+  }
+  return e.out;
+}
+
+std::string encode_evaluation(const LoggedEvaluation& ev) {
+  const ShapeEvaluation& r = ev.result;
+  Encoder e;
+  e.put<std::uint8_t>((ev.gradient ? 1 : 0) | (r.ok ? 2 : 0));
+  e.put<double>(ev.seconds);
+  e.put<std::int32_t>(r.newton_iterations);
+  for (double v : {r.J, r.rho, r.A, r.B, r.regularisation, r.seconds_state, r.seconds_distance,
+                   r.seconds_adjoint})
+    e.put<double>(v);
+  e.put_vector(ev.x.data(), static_cast<std::uint64_t>(ev.x.size()));
+  e.put_vector(r.gradient.data(), static_cast<std::uint64_t>(r.gradient.size()));
+  e.put_string(r.failure);
+  return e.out;
+}
+
+LoggedEvaluation decode_evaluation(Decoder& d) {
+  LoggedEvaluation ev;
+  ShapeEvaluation& r = ev.result;
+  const auto flags = d.get<std::uint8_t>();
+  if (flags > 3) d.fail("unknown evaluation flags");
+  ev.gradient = flags & 1;
+  r.ok = flags & 2;
+  ev.seconds = d.get<double>();
+  r.newton_iterations = d.get<std::int32_t>();
+  for (double* v : {&r.J, &r.rho, &r.A, &r.B, &r.regularisation, &r.seconds_state,
+                    &r.seconds_distance, &r.seconds_adjoint})
+    *v = d.get<double>();
+  ev.x = d.vector();
+  r.gradient = d.vector();
+  r.failure = d.string();
+  if (!ev.x.allFinite() || !std::isfinite(ev.seconds) || r.newton_iterations < 0)
+    d.fail("an evaluation holds non-finite or negative values");
+  if (ev.x.size() == 0) d.fail("an evaluation without a control");
+  if (r.ok && ev.gradient && r.gradient.size() != ev.x.size())
+    d.fail("an evaluation's gradient has the wrong size");
+  return ev;
+}
+
+std::string encode_snapshot(const RunSnapshot& s) {
+  Encoder e;
+  e.put<std::int64_t>(s.evaluations);
+  e.put<std::int64_t>(s.iterations);
+  e.put<std::uint64_t>(s.states.size());
+  for (const WarmStart& w : s.states) {
+    e.put_vector(w.m.data(), static_cast<std::uint64_t>(w.m.size()));
+    e.put_vector(w.state.u.data(), static_cast<std::uint64_t>(w.state.u.size()));
+    e.put<std::uint64_t>(static_cast<std::uint64_t>(w.state.m_qp.rows()));
+    e.put_vector(w.state.m_qp.data(), static_cast<std::uint64_t>(w.state.m_qp.size()));
+  }
+  return e.out;
+}
+
+RunSnapshot decode_snapshot(Decoder& d) {
+  RunSnapshot s;
+  s.evaluations = d.get<std::int64_t>();
+  s.iterations = d.get<std::int64_t>();
+  const std::uint64_t n = d.count(3 * sizeof(std::uint64_t));
+  for (std::uint64_t k = 0; k < n; ++k) {
+    WarmStart w;
+    w.m = d.vector();
+    w.state.u = d.vector();
+    const auto rows = d.get<std::uint64_t>();
+    const Eigen::VectorXd qp = d.vector();
+    if (rows == 0 ? qp.size() != 0 : qp.size() % rows != 0)
+      d.fail("a warm-start state has an inconsistent shape");
+    w.state.m_qp = Eigen::Map<const Eigen::MatrixXd>(qp.data(), static_cast<Eigen::Index>(rows),
+                                                     rows ? qp.size() / rows : 0);
+    s.states.push_back(std::move(w));
+  }
+  return s;
+}
+
+}  // namespace
+
+std::string content_hash(const void* data, std::size_t bytes) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(fnv1a(data, bytes)));
+  return text;
+}
+
+std::string exact_text(double value) {
+  char text[40];
+  std::snprintf(text, sizeof text, "%a", value);
+  return text;
+}
+
+RunLog parse_run_log(const std::string& bytes, const std::string& source) {
+  if (bytes.compare(0, 8, kMagic, 8) != 0 || bytes.size() < 8)
+    throw FileError(source + ": not a softhd checkpoint (no SHDLOG01 header)");
+  RunLog log;
+  std::vector<LoggedEvaluation> pending;  // evaluations after the last snapshot
+  bool has_fingerprint = false;
+  std::size_t pos = 8;
+  constexpr std::size_t kFrame = 1 + 8 + 8;  // kind, length, checksum
+  while (pos < bytes.size()) {
+    std::uint64_t length = 0;
+    const bool complete = bytes.size() - pos >= kFrame &&
+                          (std::memcpy(&length, bytes.data() + pos + 1, 8), true) &&
+                          length <= bytes.size() - pos - kFrame;
+    std::uint64_t stored = 0, sum = 0;
+    if (complete) {
+      std::memcpy(&stored, bytes.data() + pos + 9 + length, 8);
+      sum = fnv1a(bytes.data() + pos, 9 + length);
+    }
+    const std::size_t next = complete ? pos + kFrame + length : bytes.size();
+    if (!complete || stored != sum) {
+      if (next == bytes.size()) break;  // a torn last record: the run was killed writing it
+      throw FileError(source + ": corrupt record at byte " + std::to_string(pos));
+    }
+    const char kind = bytes[pos];
+    Decoder d(bytes, pos + 9, pos + 9 + length, source);
+    if (!has_fingerprint && kind != 'H') d.fail("the fingerprint record must come first");
+    if (kind == 'H') {
+      if (has_fingerprint) d.fail("a second fingerprint record");
+      const std::uint64_t n = d.count(16);
+      for (std::uint64_t k = 0; k < n; ++k) {
+        std::string key = d.string();
+        log.fingerprint[key] = d.string();
+      }
+      has_fingerprint = true;
+    } else if (kind == 'E') {
+      pending.push_back(decode_evaluation(d));
+    } else if (kind == 'S') {
+      RunSnapshot s = decode_snapshot(d);
+      const auto total = static_cast<std::int64_t>(log.evaluations.size() + pending.size());
+      if (s.evaluations != total || s.iterations < 0 || s.iterations > s.evaluations)
+        d.fail("a snapshot's counts (" + std::to_string(s.evaluations) + " evaluations, " +
+               std::to_string(s.iterations) + " iterations) do not match the " +
+               std::to_string(total) + " evaluations logged before it");
+      for (LoggedEvaluation& e : pending) log.evaluations.push_back(std::move(e));
+      pending.clear();
+      log.snapshot = std::move(s);
+      log.has_snapshot = true;
+    } else {
+      d.fail("unknown record kind");
+    }
+    d.finish();
+    pos = next;
+  }
+  if (!has_fingerprint) throw FileError(source + ": the checkpoint has no fingerprint record");
+  return log;
+}
+
+RunLog read_run_log(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw FileError(path + ": is a directory, not a checkpoint");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FileError(path + ": cannot open the checkpoint");
+  std::ostringstream s;
+  s << in.rdbuf();
+  if (in.bad()) throw FileError(path + ": read error");
+  return parse_run_log(s.str(), path);
+}
+
+void check_fingerprint(const RunFingerprint& stored, const RunFingerprint& current,
+                       const std::string& source) {
+  auto quote = [](const RunFingerprint& f, const std::string& key) {
+    const auto it = f.find(key);
+    return it == f.end() ? std::string("(absent)") : it->second;
+  };
+  RunFingerprint keys = stored;
+  keys.insert(current.begin(), current.end());
+  for (const auto& kv : keys) {
+    const std::string a = quote(stored, kv.first), b = quote(current, kv.first);
+    if (a != b)
+      throw InvalidArgument(source + " was written for another run: " + kv.first +
+                            " differs (checkpoint " + a + ", now " + b + ")");
+  }
+}
+
+RunLogWriter::RunLogWriter(const std::string& path, const RunFingerprint& fingerprint,
+                           const RunLog* replayed)
+    : path_(path) {
+  const std::string tmp = path + ".tmp";
+  file_ = std::fopen(tmp.c_str(), "wb");
+  if (!file_)
+    throw FileError(path + ": cannot write the checkpoint (" + std::strerror(errno) + ")");
+  if (std::fwrite(kMagic, 1, 8, file_) != 8)
+    throw FileError(path + ": cannot write the checkpoint");
+  write_record('H', encode_fingerprint(fingerprint));
+  if (replayed) {
+    for (const LoggedEvaluation& e : replayed->evaluations) append(e);
+    if (replayed->has_snapshot) append(replayed->snapshot);
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw FileError(path + ": cannot write the checkpoint (" + ec.message() + ")");
+}
+
+RunLogWriter::~RunLogWriter() {
+  if (file_) std::fclose(file_);
+}
+
+void RunLogWriter::append(const LoggedEvaluation& evaluation) {
+  write_record('E', encode_evaluation(evaluation));
+}
+void RunLogWriter::append(const RunSnapshot& snapshot) {
+  write_record('S', encode_snapshot(snapshot));
+}
+
+void RunLogWriter::write_record(char kind, const std::string& payload) {
+  Encoder e;
+  e.put<char>(kind);
+  e.put<std::uint64_t>(payload.size());
+  e.out += payload;
+  e.put<std::uint64_t>(fnv1a(e.out.data(), e.out.size()));
+  if (std::fwrite(e.out.data(), 1, e.out.size(), file_) != e.out.size() || std::fflush(file_) != 0)
+    throw FileError(path_ + ": cannot append to the checkpoint (" + std::strerror(errno) + ")");
+}
+
+}  // namespace softhd

@@ -1,0 +1,242 @@
+// The checkpoint log of a shape-tracking run and resume = the same run: a run interrupted
+// (by its iteration limit, or by an exception thrown from its callback like a crash) and
+// resumed has bitwise the history and the final control of an uninterrupted run; the log
+// survives a torn tail, refuses corruption and checkpoints of another problem.
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "expect_error.hpp"
+#include "softhd/control/run_log.hpp"
+#include "softhd/control/shape_tracking.hpp"
+#include "softhd/fe/cloud.hpp"
+#include "softhd/fe/materials.hpp"
+#include "softhd/fe/mesh.hpp"
+
+namespace softhd::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+fe::Assembler beam() {
+  return fe::Assembler(fe::make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, 0.6, 0.3),
+                                         Eigen::Vector3i(4, 1, 1), 1),
+                       std::make_shared<fe::MooneyRivlin>(1.0, 0.2, 3.0), Eigen::Vector3d::UnitX(),
+                       {{"x0", {}}});
+}
+
+// A target: the beam bent by m = −0.3 X3/0.3.
+PointCloud bent_target(const fe::Assembler& A, const fe::ControlSpace& space) {
+  const Eigen::VectorXd m = -0.3 * space.positions(A.mesh()).col(2) / 0.3;
+  fe::NewtonSolver newton(A);
+  fe::State s = fe::rest_state(A);
+  EXPECT_TRUE(newton.solve(space.to_quadrature(m), &s).converged());
+  return fe::deformed_cloud(A, s.u, fe::CloudPoints::kNodes, fe::CloudVolumes::kReference);
+}
+
+std::string temp_path(const std::string& name) {
+  return (fs::path(::testing::TempDir()) / ("softhd_runlog_" + name)).string();
+}
+
+struct Outcome {
+  ShapeTrackingSummary summary;
+  bool interrupted = false;
+};
+
+// One process's worth of a run: a fresh objective (as after a restart), stopping with an
+// exception after `crash_after` iterations of this process (0: never).
+Outcome run(const std::string& checkpoint, bool resume, int max_iterations, int crash_after,
+            const fe::Assembler& A, const fe::ControlSpace& space, const PointCloud& target) {
+  ShapeObjectiveOptions o;
+  o.hausdorff.threads = 1;
+  ShapeObjective J(A, space, HausdorffTarget(target, o.hausdorff), o);
+  ShapeTrackingOptions to;
+  to.optimizer.max_iterations = max_iterations;
+  to.optimizer.max_evaluations = 1000;
+  to.optimizer.relative_change = 0.0;
+  to.optimizer.move_limit = 0.1;
+  to.checkpoint = checkpoint;
+  to.resume = resume;
+  to.fingerprint["scene"] = "beam";
+  int fresh = 0;
+  ShapeTrackingCallbacks cb;
+  cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd&) {
+    if (!it.replayed && crash_after > 0 && ++fresh == crash_after)
+      throw std::runtime_error("simulated crash");
+  };
+  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(space.size(), -1.0);
+  const Eigen::VectorXd hi = Eigen::VectorXd::Zero(space.size());
+  const Eigen::VectorXd m0 = Eigen::VectorXd::Zero(space.size());
+  Outcome r;
+  try {
+    r.summary = track_shape(J, lo, hi, m0, std::nullopt, to, cb);
+  } catch (const std::runtime_error& e) {
+    if (std::string(e.what()) != "simulated crash") throw;
+    r.interrupted = true;
+  }
+  return r;
+}
+
+bool bitwise_equal(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+void expect_same_run(const ShapeTrackingSummary& a, const ShapeTrackingSummary& b) {
+  ASSERT_EQ(a.history.size(), b.history.size());
+  for (size_t k = 0; k < a.history.size(); ++k) {
+    const TrackingIteration &x = a.history[k], &y = b.history[k];
+    EXPECT_EQ(x.iteration, y.iteration);
+    EXPECT_EQ(x.evaluation, y.evaluation) << "iteration " << x.iteration;
+    for (auto [p, q] : {std::pair{x.J, y.J},
+                        {x.rho, y.rho},
+                        {x.A, y.A},
+                        {x.B, y.B},
+                        {x.projected_gradient_norm, y.projected_gradient_norm}})
+      EXPECT_TRUE(bitwise_equal(p, q)) << "iteration " << x.iteration << ": " << p << " vs " << q;
+    EXPECT_EQ(x.newton_iterations, y.newton_iterations);
+  }
+  ASSERT_EQ(a.control.size(), b.control.size());
+  EXPECT_EQ(std::memcmp(a.control.data(), b.control.data(), a.control.size() * 8), 0);
+  EXPECT_TRUE(bitwise_equal(a.J_final, b.J_final));
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.evaluations, b.evaluations);
+  EXPECT_EQ(a.termination, b.termination);
+}
+
+class ResumeIsTheSameRun : public ::testing::Test {
+ protected:
+  const fe::Assembler A = beam();
+  const fe::ControlSpace space{A.mesh(), A.geometry(), fe::ControlKind::kVertex};
+  const PointCloud target = bent_target(A, space);
+};
+
+TEST_F(ResumeIsTheSameRun, AfterSimulatedCrashes) {
+  const std::string ref_log = temp_path("ref.bin"), log = temp_path("crash.bin");
+  const Outcome reference = run(ref_log, false, 12, 0, A, space, target);
+  ASSERT_FALSE(reference.interrupted);
+  ASSERT_EQ(reference.summary.iterations, 12);
+  // Crashes after 3, then 4 more iterations; the third process finishes the run.
+  Outcome r = run(log, false, 12, 3, A, space, target);
+  ASSERT_TRUE(r.interrupted);
+  r = run(log, true, 12, 4, A, space, target);
+  ASSERT_TRUE(r.interrupted);
+  r = run(log, true, 12, 0, A, space, target);
+  ASSERT_FALSE(r.interrupted);
+  EXPECT_GT(r.summary.replayed_evaluations, 0);
+  expect_same_run(reference.summary, r.summary);
+}
+
+TEST_F(ResumeIsTheSameRun, IterationLimitIsATotalAndAFinishedRunStaysFinished) {
+  const std::string ref_log = temp_path("ref2.bin"), log = temp_path("limit.bin");
+  const Outcome reference = run(ref_log, false, 10, 0, A, space, target);
+  const Outcome first = run(log, false, 4, 0, A, space, target);
+  EXPECT_EQ(first.summary.iterations, 4);
+  // The limit counts over the whole run: resumed with 10, it ends at 10, as uninterrupted.
+  const Outcome second = run(log, true, 10, 0, A, space, target);
+  expect_same_run(reference.summary, second.summary);
+  // Resumed again with the same limit, the finished run does not go on.
+  const Outcome third = run(log, true, 10, 0, A, space, target);
+  expect_same_run(reference.summary, third.summary);
+  EXPECT_EQ(third.summary.replayed_evaluations, third.summary.evaluations);  // all of them
+}
+
+TEST_F(ResumeIsTheSameRun, ACheckpointOfAnotherProblemIsRefused) {
+  const std::string log = temp_path("other.bin");
+  run(log, false, 2, 0, A, space, target);
+  // Another target (the first point moved by 1e-3): the fingerprint names it.
+  Eigen::MatrixXd points = target.points();
+  points(0, 0) += 1e-3;
+  const PointCloud other(points, target.volumes());
+  expect_error<InvalidArgument>([&] { run(log, true, 4, 0, A, space, other); },
+                                "was written for another run: target differs");
+}
+
+// A log of three evaluations and a snapshot, for the format tests.
+std::string small_log(const std::string& path) {
+  RunFingerprint f{{"scene", "abc"}};
+  {
+    RunLogWriter w(path, f);
+    for (int k = 0; k < 3; ++k) {
+      LoggedEvaluation e;
+      e.x = Eigen::VectorXd::Constant(4, 0.1 * k + 1e-17);
+      e.gradient = k != 1;
+      e.result.ok = k != 2;
+      e.result.J = 1.0 / 3.0 + k;
+      e.result.gradient =
+          e.gradient && e.result.ok ? Eigen::VectorXd::Constant(4, -1.0 / 7.0) : Eigen::VectorXd();
+      e.result.failure = k == 2 ? "newton failed" : "";
+      e.seconds = 0.5 * k;
+      w.append(e);
+    }
+    RunSnapshot s;
+    s.evaluations = 3;
+    s.iterations = 1;
+    WarmStart ws;
+    ws.m = Eigen::VectorXd::Constant(4, 0.25);
+    ws.state.u = Eigen::VectorXd::LinSpaced(6, 0.0, 1.0);
+    ws.state.m_qp = Eigen::MatrixXd::Constant(2, 3, -0.5);
+    s.states.push_back(ws);
+    w.append(s);
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream b;
+  b << in.rdbuf();
+  return b.str();
+}
+
+TEST(RunLog, RoundTripsBitwise) {
+  const std::string path = temp_path("format.bin");
+  small_log(path);
+  const RunLog log = read_run_log(path);
+  EXPECT_EQ(log.fingerprint.at("scene"), "abc");
+  ASSERT_EQ(log.evaluations.size(), 3u);
+  EXPECT_TRUE(log.has_snapshot);
+  for (int k = 0; k < 3; ++k) {
+    const LoggedEvaluation& e = log.evaluations[k];
+    EXPECT_EQ(e.x, Eigen::VectorXd::Constant(4, 0.1 * k + 1e-17));
+    EXPECT_EQ(e.result.J, 1.0 / 3.0 + k);
+    EXPECT_EQ(e.gradient, k != 1);
+    EXPECT_EQ(e.result.ok, k != 2);
+  }
+  EXPECT_EQ(log.evaluations[0].result.gradient, Eigen::VectorXd::Constant(4, -1.0 / 7.0));
+  EXPECT_EQ(log.evaluations[2].result.failure, "newton failed");
+  EXPECT_EQ(log.snapshot.states.at(0).state.m_qp, Eigen::MatrixXd::Constant(2, 3, -0.5));
+}
+
+TEST(RunLog, DropsATornTailAndRefusesCorruption) {
+  const std::string path = temp_path("torn.bin");
+  const std::string bytes = small_log(path);
+  // Cut inside the snapshot record: the evaluations after the last whole snapshot go too.
+  const RunLog torn = parse_run_log(bytes.substr(0, bytes.size() - 5), "torn");
+  EXPECT_FALSE(torn.has_snapshot);
+  EXPECT_TRUE(torn.evaluations.empty());
+  // A flipped byte in a middle record is corruption, not a torn write.
+  std::string bad = bytes;
+  bad[40] ^= 0x10;
+  expect_error<FileError>([&] { parse_run_log(bad, "bad.bin"); }, "bad.bin");
+  expect_error<FileError>([&] { parse_run_log("not a log", "x.bin"); }, "not a softhd checkpoint");
+  expect_error<FileError>([&] { read_run_log(::testing::TempDir()); }, "is a directory");
+}
+
+// A snapshot whose counts disagree with the log (e.g. 1e12 evaluations, or more iterations
+// than evaluations) is refused, checksum or not.
+TEST(RunLog, RefusesInconsistentCounts) {
+  const std::string path = temp_path("counts.bin");
+  for (auto [evaluations, iterations] :
+       {std::pair<std::int64_t, std::int64_t>{1000000000000, 1}, {3, 47}, {2, 1}, {3, -1}}) {
+    RunLogWriter w(path, {{"scene", "abc"}});
+    LoggedEvaluation e;
+    e.x = Eigen::VectorXd::Ones(2);
+    for (int k = 0; k < 3; ++k) w.append(e);
+    RunSnapshot s;
+    s.evaluations = evaluations;
+    s.iterations = iterations;
+    w.append(s);
+    expect_error<FileError>([&] { read_run_log(path); }, "do not match");
+  }
+}
+
+}  // namespace
+}  // namespace softhd::test
