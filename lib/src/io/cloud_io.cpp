@@ -147,7 +147,11 @@ int split_fields(const std::string& path, std::size_t line, const char* p, const
 
 PointCloud read_text_cloud(const std::string& path, int dim) {
   check_dim(dim);
-  const std::string data = read_file(path);
+  return parse_text_cloud(read_file(path), path, dim);
+}
+
+PointCloud parse_text_cloud(const std::string& data, const std::string& path, int dim) {
+  check_dim(dim);
   const char* p = data.data();
   const char* const end = p + data.size();
   if (data.compare(0, 3, "\xEF\xBB\xBF") == 0) p += 3;  // UTF-8 byte order mark
@@ -575,7 +579,10 @@ void read_ply_ascii(const std::string& path, const std::string& data, const PlyH
 }  // namespace
 
 PointCloud read_ply_cloud(const std::string& path) {
-  const std::string data = read_file(path);
+  return parse_ply_cloud(read_file(path), path);
+}
+
+PointCloud parse_ply_cloud(const std::string& data, const std::string& path) {
   const PlyHeader h = parse_ply_header(path, data);
   std::vector<double> values;  // rows of x, y, [z,] volume
   if (h.binary) {
