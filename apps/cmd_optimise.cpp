@@ -253,156 +253,66 @@ std::string file_hash(const std::string& path) {
   return content_hash(bytes.data(), bytes.size());
 }
 
-// history.csv and summary.json, rewritten as the run goes.
-void write_history(const fs::path& out, const std::vector<std::string>& rows) {
-  std::ostringstream h;
-  h << kHistoryHeader << '\n';
-  for (const std::string& r : rows) h << r << '\n';
-  write_file_atomically((out / "history.csv").string(), h.str());
+std::string body_name(int iteration) {
+  char name[32];
+  std::snprintf(name, sizeof name, "body_%04d.vtu", iteration);
+  return name;
 }
 
-}  // namespace
+// The files of a run in its directory: body VTUs and their PVD, and history.csv and
+// summary.json, rewritten as the run goes.
+class RunFiles {
+ public:
+  RunFiles(fs::path dir, const ShapeObjective& objective, const fe::ControlSpace& space)
+      : dir_(std::move(dir)), objective_(objective), space_(space) {}
+  const fs::path& dir() const { return dir_; }
 
-int run_optimise(const std::vector<std::string>& tokens) {
-  Args args(tokens);
-  if (args.flag("--help")) {
-    std::cout << kUsage;
-    return 0;
-  }
-  OptimiseArgs a = parse_optimise(args);
-  const BoundedOptimizerOptions& opt = a.tracking.optimizer;
-  const ShapeObjectiveOptions& so = a.objective;
-  const bool quiet = a.quiet;
-
-  // The problem: scene, mesh, control space, target.
-  const fe::Scene scene = fe::load_scene(a.scene_file, a.memory_limit);
-  const fe::Assembler assembler = scene.make_assembler();
-  const fe::Mesh& mesh = assembler.mesh();
-  const fe::ControlSpace space(mesh, assembler.geometry(), scene.control_kind);
-  const Target target = make_target(scene, mesh, a.target_file, scene.dim(), a.memory_limit);
-  if (target.cloud.dim() != scene.dim())
-    throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
-                          "D but the scene's body is " + std::to_string(scene.dim()) + "D");
-  const fs::path out = a.out ? fs::path(*a.out) : fs::path("results") / scene.name;
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec || !fs::is_directory(out))
-    throw FileError("--out: cannot create the directory '" + out.string() + "'" +
-                    (ec ? " (" + ec.message() + ")" : ""));
-
-  ShapeObjective objective(assembler, space, HausdorffTarget(target.cloud, so.hausdorff), so);
-  const Eigen::VectorXd m0 = Eigen::VectorXd::Constant(space.size(), scene.control_initial);
-  const Eigen::VectorXd lower = Eigen::VectorXd::Constant(space.size(), scene.control_lower);
-  const Eigen::VectorXd upper = Eigen::VectorXd::Constant(space.size(), scene.control_upper);
-  ShapeTrackingOptions& to = a.tracking;
-  to.checkpoint = (out / "checkpoint.bin").string();
-  to.resume = a.resume;
-  to.fingerprint["scene"] = file_hash(a.scene_file);
-  if (a.resume && !fs::exists(to.checkpoint))
-    throw FileError("--resume: no checkpoint '" + to.checkpoint + "'");
-  if (a.resume) read_run_log(to.checkpoint);  // a malformed one refused before any output
-
-  std::vector<std::string> history_rows;
-  std::vector<std::pair<double, std::string>> pvd;
-  auto body_name = [](int iteration) {
-    char name[32];
-    std::snprintf(name, sizeof name, "body_%04d.vtu", iteration);
-    return std::string(name);
-  };
-  auto write_body = [&](int iteration, const Eigen::VectorXd& m, const Eigen::VectorXd& u) {
-    const HausdorffResult r = objective.fields(u);
-    std::vector<VtuField> point{{"m", control_at_nodes(mesh, space, m)}};
+  HausdorffResult write_body(int iteration, const Eigen::VectorXd& m, const Eigen::VectorXd& u) {
+    const fe::Assembler& a = objective_.assembler();
+    const HausdorffResult r = objective_.fields(u);
+    std::vector<VtuField> point{{"m", control_at_nodes(a.mesh(), space_, m)}};
     std::vector<VtuField> cell;
-    if (so.particles == Particles::nodes) point.push_back({"d_tilde", r.field_moving});
-    const Eigen::MatrixXd J = assembler.jacobians(u);
-    cell.push_back({"J", J.rowwise().mean()});
-    if (space.kind() == fe::ControlKind::kElement) cell.push_back({"m", m});
-    write_vtu_mesh((out / body_name(iteration)).string(), mesh, u, point, cell);
-    if (pvd.empty() || pvd.back().second != body_name(iteration))  // the last one again
-      pvd.emplace_back(iteration, body_name(iteration));
-    write_pvd((out / "body.pvd").string(), pvd);
+    if (objective_.options().particles == Particles::nodes)
+      point.push_back({"d_tilde", r.field_moving});
+    cell.push_back({"J", a.jacobians(u).rowwise().mean()});
+    if (space_.kind() == fe::ControlKind::kElement) cell.push_back({"m", m});
+    write_vtu_mesh((dir_ / body_name(iteration)).string(), a.mesh(), u, point, cell);
+    list_body(iteration);
     return r;
-  };
-
-  if (!quiet) {
-    std::fprintf(stderr, "softhd optimise %s: %ld nodes, %ld controls, target %ld points (%s)\n",
-                 scene.name.c_str(), static_cast<long>(mesh.num_nodes()),
-                 static_cast<long>(space.size()), static_cast<long>(target.cloud.size()),
-                 target.description.c_str());
   }
-  auto summary_json = [&](const ShapeTrackingSummary& s, const std::string& status) {
-    nlohmann::json sum;
-    sum["status"] = status;
-    sum["scene"] = a.scene_file;
-    sum["target"] = target.description;
-    sum["target_points"] = target.cloud.size();
-    sum["nodes"] = mesh.num_nodes();
-    sum["controls"] = space.size();
-    sum["algorithm"] = to_string(opt.algorithm);
-    sum["particles"] = to_string(so.particles);
-    sum["volumes"] = to_string(so.volumes);
-    sum["rho_start"] = s.rho_start;
-    sum["floor_self"] = optional_json(s.floor_self);
-    sum["floor_matched"] = optional_json(s.floor_matched);
-    return sum;
-  };
-  ShapeTrackingSummary started;
-  ShapeTrackingCallbacks cb;
-  cb.on_start = [&](const ShapeTrackingSummary& start) {
-    started = start;
-    if (!quiet) {
-      std::fprintf(stderr, "  rho start %.6g, floor self %s, floor matched %s\n", start.rho_start,
-                   start.floor_self ? std::to_string(*start.floor_self).c_str()
-                                    : "n/a (skipped: target too large)",
-                   start.floor_matched ? std::to_string(*start.floor_matched).c_str()
-                                       : "n/a (no known map)");
-      std::fprintf(stderr, "  %5s %12s %12s %10s %10s %7s %8s\n", "iter", "J", "rho", "rho/floor",
-                   "|P grad|", "newton", "seconds");
-    }
-    write_body(0, m0.cwiseMax(lower).cwiseMin(upper), objective.last_state().u);
-  };
-  cb.on_failure = [&](const std::string& report) {
-    if (!quiet) std::fprintf(stderr, "  state solve failed (step rejected): %s\n", report.c_str());
-  };
-  cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd& m) {
-    history_rows.push_back(
+  /// Lists a body VTU in body.pvd (once), e.g. one an earlier process of the run wrote.
+  void list_body(int iteration) {
+    if (!pvd_.empty() && pvd_.back().second == body_name(iteration)) return;
+    if (!fs::exists(dir_ / body_name(iteration))) return;
+    pvd_.emplace_back(iteration, body_name(iteration));
+    write_pvd((dir_ / "body.pvd").string(), pvd_);
+  }
+  void add_row(const TrackingIteration& it) {
+    rows_.push_back(
         csv_row({double(it.iteration), double(it.evaluation), it.J, it.rho, it.A, it.B,
                  it.rho_over_floor, it.projected_gradient_norm, double(it.newton_iterations),
                  it.seconds_state, it.seconds_distance, it.seconds_adjoint, it.seconds}));
-    if (!quiet)
-      std::fprintf(stderr, "  %5d %12.6g %12.6g %10.4g %10.3g %7d %8.1f%s\n", it.iteration, it.J,
-                   it.rho, it.rho_over_floor, it.projected_gradient_norm, it.newton_iterations,
-                   it.seconds, it.replayed ? " (from the checkpoint)" : "");
-    if (vtu_due(a.vtu_every, it.iteration)) {
-      if (!it.replayed) {
-        write_body(it.iteration, m, objective.last_state().u);
-      } else if (fs::exists(out / body_name(it.iteration))) {
-        pvd.emplace_back(it.iteration, body_name(it.iteration));  // written before the resume
-        write_pvd((out / "body.pvd").string(), pvd);
-      }
-    }
-    if (it.replayed) return;
-    write_history(out, history_rows);
-    nlohmann::json sum = summary_json(started, "interrupted");
-    sum["iterations"] = it.iteration;
-    sum["evaluations"] = it.evaluation;
-    sum["J"] = it.J;
-    sum["rho"] = it.rho;
-    sum["seconds"] = it.seconds;
-    write_file_atomically((out / "summary.json").string(), sum.dump(2) + "\n");
-  };
+  }
+  void write_history() const {
+    std::ostringstream h;
+    h << kHistoryHeader << '\n';
+    for (const std::string& r : rows_) h << r << '\n';
+    write_file_atomically((dir_ / "history.csv").string(), h.str());
+  }
+  void write_summary(const nlohmann::json& sum) const {
+    write_file_atomically((dir_ / "summary.json").string(), sum.dump(2) + "\n");
+  }
 
-  const ShapeTrackingSummary s =
-      track_shape(objective, lower, upper, m0, target.map_displacement, to, cb);
-  const Eigen::VectorXd& u = s.displacement;
-  const int iterations = s.iterations;
-  const HausdorffResult fields = write_body(iterations, s.control, u);
-  write_vtu_cloud((out / "target.vtu").string(), target.cloud, {{"d_tilde", fields.field_target}});
-  write_ply_cloud((out / "target.ply").string(), target.cloud);
-  write_ply_cloud((out / "body_final.ply").string(), objective.particles(u));
-  write_history(out, history_rows);
-  fe::write_control_file((out / "control.csv").string(), space.positions(mesh), s.control);
-  nlohmann::json sum = summary_json(s, "finished");
+ private:
+  fs::path dir_;
+  const ShapeObjective& objective_;
+  const fe::ControlSpace& space_;
+  std::vector<std::string> rows_;
+  std::vector<std::pair<double, std::string>> pvd_;
+};
+
+// summary.json's entries about the end of the run.
+void add_final(const ShapeTrackingSummary& s, nlohmann::json& sum) {
   sum["rho_final"] = s.rho_final;
   sum["J_final"] = s.J_final;
   sum["rho_final_over_floor"] =
@@ -421,24 +331,147 @@ int run_optimise(const std::vector<std::string>& tokens) {
   sum["seconds_distance"] = s.seconds_distance;
   sum["seconds_adjoint"] = s.seconds_adjoint;
   sum["seconds_optimizer"] = s.seconds_optimizer;
-  write_file_atomically((out / "summary.json").string(), sum.dump(2) + "\n");
+}
 
+void print_start(const ShapeTrackingSummary& start) {
+  std::fprintf(
+      stderr, "  rho start %.6g, floor self %s, floor matched %s\n", start.rho_start,
+      start.floor_self ? std::to_string(*start.floor_self).c_str()
+                       : "n/a (skipped: target too large)",
+      start.floor_matched ? std::to_string(*start.floor_matched).c_str() : "n/a (no known map)");
+  std::fprintf(stderr, "  %5s %12s %12s %10s %10s %7s %8s\n", "iter", "J", "rho", "rho/floor",
+               "|P grad|", "newton", "seconds");
+}
+
+void print_end(const ShapeTrackingSummary& s, const fs::path& out) {
+  std::fprintf(stderr, "  %s after %d iterations, %.1f s\n", s.termination.c_str(), s.iterations,
+               s.seconds);
+  std::fprintf(stderr, "  rho %.6g -> %.6g (%.3g x floor)", s.rho_start, s.rho_final,
+               s.floor() ? s.rho_final / *s.floor() : std::nan(""));
+  if (s.shape_error_max)
+    std::fprintf(stderr, ", shape error max %.4g rms %.4g", *s.shape_error_max, *s.shape_error_rms);
+  std::fprintf(stderr, "\n  results in %s\n", out.string().c_str());
+}
+
+fs::path output_directory(const OptimiseArgs& a, const fe::Scene& scene) {
+  const fs::path out = a.out ? fs::path(*a.out) : fs::path("results") / scene.name;
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec || !fs::is_directory(out))
+    throw FileError("--out: cannot create the directory '" + out.string() + "'" +
+                    (ec ? " (" + ec.message() + ")" : ""));
+  return out;
+}
+
+}  // namespace
+
+int run_optimise(const std::vector<std::string>& tokens) {
+  Args args(tokens);
+  if (args.flag("--help")) {
+    std::cout << kUsage;
+    return 0;
+  }
+  OptimiseArgs a = parse_optimise(args);
+  const ShapeObjectiveOptions& so = a.objective;
+
+  // The problem: scene, mesh, control space, target.
+  const fe::Scene scene = fe::load_scene(a.scene_file, a.memory_limit);
+  const fe::Assembler assembler = scene.make_assembler();
+  const fe::Mesh& mesh = assembler.mesh();
+  const fe::ControlSpace space(mesh, assembler.geometry(), scene.control_kind);
+  const Target target = make_target(scene, mesh, a.target_file, scene.dim(), a.memory_limit);
+  if (target.cloud.dim() != scene.dim())
+    throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
+                          "D but the scene's body is " + std::to_string(scene.dim()) + "D");
+  const fs::path out = output_directory(a, scene);
+  ShapeTrackingOptions& to = a.tracking;
+  to.checkpoint = (out / "checkpoint.bin").string();
+  to.resume = a.resume;
+  to.fingerprint["scene"] = file_hash(a.scene_file);
+  if (a.resume && !fs::exists(to.checkpoint))
+    throw FileError("--resume: no checkpoint '" + to.checkpoint + "'");
+  if (a.resume) read_run_log(to.checkpoint);  // a malformed one refused before any output
+
+  ShapeObjective objective(assembler, space, HausdorffTarget(target.cloud, so.hausdorff), so);
+  const Eigen::VectorXd m0 = Eigen::VectorXd::Constant(space.size(), scene.control_initial);
+  const Eigen::VectorXd lower = Eigen::VectorXd::Constant(space.size(), scene.control_lower);
+  const Eigen::VectorXd upper = Eigen::VectorXd::Constant(space.size(), scene.control_upper);
+  RunFiles files(out, objective, space);
+  nlohmann::json sum;
+  sum["scene"] = a.scene_file;
+  sum["target"] = target.description;
+  sum["target_points"] = target.cloud.size();
+  sum["nodes"] = mesh.num_nodes();
+  sum["controls"] = space.size();
+  sum["algorithm"] = to_string(to.optimizer.algorithm);
+  sum["particles"] = to_string(so.particles);
+  sum["volumes"] = to_string(so.volumes);
+  if (!a.quiet)
+    std::fprintf(stderr, "softhd optimise %s: %ld nodes, %ld controls, target %ld points (%s)\n",
+                 scene.name.c_str(), static_cast<long>(mesh.num_nodes()),
+                 static_cast<long>(space.size()), static_cast<long>(target.cloud.size()),
+                 target.description.c_str());
+
+  // From here on the directory always holds history.csv and summary.json; a resumed run
+  // keeps the earlier process's until it has new rows.
+  sum["status"] = "interrupted";  // until the run ends: a killed run leaves this
+  if (!a.resume || !fs::exists(out / "history.csv")) files.write_history();
+  if (!a.resume || !fs::exists(out / "summary.json")) files.write_summary(sum);
+
+  ShapeTrackingCallbacks cb;
+  cb.on_start = [&](const ShapeTrackingSummary& start) {
+    sum["rho_start"] = start.rho_start;
+    sum["floor_self"] = optional_json(start.floor_self);
+    sum["floor_matched"] = optional_json(start.floor_matched);
+    if (!a.quiet) print_start(start);
+    files.write_body(0, m0.cwiseMax(lower).cwiseMin(upper), objective.last_state().u);
+  };
+  cb.on_failure = [&](const std::string& report) {
+    if (!a.quiet)
+      std::fprintf(stderr, "  state solve failed (step rejected): %s\n", report.c_str());
+  };
+  cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd& m) {
+    files.add_row(it);
+    if (!a.quiet)
+      std::fprintf(stderr, "  %5d %12.6g %12.6g %10.4g %10.3g %7d %8.1f%s\n", it.iteration, it.J,
+                   it.rho, it.rho_over_floor, it.projected_gradient_norm, it.newton_iterations,
+                   it.seconds, it.replayed ? " (from the checkpoint)" : "");
+    // A replayed iteration's VTU was written by the process that made it.
+    if (vtu_due(a.vtu_every, it.iteration)) {
+      if (it.replayed)
+        files.list_body(it.iteration);
+      else
+        files.write_body(it.iteration, m, objective.last_state().u);
+    }
+    if (it.replayed) return;
+    files.write_history();
+    nlohmann::json now = sum;
+    now["iterations"] = it.iteration;
+    now["evaluations"] = it.evaluation;
+    now["J"] = it.J;
+    now["rho"] = it.rho;
+    now["seconds"] = it.seconds;
+    files.write_summary(now);
+  };
+
+  const ShapeTrackingSummary s =
+      track_shape(objective, lower, upper, m0, target.map_displacement, to, cb);
+  const HausdorffResult fields = files.write_body(s.iterations, s.control, s.displacement);
+  write_vtu_cloud((out / "target.vtu").string(), target.cloud, {{"d_tilde", fields.field_target}});
+  write_ply_cloud((out / "target.ply").string(), target.cloud);
+  write_ply_cloud((out / "body_final.ply").string(), objective.particles(s.displacement));
+  files.write_history();
+  fe::write_control_file((out / "control.csv").string(), space.positions(mesh), s.control);
+  sum["status"] = "finished";
+  add_final(s, sum);
+  files.write_summary(sum);
 #ifdef SOFTHD_PLOT_SCRIPT
   const std::string plot = std::string("/usr/bin/python3 ") + SOFTHD_PLOT_SCRIPT + " " +
                            out.string() + " >/dev/null 2>&1";
-  if (std::system(plot.c_str()) != 0 && !quiet)
+  if (std::system(plot.c_str()) != 0 && !a.quiet)
     std::fprintf(stderr, "  (convergence.png not drawn: needs python3-matplotlib)\n");
 #endif
-  if (!quiet) {
-    std::fprintf(stderr, "  %s after %d iterations, %.1f s\n", s.termination.c_str(), s.iterations,
-                 s.seconds);
-    std::fprintf(stderr, "  rho %.6g -> %.6g (%.3g x floor)", s.rho_start, s.rho_final,
-                 s.floor() ? s.rho_final / *s.floor() : std::nan(""));
-    if (s.shape_error_max)
-      std::fprintf(stderr, ", shape error max %.4g rms %.4g", *s.shape_error_max,
-                   *s.shape_error_rms);
-    std::fprintf(stderr, "\n  results in %s\n", out.string().c_str());
-  }
+  if (!a.quiet) print_end(s, out);
   if (a.json) std::cout << sum.dump(2) << '\n';
   return 0;
 }

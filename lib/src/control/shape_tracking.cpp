@@ -115,6 +115,25 @@ class Recorder {
   bool restored_ = false;
 };
 
+// The record of an accepted iteration from the evaluation that produced it.
+TrackingIteration record(const IterationRecord& rec, const ShapeEvaluation& last,
+                         const std::optional<double>& floor) {
+  TrackingIteration it;
+  it.iteration = rec.iteration;
+  it.evaluation = rec.evaluation;
+  it.J = last.J;
+  it.rho = last.rho;
+  it.A = last.A;
+  it.B = last.B;
+  it.rho_over_floor = floor ? last.rho / *floor : std::numeric_limits<double>::quiet_NaN();
+  it.projected_gradient_norm = rec.projected_gradient_norm;
+  it.newton_iterations = last.newton_iterations;
+  it.seconds_state = last.seconds_state;
+  it.seconds_distance = last.seconds_distance;
+  it.seconds_adjoint = last.seconds_adjoint;
+  return it;
+}
+
 // The final state (the best control's, re-solved from the nearest warm start) and the
 // summary's totals.
 void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimizerSummary& r,
@@ -231,19 +250,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   };
   const auto on_iteration = [&](const IterationRecord& rec, const Eigen::VectorXd& m) {
     if (error) return;
-    TrackingIteration it;
-    it.iteration = rec.iteration;
-    it.evaluation = rec.evaluation;
-    it.J = last.J;
-    it.rho = last.rho;
-    it.A = last.A;
-    it.B = last.B;
-    it.rho_over_floor = floor ? last.rho / *floor : std::numeric_limits<double>::quiet_NaN();
-    it.projected_gradient_norm = rec.projected_gradient_norm;
-    it.newton_iterations = last.newton_iterations;
-    it.seconds_state = last.seconds_state;
-    it.seconds_distance = last.seconds_distance;
-    it.seconds_adjoint = last.seconds_adjoint;
+    TrackingIteration it = record(rec, last, floor);
     it.seconds = recorder.seconds();
     it.replayed = last_replayed;
     s.history.push_back(it);
