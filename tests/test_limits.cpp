@@ -39,11 +39,13 @@ TEST(MeshSize, CountsMatchTheMeshAndDoNotOverflow) {
 }
 
 TEST(MeshSize, MeshesBeyondIntAreRefusedNotCrashed) {
-  for (auto [cells, order] : {std::pair{Eigen::Vector3i(65535, 65535, 1), 1},
-                              {Eigen::Vector3i(1290, 1290, 1290), 1},
-                              {Eigen::Vector3i(32767, 32767, 1), 2}}) {
+  for (const auto& c : {std::pair{Eigen::Vector3i(65535, 65535, 1), 1},
+                        {Eigen::Vector3i(1290, 1290, 1290), 1},
+                        {Eigen::Vector3i(32767, 32767, 1), 2}}) {
     expect_error<ResourceError>(
-        [&] { fe::make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), cells, order); },
+        [&] {
+          fe::make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), c.first, c.second);
+        },
         "more than the 2147483647 one run can index");
   }
 }

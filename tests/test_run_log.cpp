@@ -153,37 +153,39 @@ TEST_F(ResumeIsTheSameRun, ACheckpointOfAnotherProblemIsRefused) {
                                 "was written for another run: target differs");
 }
 
-// A log of three evaluations and a snapshot, for the format tests.
-std::string small_log(const std::string& path) {
-  RunFingerprint f{{"scene", "abc"}};
-  {
-    RunLogWriter w(path, f);
-    for (int k = 0; k < 3; ++k) {
-      LoggedEvaluation e;
-      e.x = Eigen::VectorXd::Constant(4, 0.1 * k + 1e-17);
-      e.gradient = k != 1;
-      e.result.ok = k != 2;
-      e.result.J = 1.0 / 3.0 + k;
-      e.result.gradient =
-          e.gradient && e.result.ok ? Eigen::VectorXd::Constant(4, -1.0 / 7.0) : Eigen::VectorXd();
-      e.result.failure = k == 2 ? "newton failed" : "";
-      e.seconds = 0.5 * k;
-      w.append(e);
-    }
-    RunSnapshot s;
-    s.evaluations = 3;
-    s.iterations = 1;
-    WarmStart ws;
-    ws.m = Eigen::VectorXd::Constant(4, 0.25);
-    ws.state.u = Eigen::VectorXd::LinSpaced(6, 0.0, 1.0);
-    ws.state.m_qp = Eigen::MatrixXd::Constant(2, 3, -0.5);
-    s.states.push_back(ws);
-    w.append(s);
-  }
+std::string read_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::ostringstream b;
   b << in.rdbuf();
   return b.str();
+}
+
+// A log of three evaluations and its states file, for the format tests; returns the log.
+std::string small_log(const std::string& path) {
+  RunFingerprint f{{"scene", "abc"}};
+  RunLogWriter w(path, f);
+  for (int k = 0; k < 3; ++k) {
+    LoggedEvaluation e;
+    e.x = Eigen::VectorXd::Constant(4, 0.1 * k + 1e-17);
+    e.gradient = k != 1;
+    e.result.ok = k != 2;
+    e.result.J = 1.0 / 3.0 + k;
+    e.result.gradient =
+        e.gradient && e.result.ok ? Eigen::VectorXd::Constant(4, -1.0 / 7.0) : Eigen::VectorXd();
+    e.result.failure = k == 2 ? "newton failed" : "";
+    e.seconds = 0.5 * k;
+    w.append(e);
+  }
+  RunSnapshot s;
+  s.evaluations = 3;
+  s.iterations = 1;
+  WarmStart ws;
+  ws.m = Eigen::VectorXd::Constant(4, 0.25);
+  ws.state.u = Eigen::VectorXd::LinSpaced(6, 0.0, 1.0);
+  ws.state.m_qp = Eigen::MatrixXd::Constant(2, 3, -0.5);
+  s.states.push_back(ws);
+  w.write_states(s);
+  return read_bytes(path);
 }
 
 TEST(RunLog, RoundTripsBitwise) {
@@ -199,33 +201,43 @@ TEST(RunLog, RoundTripsBitwise) {
     EXPECT_EQ(e.result.J, 1.0 / 3.0 + k);
     EXPECT_EQ(e.gradient, k != 1);
     EXPECT_EQ(e.result.ok, k != 2);
+    EXPECT_EQ(e.seconds, 0.5 * k);
   }
   EXPECT_EQ(log.evaluations[0].result.gradient, Eigen::VectorXd::Constant(4, -1.0 / 7.0));
   EXPECT_EQ(log.evaluations[2].result.failure, "newton failed");
   EXPECT_EQ(log.snapshot.states.at(0).state.m_qp, Eigen::MatrixXd::Constant(2, 3, -0.5));
+  EXPECT_EQ(log.snapshot.states.at(0).state.u, Eigen::VectorXd::LinSpaced(6, 0.0, 1.0));
 }
 
 TEST(RunLog, DropsATornTailAndRefusesCorruption) {
   const std::string path = temp_path("torn.bin");
   const std::string bytes = small_log(path);
-  // Cut inside the snapshot record: the evaluations after the last whole snapshot go too.
+  // Cut inside the last evaluation record: it is dropped (the run was killed writing it).
   const RunLog torn = parse_run_log(bytes.substr(0, bytes.size() - 5), "torn");
-  EXPECT_FALSE(torn.has_snapshot);
-  EXPECT_TRUE(torn.evaluations.empty());
+  EXPECT_EQ(torn.evaluations.size(), 2u);
+  // ... but then the states count more evaluations than the log has: refused.
+  std::uint64_t run_id = 0;
+  RunLog cut = torn;
+  RunSnapshot states = parse_run_states(read_bytes(path + ".states"), "s", &run_id);
+  expect_error<FileError>([&] { attach_states(cut, run_id, states, "s"); }, "do not match");
   // A flipped byte in a middle record is corruption, not a torn write.
   std::string bad = bytes;
   bad[40] ^= 0x10;
-  expect_error<FileError>([&] { parse_run_log(bad, "bad.bin"); }, "bad.bin");
+  expect_error<FileError>([&] { parse_run_log(bad, "bad.bin"); }, "bad.bin: corrupt record");
   expect_error<FileError>([&] { parse_run_log("not a log", "x.bin"); }, "not a softhd checkpoint");
   expect_error<FileError>([&] { read_run_log(::testing::TempDir()); }, "is a directory");
+  // States of another run (another run id) are refused.
+  RunLog other = parse_run_log(bytes, "log");
+  expect_error<FileError>([&] { attach_states(other, run_id + 1, states, "s"); },
+                          "belong to another run");
 }
 
-// A snapshot whose counts disagree with the log (e.g. 1e12 evaluations, or more iterations
-// than evaluations) is refused, checksum or not.
+// States whose counts are impossible (1e12 evaluations for a log of 3, more iterations than
+// evaluations, negative) are refused, checksum or not.
 TEST(RunLog, RefusesInconsistentCounts) {
   const std::string path = temp_path("counts.bin");
   for (auto [evaluations, iterations] :
-       {std::pair<std::int64_t, std::int64_t>{1000000000000, 1}, {3, 47}, {2, 1}, {3, -1}}) {
+       {std::pair<std::int64_t, std::int64_t>{1000000000000, 1}, {3, 47}, {-1, 0}, {3, -1}}) {
     RunLogWriter w(path, {{"scene", "abc"}});
     LoggedEvaluation e;
     e.x = Eigen::VectorXd::Ones(2);
@@ -233,8 +245,8 @@ TEST(RunLog, RefusesInconsistentCounts) {
     RunSnapshot s;
     s.evaluations = evaluations;
     s.iterations = iterations;
-    w.append(s);
-    expect_error<FileError>([&] { read_run_log(path); }, "do not match");
+    w.write_states(s);
+    expect_error<FileError>([&] { read_run_log(path); }, "evaluations");
   }
 }
 

@@ -1,9 +1,11 @@
 #include "softhd/control/run_log.hpp"
 
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 #include "softhd/error.hpp"
@@ -180,19 +182,21 @@ std::string exact_text(double value) {
   return text;
 }
 
-RunLog parse_run_log(const std::string& bytes, const std::string& source) {
-  if (bytes.compare(0, 8, kMagic, 8) != 0 || bytes.size() < 8)
-    throw FileError(source + ": not a softhd checkpoint (no SHDLOG01 header)");
-  RunLog log;
-  std::vector<LoggedEvaluation> pending;  // evaluations after the last snapshot
-  bool has_fingerprint = false;
+namespace {
+
+constexpr char kStatesMagic[9] = "SHDSTA01";
+constexpr std::size_t kFrame = 1 + 8 + 8;  // kind, length, checksum
+
+// Calls on_record(kind, decoder) for every whole record after the 8-byte magic. A torn
+// last record (the run was killed while writing it) ends the walk; any other bad checksum
+// is corruption.
+template <class F>
+void walk_records(const std::string& bytes, const std::string& source, F&& on_record) {
   std::size_t pos = 8;
-  constexpr std::size_t kFrame = 1 + 8 + 8;  // kind, length, checksum
   while (pos < bytes.size()) {
     std::uint64_t length = 0;
-    const bool complete = bytes.size() - pos >= kFrame &&
-                          (std::memcpy(&length, bytes.data() + pos + 1, 8), true) &&
-                          length <= bytes.size() - pos - kFrame;
+    if (bytes.size() - pos >= kFrame) std::memcpy(&length, bytes.data() + pos + 1, 8);
+    const bool complete = bytes.size() - pos >= kFrame && length <= bytes.size() - pos - kFrame;
     std::uint64_t stored = 0, sum = 0;
     if (complete) {
       std::memcpy(&stored, bytes.data() + pos + 9 + length, 8);
@@ -200,44 +204,17 @@ RunLog parse_run_log(const std::string& bytes, const std::string& source) {
     }
     const std::size_t next = complete ? pos + kFrame + length : bytes.size();
     if (!complete || stored != sum) {
-      if (next == bytes.size()) break;  // a torn last record: the run was killed writing it
+      if (next == bytes.size()) return;
       throw FileError(source + ": corrupt record at byte " + std::to_string(pos));
     }
-    const char kind = bytes[pos];
     Decoder d(bytes, pos + 9, pos + 9 + length, source);
-    if (!has_fingerprint && kind != 'H') d.fail("the fingerprint record must come first");
-    if (kind == 'H') {
-      if (has_fingerprint) d.fail("a second fingerprint record");
-      const std::uint64_t n = d.count(16);
-      for (std::uint64_t k = 0; k < n; ++k) {
-        std::string key = d.string();
-        log.fingerprint[key] = d.string();
-      }
-      has_fingerprint = true;
-    } else if (kind == 'E') {
-      pending.push_back(decode_evaluation(d));
-    } else if (kind == 'S') {
-      RunSnapshot s = decode_snapshot(d);
-      const auto total = static_cast<std::int64_t>(log.evaluations.size() + pending.size());
-      if (s.evaluations != total || s.iterations < 0 || s.iterations > s.evaluations)
-        d.fail("a snapshot's counts (" + std::to_string(s.evaluations) + " evaluations, " +
-               std::to_string(s.iterations) + " iterations) do not match the " +
-               std::to_string(total) + " evaluations logged before it");
-      for (LoggedEvaluation& e : pending) log.evaluations.push_back(std::move(e));
-      pending.clear();
-      log.snapshot = std::move(s);
-      log.has_snapshot = true;
-    } else {
-      d.fail("unknown record kind");
-    }
+    on_record(bytes[pos], d);
     d.finish();
     pos = next;
   }
-  if (!has_fingerprint) throw FileError(source + ": the checkpoint has no fingerprint record");
-  return log;
 }
 
-RunLog read_run_log(const std::string& path) {
+std::string read_bytes(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw FileError(path + ": is a directory, not a checkpoint");
@@ -246,7 +223,83 @@ RunLog read_run_log(const std::string& path) {
   std::ostringstream s;
   s << in.rdbuf();
   if (in.bad()) throw FileError(path + ": read error");
-  return parse_run_log(s.str(), path);
+  return s.str();
+}
+
+std::string states_path(const std::string& path) { return path + ".states"; }
+
+}  // namespace
+
+RunLog parse_run_log(const std::string& bytes, const std::string& source) {
+  if (bytes.size() < 8 || bytes.compare(0, 8, kMagic, 8) != 0)
+    throw FileError(source + ": not a softhd checkpoint (no SHDLOG01 header)");
+  RunLog log;
+  bool has_fingerprint = false;
+  walk_records(bytes, source, [&](char kind, Decoder& d) {
+    if (!has_fingerprint && kind != 'H') d.fail("the fingerprint record must come first");
+    if (kind == 'H') {
+      if (has_fingerprint) d.fail("a second fingerprint record");
+      log.run_id = d.get<std::uint64_t>();
+      const std::uint64_t n = d.count(16);
+      for (std::uint64_t k = 0; k < n; ++k) {
+        std::string key = d.string();
+        log.fingerprint[key] = d.string();
+      }
+      has_fingerprint = true;
+    } else if (kind == 'E') {
+      log.evaluations.push_back(decode_evaluation(d));
+    } else {
+      d.fail("unknown record kind");
+    }
+  });
+  if (!has_fingerprint) throw FileError(source + ": the checkpoint has no fingerprint record");
+  return log;
+}
+
+RunSnapshot parse_run_states(const std::string& bytes, const std::string& source,
+                             std::uint64_t* run_id) {
+  if (bytes.size() < 8 || bytes.compare(0, 8, kStatesMagic, 8) != 0)
+    throw FileError(source + ": not a softhd checkpoint's states (no SHDSTA01 header)");
+  RunSnapshot s;
+  int records = 0;
+  walk_records(bytes, source, [&](char kind, Decoder& d) {
+    if (kind != 'S' || records++ > 0) d.fail("expected one states record");
+    *run_id = d.get<std::uint64_t>();
+    s = decode_snapshot(d);
+  });
+  if (records != 1) throw FileError(source + ": incomplete states record");
+  if (s.evaluations < 0 || s.iterations < 0 || s.iterations > s.evaluations)
+    throw FileError(source + ": inconsistent counts (" + std::to_string(s.evaluations) +
+                    " evaluations, " + std::to_string(s.iterations) + " iterations)");
+  return s;
+}
+
+void attach_states(RunLog& log, std::uint64_t run_id, RunSnapshot states,
+                   const std::string& source) {
+  if (run_id != log.run_id)
+    throw FileError(source + ": the states belong to another run than the log");
+  if (states.evaluations > static_cast<std::int64_t>(log.evaluations.size()))
+    throw FileError(source + ": the states' counts (" + std::to_string(states.evaluations) +
+                    " evaluations) do not match the " + std::to_string(log.evaluations.size()) +
+                    " evaluations logged");
+  // Evaluations after the states were written are made again on resume.
+  log.evaluations.resize(static_cast<std::size_t>(states.evaluations));
+  log.snapshot = std::move(states);
+  log.has_snapshot = true;
+}
+
+RunLog read_run_log(const std::string& path) {
+  RunLog log = parse_run_log(read_bytes(path), path);
+  const std::string states = states_path(path);
+  std::error_code ec;
+  if (std::filesystem::exists(states, ec)) {
+    std::uint64_t run_id = 0;
+    RunSnapshot s = parse_run_states(read_bytes(states), states, &run_id);
+    attach_states(log, run_id, std::move(s), states);
+  } else {
+    log.evaluations.clear();  // killed before its first iteration: nothing to replay
+  }
+  return log;
 }
 
 void check_fingerprint(const RunFingerprint& stored, const RunFingerprint& current,
@@ -268,17 +321,27 @@ void check_fingerprint(const RunFingerprint& stored, const RunFingerprint& curre
 RunLogWriter::RunLogWriter(const std::string& path, const RunFingerprint& fingerprint,
                            const RunLog* replayed)
     : path_(path) {
+  if (replayed) {
+    run_id_ = replayed->run_id;
+  } else {
+    std::random_device device;
+    run_id_ =
+        (std::uint64_t(device()) << 32) ^ device() ^
+        static_cast<std::uint64_t>(std::chrono::steady_clock::now().time_since_epoch().count());
+    std::error_code ec;
+    std::filesystem::remove(states_path(path), ec);  // an earlier run's
+  }
   const std::string tmp = path + ".tmp";
   file_ = std::fopen(tmp.c_str(), "wb");
   if (!file_)
     throw FileError(path + ": cannot write the checkpoint (" + std::strerror(errno) + ")");
   if (std::fwrite(kMagic, 1, 8, file_) != 8)
     throw FileError(path + ": cannot write the checkpoint");
-  write_record('H', encode_fingerprint(fingerprint));
-  if (replayed) {
+  Encoder h;
+  h.put<std::uint64_t>(run_id_);
+  write_record('H', h.out + encode_fingerprint(fingerprint));
+  if (replayed)
     for (const LoggedEvaluation& e : replayed->evaluations) append(e);
-    if (replayed->has_snapshot) append(replayed->snapshot);
-  }
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
   if (ec) throw FileError(path + ": cannot write the checkpoint (" + ec.message() + ")");
@@ -291,8 +354,26 @@ RunLogWriter::~RunLogWriter() {
 void RunLogWriter::append(const LoggedEvaluation& evaluation) {
   write_record('E', encode_evaluation(evaluation));
 }
-void RunLogWriter::append(const RunSnapshot& snapshot) {
-  write_record('S', encode_snapshot(snapshot));
+
+void RunLogWriter::write_states(const RunSnapshot& snapshot) {
+  Encoder e;
+  e.put<std::uint64_t>(run_id_);
+  const std::string payload = e.out + encode_snapshot(snapshot);
+  Encoder r;
+  r.out.assign(kStatesMagic, 8);
+  r.put<char>('S');
+  r.put<std::uint64_t>(payload.size());
+  r.out += payload;
+  r.put<std::uint64_t>(fnv1a(r.out.data() + 8, r.out.size() - 8));
+  const std::string path = states_path(path_), tmp = path + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out.write(r.out.data(), static_cast<std::streamsize>(r.out.size()));
+    if (!out) throw FileError(path + ": cannot write the checkpoint's states");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) throw FileError(path + ": cannot write the checkpoint's states (" + ec.message() + ")");
 }
 
 void RunLogWriter::write_record(char kind, const std::string& payload) {

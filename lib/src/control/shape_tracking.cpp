@@ -52,8 +52,6 @@ class Recorder {
     if (options.resume) {
       log_ = read_run_log(options.checkpoint);
       check_fingerprint(log_.fingerprint, fingerprint, options.checkpoint);
-      // Evaluations after the last snapshot have no warm-start states: made again.
-      if (!log_.has_snapshot) log_.evaluations.clear();
     }
     writer_ = std::make_unique<RunLogWriter>(options.checkpoint, fingerprint, &log_);
   }
@@ -95,7 +93,7 @@ class Recorder {
     s.evaluations = static_cast<std::int64_t>(next_);
     s.iterations = iterations;
     s.states.assign(objective_.warm_starts().begin(), objective_.warm_starts().end());
-    writer_->append(s);
+    writer_->write_states(s);
   }
   /// The warm-start states the log ended with, once replay is over.
   void restore() {

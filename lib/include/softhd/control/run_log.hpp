@@ -1,21 +1,22 @@
 #pragma once
 /// \file run_log.hpp
 /// The checkpoint of a shape-tracking run: an append-only binary log of every objective
-/// evaluation the optimiser asked for (x, J, ρ̃, A, B, gradient, timings — bitwise), with
-/// a fingerprint of the problem up front and, at each accepted iteration, a snapshot of
-/// the objective's warm-start states.
+/// evaluation the optimiser asked for (x, J, ρ̃, A, B, gradient, timings — bitwise) with a
+/// fingerprint of the problem up front, and beside it (file `<log>.states`, rewritten
+/// atomically at each accepted iteration) the objective's warm-start states and the number
+/// of evaluations they follow.
 ///
 /// A resumed run starts the optimiser again from the beginning and serves its evaluations
-/// from the log (checking that each x matches bitwise) until the log runs out; then the
-/// warm-start states are restored and real evaluations continue. For a deterministic
+/// from the log (checking that each x matches bitwise) until it reaches that number; then
+/// the warm-start states are restored and real evaluations continue. For a deterministic
 /// optimiser and objective the resumed run is therefore the uninterrupted run, whatever
 /// state the optimiser keeps internally.
 ///
-/// File layout: the 8 bytes "SHDLOG01", then records [kind u8][payload length u64]
-/// [payload][FNV-1a 64 of kind, length and payload], little-endian doubles stored bitwise.
-/// Kinds: 'H' fingerprint text (first record, exactly once), 'E' one evaluation, 'S' a
-/// warm-start snapshot. A torn last record (a run killed while writing it) is dropped;
-/// anything else malformed is refused.
+/// Files: 8 magic bytes ("SHDLOG01", "SHDSTA01"), then records [kind u8][payload length
+/// u64][payload][FNV-1a 64 of kind, length and payload], little-endian doubles stored
+/// bitwise. Log kinds: 'H' run id and fingerprint (first, once), 'E' one evaluation; the
+/// states file holds one 'S' record (run id, counts, states). A torn last log record (a
+/// run killed while writing it) is dropped; anything else malformed is refused.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -52,18 +53,27 @@ struct RunSnapshot {
   std::vector<WarmStart> states;
 };
 
-/// A checkpoint as read back: the evaluations up to the last snapshot, and that snapshot.
+/// A checkpoint as read back: the evaluations the states follow, and the states.
 struct RunLog {
   RunFingerprint fingerprint;
+  std::uint64_t run_id = 0;  ///< ties the states file to its log
   std::vector<LoggedEvaluation> evaluations;
   RunSnapshot snapshot;
   bool has_snapshot = false;
 };
 
-/// Parses a log's bytes; `source` names it in errors. Throws FileError (naming the byte
-/// offset) for anything but a torn last record.
+/// Parses a log's bytes (every whole evaluation record, no states); `source` names it in
+/// errors. Throws FileError (naming the byte offset) for anything but a torn last record.
 RunLog parse_run_log(const std::string& bytes, const std::string& source);
-/// Reads a log file. Throws FileError (also for a directory or an unreadable file).
+/// Parses a states file's bytes; sets *run_id. Throws FileError.
+RunSnapshot parse_run_states(const std::string& bytes, const std::string& source,
+                             std::uint64_t* run_id);
+/// Keeps the log's evaluations the states follow and attaches the states. Throws FileError
+/// if they belong to another run or count more evaluations than the log holds.
+void attach_states(RunLog& log, std::uint64_t run_id, RunSnapshot states,
+                   const std::string& source);
+/// Reads a log and its states file (without one, nothing is replayed). Throws FileError
+/// (also for a directory or an unreadable file).
 RunLog read_run_log(const std::string& path);
 
 /// Throws InvalidArgument naming the first key whose value differs (or that only one of
@@ -76,8 +86,10 @@ void check_fingerprint(const RunFingerprint& stored, const RunFingerprint& curre
 class RunLogWriter {
  public:
   /// Creates (truncates) `path` and writes the fingerprint, and if `replayed` is given the
-  /// evaluations and snapshot of an earlier log (written to a temporary file and renamed,
-  /// so the old log survives until the new one is complete). Throws FileError.
+  /// evaluations of an earlier log, keeping its run id and states file (written to a
+  /// temporary file and renamed, so the old log survives until the new one is complete).
+  /// Without `replayed` a new run id is drawn and an old states file removed.
+  /// Throws FileError.
   RunLogWriter(const std::string& path, const RunFingerprint& fingerprint,
                const RunLog* replayed = nullptr);
   ~RunLogWriter();
@@ -85,11 +97,13 @@ class RunLogWriter {
   RunLogWriter& operator=(const RunLogWriter&) = delete;
 
   void append(const LoggedEvaluation& evaluation);
-  void append(const RunSnapshot& snapshot);
+  /// Rewrites `<path>.states` atomically.
+  void write_states(const RunSnapshot& snapshot);
 
  private:
   void write_record(char kind, const std::string& payload);
   std::string path_;
+  std::uint64_t run_id_ = 0;
   std::FILE* file_ = nullptr;
 };
 
