@@ -203,7 +203,8 @@ int forward(const Args& args) {
   }
   NewtonOptions options;
   options.verbose = args.verbose;
-  if (!args.linear_solver.empty()) options.linear_solver = parse_linear_solver(args.linear_solver);
+  if (!args.linear_solver.empty())
+    options.tangent.linear_solver = parse_linear_solver(args.linear_solver);
   NewtonSolver newton(assembler, options);
   const Eigen::MatrixXd m_qp = control.to_quadrature(m);
   State state = start_state(scene, assembler, m_qp, args, args.coarse_levels, options);

@@ -107,7 +107,7 @@ int newton(const std::string& name, const std::string& solver) {
   const Assembler A = s.make_assembler();
   const ControlSpace c(A.mesh(), A.geometry(), s.control_kind);
   NewtonOptions o;
-  if (!solver.empty()) o.linear_solver = parse_linear_solver(solver);
+  if (!solver.empty()) o.tangent.linear_solver = parse_linear_solver(solver);
   NewtonSolver newton(A, o);
   // bending: the linear-through-thickness bend; torsion: 2 % of the lower bound on the
   // top half, which bends and (through the oblique material direction) twists the beam.
@@ -119,7 +119,7 @@ int newton(const std::string& name, const std::string& solver) {
     m = (P.col(2).array() > 0.5 * s.upper[2]).cast<double>() * 0.02 * s.control_lower;
   }
   std::printf("scene=%s,dofs=%ld,solver=%s\n", name.c_str(), static_cast<long>(A.dofs().num_free),
-              to_string(o.linear_solver).c_str());
+              to_string(o.tangent.linear_solver).c_str());
   State st = rest_state(A);
   const NewtonSummary cold = newton.solve(c.to_quadrature(m), &st);
   print_summary("cold", cold);
@@ -130,7 +130,7 @@ int newton(const std::string& name, const std::string& solver) {
   auto t0 = Clock::now();
   Eigen::VectorXd g = Eigen::VectorXd::Zero(A.dofs().num_dofs);
   for (int n : A.mesh().face("x1")) g.segment(3 * n, 3) = 2.0 * st.u.segment(3 * n, 3);
-  const Eigen::VectorXd lambda = solve_adjoint(A, newton.converged_factorization(), g);
+  const Eigen::VectorXd lambda = solve_adjoint(A, newton, g);
   const Eigen::VectorXd grad = control_gradient(A, c, st.u, lambda);
   const double t_adj = since(t0);
   std::printf("adjoint_s=%.4f,fraction_of_cold_solve=%.4f,|grad|=%.4e\n", t_adj,

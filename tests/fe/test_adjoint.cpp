@@ -61,7 +61,7 @@ TEST(Adjoint, TaylorTestSecondOrder) {
     ASSERT_TRUE(newton.solve(c.to_quadrature(m), &s0).converged());
     Eigen::VectorXd g_u, g_m;
     const double J0 = F.value(s0.u, m, &g_u);
-    const Eigen::VectorXd lambda = solve_adjoint(A, newton.converged_factorization(), g_u);
+    const Eigen::VectorXd lambda = solve_adjoint(A, newton, g_u);
     c.regularisation(m, F.M, F.eps, &g_m);
     const Eigen::VectorXd grad = g_m + control_gradient(A, c, s0.u, lambda);
     const double slope = grad.dot(dm);
@@ -84,10 +84,11 @@ TEST(Adjoint, TaylorTestSecondOrder) {
   }
 }
 
-TEST(Adjoint, MissingFactorizationIsAnError) {
+TEST(Adjoint, NoConvergedStateIsAnError) {
   const Assembler A(fe_test::box(3, 1, {1.0, 1.0, 1.0}, {1, 1, 1}), fe_test::mooney_rivlin(),
                     Eigen::Vector3d::UnitX(), {{"x0", {}}});
-  EXPECT_THROW(solve_adjoint(A, nullptr, Eigen::VectorXd::Zero(A.dofs().num_dofs)),
+  NewtonSolver newton(A);
+  EXPECT_THROW(solve_adjoint(A, newton, Eigen::VectorXd::Zero(A.dofs().num_dofs)),
                softhd::InvalidArgument);
 }
 

@@ -33,4 +33,11 @@ class ResourceError : public Error {
   using Error::Error;
 };
 
+/// A numerical operation that cannot be carried out on valid input (e.g. a solve with a
+/// tangent that is not positive definite).
+class NumericalError : public Error {
+ public:
+  using Error::Error;
+};
+
 }  // namespace softhd

@@ -134,6 +134,25 @@ LoggedEvaluation decode_evaluation(Decoder& d) {
   return ev;
 }
 
+void encode_state(Encoder& e, const fe::State& state) {
+  e.put_vector(state.u.data(), static_cast<std::uint64_t>(state.u.size()));
+  e.put<std::uint64_t>(static_cast<std::uint64_t>(state.m_qp.rows()));
+  e.put_vector(state.m_qp.data(), static_cast<std::uint64_t>(state.m_qp.size()));
+}
+
+fe::State decode_state(Decoder& d) {
+  fe::State state;
+  state.u = d.vector();
+  const auto rows = d.get<std::uint64_t>();
+  const Eigen::VectorXd qp = d.vector();
+  if (rows == 0 ? qp.size() != 0 : qp.size() % rows != 0)
+    d.fail("a warm-start state has an inconsistent shape");
+  state.m_qp = Eigen::Map<const Eigen::MatrixXd>(qp.data(), static_cast<Eigen::Index>(rows),
+                                                 rows ? qp.size() / rows : 0);
+  if (!state.u.allFinite() || !state.m_qp.allFinite()) d.fail("a state holds non-finite values");
+  return state;
+}
+
 std::string encode_snapshot(const RunSnapshot& s) {
   Encoder e;
   e.put<std::int64_t>(s.evaluations);
@@ -141,10 +160,9 @@ std::string encode_snapshot(const RunSnapshot& s) {
   e.put<std::uint64_t>(s.states.size());
   for (const WarmStart& w : s.states) {
     e.put_vector(w.m.data(), static_cast<std::uint64_t>(w.m.size()));
-    e.put_vector(w.state.u.data(), static_cast<std::uint64_t>(w.state.u.size()));
-    e.put<std::uint64_t>(static_cast<std::uint64_t>(w.state.m_qp.rows()));
-    e.put_vector(w.state.m_qp.data(), static_cast<std::uint64_t>(w.state.m_qp.size()));
+    encode_state(e, w.state);
   }
+  encode_state(e, s.best);
   return e.out;
 }
 
@@ -152,19 +170,14 @@ RunSnapshot decode_snapshot(Decoder& d) {
   RunSnapshot s;
   s.evaluations = d.get<std::int64_t>();
   s.iterations = d.get<std::int64_t>();
-  const std::uint64_t n = d.count(3 * sizeof(std::uint64_t));
+  const std::uint64_t n = d.count(4 * sizeof(std::uint64_t));
   for (std::uint64_t k = 0; k < n; ++k) {
     WarmStart w;
     w.m = d.vector();
-    w.state.u = d.vector();
-    const auto rows = d.get<std::uint64_t>();
-    const Eigen::VectorXd qp = d.vector();
-    if (rows == 0 ? qp.size() != 0 : qp.size() % rows != 0)
-      d.fail("a warm-start state has an inconsistent shape");
-    w.state.m_qp = Eigen::Map<const Eigen::MatrixXd>(qp.data(), static_cast<Eigen::Index>(rows),
-                                                     rows ? qp.size() / rows : 0);
+    w.state = decode_state(d);
     s.states.push_back(std::move(w));
   }
+  s.best = decode_state(d);
   return s;
 }
 

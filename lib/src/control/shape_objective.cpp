@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <optional>
 
 #include "softhd/error.hpp"
 #include "softhd/fe/adjoint.hpp"
@@ -41,7 +42,7 @@ struct ShapeObjective::Impl {
         control(c),
         target(std::move(t)),
         options(std::move(o)),
-        newton(a, options.newton) {
+        newton(std::in_place, a, options.newton) {
     const fe::Mesh& mesh = a.mesh();
     dim = mesh.dim;
     // Clamped nodes (no free dof) are not differentiated.
@@ -58,7 +59,7 @@ struct ShapeObjective::Impl {
   const fe::ControlSpace& control;
   HausdorffTarget target;
   ShapeObjectiveOptions options;
-  fe::NewtonSolver newton;
+  std::optional<fe::NewtonSolver> newton;  // optional: reset_solver() makes a new one
   int dim = 3;
   Eigen::Array<bool, Eigen::Dynamic, 1> differentiate;
   std::deque<WarmStart> cache;  // most recent first
@@ -120,11 +121,20 @@ ShapeObjective::~ShapeObjective() = default;
 
 PointCloud ShapeObjective::particles(const Eigen::VectorXd& u) const { return impl_->particles(u); }
 const fe::State& ShapeObjective::last_state() const { return impl_->cache.front().state; }
+void ShapeObjective::remember_state(const Eigen::VectorXd& m, const fe::State& state) {
+  impl_->cache.push_front({m, state});
+  while (static_cast<int>(impl_->cache.size()) > impl_->options.warm_start_states)
+    impl_->cache.pop_back();
+}
 const HausdorffTarget& ShapeObjective::target() const { return impl_->target; }
 const ShapeObjectiveOptions& ShapeObjective::options() const { return impl_->options; }
 const fe::Assembler& ShapeObjective::assembler() const { return impl_->assembler; }
 
 const std::deque<WarmStart>& ShapeObjective::warm_starts() const { return impl_->cache; }
+
+void ShapeObjective::reset_solver() {
+  impl_->newton.emplace(impl_->assembler, impl_->options.newton);
+}
 
 void ShapeObjective::restore_warm_starts(const std::vector<WarmStart>& states) {
   Impl& d = *impl_;
@@ -158,15 +168,14 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
   // State: warm start from the cached state with the nearest control.
   auto t0 = std::chrono::steady_clock::now();
   fe::State state = d.nearest_state(m);
-  const fe::NewtonSummary ns = d.newton.solve(d.control.to_quadrature(m), &state);
+  const fe::NewtonSummary ns = d.newton->solve(d.control.to_quadrature(m), &state);
   ev.newton_iterations = ns.newton_iterations;
   ev.seconds_state = seconds_since(t0);
   if (!ns.converged()) {
     ev.failure = ns.BriefReport();
     return ev;
   }
-  d.cache.push_front({m, state});
-  while (static_cast<int>(d.cache.size()) > d.options.warm_start_states) d.cache.pop_back();
+  remember_state(m, state);
 
   // Distance (and its gradient w.r.t. the particles).
   t0 = std::chrono::steady_clock::now();
@@ -190,8 +199,7 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
     // Adjoint: K λ = ∂ρ̃/∂u, then dJ/dm = ∂J_reg/∂m + ∫ M_k (F a₀)·(∇λ a₀) dX.
     t0 = std::chrono::steady_clock::now();
     const Eigen::VectorXd g = d.displacement_gradient(state.u, r);
-    const Eigen::VectorXd lambda =
-        fe::solve_adjoint(d.assembler, d.newton.converged_factorization(), g);
+    const Eigen::VectorXd lambda = fe::solve_adjoint(d.assembler, *d.newton, g);
     ev.gradient = reg_gradient + fe::control_gradient(d.assembler, d.control, state.u, lambda);
     ev.seconds_adjoint = seconds_since(t0);
   }

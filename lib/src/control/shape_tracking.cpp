@@ -66,7 +66,7 @@ class Recorder {
   }
 
   /// The evaluation at m: from the log, or made (and logged).
-  ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient) {
+  ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient, fe::State* best) {
     if (replaying()) {
       const LoggedEvaluation& e = log_.evaluations[next_];
       if (e.x.size() != m.size() || std::memcmp(e.x.data(), m.data(), m.size() * 8) != 0 ||
@@ -79,7 +79,7 @@ class Recorder {
       t_base_ = Clock::now();
       return e.result;
     }
-    restore();
+    restore(best);
     ++next_;
     LoggedEvaluation e{m, gradient, objective_.evaluate(m, gradient), 0.0};
     e.seconds = seconds();
@@ -87,18 +87,28 @@ class Recorder {
     return e.result;
   }
   /// After an accepted iteration: the warm-start states, unless still replaying.
-  void snapshot(int iterations) {
+  void snapshot(int iterations, const fe::State& best) {
     if (!writer_ || next_ <= log_.evaluations.size()) return;
     RunSnapshot s;
     s.evaluations = static_cast<std::int64_t>(next_);
     s.iterations = iterations;
     s.states.assign(objective_.warm_starts().begin(), objective_.warm_starts().end());
+    s.best = best;
     writer_->write_states(s);
+    // The solver's kept factorisations are not in the checkpoint: a resumed run starts
+    // here with a new solver, so the uninterrupted run does too.
+    objective_.reset_solver();
   }
-  /// The warm-start states the log ended with, once replay is over.
-  void restore() {
+  /// The warm-start states and the best state the log ended with, once replay is over.
+  void restore(fe::State* best) {
     if (restored_ || !log_.has_snapshot || log_.evaluations.empty()) return;
     objective_.restore_warm_starts(log_.snapshot.states);
+    const fe::State& b = log_.snapshot.best;
+    if (b.u.size() != best->u.size() || b.m_qp.rows() != best->m_qp.rows() ||
+        b.m_qp.cols() != best->m_qp.cols())
+      throw InvalidArgument("the checkpoint's best state does not fit this problem");
+    *best = b;
+    objective_.reset_solver();  // as the uninterrupted run did at its snapshot
     restored_ = true;
   }
 
@@ -135,8 +145,12 @@ TrackingIteration record(const IterationRecord& rec, const ShapeEvaluation& last
 // The final state (the best control's, re-solved from the nearest warm start) and the
 // summary's totals.
 void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimizerSummary& r,
-            const std::optional<Eigen::VectorXd>& map_displacement, ShapeTrackingSummary* s) {
-  recorder.restore();  // a run resumed after its end: the final solve starts as it did
+            const std::optional<Eigen::VectorXd>& map_displacement, fe::State* best_state,
+            ShapeTrackingSummary* s) {
+  recorder.restore(best_state);  // a run resumed after its end: the final solve as it was
+  // The best control's state, evaluated again from its own state (Newton stops at once
+  // there, so the final ρ̃ is the one the optimiser saw).
+  objective.remember_state(r.x, *best_state);
   const ShapeEvaluation final_eval = objective.evaluate(r.x, false);
   if (!final_eval.ok)
     throw Error("the state solve at the best control failed: " + final_eval.failure);
@@ -223,13 +237,14 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   // The objective for the optimiser, remembering the last evaluation for the records. An
   // exception inside it would be swallowed by NLopt: kept and rethrown after minimise.
   ShapeEvaluation last;
+  fe::State best_state = objective.last_state();  // the state of the best control so far
   bool last_replayed = false;
   std::exception_ptr error;
   const BoundedObjective f = [&](const Eigen::VectorXd& m, double& value, Eigen::VectorXd* g) {
     if (error) return false;
     try {
       last_replayed = recorder.replaying();
-      last = recorder.evaluate(m, g != nullptr);
+      last = recorder.evaluate(m, g != nullptr, &best_state);
     } catch (...) {
       error = std::current_exception();
       return false;
@@ -248,6 +263,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   };
   const auto on_iteration = [&](const IterationRecord& rec, const Eigen::VectorXd& m) {
     if (error) return;
+    if (!last_replayed) best_state = objective.last_state();  // else restored from the log
     TrackingIteration it = record(rec, last, floor);
     it.seconds = recorder.seconds();
     it.replayed = last_replayed;
@@ -255,7 +271,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     try {
       // The snapshot after the callback: an iteration in the log had its outputs written.
       if (callbacks.on_iteration) callbacks.on_iteration(it, m);
-      recorder.snapshot(rec.iteration);
+      recorder.snapshot(rec.iteration, best_state);
     } catch (...) {
       error = std::current_exception();
     }
@@ -265,7 +281,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     opt.max_seconds = std::max(1e-9, opt.max_seconds - recorder.logged_seconds());
   const BoundedOptimizerSummary r = minimise(f, m0, lower, upper, opt, on_iteration);
   if (error) std::rethrow_exception(error);
-  finish(objective, recorder, r, map_displacement, &s);
+  finish(objective, recorder, r, map_displacement, &best_state, &s);
   return s;
 }
 

@@ -4,20 +4,18 @@
 
 namespace softhd::fe {
 
-Eigen::VectorXd solve_adjoint(const Assembler& assembler, const LinearSolver* factorization,
+Eigen::VectorXd solve_adjoint(const Assembler& assembler, NewtonSolver& newton,
                               const Eigen::VectorXd& g) {
   const DofMap& dofs = assembler.dofs();
   if (g.size() != dofs.num_dofs) {
     throw InvalidArgument("adjoint: g must have " + std::to_string(dofs.num_dofs) + " entries");
   }
   if (dofs.num_free == 0) return Eigen::VectorXd::Zero(dofs.num_dofs);
-  if (!factorization) {
-    throw InvalidArgument(
-        "adjoint: no factorisation of a converged tangent (the state solve failed or "
-        "factorize_converged_tangent is off)");
+  if (!newton.converged()) {
+    throw InvalidArgument("adjoint: the last state solve did not converge");
   }
-  // K λ = g on the free dofs (K symmetric).
-  return dofs.expand(factorization->solve(dofs.restrict(g)));
+  // K λ = g on the free dofs (K symmetric), K the tangent at the converged state.
+  return dofs.expand(newton.solve_converged_tangent(dofs.restrict(g)));
 }
 
 Eigen::VectorXd control_gradient(const Assembler& assembler, const ControlSpace& control,

@@ -2,6 +2,9 @@
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include "softhd/error.hpp"
 
@@ -28,6 +31,29 @@ LinearSolverType parse_linear_solver(const std::string& name) {
   }
   throw InvalidArgument("linear solver must be one of eigen-llt, eigen-ldlt, cholmod; got \"" +
                         name + "\"");
+}
+
+double LinearSolver::factorize_shifted(const Sparse& K, bool allow_shift, int* attempts) {
+  double dmax = 0.0;
+  for (int j = 0; j < K.outerSize(); ++j) dmax = std::max(dmax, std::abs(K.coeff(j, j)));
+  double shift = last_shift_ > 0.0 ? 0.1 * last_shift_ : 0.0;
+  if (shift < 1e-8 * dmax || !allow_shift) shift = 0.0;
+  bool ok = false;
+  int count = 0;
+  for (int attempt = 0; attempt <= (allow_shift ? 20 : 0) && !ok; ++attempt) {
+    if (attempt > 0) shift = shift > 0.0 ? 10.0 * shift : 1e-8 * dmax;
+    ++count;
+    if (shift == 0.0) {
+      ok = factorize(K);
+    } else {
+      shifted_ = K;  // K + μ I on the stored lower triangle
+      for (int j = 0; j < shifted_.outerSize(); ++j) shifted_.coeffRef(j, j) += shift;
+      ok = factorize(shifted_);
+    }
+  }
+  if (attempts) *attempts = count;
+  last_shift_ = ok ? shift : 0.0;
+  return ok ? shift : std::numeric_limits<double>::infinity();
 }
 
 namespace {

@@ -7,6 +7,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "line_search.hpp"
 #include "softhd/error.hpp"
 
 namespace softhd::fe {
@@ -39,6 +40,12 @@ bool NewtonOptions::IsValid(std::string* error) const {
     return fail("min_load_increment must be in (0, initial_load_increment]");
   if (max_load_steps < 1) return fail("max_load_steps must be >= 1");
   if (max_total_iterations < 1) return fail("max_total_iterations must be >= 1");
+  if (!(forcing > 0.0 && forcing < 1.0)) return fail("forcing must be in (0, 1)");
+  if (!(adjoint_tolerance > 0.0 && adjoint_tolerance < 1.0))
+    return fail("adjoint_tolerance must be in (0, 1)");
+  if (tangent.max_krylov_iterations < 1) return fail("tangent.max_krylov_iterations must be >= 1");
+  if (tangent.refactor_after_iterations < 1)
+    return fail("tangent.refactor_after_iterations must be >= 1");
   return true;
 }
 
@@ -60,20 +67,24 @@ std::string NewtonSummary::BriefReport() const {
   char buf[320];
   std::snprintf(buf, sizeof buf,
                 "Newton %s: %d iterations, %d load steps (%d failed), load %.4g, |R| = %.3e "
-                "(ref %.3e), energy %.8e, %.3f s (assembly %.3f, factorisation %.3f, solve %.3f)",
+                "(ref %.3e), energy %.8e, %.3f s (%d assemblies %.3f s, %d factorisations "
+                "%.3f s, %d PCG iterations + solves %.3f s)",
                 to_string(status).c_str(), newton_iterations, load_steps, failed_load_steps,
-                final_load, residual, residual_reference, energy, seconds_total, seconds_assembly,
-                seconds_factorization, seconds_solve);
+                final_load, residual, residual_reference, energy, seconds_total, assemblies,
+                seconds_assembly, factorizations, seconds_factorization, krylov_iterations,
+                seconds_solve);
   return buf + (message.empty() ? std::string() : "; " + message);
 }
 
 std::string NewtonSummary::FullReport() const {
   std::ostringstream os;
-  os << BriefReport() << "\n  step   load        it  |R|          energy          s        shift\n";
+  os << BriefReport()
+     << "\n  step   load        it  |R|          energy          s        shift  pcg  fact\n";
   char buf[160];
   for (const NewtonIteration& it : iterations) {
-    std::snprintf(buf, sizeof buf, "  %4d  %-10.4g %3d  %.3e  %.8e  %-7.3g  %.2g\n", it.load_step,
-                  it.load, it.iteration, it.residual, it.energy, it.step, it.shift);
+    std::snprintf(buf, sizeof buf, "  %4d  %-10.4g %3d  %.3e  %.8e  %-7.3g  %-5.2g  %3d  %d\n",
+                  it.load_step, it.load, it.iteration, it.residual, it.energy, it.step, it.shift,
+                  it.krylov, it.factorized ? 1 : 0);
     os << buf;
   }
   return os.str();
@@ -84,94 +95,71 @@ State rest_state(const Assembler& a) {
           Eigen::MatrixXd::Zero(a.mesh().num_elements(), a.geometry().points_per_element())};
 }
 
-NewtonSolver::NewtonSolver(const Assembler& assembler, NewtonOptions options)
-    : assembler_(assembler), options_(options) {
+namespace {
+
+NewtonOptions validated(NewtonOptions options) {
   std::string error;
-  if (!options_.IsValid(&error)) throw InvalidArgument(error);
-  K_ = assembler_.tangent_pattern();
-  shifted_ = K_;
-  for (int j = 0; j < K_.outerSize(); ++j) {
-    const int* begin = K_.innerIndexPtr() + K_.outerIndexPtr()[j];
-    const int* end = K_.innerIndexPtr() + K_.outerIndexPtr()[j + 1];
-    diagonal_.push_back(static_cast<int>(std::lower_bound(begin, end, j) - K_.innerIndexPtr()));
-  }
-  solver_ = make_linear_solver(options_.linear_solver);
-  if (K_.rows() > 0) solver_->analyze(K_);  // symbolic analysis once per pattern
+  if (!options.IsValid(&error)) throw InvalidArgument(error);
+  return options;
 }
 
-double NewtonSolver::factorize_with_fallback(NewtonSummary* summary) {
+}  // namespace
+
+NewtonSolver::NewtonSolver(const Assembler& assembler, NewtonOptions options)
+    : assembler_(assembler),
+      options_(validated(options)),
+      tangent_(assembler.tangent_pattern(), options_.tangent),
+      K_(assembler.tangent_pattern()),
+      K_path_(K_) {}
+
+bool NewtonSolver::assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m, double* energy,
+                            Eigen::VectorXd* residual, SparseMatrix* tangent,
+                            NewtonSummary* summary) const {
   const auto t0 = Clock::now();
-  double shift = 0.0;
-  bool ok = solver_->factorize(K_);
-  ++summary->factorizations;
-  if (!ok) {
-    // Not positive definite: factorise K + μ I with μ growing from 1e-8 max|K_ii|.
-    double dmax = 0.0;
-    for (int idx : diagonal_) dmax = std::max(dmax, std::abs(K_.valuePtr()[idx]));
-    shift = 1e-8 * dmax;
-    for (int attempt = 0; attempt < 20 && !ok; ++attempt, shift *= 10.0) {
-      std::copy(K_.valuePtr(), K_.valuePtr() + K_.nonZeros(), shifted_.valuePtr());
-      for (int idx : diagonal_) shifted_.valuePtr()[idx] += shift;
-      ok = solver_->factorize(shifted_);
-      ++summary->factorizations;
-      if (ok) break;
-    }
-    if (!ok) shift = std::numeric_limits<double>::infinity();
-  }
-  summary->seconds_factorization += seconds_since(t0);
-  return shift;
+  const bool ok = assembler_.evaluate(u, m, energy, residual, tangent);
+  summary->seconds_assembly += seconds_since(t0);
+  ++summary->assemblies;
+  return ok;
 }
 
-double NewtonSolver::backtrack(const Eigen::MatrixXd& m, const Eigen::VectorXd& u0, double Pi0,
-                               double slope, const Eigen::VectorXd& du, double s, double rnorm,
-                               Eigen::VectorXd* u, NewtonSummary* summary) const {
-  // Π(u0 + s du) <= Π(u0) + c s slope, s halving; +inf energy (det F <= 0) never accepted.
-  for (int ls = 0; ls < options_.max_line_search_steps; ++ls, s *= options_.backtrack) {
-    const Eigen::VectorXd trial = u0 + s * du;
-    double Pi_trial;
-    const auto t0 = Clock::now();
-    const bool admissible = assembler_.evaluate(trial, m, &Pi_trial, nullptr, nullptr);
-    summary->seconds_assembly += seconds_since(t0);
-    if (!admissible) continue;
-    bool accept = Pi_trial <= Pi0 + options_.armijo * s * slope;
-    if (!accept && std::abs(Pi_trial - Pi0) <= 1e-13 * std::abs(Pi0)) {
-      // Energy differences at round-off: accept if the residual decreases.
-      Eigen::VectorXd R_trial;
-      assembler_.evaluate(trial, m, nullptr, &R_trial, nullptr);
-      accept = R_trial.norm() < rnorm;
-    }
-    if (accept) {
-      *u = trial;
-      return s;
-    }
-  }
-  return 0.0;
+bool NewtonSolver::direction(const SparseMatrix& K, const Eigen::VectorXd& R, double eta,
+                             Eigen::VectorXd* du, NewtonIteration* rec, NewtonSummary* summary) {
+  // K du = −R on the free dofs, to ‖K du + R‖ <= η ‖R‖.
+  Eigen::VectorXd x;
+  const TangentSolveReport r = tangent_.solve(K, -R, eta, /*allow_shift=*/true, &x);
+  summary->factorizations += r.factorizations;
+  summary->krylov_iterations += r.krylov_iterations;
+  summary->seconds_factorization += r.seconds_factorization;
+  summary->seconds_solve += r.seconds_solve;
+  rec->shift = r.shift;
+  rec->krylov = r.krylov_iterations;
+  rec->factorized = r.factorized;
+  if (!r.ok) return false;
+  *du = assembler_.dofs().expand(x);
+  return true;
 }
 
 bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, double load,
-                                   Eigen::VectorXd* u, NewtonSummary* summary) {
+                                   bool predictor, Eigen::VectorXd* u, NewtonSummary* summary) {
   const DofMap& dofs = assembler_.dofs();
   Eigen::VectorXd R, R0;
   double Pi = 0.0;
-  auto t0 = Clock::now();
-  assembler_.evaluate(Eigen::VectorXd::Zero(dofs.num_dofs), m, nullptr, &R0, nullptr);
-  summary->seconds_assembly += seconds_since(t0);
+  assemble(Eigen::VectorXd::Zero(dofs.num_dofs), m, nullptr, &R0, nullptr, summary);
   double R_ref = R0.norm();
-  // Watchdog (nonmonotone) line search: a full step that raises the energy but keeps
-  // det F > 0 is taken tentatively; if the next full step does not bring the energy below
-  // the Armijo line of the saved point, both are undone and the saved step backtracks.
-  // Thin bodies need it: the full Newton step bends them correctly but leaves second-order
-  // membrane strains whose energy the next iteration removes.
-  struct Watch {
-    bool active = false;
-    Eigen::VectorXd u, du;
-    double Pi = 0.0, slope = 0.0, rnorm = 0.0;
-  } watch;
+  EnergyLineSearch line_search(
+      options_,
+      [&](const Eigen::VectorXd& v, double* e) {
+        return assemble(v, m, e, nullptr, nullptr, summary);
+      },
+      [&](const Eigen::VectorXd& v) {
+        Eigen::VectorXd Rv;
+        assemble(v, m, nullptr, &Rv, nullptr, summary);
+        return Rv.norm();
+      });
   for (int it = 0; it <= options_.max_iterations; ++it) {
-    t0 = Clock::now();
-    const bool admissible = assembler_.evaluate(*u, m, &Pi, &R, &K_);
-    summary->seconds_assembly += seconds_since(t0);
-    if (!admissible) {
+    // The predictor's first direction uses K_path_: K at u is not needed then.
+    const bool use_path = predictor && it == 0 && have_path_tangent_;
+    if (!assemble(*u, m, &Pi, &R, use_path ? nullptr : &K_, summary)) {
       summary->message = "start state of the load step has det F <= 0";
       return false;
     }
@@ -180,15 +168,13 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
     summary->residual = rnorm;
     summary->residual_reference = R_ref;
     summary->energy = Pi;
-    NewtonIteration rec{load_step, load, it, rnorm, Pi, 0.0, 0.0};
+    NewtonIteration rec{load_step, load, it, rnorm, Pi, 0.0, 0.0, 0, false};
     if (rnorm <= options_.relative_tolerance * R_ref + options_.absolute_tolerance ||
         rnorm == 0.0) {
       summary->iterations.push_back(rec);
-      if ((options_.factorize_converged_tangent || options_.path_predictor) && dofs.num_free > 0) {
-        const double shift = factorize_with_fallback(summary);
-        factorization_valid_ = shift == 0.0;
-        have_path_tangent_ = std::isfinite(shift);
-      }
+      if (use_path) assemble(*u, m, nullptr, nullptr, &K_, summary);
+      std::swap(K_path_, K_);  // the tangent at the converged state, kept
+      have_path_tangent_ = true;
       return true;
     }
     if (it == options_.max_iterations) {
@@ -197,55 +183,34 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
       return false;
     }
     ++summary->newton_iterations;
-    if (it == 0 && have_path_tangent_) {
-      rec.shift = 0.0;  // predictor: reuse the previous converged tangent's factorisation
-    } else {
-      rec.shift = factorize_with_fallback(summary);
-    }
-    have_path_tangent_ = false;
-    factorization_valid_ = false;
-    if (!std::isfinite(rec.shift)) {
+    // Forcing term η = min(forcing, |R|/R_ref, 1e-3 tol/|R|): falls like the residual
+    // (quadratic convergence), and the last direction is solved to 1e-3 of the tolerance so
+    // that the converged state is as accurate as after an exact Newton step.
+    const double tol = options_.relative_tolerance * R_ref + options_.absolute_tolerance;
+    const double eta =
+        std::max(1e-14, std::min({options_.forcing, rnorm / R_ref, 1e-3 * tol / rnorm}));
+    Eigen::VectorXd du;
+    const SparseMatrix& K = use_path ? K_path_ : K_;
+    if (!direction(K, R, eta, &du, &rec, summary)) {
       summary->iterations.push_back(rec);
       summary->message = "tangent could not be factorised";
       return false;
     }
-    t0 = Clock::now();
-    const Eigen::VectorXd du = dofs.expand(-solver_->solve(R));
-    summary->seconds_solve += seconds_since(t0);
-    const double slope = R.dot(dofs.restrict(du));  // dΠ/ds at s = 0, < 0 for descent
-    if (watch.active) {
-      watch.active = false;
-      double Pi_full;
-      const Eigen::VectorXd full = *u + du;
-      if (assembler_.evaluate(full, m, &Pi_full, nullptr, nullptr) &&
-          Pi_full <= watch.Pi + options_.armijo * watch.slope) {
-        *u = full;
-        rec.step = 1.0;
-      } else {
-        rec.step = backtrack(m, watch.u, watch.Pi, watch.slope, watch.du, options_.backtrack,
-                             watch.rnorm, u, summary);
-        if (rec.step == 0.0) *u = watch.u;
-      }
-    } else {
-      double Pi_full;
-      const Eigen::VectorXd full = *u + du;
-      const bool ok = assembler_.evaluate(full, m, &Pi_full, nullptr, nullptr);
-      if (ok && Pi_full <= Pi + options_.armijo * slope) {
-        *u = full;
-        rec.step = 1.0;
-      } else if (ok && options_.watchdog) {
-        watch = {true, *u, du, Pi, slope, rnorm};
-        *u = full;
-        rec.step = 1.0;
-      } else {
-        rec.step = backtrack(m, *u, Pi, slope, du, 1.0, rnorm, u, summary);
-      }
+    const Eigen::VectorXd u_before = *u;
+    rec.step = line_search.step(du, Pi, R.dot(dofs.restrict(du)), rnorm, u);
+    if (rec.step == 0.0 && !rec.factorized) {
+      // The direction came from PCG with a kept factorisation: retry with K factorised.
+      tangent_.drop_factorization();
+      *u = u_before;
+      if (direction(K, R, eta, &du, &rec, summary))
+        rec.step = line_search.step(du, Pi, R.dot(dofs.restrict(du)), rnorm, u);
     }
     summary->iterations.push_back(rec);
     if (options_.verbose) {
       std::cerr << "newton: step " << load_step << " load " << load << " it " << it << " |R| "
                 << rnorm << " energy " << Pi << " s " << rec.step << " shift " << rec.shift
-                << (watch.active ? " (tentative)" : "") << "\n";
+                << " pcg " << rec.krylov << (rec.factorized ? " factorised" : "")
+                << (line_search.tentative() ? " (tentative)" : "") << "\n";
     }
     if (rec.step == 0.0) {
       summary->message = "line search failed at iteration " + std::to_string(it);
@@ -253,6 +218,18 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
     }
   }
   return false;
+}
+
+Eigen::VectorXd NewtonSolver::solve_converged_tangent(const Eigen::VectorXd& b) {
+  if (!converged_) throw InvalidArgument("Newton: no converged state to solve with");
+  if (b.size() != assembler_.dofs().num_free)
+    throw InvalidArgument("Newton: the right-hand side must have num_free entries");
+  Eigen::VectorXd x;
+  last_tangent_solve_ =
+      tangent_.solve(K_path_, b, options_.adjoint_tolerance, /*allow_shift=*/false, &x);
+  if (!last_tangent_solve_.ok)
+    throw NumericalError("Newton: the converged tangent is not positive definite");
+  return x;
 }
 
 NewtonSummary NewtonSolver::solve(const Eigen::MatrixXd& m_qp, State* state) {
@@ -268,13 +245,14 @@ NewtonSummary NewtonSolver::solve(const Eigen::MatrixXd& m_qp, State* state) {
     throw InvalidArgument("Newton: the start state has the wrong size (use rest_state())");
   }
   NewtonSummary summary;
-  // The factorisation left by the previous solve is the path tangent of this one only if
-  // this one starts exactly where that one ended.
+  // The tangent kept from the previous solve is the path tangent of this one only if this
+  // one starts exactly where that one ended.
   if (!(have_path_tangent_ && last_u_.size() == state->u.size() && last_u_ == state->u &&
         last_m_ == state->m_qp)) {
     have_path_tangent_ = false;
   }
-  factorization_valid_ = false;
+  converged_ = false;
+  const bool has_free = assembler_.dofs().num_free > 0;
   const Eigen::MatrixXd m0 = state->m_qp;
   double t = 0.0, inc = options_.initial_load_increment;
   Eigen::VectorXd u = state->u;
@@ -289,16 +267,13 @@ NewtonSummary NewtonSolver::solve(const Eigen::MatrixXd& m_qp, State* state) {
     }
     const double t_try = std::min(1.0, t + inc);
     const Eigen::MatrixXd m = m0 + t_try * (m_qp - m0);
-    if (options_.path_predictor && !have_path_tangent_ && assembler_.dofs().num_free > 0) {
-      // Tangent at the last converged state (u, m_t): its first step is the Euler
-      // predictor along the equilibrium path (K depends on m through the fiber term).
-      const auto t0 = Clock::now();
-      assembler_.evaluate(state->u, state->m_qp, nullptr, nullptr, &K_);
-      summary.seconds_assembly += seconds_since(t0);
-      have_path_tangent_ = std::isfinite(factorize_with_fallback(&summary));
+    if (options_.path_predictor && !have_path_tangent_ && has_free) {
+      // Tangent at the last converged state (u, m_t) for the Euler predictor.
+      have_path_tangent_ = assemble(state->u, state->m_qp, nullptr, nullptr, &K_path_, &summary);
     }
     const int before = summary.newton_iterations;
-    const bool ok = solve_load_step(m, summary.load_steps, t_try, &u, &summary);
+    const bool ok = solve_load_step(m, summary.load_steps, t_try,
+                                    options_.path_predictor && has_free, &u, &summary);
     ++summary.load_steps;
     if (ok) {
       t = t_try;
@@ -313,8 +288,7 @@ NewtonSummary NewtonSolver::solve(const Eigen::MatrixXd& m_qp, State* state) {
         inc = std::min(1.0, 2.0 * inc);
     } else {
       ++summary.failed_load_steps;
-      u = state->u;  // back to the last converged state
-      have_path_tangent_ = false;
+      u = state->u;  // back to the last converged state, whose tangent K_path_ still is
       inc *= 0.5;
       if (inc < options_.min_load_increment) {
         summary.status = NewtonStatus::kLoadIncrementTooSmall;
@@ -323,7 +297,11 @@ NewtonSummary NewtonSolver::solve(const Eigen::MatrixXd& m_qp, State* state) {
       }
     }
   }
-  if (!summary.converged()) factorization_valid_ = false;
+  converged_ = summary.converged();
+  if (converged_ && !have_path_tangent_ && has_free) {
+    // Converged without a Newton iteration on a fresh start: K at the state for the adjoint.
+    have_path_tangent_ = assemble(state->u, state->m_qp, nullptr, nullptr, &K_path_, &summary);
+  }
   if (have_path_tangent_) {
     last_u_ = state->u;
     last_m_ = state->m_qp;

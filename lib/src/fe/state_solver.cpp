@@ -19,9 +19,9 @@ NewtonSummary StateSolver::solve(const Eigen::VectorXd& m) {
   return summary;
 }
 
-Eigen::VectorXd StateSolver::gradient(const Eigen::VectorXd& g) const {
+Eigen::VectorXd StateSolver::gradient(const Eigen::VectorXd& g) {
   if (!converged_) throw InvalidArgument("state solver: gradient() needs a converged solve");
-  const Eigen::VectorXd lambda = solve_adjoint(assembler_, newton_.converged_factorization(), g);
+  const Eigen::VectorXd lambda = solve_adjoint(assembler_, newton_, g);
   return control_gradient(assembler_, control_, state_.u, lambda);
 }
 

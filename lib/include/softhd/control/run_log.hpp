@@ -51,6 +51,7 @@ struct RunSnapshot {
   std::int64_t evaluations = 0;  ///< evaluations logged before it
   std::int64_t iterations = 0;   ///< accepted iterations by then
   std::vector<WarmStart> states;
+  fe::State best;  ///< the state of the best control so far (the final solve starts there)
 };
 
 /// A checkpoint as read back: the evaluations the states follow, and the states.

@@ -80,6 +80,9 @@ class ShapeObjective {
   PointCloud particles(const Eigen::VectorXd& u) const;
   /// The last converged state (the rest state before any evaluation).
   const fe::State& last_state() const;
+  /// Puts a converged state for the control m first among the warm starts (e.g. the best
+  /// one, so that evaluating m again starts, and stays, exactly there).
+  void remember_state(const Eigen::VectorXd& m, const fe::State& state);
   const HausdorffTarget& target() const;
   const ShapeObjectiveOptions& options() const;
   const fe::Assembler& assembler() const;
@@ -89,6 +92,11 @@ class ShapeObjective {
   /// is bitwise the one an uninterrupted run would make. Throws InvalidArgument if the
   /// list is empty, longer than warm_start_states, or a size does not fit the problem.
   void restore_warm_starts(const std::vector<WarmStart>& states);
+  /// Replaces the state solver by a new one, forgetting what it keeps between solves (its
+  /// factorisations and path tangent): later evaluations then depend on earlier ones only
+  /// through the warm starts, which a checkpoint can save. Costs a factorisation at the
+  /// next solve.
+  void reset_solver();
   /// Per-point fields d̃ of the last converged state (moving cloud, target cloud).
   HausdorffResult fields(const Eigen::VectorXd& u) const;
 

@@ -27,6 +27,18 @@ LinearSolverType parse_linear_solver(const std::string& name);
 class LinearSolver {
  public:
   virtual ~LinearSolver() = default;
+  /// Factorises K + μ I with the smallest μ >= 0 found in the sequence below for which the
+  /// factorisation succeeds, and returns μ (+inf if none of 20 attempts succeeds; the
+  /// solver then holds no factorisation). The search starts at μ = 0 if the previous call
+  /// needed no shift, else at a tenth of the previous shift (shifts fall along a Newton
+  /// solve, so one or two attempts usually suffice instead of a climb from 1e-8 max|K_ii|),
+  /// and multiplies μ by 10 after each failure (from 1e-8 max|K_ii| when it was 0).
+  /// With `allow_shift` false only μ = 0 is tried. `attempts` (optional) gets the number
+  /// of numeric factorisations made.
+  double factorize_shifted(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& K,
+                           bool allow_shift = true, int* attempts = nullptr);
+  /// Forgets the shift of the previous factorize_shifted (the next search starts at 0).
+  void reset_shift() { last_shift_ = 0.0; }
   /// Symbolic analysis of the pattern (lower triangle); call again only if it changes.
   virtual void analyze(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& pattern) = 0;
   /// Numeric factorisation of a matrix with the analysed pattern. Returns false if the
@@ -35,6 +47,10 @@ class LinearSolver {
   /// x = K⁻¹ b with the last successful factorisation.
   virtual Eigen::VectorXd solve(const Eigen::VectorXd& b) const = 0;
   virtual LinearSolverType type() const = 0;
+
+ private:
+  double last_shift_ = 0.0;
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> shifted_;
 };
 
 std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverType type);

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "softhd/fe/assembly.hpp"
-#include "softhd/fe/linear_solver.hpp"
+#include "softhd/fe/tangent_solver.hpp"
 
 namespace softhd::fe {
 
@@ -38,11 +38,12 @@ struct NewtonOptions {
   double initial_load_increment = 1.0;
   double min_load_increment = 1.0 / 4096.0;
   /// Take the first iteration of each load step with the tangent at the last converged
-  /// state (u_t, m_t): the Euler predictor along the equilibrium path. The tangent at
-  /// (u_t, m_{t+Δ}) carries the geometric stiffness of the whole unbalanced fiber tension
-  /// and predicts bending of thin bodies far too stiff. Costs one factorisation per
-  /// load step (shared with the adjoint's) and one at the start unless the previous
-  /// solve ended at the start state.
+  /// state (u_t, m_t): u_t − K(u_t, m_t)⁻¹ R(u_t; m_{t+Δ}) is the first-order (Euler)
+  /// predictor of the equilibrium path, since R is linear in m and R(u_t; m_t) = 0. The
+  /// tangent at (u_t, m_{t+Δ}) carries the geometric stiffness of the whole unbalanced
+  /// fiber tension and predicts bending of thin bodies far too stiff. The converged
+  /// tangent is kept, so this costs one assembly only when a solve does not start where
+  /// the previous one ended.
   bool path_predictor = true;
   /// Total load steps (successful or not) allowed in one solve.
   int max_load_steps = 400;
@@ -50,13 +51,18 @@ struct NewtonOptions {
   /// optimiser; the full-turn plate of issue 4 needs about 420). Checked between load
   /// steps, so a solve may overrun it by up to max_iterations.
   int max_total_iterations = 3000;
-  /// Sparse direct solver. CHOLMOD (supernodal, here with Debian's reference BLAS): on the
-  /// bending mesh (16 500 dofs) Eigen's LDLT factorises in 0.31 s CPU against 0.39 s, on
-  /// the mesh 2x finer in each direction (113 400 dofs) CHOLMOD takes 15.8 s against 60.2 s
-  /// (bench_state solvers 1 | 2), so CHOLMOD is the default that scales.
-  LinearSolverType linear_solver = LinearSolverType::kCholmod;
-  /// Factorise the tangent at the converged state (needed by the adjoint).
-  bool factorize_converged_tangent = true;
+  /// Linear solves with the tangent: PCG preconditioned by a kept Cholesky factorisation,
+  /// refactorising when it is stale (tangent_solver.hpp); `tangent.reuse_factorization =
+  /// false` factorises every tangent (classical Newton). The factorisations are CHOLMOD's
+  /// (supernodal, AMD ordering, chosen by measurement: bench_state solvers).
+  TangentSolverOptions tangent;
+  /// A Newton direction is computed to a relative residual η = min(forcing, |R|/R_ref,
+  /// 1e-3 tol/|R|), tol the convergence threshold: inexact Newton whose forcing term falls
+  /// like the residual (convergence stays quadratic) and whose last direction is as
+  /// accurate as an exact one at the tolerance; a direct solve is exact anyway.
+  double forcing = 1e-2;
+  /// Relative residual of the solve with the converged tangent (the adjoint).
+  double adjoint_tolerance = 1e-12;
   /// Print one line per iteration to stderr.
   bool verbose = false;
 
@@ -74,13 +80,15 @@ std::string to_string(NewtonStatus status);
 
 /// One Newton iteration.
 struct NewtonIteration {
-  int load_step = 0;      ///< index of the load step (counting failed ones)
-  double load = 0.0;      ///< fraction t of the change of m being applied
-  int iteration = 0;      ///< within the load step
-  double residual = 0.0;  ///< |R|₂ before the update
-  double energy = 0.0;    ///< Π before the update
-  double step = 0.0;      ///< accepted line-search step (0 if none)
-  double shift = 0.0;     ///< diagonal shift added because K was not positive definite
+  int load_step = 0;        ///< index of the load step (counting failed ones)
+  double load = 0.0;        ///< fraction t of the change of m being applied
+  int iteration = 0;        ///< within the load step
+  double residual = 0.0;    ///< |R|₂ before the update
+  double energy = 0.0;      ///< Π before the update
+  double step = 0.0;        ///< accepted line-search step (0 if none)
+  double shift = 0.0;       ///< diagonal shift added because K was not positive definite
+  int krylov = 0;           ///< PCG iterations of the direction (0: direct solve)
+  bool factorized = false;  ///< the direction came with a new factorisation
 };
 
 struct NewtonSummary {
@@ -94,7 +102,9 @@ struct NewtonSummary {
   double energy = 0.0;  ///< final Π
   double seconds_assembly = 0.0, seconds_factorization = 0.0, seconds_solve = 0.0,
          seconds_total = 0.0;
-  int factorizations = 0;
+  int assemblies = 0;         ///< evaluations of Π, R or K (line searches included)
+  int factorizations = 0;     ///< numeric factorisations (shift searches included)
+  int krylov_iterations = 0;  ///< PCG iterations of the Newton directions
   std::vector<NewtonIteration> iterations;
   std::string message;  ///< why a failure happened
 
@@ -123,35 +133,39 @@ class NewtonSolver {
   /// ramping m from state->m_qp. On failure *state is the last converged load step.
   NewtonSummary solve(const Eigen::MatrixXd& m_qp, State* state);
 
-  /// The factorisation of the tangent at the last converged state, or null if the last
-  /// solve failed or factorize_converged_tangent is off.
-  const LinearSolver* converged_factorization() const {
-    return factorization_valid_ ? solver_.get() : nullptr;
-  }
+  /// x with K x = b on the free dofs (num_free entries) for the tangent K at the last
+  /// converged state, to the relative residual adjoint_tolerance (PCG with the kept
+  /// factorisation, or a factorisation of K). Throws InvalidArgument if the last solve
+  /// failed, NumericalError if that tangent is not positive definite.
+  Eigen::VectorXd solve_converged_tangent(const Eigen::VectorXd& b);
+  /// True if the last solve converged (solve_converged_tangent is then available).
+  bool converged() const { return converged_; }
+  /// What the last solve_converged_tangent did.
+  const TangentSolveReport& last_tangent_solve() const { return last_tangent_solve_; }
   const NewtonOptions& options() const { return options_; }
 
  private:
-  /// Newton at fixed m from *u; returns true on convergence.
-  bool solve_load_step(const Eigen::MatrixXd& m, int load_step, double load, Eigen::VectorXd* u,
-                       NewtonSummary* summary);
-  /// Backtracking from u0 along du starting at step s; sets *u and returns the accepted
-  /// step, or 0 (u untouched) if none.
-  double backtrack(const Eigen::MatrixXd& m, const Eigen::VectorXd& u0, double Pi0, double slope,
-                   const Eigen::VectorXd& du, double s, double rnorm, Eigen::VectorXd* u,
-                   NewtonSummary* summary) const;
-  /// Factorises K (shifting its diagonal until positive definite); returns the shift.
-  double factorize_with_fallback(NewtonSummary* summary);
+  /// Newton at fixed m from *u; returns true on convergence. `predictor`: take the first
+  /// direction with K_path_ (the tangent at the last converged state).
+  bool solve_load_step(const Eigen::MatrixXd& m, int load_step, double load, bool predictor,
+                       Eigen::VectorXd* u, NewtonSummary* summary);
+  /// Newton direction du (num_dofs) from K du = −R to the relative residual eta.
+  bool direction(const SparseMatrix& K, const Eigen::VectorXd& R, double eta, Eigen::VectorXd* du,
+                 NewtonIteration* rec, NewtonSummary* summary);
+  /// Energy and/or residual and/or tangent at (u, m), timed and counted.
+  bool assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m, double* energy,
+                Eigen::VectorXd* residual, SparseMatrix* tangent, NewtonSummary* summary) const;
 
   const Assembler& assembler_;
   NewtonOptions options_;
-  std::unique_ptr<LinearSolver> solver_;
-  SparseMatrix K_, shifted_;
-  std::vector<int> diagonal_;  ///< index of each diagonal entry in K_'s values
-  bool factorization_valid_ = false;
-  /// solver_ holds the factorisation at the last converged state (last_u_, last_m_).
+  TangentSolver tangent_;
+  SparseMatrix K_;       ///< tangent at the current iterate
+  SparseMatrix K_path_;  ///< tangent at the last converged state (last_u_, last_m_)
   bool have_path_tangent_ = false;
+  bool converged_ = false;
   Eigen::VectorXd last_u_;
   Eigen::MatrixXd last_m_;
+  TangentSolveReport last_tangent_solve_;
 };
 
 }  // namespace softhd::fe

@@ -2,8 +2,7 @@
 /// \file state_solver.hpp
 /// The state equation as the optimiser sees it (SPEC §4): a control vector m in, the
 /// equilibrium displacement out, warm-started from the previous solve, and the adjoint
-/// gradient dJ/dm for any ∂J/∂u at the last converged state, reusing the factorisation of
-/// its tangent.
+/// gradient dJ/dm for any ∂J/∂u at the last converged state, solved with its tangent.
 
 #include <Eigen/Core>
 
@@ -36,7 +35,7 @@ class StateSolver {
 
   /// State part of dJ/dm_k = ∫ M_k (F a₀)·(∇λ a₀) dX with K λ = g, g = ∂J/∂u (num_dofs).
   /// Throws InvalidArgument if the last solve did not converge.
-  Eigen::VectorXd gradient(const Eigen::VectorXd& g) const;
+  Eigen::VectorXd gradient(const Eigen::VectorXd& g);
 
  private:
   Assembler assembler_;
