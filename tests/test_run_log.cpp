@@ -50,7 +50,8 @@ struct Outcome {
 // One process's worth of a run: a fresh objective (as after a restart), stopping with an
 // exception after `crash_after` iterations of this process (0: never).
 Outcome run(const std::string& checkpoint, bool resume, int max_iterations, int crash_after,
-            const fe::Assembler& A, const fe::ControlSpace& space, const PointCloud& target) {
+            const fe::Assembler& A, const fe::ControlSpace& space, const PointCloud& target,
+            double max_seconds = 0.0) {
   ShapeObjectiveOptions o;
   o.hausdorff.threads = 1;
   ShapeObjective J(A, space, HausdorffTarget(target, o.hausdorff), o);
@@ -59,6 +60,7 @@ Outcome run(const std::string& checkpoint, bool resume, int max_iterations, int 
   to.optimizer.max_evaluations = 1000;
   to.optimizer.relative_change = 0.0;
   to.optimizer.move_limit = 0.1;
+  to.optimizer.max_seconds = max_seconds;
   to.checkpoint = checkpoint;
   to.resume = resume;
   to.fingerprint["scene"] = "beam";
@@ -140,6 +142,19 @@ TEST_F(ResumeIsTheSameRun, IterationLimitIsATotalAndAFinishedRunStaysFinished) {
   const Outcome third = run(log, true, 10, 0, A, space, target);
   expect_same_run(reference.summary, third.summary);
   EXPECT_EQ(third.summary.replayed_evaluations, third.summary.evaluations);  // all of them
+}
+
+// The wall-clock limit is a total too: resumed with a limit the earlier process already
+// used up, the run stops at once, making no new evaluation (with a per-process limit it
+// would go on for that long again).
+TEST_F(ResumeIsTheSameRun, WallClockLimitIsATotal) {
+  const std::string log = temp_path("clock.bin");
+  ASSERT_TRUE(run(log, false, 50, 4, A, space, target).interrupted);
+  const double used = read_run_log(log).evaluations.back().seconds;
+  ASSERT_GT(used, 0.0);
+  const Outcome r = run(log, true, 50, 0, A, space, target, 0.5 * used);
+  EXPECT_EQ(r.summary.termination, "the wall-clock limit was reached");
+  EXPECT_EQ(r.summary.replayed_evaluations, r.summary.evaluations);
 }
 
 TEST_F(ResumeIsTheSameRun, ACheckpointOfAnotherProblemIsRefused) {
