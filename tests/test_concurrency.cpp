@@ -47,8 +47,8 @@ TEST_P(Concurrency, ManyThreadsOnOneTargetGiveTheSerialResults) {
   HausdorffOptions o;
   o.method = GetParam();
   o.threads = 2;  // OpenMP inside every evaluation as well
-  const HausdorffTarget target(random_cloud(3000, 1), o);
-  constexpr int kClouds = 8, kThreads = 8, kRepeats = 6;
+  const HausdorffTarget target(random_cloud(2000, 1), o);
+  constexpr int kClouds = 8, kThreads = 8, kRepeats = 4;
   std::vector<PointCloud> moving;
   std::vector<HausdorffResult> serial;
   HausdorffRequest req;
