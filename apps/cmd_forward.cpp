@@ -17,6 +17,7 @@
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/io/cloud_io.hpp"
+#include "softhd/parallel.hpp"
 
 namespace {
 
@@ -25,7 +26,9 @@ using namespace softhd::fe;
 constexpr const char* kUsage =
     "usage: softhd forward SCENE [--control FILE | --control-uniform V] [--probe X1,X2[,X3]]...\n"
     "                      [--out DIR] [--write-cloud FILE] [--json] [--linear-solver NAME]\n"
-    "                      [--coarse-levels K] [--verbose]\n"
+    "                      [--coarse-levels K] [--step-tol T] [--load-increment F]\n"
+    "                      [--intermediate-tol T] [--factorize-every-step]\n"
+    "                      [--threads N] [--verbose]\n"
     "       softhd forward SCENE --write-control-nodes FILE [--control-uniform V]\n"
     "\n"
     "Solves the equilibrium of the scene's body for the active tension m and writes\n"
@@ -43,6 +46,15 @@ constexpr const char* kUsage =
     "                         onto its nodes (default 0: start from rest)\n"
     "  --json                 print a JSON summary (probes, energy, volume, iterations, ...)\n"
     "  --linear-solver NAME   eigen-llt, eigen-ldlt or cholmod (default cholmod)\n"
+    "  --step-tol T           converged also needs the last Newton correction\n"
+    "                         |du|_inf <= T |u|_inf (default 1e-10; 0: residual test only)\n"
+    "  --load-increment F     first load step, a fraction of m (default 1; doubled after\n"
+    "                         quick steps, halved after failed ones)\n"
+    "  --intermediate-tol T   relative residual accepting a load step before the last\n"
+    "                         (default 1e-9, as the last one)\n"
+    "  --factorize-every-step classical Newton: factorise every tangent instead of\n"
+    "                         reusing a factorisation as a PCG preconditioner\n"
+    "  --threads N            threads of the assembly (default 0: OMP_NUM_THREADS or all cores)\n"
     "  --max-memory GIB       refuse meshes whose estimated memory exceeds this (default 8)\n"
     "  --write-control-nodes FILE  write the control nodes with their current values and stop\n";
 
@@ -50,6 +62,11 @@ struct Args {
   std::string scene, control_file, out_dir = "out", write_nodes, linear_solver, write_cloud;
   bool has_uniform = false, json = false, verbose = false;
   int coarse_levels = 0;
+  int threads = 0;
+  double step_tol = 1e-10;
+  double load_increment = 1.0;
+  double intermediate_tol = 1e-9;
+  bool factorize_every_step = false;
   double uniform = 0.0;
   double memory_limit = softhd::fe::kDefaultMemoryLimit;
   std::vector<Eigen::VectorXd> probes;
@@ -99,6 +116,25 @@ bool parse(int argc, char** argv, Args* a) {
       a->verbose = true;
     } else if (s == "--linear-solver") {
       a->linear_solver = value();
+    } else if (s == "--step-tol") {
+      a->step_tol = parse_number(value(), s);
+      if (!(a->step_tol >= 0.0 && a->step_tol < 1.0))
+        throw softhd::InvalidArgument("--step-tol must be in [0, 1)");
+    } else if (s == "--load-increment") {
+      a->load_increment = parse_number(value(), s);
+      if (!(a->load_increment > 0.0 && a->load_increment <= 1.0))
+        throw softhd::InvalidArgument("--load-increment must be in (0, 1]");
+    } else if (s == "--intermediate-tol") {
+      a->intermediate_tol = parse_number(value(), s);
+      if (!(a->intermediate_tol > 0.0 && a->intermediate_tol < 1.0))
+        throw softhd::InvalidArgument("--intermediate-tol must be in (0, 1)");
+    } else if (s == "--factorize-every-step") {
+      a->factorize_every_step = true;
+    } else if (s == "--threads") {
+      const double t = parse_number(value(), s);
+      if (!(t >= 0 && t <= 1024 && t == static_cast<int>(t)))
+        throw softhd::InvalidArgument("--threads expects an integer from 0 to 1024");
+      a->threads = static_cast<int>(t);
     } else if (s == "--coarse-levels") {
       const double k = parse_number(value(), s);
       if (!(k >= 0 && k <= 8 && k == static_cast<int>(k)))
@@ -201,8 +237,14 @@ int forward(const Args& args) {
       throw softhd::InvalidArgument(os.str());
     }
   }
+  softhd::set_threads(args.threads);
   NewtonOptions options;
   options.verbose = args.verbose;
+  options.displacement_tolerance = args.step_tol;
+  options.initial_load_increment = args.load_increment;
+  options.min_load_increment = std::min(options.min_load_increment, args.load_increment);
+  options.intermediate_tolerance = args.intermediate_tol;
+  options.tangent.reuse_factorization = !args.factorize_every_step;
   if (!args.linear_solver.empty())
     options.tangent.linear_solver = parse_linear_solver(args.linear_solver);
   NewtonSolver newton(assembler, options);
@@ -242,6 +284,8 @@ int forward(const Args& args) {
     j["volume"] = assembler.deformed_volume(state.u);
     j["min_J"] = J.minCoeff();
     j["newton_iterations"] = summary.newton_iterations;
+    j["factorizations"] = summary.factorizations;
+    j["krylov_iterations"] = summary.krylov_iterations;
     j["load_steps"] = summary.load_steps;
     j["dofs"] = assembler.dofs().num_free;
     j["seconds"] = seconds;

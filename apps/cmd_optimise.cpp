@@ -23,6 +23,7 @@
 #include "softhd/fe/scene.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/io/vtu.hpp"
+#include "softhd/parallel.hpp"
 #include "softhd/samplers.hpp"
 
 namespace softhd::cli {
@@ -230,6 +231,7 @@ OptimiseArgs parse_optimise(Args& args) {
   so.tikhonov_mass = args.number("--tikhonov-mass", 0.0);
   so.tikhonov_gradient = args.number("--tikhonov-grad", 0.0);
   so.hausdorff.threads = static_cast<int>(args.integer("--threads", 0, 0, 4096));
+  set_threads(so.hausdorff.threads);  // the FE assembly too
   a.vtu_every = args.integer("--vtu-every", 10, 0, 1000000000);
   const double gib = args.number("--max-memory", a.memory_limit / (1u << 30));
   if (!(gib > 0.0 && gib <= 1e6)) throw UsageError("--max-memory: expected GiB in (0, 1e6]");
@@ -313,6 +315,8 @@ class RunFiles {
 
 // summary.json's entries about the end of the run.
 void add_final(const ShapeTrackingSummary& s, nlohmann::json& sum) {
+  sum["floor_self"] = optional_json(s.floor_self);  // with a known map, made at the end
+  sum["floor_matched"] = optional_json(s.floor_matched);
   sum["rho_final"] = s.rho_final;
   sum["J_final"] = s.J_final;
   sum["rho_final_over_floor"] =
@@ -336,8 +340,9 @@ void add_final(const ShapeTrackingSummary& s, nlohmann::json& sum) {
 void print_start(const ShapeTrackingSummary& start) {
   std::fprintf(
       stderr, "  rho start %.6g, floor self %s, floor matched %s\n", start.rho_start,
-      start.floor_self ? std::to_string(*start.floor_self).c_str()
-                       : "n/a (skipped: target too large)",
+      start.floor_self      ? std::to_string(*start.floor_self).c_str()
+      : start.floor_matched ? "computed at the end"
+                            : "n/a (skipped: target too large)",
       start.floor_matched ? std::to_string(*start.floor_matched).c_str() : "n/a (no known map)");
   std::fprintf(stderr, "  %5s %12s %12s %10s %10s %7s %8s\n", "iter", "J", "rho", "rho/floor",
                "|P grad|", "newton", "seconds");

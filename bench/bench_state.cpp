@@ -137,6 +137,7 @@ int newton(const std::string& name, const std::string& solver) {
               t_adj / cold.seconds_total, grad.norm());
   const NewtonSummary warm = newton.solve(c.to_quadrature(1.05 * m), &st);
   print_summary("warm_plus5pct", warm);
+  if (std::getenv("SOFTHD_BENCH_REPORT")) std::fprintf(stderr, "%s", warm.FullReport().c_str());
   std::printf("adjoint_fraction_of_warm_solve=%.4f\n", t_adj / warm.seconds_total);
   return cold.converged() && warm.converged() ? 0 : 1;
 }

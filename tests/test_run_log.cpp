@@ -118,11 +118,11 @@ TEST_F(ResumeIsTheSameRun, AfterSimulatedCrashes) {
   const std::string ref_log = temp_path("ref.bin"), log = temp_path("crash.bin");
   const Outcome reference = run(ref_log, false, 12, 0, A, space, target);
   ASSERT_FALSE(reference.interrupted);
-  ASSERT_EQ(reference.summary.iterations, 12);
-  // Crashes after 3, then 4 more iterations; the third process finishes the run.
-  Outcome r = run(log, false, 12, 3, A, space, target);
+  ASSERT_GE(reference.summary.iterations, 6) << reference.summary.termination;
+  // Crashes after 2, then 3 more iterations; the third process finishes the run.
+  Outcome r = run(log, false, 12, 2, A, space, target);
   ASSERT_TRUE(r.interrupted);
-  r = run(log, true, 12, 4, A, space, target);
+  r = run(log, true, 12, 3, A, space, target);
   ASSERT_TRUE(r.interrupted);
   r = run(log, true, 12, 0, A, space, target);
   ASSERT_FALSE(r.interrupted);

@@ -90,8 +90,12 @@ TEST(Assembly, RigidRotationIsStressFree) {
   }
 }
 
+// 160 Q2 elements: two parallel passes (128 and 32 elements, both above the serial cut-off
+// of 8), so the two-thread evaluation really splits elements between threads.
 TEST(Assembly, SameResultForOneAndTwoThreads) {
-  const Assembler A = make({3, 2});
+  const Assembler A(fe_test::box(3, 2, {2.0, 1.0, 0.5}, {10, 4, 4}), fe_test::mooney_rivlin(),
+                    Eigen::Vector3d(1, 0.5, 0.2), {{"x0", {}}});
+  ASSERT_EQ(A.mesh().num_elements(), 160);
   const Eigen::MatrixXd m =
       Eigen::MatrixXd::Constant(A.mesh().num_elements(), A.geometry().points_per_element(), -0.3);
   const Eigen::VectorXd u = admissible_u(A, 4);
@@ -102,6 +106,7 @@ TEST(Assembly, SameResultForOneAndTwoThreads) {
   omp_set_num_threads(1);
   A.evaluate(u, m, &P1, &R1, &K1);
   omp_set_num_threads(2);
+  ASSERT_EQ(omp_get_max_threads(), 2);
   A.evaluate(u, m, &P2, &R2, &K2);
   omp_set_num_threads(saved);
   EXPECT_EQ(P1, P2);

@@ -137,6 +137,50 @@ TEST(Newton, WarmStartMatchesColdStart) {
   EXPECT_TRUE(newton.converged());
 }
 
+// The watchdog, the path predictor and the reuse of factorisations change the path, not the
+// equilibrium: every combination reaches the same state, and each option changes the
+// iteration history (so an option that were ignored would fail the test).
+TEST(Newton, OptionsChangeThePathNotTheEquilibrium) {
+  const Assembler A(fe_test::box(3, 2, {4.0, 1.0, 0.25}, {6, 1, 1}), fe_test::mooney_rivlin(),
+                    Eigen::Vector3d::UnitX(), {{"x0", {}}});
+  const Eigen::MatrixXd X = quadrature_points(A.mesh(), A.geometry());
+  Eigen::MatrixXd m(A.mesh().num_elements(), A.geometry().points_per_element());
+  for (Eigen::Index i = 0; i < X.rows(); ++i) m(i / m.cols(), i % m.cols()) = -0.5 * X(i, 2) / 0.25;
+  struct Run {
+    Eigen::VectorXd u;
+    std::vector<double> cold, residuals;  // |R| of the cold solve and of the warm re-solve
+    int factorizations = 0;
+  };
+  auto run = [&](bool watchdog, bool predictor, bool reuse) {
+    NewtonOptions o;
+    o.watchdog = watchdog;
+    o.path_predictor = predictor;
+    o.tangent.reuse_factorization = reuse;
+    o.relative_tolerance = 1e-11;
+    NewtonSolver newton(A, o);
+    State s = rest_state(A);
+    const NewtonSummary c = newton.solve(m, &s);
+    EXPECT_TRUE(c.converged()) << c.FullReport();
+    const NewtonSummary w = newton.solve(1.1 * m, &s);
+    EXPECT_TRUE(w.converged()) << w.FullReport();
+    Run r{s.u, {}, {}, w.factorizations};
+    for (const NewtonIteration& it : c.iterations) r.cold.push_back(it.residual);
+    for (const NewtonIteration& it : w.iterations) r.residuals.push_back(it.residual);
+    return r;
+  };
+  const Run ref = run(true, true, true);
+  for (int mask = 1; mask < 8; ++mask) {
+    const Run r = run(!(mask & 1), !(mask & 2), !(mask & 4));
+    EXPECT_LT((r.u - ref.u).lpNorm<Eigen::Infinity>(), 1e-8 * ref.u.lpNorm<Eigen::Infinity>())
+        << "mask " << mask;
+  }
+  // Each option on its own changes the warm re-solve's path.
+  EXPECT_NE(run(true, false, true).residuals, ref.residuals);  // predictor off
+  EXPECT_NE(run(true, true, false).residuals, ref.residuals);  // factorise every tangent
+  EXPECT_GT(run(true, true, false).factorizations, ref.factorizations);
+  EXPECT_NE(run(false, true, true).cold, ref.cold);  // watchdog off
+}
+
 // All linear solvers give the same Newton solution.
 TEST(Newton, LinearSolversAgree) {
   const Assembler A(fe_test::box(3, 1, {2.0, 1.0, 0.5}, {4, 2, 2}), fe_test::mooney_rivlin(),

@@ -68,6 +68,24 @@ nlopt::algorithm nlopt_algorithm(Algorithm a) {
 // Why the driver asked NLopt to stop (NLopt only knows "forced stop").
 enum class Stop { none, iterations, relative_change, target, time };
 
+// The scale of f for one NLopt run. MMA's conservative approximation adds, per variable,
+// (|g_j| σ_j + ρ/2) Δz_j² / (σ_j² − Δz_j²) to the linear term, ρ starting at 1 in every run
+// and falling 10× per outer iteration. Unless ρ/2 << |g_j| σ_j the first steps are
+// Δz_j ≈ −g_j σ_j² / ρ, orders of magnitude below the move limit: the plateaus of issue 12
+// (J changing in the 4th digit for 3-5 iterations after every round's restart). Scaling f
+// so that the largest gradient component in z is kMmaGradient makes ρ = 1 small against
+// the variables that matter from the first step; f / |f(x0)| is kept if it is larger.
+constexpr double kMmaGradient = 100.0;
+
+double round_scale(const Eigen::VectorXd& gz, double report_scale,
+                   const BoundedOptimizerOptions& options) {
+  if (options.algorithm != Algorithm::mma && options.algorithm != Algorithm::ccsaq)
+    return report_scale;
+  const double gmax = gz.size() ? gz.lpNorm<Eigen::Infinity>() : 0.0;
+  if (!(gmax > 0.0) || !std::isfinite(gmax)) return report_scale;
+  return std::min(report_scale, gmax / kMmaGradient);
+}
+
 struct Driver {
   Driver(const BoundedObjective& f, const BoundedOptimizerOptions& o,
          const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& cb)
@@ -76,9 +94,12 @@ struct Driver {
   const BoundedObjective& objective;
   const BoundedOptimizerOptions& options;
   const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& on_iteration;
-  Eigen::VectorXd scale;     // x = scale ∘ z
-  Eigen::VectorXd zlo, zhi;  // bounds on z
-  double fscale = 1.0;       // f_nlopt = f / fscale
+  Eigen::VectorXd scale;           // x = scale ∘ z
+  Eigen::VectorXd zlo, zhi;        // bounds on z
+  Eigen::VectorXd box_lo, box_hi;  // the current round's move-limit box (empty: none)
+  bool recentre = false;           // the best point reached a side of the box
+  double fscale = 1.0;             // f_nlopt = f / fscale (set per round, see round_scale)
+  double report_scale = 1.0;       // |f(x0)|: records give gradients of f / |f(x0)|
   std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
   BoundedOptimizerSummary summary;
   double largest_abs = 1.0;  // largest |J| seen, for the failure penalty
@@ -117,8 +138,9 @@ struct Driver {
     }
     largest_abs = std::max(largest_abs, std::fabs(f));
     const Eigen::VectorXd gz =
-        want_grad ? Eigen::VectorXd(scale.cwiseProduct(gx) / fscale) : Eigen::VectorXd();
-    for (size_t k = 0; k < grad.size(); ++k) grad[k] = gz[static_cast<Eigen::Index>(k)];
+        want_grad ? Eigen::VectorXd(scale.cwiseProduct(gx) / report_scale) : Eigen::VectorXd();
+    const double to_nlopt = report_scale / fscale;
+    for (size_t k = 0; k < grad.size(); ++k) grad[k] = to_nlopt * gz[static_cast<Eigen::Index>(k)];
     if (f < summary.final_value) {
       z0 = z;
       f0 = f;
@@ -159,7 +181,25 @@ struct Driver {
     if (s != Stop::none && stop == Stop::none) {
       stop = s;
       opt.force_stop();
+    } else if (stop == Stop::none && on_box_side(z)) {
+      // Within a round MMA would now converge to the box's constrained optimum, taking
+      // tiny steps along its side until the round's evaluations are spent: start the next
+      // round around this point instead.
+      recentre = true;
+      opt.force_stop();
     }
+  }
+
+  /// True if z lies on a side of the current move-limit box that is not a bound.
+  bool on_box_side(const Eigen::Ref<const Eigen::VectorXd>& z) const {
+    if (box_lo.size() != z.size()) return false;
+    for (Eigen::Index k = 0; k < z.size(); ++k) {
+      const double tiny = 1e-9 * (zhi[k] - zlo[k]);
+      if ((z[k] <= box_lo[k] + tiny && box_lo[k] > zlo[k] + tiny) ||
+          (z[k] >= box_hi[k] - tiny && box_hi[k] < zhi[k] - tiny))
+        return true;
+    }
+    return false;
   }
 };
 
@@ -219,7 +259,7 @@ BoundedOptimizerSummary minimise(
     d.summary.seconds = d.seconds();
     return d.summary;
   }
-  d.fscale = f != 0.0 ? std::fabs(f) : 1.0;
+  d.fscale = d.report_scale = f != 0.0 ? std::fabs(f) : 1.0;
   d.largest_abs = std::max(1.0, std::fabs(f));
   d.f0 = f;
   d.g0 = g;
@@ -247,6 +287,12 @@ BoundedOptimizerSummary minimise(
       nlopt_reason = "the evaluation limit was reached";
       break;
     }
+    if (delta > 0.0) {
+      d.box_lo = lo;
+      d.box_hi = hi;
+    }
+    d.recentre = false;
+    d.fscale = round_scale(d.scale.cwiseProduct(d.g0), d.report_scale, options);
     nlopt::opt opt(nlopt_algorithm(options.algorithm), static_cast<unsigned>(n));
     opt.set_lower_bounds(std::vector<double>(lo.data(), lo.data() + n));
     opt.set_upper_bounds(std::vector<double>(hi.data(), hi.data() + n));
@@ -282,6 +328,7 @@ BoundedOptimizerSummary minimise(
       if (d.stop == Stop::none) nlopt_reason = std::string("NLopt failed: ") + e.what();
     }
     if (d.stop != Stop::none || delta <= 0.0) break;
+    if (d.recentre) continue;  // progress up to the box's side: same move limit, new centre
     // Next round: keep the move limit after progress, halve it otherwise.
     if (!(d.summary.final_value < round_start)) delta *= 0.5;
     if (delta < options.move_limit * 1e-3) {

@@ -102,6 +102,7 @@ std::string encode_evaluation(const LoggedEvaluation& ev) {
   e.put<std::uint8_t>((ev.gradient ? 1 : 0) | (r.ok ? 2 : 0));
   e.put<double>(ev.seconds);
   e.put<std::int32_t>(r.newton_iterations);
+  e.put<std::int32_t>(r.factorizations);
   for (double v : {r.J, r.rho, r.A, r.B, r.regularisation, r.seconds_state, r.seconds_distance,
                    r.seconds_adjoint})
     e.put<double>(v);
@@ -120,13 +121,15 @@ LoggedEvaluation decode_evaluation(Decoder& d) {
   r.ok = flags & 2;
   ev.seconds = d.get<double>();
   r.newton_iterations = d.get<std::int32_t>();
+  r.factorizations = d.get<std::int32_t>();
   for (double* v : {&r.J, &r.rho, &r.A, &r.B, &r.regularisation, &r.seconds_state,
                     &r.seconds_distance, &r.seconds_adjoint})
     *v = d.get<double>();
   ev.x = d.vector();
   r.gradient = d.vector();
   r.failure = d.string();
-  if (!ev.x.allFinite() || !std::isfinite(ev.seconds) || r.newton_iterations < 0)
+  if (!ev.x.allFinite() || !std::isfinite(ev.seconds) || r.newton_iterations < 0 ||
+      r.factorizations < 0)
     d.fail("an evaluation holds non-finite or negative values");
   if (ev.x.size() == 0) d.fail("an evaluation without a control");
   if (r.ok && ev.gradient && r.gradient.size() != ev.x.size())

@@ -170,6 +170,7 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
   fe::State state = d.nearest_state(m);
   const fe::NewtonSummary ns = d.newton->solve(d.control.to_quadrature(m), &state);
   ev.newton_iterations = ns.newton_iterations;
+  ev.factorizations = ns.factorizations;
   ev.seconds_state = seconds_since(t0);
   if (!ns.converged()) {
     ev.failure = ns.BriefReport();
@@ -200,6 +201,7 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
     t0 = std::chrono::steady_clock::now();
     const Eigen::VectorXd g = d.displacement_gradient(state.u, r);
     const Eigen::VectorXd lambda = fe::solve_adjoint(d.assembler, *d.newton, g);
+    ev.factorizations += d.newton->last_tangent_solve().factorizations;
     ev.gradient = reg_gradient + fe::control_gradient(d.assembler, d.control, state.u, lambda);
     ev.seconds_adjoint = seconds_since(t0);
   }

@@ -136,6 +136,7 @@ TrackingIteration record(const IterationRecord& rec, const ShapeEvaluation& last
   it.rho_over_floor = floor ? last.rho / *floor : std::numeric_limits<double>::quiet_NaN();
   it.projected_gradient_norm = rec.projected_gradient_norm;
   it.newton_iterations = last.newton_iterations;
+  it.factorizations = last.factorizations;
   it.seconds_state = last.seconds_state;
   it.seconds_distance = last.seconds_distance;
   it.seconds_adjoint = last.seconds_adjoint;
@@ -147,7 +148,10 @@ TrackingIteration record(const IterationRecord& rec, const ShapeEvaluation& last
 void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimizerSummary& r,
             const std::optional<Eigen::VectorXd>& map_displacement, fe::State* best_state,
             ShapeTrackingSummary* s) {
-  recorder.restore(best_state);  // a run resumed after its end: the final solve as it was
+  // The states at the end too, so that a finished run resumed replays all of it; then, in a
+  // run resumed after its end, the states it ended with.
+  recorder.snapshot(r.iterations, *best_state);
+  recorder.restore(best_state);
   // The best control's state, evaluated again from its own state (Newton stops at once
   // there, so the final ρ̃ is the one the optimiser saw).
   objective.remember_state(r.x, *best_state);
@@ -225,7 +229,10 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   // the known map at this discretisation.
   const HausdorffTarget& Y = objective.target();
   const double m_points = static_cast<double>(Y.cloud().size());
-  if (m_points * m_points <= options.self_floor_max_pairs) s.floor_self = Y.evaluate(Y.cloud()).rho;
+  const bool self_floor = m_points * m_points <= options.self_floor_max_pairs;
+  // With a known map the matched floor judges progress, and the self floor (M² pairs, often
+  // the most expensive evaluation of the run) is only reported: computed after the run.
+  if (self_floor && !map_displacement) s.floor_self = Y.evaluate(Y.cloud()).rho;
   if (map_displacement) s.floor_matched = Y.evaluate(objective.particles(*map_displacement)).rho;
   const std::optional<double> floor = s.floor();
 
@@ -253,6 +260,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     s.seconds_distance += last.seconds_distance;
     s.seconds_adjoint += last.seconds_adjoint;
     s.newton_iterations += last.newton_iterations;
+    s.factorizations += last.factorizations;
     if (!last.ok) {
       if (callbacks.on_failure && !last_replayed) callbacks.on_failure(last.failure);
       return false;
@@ -282,6 +290,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   const BoundedOptimizerSummary r = minimise(f, m0, lower, upper, opt, on_iteration);
   if (error) std::rethrow_exception(error);
   finish(objective, recorder, r, map_displacement, &best_state, &s);
+  if (self_floor && map_displacement) s.floor_self = Y.evaluate(Y.cloud()).rho;
   return s;
 }
 

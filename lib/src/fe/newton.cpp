@@ -9,6 +9,7 @@
 
 #include "line_search.hpp"
 #include "softhd/error.hpp"
+#include "softhd/parallel.hpp"
 
 namespace softhd::fe {
 
@@ -41,6 +42,9 @@ bool NewtonOptions::IsValid(std::string* error) const {
   if (max_load_steps < 1) return fail("max_load_steps must be >= 1");
   if (max_total_iterations < 1) return fail("max_total_iterations must be >= 1");
   if (!(forcing > 0.0 && forcing < 1.0)) return fail("forcing must be in (0, 1)");
+  if (!(displacement_tolerance >= 0.0)) return fail("displacement_tolerance must be >= 0");
+  if (!(intermediate_tolerance > 0.0 && intermediate_tolerance < 1.0))
+    return fail("intermediate_tolerance must be in (0, 1)");
   if (!(adjoint_tolerance > 0.0 && adjoint_tolerance < 1.0))
     return fail("adjoint_tolerance must be in (0, 1)");
   if (tangent.max_krylov_iterations < 1) return fail("tangent.max_krylov_iterations must be >= 1");
@@ -110,7 +114,9 @@ NewtonSolver::NewtonSolver(const Assembler& assembler, NewtonOptions options)
       options_(validated(options)),
       tangent_(assembler.tangent_pattern(), options_.tangent),
       K_(assembler.tangent_pattern()),
-      K_path_(K_) {}
+      K_path_(K_) {
+  limit_blas_threads();
+}
 
 bool NewtonSolver::assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m, double* energy,
                             Eigen::VectorXd* residual, SparseMatrix* tangent,
@@ -122,11 +128,19 @@ bool NewtonSolver::assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m, 
   return ok;
 }
 
-bool NewtonSolver::direction(const SparseMatrix& K, const Eigen::VectorXd& R, double eta,
-                             Eigen::VectorXd* du, NewtonIteration* rec, NewtonSummary* summary) {
+bool NewtonSolver::direction(const SparseMatrix& K, const Eigen::VectorXd& R, double reference,
+                             double eta, Eigen::VectorXd* du, NewtonIteration* rec,
+                             NewtonSummary* summary) {
   // K du = −R on the free dofs, to ‖K du + R‖ <= η ‖R‖.
   Eigen::VectorXd x;
-  const TangentSolveReport r = tangent_.solve(K, -R, eta, /*allow_shift=*/true, &x);
+  // Truncated (Newton–CG) directions escape indefinite regions cheaply, but in a row they
+  // can stall on a flat unstable mode (the residual oscillating at constant energy, as on a
+  // compressed 3x1x1 plate) and near equilibrium a shifted factorisation converges better:
+  // truncate only far from equilibrium and never twice in a row.
+  const bool allow_truncation = R.norm() > 1e-3 * reference && !last_truncated_;
+  const TangentSolveReport r =
+      tangent_.solve(K, -R, eta, /*allow_shift=*/true, &x, allow_truncation);
+  last_truncated_ = r.truncated;
   summary->factorizations += r.factorizations;
   summary->krylov_iterations += r.krylov_iterations;
   summary->seconds_factorization += r.seconds_factorization;
@@ -134,6 +148,7 @@ bool NewtonSolver::direction(const SparseMatrix& K, const Eigen::VectorXd& R, do
   rec->shift = r.shift;
   rec->krylov = r.krylov_iterations;
   rec->factorized = r.factorized;
+  rec->truncated = r.truncated;
   if (!r.ok) return false;
   *du = assembler_.dofs().expand(x);
   return true;
@@ -156,6 +171,11 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
         assemble(v, m, nullptr, &Rv, nullptr, summary);
         return Rv.norm();
       });
+  double last_step = 0.0;  // |Δu|_∞ of the last iteration
+  const bool final = load >= 1.0;
+  const double tolerance_factor =
+      final ? options_.relative_tolerance
+            : std::max(options_.relative_tolerance, options_.intermediate_tolerance);
   for (int it = 0; it <= options_.max_iterations; ++it) {
     // The predictor's first direction uses K_path_: K at u is not needed then.
     const bool use_path = predictor && it == 0 && have_path_tangent_;
@@ -168,14 +188,20 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
     summary->residual = rnorm;
     summary->residual_reference = R_ref;
     summary->energy = Pi;
-    NewtonIteration rec{load_step, load, it, rnorm, Pi, 0.0, 0.0, 0, false};
-    if (rnorm <= options_.relative_tolerance * R_ref + options_.absolute_tolerance ||
-        rnorm == 0.0) {
-      summary->iterations.push_back(rec);
+    NewtonIteration rec{load_step, load, it, rnorm, Pi, 0.0, 0.0, 0, false, false};
+    const bool small_step =
+        options_.displacement_tolerance == 0.0 || it == 0 ||
+        last_step <= options_.displacement_tolerance * u->lpNorm<Eigen::Infinity>();
+    const bool residual_ok = rnorm <= tolerance_factor * R_ref + options_.absolute_tolerance;
+    const auto converge = [&] {
       if (use_path) assemble(*u, m, nullptr, nullptr, &K_, summary);
       std::swap(K_path_, K_);  // the tangent at the converged state, kept
       have_path_tangent_ = true;
       return true;
+    };
+    if ((residual_ok && (small_step || !final)) || rnorm == 0.0) {
+      summary->iterations.push_back(rec);
+      return converge();
     }
     if (it == options_.max_iterations) {
       summary->iterations.push_back(rec);
@@ -186,12 +212,22 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
     // Forcing term η = min(forcing, |R|/R_ref, 1e-3 tol/|R|): falls like the residual
     // (quadratic convergence), and the last direction is solved to 1e-3 of the tolerance so
     // that the converged state is as accurate as after an exact Newton step.
-    const double tol = options_.relative_tolerance * R_ref + options_.absolute_tolerance;
+    const double tol = tolerance_factor * R_ref + options_.absolute_tolerance;
     const double eta =
         std::max(1e-14, std::min({options_.forcing, rnorm / R_ref, 1e-3 * tol / rnorm}));
     Eigen::VectorXd du;
     const SparseMatrix& K = use_path ? K_path_ : K_;
-    if (!direction(K, R, eta, &du, &rec, summary)) {
+    const bool direction_ok = direction(K, R, R_ref, eta, &du, &rec, summary);
+    if (residual_ok && (!direction_ok || rec.shift != 0.0 || rec.truncated)) {
+      // Only the step test is pending, and K is not positive definite here (an unstable
+      // equilibrium, e.g. a compressed plate before it buckles): a Newton step would leave
+      // it along a descent direction instead of confirming it. Converged at the residual.
+      --summary->newton_iterations;
+      rec.shift = 0.0;
+      summary->iterations.push_back(rec);
+      return converge();
+    }
+    if (!direction_ok) {
       summary->iterations.push_back(rec);
       summary->message = "tangent could not be factorised";
       return false;
@@ -202,14 +238,16 @@ bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, doub
       // The direction came from PCG with a kept factorisation: retry with K factorised.
       tangent_.drop_factorization();
       *u = u_before;
-      if (direction(K, R, eta, &du, &rec, summary))
+      if (direction(K, R, R_ref, eta, &du, &rec, summary))
         rec.step = line_search.step(du, Pi, R.dot(dofs.restrict(du)), rnorm, u);
     }
+    last_step = (*u - u_before).lpNorm<Eigen::Infinity>();
     summary->iterations.push_back(rec);
     if (options_.verbose) {
       std::cerr << "newton: step " << load_step << " load " << load << " it " << it << " |R| "
                 << rnorm << " energy " << Pi << " s " << rec.step << " shift " << rec.shift
                 << " pcg " << rec.krylov << (rec.factorized ? " factorised" : "")
+                << (rec.truncated ? " truncated" : "")
                 << (line_search.tentative() ? " (tentative)" : "") << "\n";
     }
     if (rec.step == 0.0) {

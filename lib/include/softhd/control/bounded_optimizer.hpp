@@ -37,9 +37,11 @@ struct BoundedOptimizerOptions {
   double failure_penalty = 10.0;
   /// Move limit: if > 0, NLopt runs in rounds of at most `round_evaluations`
   /// evaluations on the box [x − δ(u − l), x + δ(u − l)] ∩ [l, u] around the best x,
-  /// δ = move_limit, halved after a round without progress. Keeps MMA's first steps
-  /// (which may span half the bounds) from asking the state solver for huge
-  /// deformations. 0 = one NLopt run on the whole box.
+  /// δ = move_limit, halved after a round without progress. A round also ends as soon as
+  /// the best point reaches a side of its box that is not a bound (the next round is
+  /// centred there), so MMA does not spend evaluations on the box's own optimum. Keeps MMA's first
+  /// steps (which may span half the bounds) from asking the state solver for huge deformations. 0 =
+  /// one NLopt run on the whole box.
   double move_limit = 0.0;
   int round_evaluations = 10;  ///< evaluations per round when move_limit > 0
 

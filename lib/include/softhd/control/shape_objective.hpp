@@ -53,6 +53,7 @@ struct ShapeEvaluation {
   double regularisation = 0.0;
   Eigen::VectorXd gradient;  ///< dJ/dm (if requested and ok)
   int newton_iterations = 0;
+  int factorizations = 0;  ///< numeric factorisations of the state solve and the adjoint
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
   std::string failure;  ///< the Newton report of a failed solve
 };

@@ -27,6 +27,7 @@ struct TrackingIteration {
   double rho_over_floor = 0.0;
   double projected_gradient_norm = 0.0;
   int newton_iterations = 0;
+  int factorizations = 0;  ///< numeric factorisations (state solves and adjoints)
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
   double seconds = 0.0;   ///< wall time of the run (over all resumes)
   bool replayed = false;  ///< served from the checkpoint of a resumed run (no state at hand)
@@ -65,6 +66,7 @@ struct ShapeTrackingSummary {
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
   double seconds_optimizer = 0.0;  ///< the rest: NLopt, records, callbacks
   int newton_iterations = 0;
+  int factorizations = 0;                  ///< numeric factorisations (state solves and adjoints)
   Eigen::VectorXd control;                 ///< the best m found
   Eigen::VectorXd displacement;            ///< its state u
   std::vector<TrackingIteration> history;  ///< accepted iterations (replayed ones included)

@@ -3,10 +3,10 @@
 /// Energy Π(u; m) = ∫ W(F) + W_m(F) dX, residual R = ∫ P ∇N dX and tangent
 /// K = ∫ ∇N C ∇N dX on the free dofs (SPEC §3), assembled in parallel with OpenMP.
 ///
-/// Determinism: elements are coloured so that no two elements of one colour share a
-/// node; colours are processed in a fixed order and each nonzero receives its element
-/// contributions in the same order whatever the number of threads, so the results are
-/// bitwise identical for 1 and N threads. The sparsity pattern of K (lower triangle,
+/// Determinism: element energies, residuals and matrices are computed in parallel into
+/// per-element buffers (passes of a fixed number of elements) and added to the global
+/// vectors serially in element order, so the results are bitwise identical for any
+/// number of threads. The sparsity pattern of K (lower triangle,
 /// free dofs) and the element-to-nonzero maps are built once in the constructor.
 
 #include <Eigen/Core>
@@ -37,8 +37,6 @@ class Assembler {
   const DofMap& dofs() const { return dofs_; }
   const Material& material() const { return *material_; }
   const Eigen::Vector3d& fiber() const { return a0_; }
-  /// Number of element colours (for reports).
-  int num_colours() const { return static_cast<int>(colours_.size()); }
 
   /// An all-zero tangent with the fixed sparsity pattern (free by free, lower triangle).
   SparseMatrix tangent_pattern() const;
@@ -65,14 +63,18 @@ class Assembler {
   Eigen::Matrix3d deformation_gradient(const Eigen::VectorXd& u, Eigen::Index e, int q) const;
 
  private:
+  struct ElementWork;
+  /// Π_e, r_e (nd) and K_e (nd by nd, row-major, local dof a·dim + i) of element e; null
+  /// outputs are skipped. Returns false if det F <= 0 at one of its points.
+  bool element_kernel(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp, Eigen::Index e,
+                      double* energy, double* residual, double* tangent, ElementWork& work) const;
+
   Mesh mesh_;
   ReferenceGeometry geometry_;
   std::shared_ptr<const Material> material_;
   Eigen::Vector3d a0_;
   DofMap dofs_;
   SparseMatrix pattern_;
-  /// Element colours: lists of element ids.
-  std::vector<std::vector<int>> colours_;
   /// Per element, (ndof_e)² entries: index into the tangent's values or -1.
   std::vector<std::vector<int>> nz_map_;
 };

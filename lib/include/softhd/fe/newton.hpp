@@ -23,6 +23,15 @@ struct NewtonOptions {
   /// |R(0; m)|₂ (the unbalanced fiber force of the load step), or |R(u₀; m)|₂ if that is 0.
   double relative_tolerance = 1e-9;
   double absolute_tolerance = 0.0;
+  /// If > 0, convergence also needs the last Newton correction to be small:
+  /// |Δu|_∞ <= displacement_tolerance · |u|_∞ (the test of FEniCS-style solvers). Soft
+  /// modes (a plate near buckling, a twisted beam) keep a displacement error of about
+  /// |R|/λ_min after the residual test alone; this removes it at the price of about one
+  /// more iteration. 0 = the residual test alone.
+  double displacement_tolerance = 0.0;
+  /// Relative residual at which an intermediate load step (t < 1) is accepted: the path
+  /// to the final load need not be followed to the final tolerance.
+  double intermediate_tolerance = 1e-9;
   /// Armijo constant c of Π(u + s du) <= Π(u) + c s R·du.
   double armijo = 1e-4;
   /// Step shrink factor and maximum number of shrinks of the line search.
@@ -89,6 +98,7 @@ struct NewtonIteration {
   double shift = 0.0;       ///< diagonal shift added because K was not positive definite
   int krylov = 0;           ///< PCG iterations of the direction (0: direct solve)
   bool factorized = false;  ///< the direction came with a new factorisation
+  bool truncated = false;   ///< PCG stopped at negative curvature (Newton–CG direction)
 };
 
 struct NewtonSummary {
@@ -149,9 +159,10 @@ class NewtonSolver {
   /// direction with K_path_ (the tangent at the last converged state).
   bool solve_load_step(const Eigen::MatrixXd& m, int load_step, double load, bool predictor,
                        Eigen::VectorXd* u, NewtonSummary* summary);
-  /// Newton direction du (num_dofs) from K du = −R to the relative residual eta.
-  bool direction(const SparseMatrix& K, const Eigen::VectorXd& R, double eta, Eigen::VectorXd* du,
-                 NewtonIteration* rec, NewtonSummary* summary);
+  /// Newton direction du (num_dofs) from K du = −R to the relative residual eta
+  /// (`reference`: the load step's R_ref).
+  bool direction(const SparseMatrix& K, const Eigen::VectorXd& R, double reference, double eta,
+                 Eigen::VectorXd* du, NewtonIteration* rec, NewtonSummary* summary);
   /// Energy and/or residual and/or tangent at (u, m), timed and counted.
   bool assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m, double* energy,
                 Eigen::VectorXd* residual, SparseMatrix* tangent, NewtonSummary* summary) const;
@@ -162,6 +173,7 @@ class NewtonSolver {
   SparseMatrix K_;       ///< tangent at the current iterate
   SparseMatrix K_path_;  ///< tangent at the last converged state (last_u_, last_m_)
   bool have_path_tangent_ = false;
+  bool last_truncated_ = false;  ///< the last direction was a truncated PCG one
   bool converged_ = false;
   Eigen::VectorXd last_u_;
   Eigen::MatrixXd last_m_;

@@ -30,6 +30,10 @@ struct TangentSolverOptions {
   /// stale: the next solve factorises its K first. A factorisation costs about as much as
   /// 15 PCG iterations on the paper's meshes.
   int refactor_after_iterations = 12;
+  /// Newton directions (solves that allow a shift): when PCG meets negative curvature
+  /// after its first iteration, return the iterate so far (a descent direction, as in
+  /// line-search Newton–CG) instead of factorising the indefinite K with a shift.
+  bool truncate_on_negative_curvature = true;
 
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
@@ -42,6 +46,7 @@ struct TangentSolveReport {
   int factorizations = 0;     ///< numeric factorisations made (shift search included)
   int krylov_iterations = 0;  ///< PCG iterations (0 after a direct solve)
   double shift = 0.0;         ///< μ of a direct solve with K + μ I (0 if none)
+  bool truncated = false;     ///< PCG stopped at negative curvature (a descent direction)
   double seconds_factorization = 0.0;
   double seconds_solve = 0.0;
 };
@@ -57,9 +62,11 @@ class TangentSolver {
   /// μ = 0 unless K is not positive definite and `allow_shift` is set (Newton directions;
   /// the report gives μ). Returns ok = false if K cannot be factorised (with μ = 0 when
   /// shifts are not allowed). K stores its lower triangle.
+  /// `allow_truncation`: with allow_shift, PCG may stop at negative curvature (see
+  /// TangentSolverOptions::truncate_on_negative_curvature).
   TangentSolveReport solve(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& K,
                            const Eigen::VectorXd& b, double tolerance, bool allow_shift,
-                           Eigen::VectorXd* x);
+                           Eigen::VectorXd* x, bool allow_truncation = true);
 
   /// True if a factorisation is kept.
   bool has_factorization() const { return have_factor_; }
@@ -71,7 +78,7 @@ class TangentSolver {
   /// PCG on K from x = 0 with the kept factorisation; false on negative curvature or no
   /// convergence within max_krylov_iterations.
   bool pcg(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& K, const Eigen::VectorXd& b,
-           double tolerance, Eigen::VectorXd* x, int* iterations) const;
+           double tolerance, Eigen::VectorXd* x, int* iterations, bool* negative_curvature) const;
 
   TangentSolverOptions options_;
   std::unique_ptr<LinearSolver> factor_;
