@@ -3,7 +3,7 @@
 BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: deps build test demo bench bench-quick fuzz clean format
+.PHONY: deps build test demo bench bench-quick fuzz docs clean format
 
 deps:
 	@scripts/install-deps.sh
@@ -42,6 +42,10 @@ fuzz: deps
 	  > $(FUZZ_DIR)/configure.log 2>&1 || (cat $(FUZZ_DIR)/configure.log; exit 1)
 	@cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzz_text_cloud fuzz_ply_cloud fuzz_scene fuzz_checkpoint
 	@scripts/fuzz.sh $(FUZZ_DIR) $(FUZZ_SECONDS)
+
+# The API reference of the public headers (Doxygen): $(BUILD_DIR)/docs/html/index.html.
+docs: deps
+	@scripts/docs.sh $(BUILD_DIR)/docs
 
 format:
 	@git ls-files '*.cpp' '*.hpp' | xargs clang-format -i

@@ -1,4 +1,4 @@
-// softhd distance: ρ̃_H between two cloud files (SPEC §2, §6).
+// softhd distance: ρ̃_H between two cloud files (docs/formulation.md §2, §6).
 
 #include <cmath>
 #include <cstdio>
@@ -18,7 +18,8 @@ namespace {
 
 const char* kUsage = R"(usage: softhd distance MOVING TARGET [options]
 
-Regularised Hausdorff distance rho between two point clouds (SPEC section 2).
+Regularised Hausdorff distance rho between two point clouds
+(docs/formulation.md section 2).
 MOVING and TARGET are text files (x y [z] [V] per line, whitespace or commas,
 '#' comments, V = 1 when absent) or PLY files (ascii or binary little-endian).
 

@@ -1,6 +1,7 @@
-// softhd optimise: track a target point cloud with the fiber tension m (SPEC §4, §5).
-// Progress one line per iteration; history.csv, summary.json (status "interrupted" until
-// the end) and the checkpoint log kept up to date as the run goes (resumable with --resume).
+// softhd optimise: track a target point cloud with the fiber tension m
+// (docs/formulation.md §4, §5). Progress one line per iteration; history.csv, summary.json
+// (status "interrupted" until the end) and the checkpoint log kept up to date as the run
+// goes (resumable with --resume).
 
 #include <chrono>
 #include <cmath>
@@ -35,7 +36,8 @@ namespace fs = std::filesystem;
 const char* kUsage = R"(usage: softhd optimise SCENE [options]
 
 Finds the fiber tension m, within the scene's bounds, whose equilibrium shape best
-matches the target cloud under the regularised Hausdorff distance (SPEC section 4).
+matches the target cloud under the regularised Hausdorff distance
+(docs/formulation.md section 4; the user's guide is docs/guide.md).
 
 options:
   --out DIR          output directory (default results/<scene name>)
@@ -63,7 +65,8 @@ options:
 
 scene targets ("target" in the scene file):
   {"kind": "arc", "angle": RAD [, "cells": [n1, n2, n3]]}  the plate bent into a
-      circular arc (SPEC section 5), sampled on its own cell-centred grid
+      circular arc (docs/formulation.md section 5.2), sampled on its own
+      cell-centred grid
   {"kind": "cloud", "file": PATH [, "solved_on": SCENE]}  a cloud file; with solved_on
       it holds the deformed nodes of a state solved on SCENE's mesh ('softhd forward
       --write-cloud'), which gives the known map for the matched floor and shape error

@@ -1,6 +1,6 @@
-// Run time against error of the regularised Hausdorff distance (SPEC §2): methods exact,
-// tree (several τ) and nearest, value only and value + gradient, on four cloud families
-// and a ladder of sizes N = M. Writes one CSV row per (cloud, size, method, τ, mode).
+// Run time against error of the regularised Hausdorff distance (docs/formulation.md §2): methods
+// exact, tree (several τ) and nearest, value only and value + gradient, on four cloud families and
+// a ladder of sizes N = M. Writes one CSV row per (cloud, size, method, τ, mode).
 //
 //   bench_hausdorff [--min-n 1000] [--max-n 1000000] [--repeats 3] [--csv FILE]
 //                   [--exact-max 100000] [--shapes cube,shell,clusters,plate]
@@ -98,7 +98,7 @@ PointCloud clusters(Eigen::Index n, unsigned seed) {
 }
 
 // A grid over [0,10]×[0,2]×[0,0.1] with about n points (at least 2 across the thickness),
-// optionally bent by the arc map of SPEC §5 (total angle θ).
+// optionally bent by the arc map of docs/formulation.md §5.2 (total angle θ).
 PointCloud plate(double n, double theta) {
   auto count = [](double h, double len) { return static_cast<int>(std::lround(len / h)) + 1; };
   double lo = 1e-4, hi = 10.0;

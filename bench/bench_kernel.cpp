@@ -1,7 +1,7 @@
-// Throughput of the exact pair kernel (SPEC §2): kernel (pair) evaluations per second
-// for value only and for value + gradient, on 1 and 2 threads, against a measured
-// ceiling: the rate at which this core retires the kernel's unavoidable sqrt and
-// division (r = √(r²), t = 1/(r + ε)), which bound the pair loop.
+// Throughput of the exact pair kernel (docs/formulation.md §2.5): kernel (pair) evaluations per
+// second for value only and for value + gradient, on 1 and 2 threads, against a measured ceiling:
+// the rate at which this core retires the kernel's unavoidable sqrt and division (r = √(r²), t =
+// 1/(r + ε)), which bound the pair loop.
 //
 //   bench_kernel [--n N] [--repeats R] [--csv FILE]
 //

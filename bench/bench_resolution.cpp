@@ -1,6 +1,7 @@
 // bench_resolution (issue 6): the bending scene against targets of differing resolution
 // and regularity, and the state mesh at three refinements against one fixed target.
-// Every target is the analytic arc (SPEC §5), so each run reports the true shape error.
+// Every target is the analytic arc (docs/formulation.md §5.2), so each run reports the true shape
+// error.
 //
 //   bench_resolution [--quick] [--csv FILE] [--max-iter N] [--max-seconds S]
 //

@@ -284,6 +284,38 @@ def section_hausdorff(out, report):
     return "".join(s)
 
 
+def section_forward(rows):
+    """softhd forward against FEniCS on the torsion beam (bench/bench_forward_fenics.py)."""
+    best = {}
+    for r in rows:
+        code = r["code"]
+        t = num(r, "solve_seconds")
+        if code not in best or t < num(best[code], "solve_seconds"):
+            best[code] = r
+    text = ("## Forward solve against FEniCS (issue 12)\n\n"
+            "Torsion beam, Q2 50x4x2 (13 635 dofs), uniform m = -5e5 from rest; softhd "
+            "(Newton with PCG on a kept Cholesky factorisation; `loadsteps`: with "
+            "`--load-increment 0.1 --intermediate-tol 1e-3`), softhd with a factorisation "
+            "of every tangent, and the independent FEniCS 2019 solver "
+            "`bench/peers/fenics_forward.py` (Q2, MUMPS, load stepping), run alternately. "
+            "Best solve time of the repeats (FEniCS: its `wall_solve_s`, JIT excluded), and "
+            "the largest displacement difference from FEniCS at three probes.\n\n")
+    f = best.get("fenics")
+    rows_out = []
+    for code in ("softhd", "softhd-loadsteps", "softhd-classical", "fenics"):
+        if code not in best:
+            continue
+        r = best[code]
+        speed = (num(f, "solve_seconds") / num(r, "solve_seconds")) if f else math.nan
+        rows_out.append([code, num(r, "solve_seconds"), r["newton_iterations"],
+                         r["factorizations"], speed, num(r, "max_abs_diff_vs_fenics")])
+    text += table(["code", "solve s", "Newton its", "factorisations", "x FEniCS speed",
+                   "max abs diff vs FEniCS"], rows_out)
+    if not f:
+        text += "\nFEniCS was not installed for this run (apt-get install python3-dolfin).\n"
+    return text
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__)
     p.add_argument("out")
@@ -304,7 +336,8 @@ def main():
     sections = [("resolution", lambda r: section_resolution(r, out, a.report)),
                 ("control", lambda r: section_control(r, out, a.report)),
                 ("stability", section_stability),
-                ("kernel", section_kernel)]
+                ("kernel", section_kernel),
+                ("forward_fenics", section_forward)]
     for name, make in sections:
         rows = load(os.path.join(out, name + ".csv"))
         if rows:

@@ -41,7 +41,7 @@ Eigen::VectorXd arc_displacement(const ArcMap& T, const fe::Mesh& mesh,
 PointCloud shifted(const PointCloud& cloud, const Eigen::Vector3d& shift);
 
 /// Arc targets of the plate [0, L] × [0, W] × [0, t] (`box` = the scene), each mapped by T
-/// with volumes × det ∇T (SPEC §5):
+/// with volumes × det ∇T (docs/formulation.md §5.2):
 /// a cell-centred grid with `counts` cells;
 PointCloud arc_grid(const fe::Scene& box, const ArcMap& T, const Eigen::Vector3i& counts);
 /// n uniform random points of the plate;

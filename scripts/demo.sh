@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The main job (make demo): optimise the bending scene (SPEC §5) against its half-circle
+# The main job (make demo): optimise the bending scene (docs/formulation.md §5.1) against its half-circle
 # target, then draw the convergence history and the final shape against the target.
 set -euo pipefail
 build=${1:-build}

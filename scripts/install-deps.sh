@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs the Debian packages softhd needs to build, test, run the demo and draw
-# its plots, and only those that are missing. Safe to run again.
+# Installs the Debian packages softhd needs to build, test, run the demo, draw its
+# plots and build the API reference (doxygen), and only those that are missing.
+# Safe to run again.
 set -euo pipefail
 
 packages=(
@@ -9,6 +10,7 @@ packages=(
   libsuitesparse-dev libopenblas0-pthread
   python3 python3-matplotlib python3-numpy
   clang libclang-rt-14-dev libomp-14-dev
+  doxygen
 )
 
 missing=()

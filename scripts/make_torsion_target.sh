@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates data/targets/torsion_target.ply, the torsion scene's target (issue 5, SPEC §5):
+# Regenerates data/targets/torsion_target.ply, the torsion scene's target (issue 5, docs/formulation.md §5.2):
 # the equilibrium of the torsion beam for the known control m*(X) = -1e6 * X3 / 2, solved on a
 # mesh 2x finer in each direction (data/targets/torsion_fine.json); its deformed nodes, in
 # node order, with their deformed volumes V_i = ∫ N_i J dX.

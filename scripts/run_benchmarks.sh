@@ -3,7 +3,7 @@
 #
 #   scripts/run_benchmarks.sh [--quick] [--only a,b,...] BUILD_DIR OUT_DIR REPORT
 #
-# Benchmarks: kernel, hausdorff, resolution, control, stability (--only picks some; the
+# Benchmarks: kernel, hausdorff, resolution, control, stability, forward_fenics (--only picks some; the
 # report then also uses the CSVs already in OUT_DIR for the others). Each writes
 # OUT_DIR/<name>.csv, its log OUT_DIR/<name>.log and OUT_DIR/<name>.meta (command, date,
 # commit, machine, load before and after); then bench/make_report.py writes REPORT and the
@@ -11,7 +11,7 @@
 # suite runs it). Exit code: non-zero if any benchmark or the report failed.
 set -euo pipefail
 quick=0
-only="kernel,hausdorff,resolution,control,stability"
+only="kernel,hausdorff,resolution,control,stability,forward_fenics"
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1; shift ;;
@@ -68,6 +68,9 @@ else
   run resolution "$b/bench_resolution" --csv "$out/resolution.csv"
   run control "$b/bench_control" --csv "$out/control.csv"
   run stability "$b/bench_stability" --csv "$out/stability.csv"
+  # softhd forward against FEniCS (skipped, with a line, without python3-dolfin).
+  run forward_fenics /usr/bin/python3 "$here/bench/bench_forward_fenics.py" "$build" \
+    --repeats 3 --csv "$out/forward_fenics.csv"
 fi
 /usr/bin/python3 "$here/bench/make_report.py" "$out" --report "$report" $([ $quick -eq 1 ] && echo --quick)
 echo "report: $report" >&2

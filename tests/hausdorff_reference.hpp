@@ -1,6 +1,6 @@
 #pragma once
-// Independent oracles for the Hausdorff tests: the naive formulas of SPEC §2 in long
-// double (no scaling, no trees), brute-force nearest distances, and random clouds.
+// Independent oracles for the Hausdorff tests: the naive formulas of docs/formulation.md §2.1 in
+// long double (no scaling, no trees), brute-force nearest distances, and random clouds.
 
 #include <Eigen/Core>
 #include <cmath>

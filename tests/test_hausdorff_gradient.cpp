@@ -1,4 +1,4 @@
-// Gradients of ρ̃ (SPEC §2) against finite differences: central differences per
+// Gradients of ρ̃ (docs/formulation.md §2.4) against finite differences: central differences per
 // coordinate and a Taylor test whose remainder must fall as h² (observed order ≥ 1.9).
 
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
-// Method tree (SPEC §2): every kernel sum within its guaranteed relative tolerance τ of
-// a long-double all-pairs reference, on random, clustered, surface and degenerate
-// clouds in 2D and 3D; the field and mean bounds derived in docs/tree_tolerance.md;
-// a tiny τ reproducing method exact.
+// Method tree (docs/formulation.md §2.5): every kernel sum within its guaranteed relative tolerance
+// τ of a long-double all-pairs reference, on random, clustered, surface and degenerate clouds in 2D
+// and 3D; the field and mean bounds derived in docs/tree_tolerance.md; a tiny τ reproducing method
+// exact.
 
 #include <gtest/gtest.h>
 
@@ -225,7 +225,7 @@ HausdorffOptions tree_options(double tau, int threads = 0) {
 
 // The propagated bounds of docs/tree_tolerance.md, e = (1 − τ)^(−1/α) − 1:
 // |Δd̃| ≤ e (d̃ + ε) per field value, |ΔA| ≤ e (A + ε), |ΔB| ≤ e (B + ε), |Δρ̃| ≤ e (ρ̃ + ε),
-// against the naive long-double formula of SPEC §2.
+// against the naive long-double formula of docs/formulation.md §2.1.
 TEST(HausdorffTree, FieldsAndMeansWithinThePropagatedBound) {
   for (int d : {2, 3})
     for (Shape shape : {Shape::cube, Shape::clusters, Shape::sphere, Shape::plane}) {

@@ -1,5 +1,5 @@
-// Values and fields of ρ̃ (SPEC §2) against independent oracles: the naive formula in
-// long double, brute-force nearest distances, analytic limits and invariances.
+// Values and fields of ρ̃ (docs/formulation.md §2.1) against independent oracles: the naive formula
+// in long double, brute-force nearest distances, analytic limits and invariances.
 
 #include <gtest/gtest.h>
 

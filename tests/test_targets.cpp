@@ -1,5 +1,6 @@
-// Targets with a known map (SPEC §5): the arc map against its geometric properties, and the
-// manufactured-state map against a displacement field its shape functions reproduce exactly.
+// Targets with a known map (docs/formulation.md §5.2): the arc map against its geometric
+// properties, and the manufactured-state map against a displacement field its shape functions
+// reproduce exactly.
 
 #include <gtest/gtest.h>
 

@@ -59,7 +59,7 @@ TEST(Shape, GaussRuleIntegratesOddDegreeExactly) {
 TEST(Mesh, BendingPlateCountsAndFaces) {
   const Mesh m = make_box_mesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(10, 2, 0.1),
                                Eigen::Vector3i(50, 5, 2), 2);
-  EXPECT_EQ(m.num_nodes(), 5555);  // (2·50+1)(2·5+1)(2·2+1), SPEC §5
+  EXPECT_EQ(m.num_nodes(), 5555);  // (2·50+1)(2·5+1)(2·2+1), docs/formulation.md §5.1
   EXPECT_EQ(m.num_elements(), 500);
   EXPECT_EQ(m.nodes_per_element(), 27);
   EXPECT_EQ(m.num_vertices(), 51 * 6 * 3);

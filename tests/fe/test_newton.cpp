@@ -30,7 +30,7 @@ Eigen::Vector2d solve2(const std::function<Eigen::Vector2d(const Eigen::Vector2d
 }
 
 // Stretches (λ1, λ2) of the stress-free homogeneous state under uniform m with fibers
-// along X1, from ∂W/∂λ1 = ∂W/∂λ2 = 0 written directly from the energy of SPEC §3:
+// along X1, from ∂W/∂λ1 = ∂W/∂λ2 = 0 written directly from the energy of docs/formulation.md §3.2:
 // 3D (λ2 = λ3): W = a(λ1² + 2λ2²) + b(λ2⁴ + 2λ1²λ2²) + c(J − 1)² − 2(a + 2b) ln J − ½ m λ1²,
 // J = λ1 λ2²; plane strain (λ3 = 1): W = a(λ1² + λ2² + 1) + b(λ1² + λ2² + λ1²λ2²)
 // + c(J − 1)² − 2(a + 2b) ln J − ½ m λ1², J = λ1 λ2.

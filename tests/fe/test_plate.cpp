@@ -1,5 +1,5 @@
-// Verification on the bending plate of SPEC §5 under m = -1e4 X3 / 0.1 (issue 4): the
-// tip displacement converges under refinement of Q2 meshes, and Q1 locks.
+// Verification on the bending plate of docs/formulation.md §5.1 under m = -1e4 X3 / 0.1 (issue 4):
+// the tip displacement converges under refinement of Q2 meshes, and Q1 locks.
 
 #include <gtest/gtest.h>
 

@@ -12,18 +12,21 @@ namespace softhd {
 /// Base of every exception softhd throws.
 class Error : public std::runtime_error {
  public:
+  /// An exception whose what() is `message` (one line naming the problem).
   explicit Error(const std::string& message) : std::runtime_error(message) {}
 };
 
 /// An argument or parameter outside its valid range.
 class InvalidArgument : public Error {
  public:
+  /// An exception whose what() is `message`.
   using Error::Error;
 };
 
 /// A file that cannot be opened, read, parsed or written.
 class FileError : public Error {
  public:
+  /// An exception whose what() is `message` (names the file, and the line if any).
   using Error::Error;
 };
 

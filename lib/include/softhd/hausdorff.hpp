@@ -1,6 +1,6 @@
 #pragma once
 /// \file hausdorff.hpp
-/// The regularised Hausdorff distance between two weighted point clouds (SPEC §2).
+/// The regularised Hausdorff distance between two weighted point clouds (docs/formulation.md §2).
 ///
 /// Moving cloud X = {x_i, V_i} (N points), target cloud Y = {y_j, W_j} (M points):
 ///
@@ -46,6 +46,7 @@ enum class Method {
 
 /// "exact" / "tree" / "nearest"; method_from_string throws InvalidArgument for other names.
 std::string to_string(Method method);
+/// The Method named "exact", "tree" or "nearest".
 Method method_from_string(const std::string& name);
 
 /// Evaluation settings.
@@ -75,6 +76,7 @@ struct HausdorffRequest {
   /// (their gradient rows are zero; e.g. clamped nodes). Empty: all points.
   Eigen::Array<bool, Eigen::Dynamic, 1> differentiate;
 
+  /// True if any gradient is requested.
   bool any_gradient() const { return gradient_points || gradient_volumes || gradient_target; }
 };
 
@@ -102,10 +104,14 @@ class HausdorffTarget {
   /// Throws InvalidArgument for invalid options.
   explicit HausdorffTarget(PointCloud target, HausdorffOptions options = {});
   ~HausdorffTarget();
+  /// Moves the cloud and its trees; the moved-from target must not be evaluated.
   HausdorffTarget(HausdorffTarget&&) noexcept;
+  /// Moves the cloud and its trees; the moved-from target must not be evaluated.
   HausdorffTarget& operator=(HausdorffTarget&&) noexcept;
 
+  /// The target cloud Y (the target's own copy).
   const PointCloud& cloud() const;
+  /// The options fixed at construction.
   const HausdorffOptions& options() const;
 
   /// ρ̃(moving, target) and what `request` asks for. Throws InvalidArgument when the

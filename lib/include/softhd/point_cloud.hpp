@@ -1,6 +1,6 @@
 #pragma once
 /// \file point_cloud.hpp
-/// A weighted point cloud (SPEC §1): N points in R^d (d = 2 or 3) with volumes
+/// A weighted point cloud (docs/formulation.md §1.1): N points in R^d (d = 2 or 3) with volumes
 /// V_i > 0 (areas in 2D).
 
 #include <Eigen/Core>
@@ -21,7 +21,9 @@ class PointCloud {
   /// All volumes equal to 1.
   explicit PointCloud(Eigen::MatrixXd points);
 
+  /// The dimension d (2 or 3).
   int dim() const { return static_cast<int>(points_.cols()); }
+  /// The number of points N.
   Eigen::Index size() const { return points_.rows(); }
   /// N by d positions.
   const Eigen::MatrixXd& points() const { return points_; }

@@ -1,6 +1,6 @@
 #pragma once
 /// \file samplers.hpp
-/// Point clouds sampled from simple shapes (SPEC §1): regular and Q2-node grids
+/// Point clouds sampled from simple shapes (docs/formulation.md §1.3): regular and Q2-node grids
 /// of a box, uniform random points in a box, uniform points on a sphere or circle.
 ///
 /// The dimension d of the result is the size of `lo`/`hi` (or `center`), 2 or 3.

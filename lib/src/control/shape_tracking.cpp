@@ -225,8 +225,8 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   Recorder recorder(objective, options, run_fingerprint(objective, lower, upper, m0_in, options));
 
   ShapeTrackingSummary s;
-  // Floors (SPEC §2, §5): the target against itself, and the body deformed exactly by
-  // the known map at this discretisation.
+  // Floors (docs/formulation.md §2.2, §5.3): the target against itself, and the body deformed
+  // exactly by the known map at this discretisation.
   const HausdorffTarget& Y = objective.target();
   const double m_points = static_cast<double>(Y.cloud().size());
   const bool self_floor = m_points * m_points <= options.self_floor_max_pairs;

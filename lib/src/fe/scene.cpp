@@ -152,7 +152,7 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
       control.contains("initial") ? r.number(control, "initial", "control.initial") : 0.0;
   if (!(s.control_lower <= s.control_upper)) r.fail("control.upper", "must be >= control.lower");
   if (!(s.control_upper < 2.0 * s.material->a()))
-    r.fail("control.upper", "must be < 2a (SPEC §3: existence needs m < 2a)");
+    r.fail("control.upper", "must be < 2a (docs/formulation.md §3.3: existence needs m < 2a)");
   if (doc.contains("target")) s.target_json = doc["target"].dump();
   // Faces and components are checked against the mesh now, so errors name the file.
   try {

@@ -1,5 +1,5 @@
-// Orchestration of the regularised Hausdorff evaluation (SPEC §2): nearest distances,
-// the two pair passes (and a third for target gradients), the means and the chain rule.
+// Orchestration of the regularised Hausdorff evaluation (docs/formulation.md §2): nearest
+// distances, the two pair passes (and a third for target gradients), the means and the chain rule.
 
 #include "softhd/hausdorff.hpp"
 

@@ -1,6 +1,6 @@
 #pragma once
-// The all-pairs kernel sums of SPEC §2 (internal). Runs N·M times per pass: this is
-// the hot loop of the exact method.
+// The all-pairs kernel sums of docs/formulation.md §2.5 (internal). Runs N·M times per pass: this
+// is the hot loop of the exact method.
 //
 // For an outer point o with scale c_o = r_min(o) + ε and inner points x_n:
 //     t_n = 1/(r_n + ε),  r_n = |o − x_n|            (φ(r_n))

@@ -1,5 +1,5 @@
 #pragma once
-// Scalar formulas of SPEC §2 evaluated in the scaled / log domain (internal).
+// Scalar formulas of docs/formulation.md §2.3 evaluated in the scaled / log domain (internal).
 // Each function is one formula; the comment gives the formula it implements.
 
 #include <Eigen/Core>

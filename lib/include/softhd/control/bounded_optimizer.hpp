@@ -1,6 +1,6 @@
 #pragma once
 /// \file bounded_optimizer.hpp
-/// Bound-constrained minimisation on NLopt (SPEC §4 "Optimiser"): MMA by default,
+/// Bound-constrained minimisation on NLopt (docs/formulation.md §4.5): MMA by default,
 /// CCSAQ, L-BFGS and SLSQP selectable, variables scaled to O(1), stopping on
 /// iterations, relative change, a target value and wall-clock time, and failed
 /// evaluations turned into rejected steps instead of crashes.
@@ -13,10 +13,13 @@
 
 namespace softhd {
 
+/// NLopt gradient algorithms for bound-constrained problems: MMA (the default), CCSAQ,
+/// L-BFGS and SLSQP.
 enum class Algorithm { mma, ccsaq, lbfgs, slsqp };
 
 /// "mma", "ccsaq", "lbfgs", "slsqp"; algorithm_from_string throws InvalidArgument.
 std::string to_string(Algorithm algorithm);
+/// The Algorithm named by to_string.
 Algorithm algorithm_from_string(const std::string& name);
 
 /// One evaluation of the objective. `gradient` is null when only the value is needed.
@@ -25,6 +28,7 @@ Algorithm algorithm_from_string(const std::string& name);
 using BoundedObjective =
     std::function<bool(const Eigen::VectorXd& x, double& value, Eigen::VectorXd* gradient)>;
 
+/// Settings of minimise(); defaults as documented per field (docs/formulation.md §4.5).
 struct BoundedOptimizerOptions {
   Algorithm algorithm = Algorithm::mma;  ///< NLopt algorithm
   int max_iterations = 200;              ///< accepted iterations (improvements of the best value)
@@ -58,17 +62,18 @@ struct IterationRecord {
   double seconds = 0.0;                  ///< wall time since the start of minimise()
 };
 
+/// What minimise() did: why it stopped, the best point and the accepted iterations.
 struct BoundedOptimizerSummary {
-  std::string termination;  ///< why it stopped, one line
-  bool converged = false;   ///< stopped on a tolerance or the target value
-  double initial_value = 0.0;
-  double final_value = 0.0;
-  Eigen::VectorXd x;  ///< the best point found
-  int iterations = 0;
-  int evaluations = 0;
-  int failed_evaluations = 0;
-  double seconds = 0.0;
-  std::vector<IterationRecord> history;
+  std::string termination;               ///< why it stopped, one line
+  bool converged = false;                ///< stopped on a tolerance or the target value
+  double initial_value = 0.0;            ///< f at the start (NaN if that evaluation failed)
+  double final_value = 0.0;              ///< f at the best point
+  Eigen::VectorXd x;                     ///< the best point found
+  int iterations = 0;                    ///< accepted iterations
+  int evaluations = 0;                   ///< objective evaluations, including the start
+  int failed_evaluations = 0;            ///< evaluations that returned false (rejected points)
+  double seconds = 0.0;                  ///< wall time of minimise()
+  std::vector<IterationRecord> history;  ///< one record per accepted iteration
 };
 
 /// Minimises f(x) subject to lower ≤ x ≤ upper.

@@ -40,27 +40,27 @@ std::string exact_text(double value);
 
 /// One evaluation as the optimiser saw it.
 struct LoggedEvaluation {
-  Eigen::VectorXd x;
-  bool gradient = false;  ///< the optimiser asked for the gradient
-  ShapeEvaluation result;
-  double seconds = 0.0;  ///< the run's wall time (over all resumes) when it ended
+  Eigen::VectorXd x;       ///< the control the optimiser asked about
+  bool gradient = false;   ///< the optimiser asked for the gradient
+  ShapeEvaluation result;  ///< what the objective returned
+  double seconds = 0.0;    ///< the run's wall time (over all resumes) when it ended
 };
 
 /// The objective's warm-start states after a given number of evaluations.
 struct RunSnapshot {
-  std::int64_t evaluations = 0;  ///< evaluations logged before it
-  std::int64_t iterations = 0;   ///< accepted iterations by then
-  std::vector<WarmStart> states;
+  std::int64_t evaluations = 0;   ///< evaluations logged before it
+  std::int64_t iterations = 0;    ///< accepted iterations by then
+  std::vector<WarmStart> states;  ///< ShapeObjective::warm_starts(), most recent first
   fe::State best;  ///< the state of the best control so far (the final solve starts there)
 };
 
 /// A checkpoint as read back: the evaluations the states follow, and the states.
 struct RunLog {
-  RunFingerprint fingerprint;
-  std::uint64_t run_id = 0;  ///< ties the states file to its log
-  std::vector<LoggedEvaluation> evaluations;
-  RunSnapshot snapshot;
-  bool has_snapshot = false;
+  RunFingerprint fingerprint;                 ///< what the run depends on
+  std::uint64_t run_id = 0;                   ///< ties the states file to its log
+  std::vector<LoggedEvaluation> evaluations;  ///< those the states follow, in order
+  RunSnapshot snapshot;                       ///< the states (if has_snapshot)
+  bool has_snapshot = false;                  ///< false: no states file, nothing to replay
 };
 
 /// Parses a log's bytes (every whole evaluation record, no states); `source` names it in
@@ -97,6 +97,7 @@ class RunLogWriter {
   RunLogWriter(const RunLogWriter&) = delete;
   RunLogWriter& operator=(const RunLogWriter&) = delete;
 
+  /// Appends one evaluation record and flushes it. Throws FileError.
   void append(const LoggedEvaluation& evaluation);
   /// Rewrites `<path>.states` atomically.
   void write_states(const RunSnapshot& snapshot);

@@ -1,6 +1,6 @@
 #pragma once
 /// \file shape_objective.hpp
-/// The shape-tracking objective of SPEC §4 and its adjoint gradient:
+/// The shape-tracking objective of docs/formulation.md §4.2 and its adjoint gradient:
 ///
 ///     J(m) = ρ̃_H(Φ_m(Ω₀), Ω_d) + (M/2)∫m² + (ε_m/2)∫|∇m|²
 ///
@@ -30,11 +30,14 @@ enum class Particles { nodes, quadrature };
 /// Volumes of the moving cloud: fixed reference volumes or the deformed ones.
 enum class ParticleVolumes { reference, deformed };
 
+/// "nodes" or "quadrature".
 std::string to_string(Particles p);
+/// "reference" or "deformed".
 std::string to_string(ParticleVolumes v);
 Particles particles_from_string(const std::string& name);               ///< "nodes"/"quadrature"
 ParticleVolumes particle_volumes_from_string(const std::string& name);  ///< "reference"/"deformed"
 
+/// Settings of the objective J(m) (docs/formulation.md §4.2, §4.3); defaults per field.
 struct ShapeObjectiveOptions {
   HausdorffOptions hausdorff;                            ///< α, β, γ, ε, method, threads
   Particles particles = Particles::nodes;                ///< moving cloud: nodes (paper)
@@ -49,19 +52,25 @@ struct ShapeObjectiveOptions {
 struct ShapeEvaluation {
   bool ok = false;  ///< false: the state solve failed (see failure)
   double J = 0.0;   ///< ρ̃ + regularisation
+  ///@{
+  /// ρ̃, A and B of the deformed body against the target (docs/formulation.md §2.1).
   double rho = 0.0, A = 0.0, B = 0.0;
-  double regularisation = 0.0;
-  Eigen::VectorXd gradient;  ///< dJ/dm (if requested and ok)
-  int newton_iterations = 0;
-  int factorizations = 0;  ///< numeric factorisations of the state solve and the adjoint
+  ///@}
+  double regularisation = 0.0;  ///< the Tikhonov terms of J
+  Eigen::VectorXd gradient;     ///< dJ/dm (if requested and ok)
+  int newton_iterations = 0;    ///< Newton iterations of the state solve
+  int factorizations = 0;       ///< numeric factorisations of the state solve and the adjoint
+  ///@{
+  /// Wall time (seconds) of the state solve, the distance and the adjoint.
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
+  ///@}
   std::string failure;  ///< the Newton report of a failed solve
 };
 
 /// A converged state kept for warm starts, with its control (empty for the rest state).
 struct WarmStart {
-  Eigen::VectorXd m;
-  fe::State state;
+  Eigen::VectorXd m;  ///< the control (empty for the rest state)
+  fe::State state;    ///< its converged state
 };
 
 /// J(m) and dJ/dm for one body, control space and target. Keeps the last converged
@@ -84,8 +93,11 @@ class ShapeObjective {
   /// Puts a converged state for the control m first among the warm starts (e.g. the best
   /// one, so that evaluating m again starts, and stays, exactly there).
   void remember_state(const Eigen::VectorXd& m, const fe::State& state);
+  /// The target with its trees.
   const HausdorffTarget& target() const;
+  /// The options (with the Newton absolute tolerance filled in if it was 0).
   const ShapeObjectiveOptions& options() const;
+  /// The body's assembler.
   const fe::Assembler& assembler() const;
   /// The warm-start states, most recent first (what the next evaluation starts from).
   const std::deque<WarmStart>& warm_starts() const;

@@ -1,7 +1,7 @@
 #pragma once
 /// \file shape_tracking.hpp
-/// One shape-tracking run (SPEC §4, issue 5): the floors, the optimisation of J(m) on the
-/// bounded optimiser, per-iteration records with stage timings, and the true shape error
+/// One shape-tracking run (docs/formulation.md §4, issue 5): the floors, the optimisation of J(m)
+/// on the bounded optimiser, per-iteration records with stage timings, and the true shape error
 /// where the target comes from a known map T. The CLI `softhd optimise` and the
 /// benchmarks both run through here.
 
@@ -20,19 +20,29 @@ namespace softhd {
 
 /// One accepted iteration, with the stage timings of the evaluation that produced it.
 struct TrackingIteration {
+  ///@{
+  /// Iteration number and evaluation count (1-based, continued after a resume).
   int iteration = 0, evaluation = 0;
+  ///@}
+  ///@{
+  /// J, ρ̃, A and B of the accepted evaluation.
   double J = 0.0, rho = 0.0, A = 0.0, B = 0.0;
+  ///@}
   /// ρ̃ / matched floor (self floor without a known map); NaN if neither is known (no
   /// map, and the self floor skipped for a huge target).
   double rho_over_floor = 0.0;
-  double projected_gradient_norm = 0.0;
-  int newton_iterations = 0;
-  int factorizations = 0;  ///< numeric factorisations (state solves and adjoints)
+  double projected_gradient_norm = 0.0;  ///< in the optimiser's scaled variables
+  int newton_iterations = 0;             ///< of this evaluation's state solve
+  int factorizations = 0;                ///< numeric factorisations (state solve and adjoint)
+  ///@{
+  /// Wall time (seconds) of this evaluation's state solve, distance and adjoint.
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
+  ///@}
   double seconds = 0.0;   ///< wall time of the run (over all resumes)
   bool replayed = false;  ///< served from the checkpoint of a resumed run (no state at hand)
 };
 
+/// Settings of track_shape(); defaults per field.
 struct ShapeTrackingOptions {
   BoundedOptimizerOptions optimizer;  ///< algorithm, stopping, move limit
   /// The self floor ρ̃(Ω_d, Ω_d) costs M² pairs: skipped (nullopt) above this many, e.g. for a
@@ -51,21 +61,35 @@ struct ShapeTrackingOptions {
   RunFingerprint fingerprint;
 };
 
+/// The result of track_shape(): floors, final values, why it stopped, the shape error and
+/// the time split (docs/formulation.md §5.3).
 struct ShapeTrackingSummary {
-  double rho_start = 0.0;
+  double rho_start = 0.0;               ///< ρ̃ at the starting control
   std::optional<double> floor_self;     ///< ρ̃(Ω_d, Ω_d), unless skipped (see options)
   std::optional<double> floor_matched;  ///< ρ̃(T(Ω₀), Ω_d), with a known map
   /// The floor progress is judged against: matched, else self, else none.
   std::optional<double> floor() const { return floor_matched ? floor_matched : floor_self; }
+  ///@{
+  /// ρ̃ and J at the best control.
   double rho_final = 0.0, J_final = 0.0;
-  int iterations = 0, evaluations = 0, failed_evaluations = 0;  ///< over all resumes
-  std::string termination;
-  bool converged = false;
-  std::optional<double> shape_error_max, shape_error_rms;  ///< |x_i − T(X_i)| over the nodes
-  double seconds = 0.0;                                    ///< wall time over all resumes
+  ///@}
+  ///@{
+  /// Accepted iterations, evaluations and failed evaluations, over all resumes.
+  int iterations = 0, evaluations = 0, failed_evaluations = 0;
+  ///@}
+  std::string termination;  ///< why the optimiser stopped, one line
+  bool converged = false;   ///< stopped on a tolerance, not on a limit
+  ///@{
+  /// Max and RMS of |x_i − T(X_i)| over the nodes (with a known map only).
+  std::optional<double> shape_error_max, shape_error_rms;
+  ///@}
+  double seconds = 0.0;  ///< wall time over all resumes
+  ///@{
+  /// Total wall time (seconds) of the state solves, distances and adjoints.
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
-  double seconds_optimizer = 0.0;  ///< the rest: NLopt, records, callbacks
-  int newton_iterations = 0;
+  ///@}
+  double seconds_optimizer = 0.0;          ///< the rest: NLopt, records, callbacks
+  int newton_iterations = 0;               ///< over all state solves of this run
   int factorizations = 0;                  ///< numeric factorisations (state solves and adjoints)
   Eigen::VectorXd control;                 ///< the best m found
   Eigen::VectorXd displacement;            ///< its state u

@@ -1,8 +1,8 @@
 #pragma once
 /// \file targets.hpp
-/// Targets with a known map T (SPEC §5): the bending scene's circular arc, analytic at
-/// any resolution, and a manufactured state (the torsion target: the deformed nodes of a
-/// state solved on a finer mesh, interpolated by that mesh's shape functions). A known map gives
+/// Targets with a known map T (docs/formulation.md §5.2): the bending scene's circular arc,
+/// analytic at any resolution, and a manufactured state (the torsion target: the deformed nodes of
+/// a state solved on a finer mesh, interpolated by that mesh's shape functions). A known map gives
 /// the matched floor ρ̃(T(Ω₀), Ω_d) and the true shape error |x_i − T(X_i)|.
 
 #include <Eigen/Core>
@@ -13,7 +13,7 @@
 namespace softhd {
 
 /// The plate [0, length] × [0, width] × [0, thickness], clamped at X1 = 0, bent about
-/// the X2 axis through the total angle θ, curling towards +X3 (SPEC §5). With
+/// the X2 axis through the total angle θ, curling towards +X3 (docs/formulation.md §5.2). With
 /// R = length/θ and z = X3 − thickness/2:
 ///
 ///     T(X) = ((R − z) sin(X1/R), X2, thickness/2 + R − (R − z) cos(X1/R)),
@@ -21,14 +21,16 @@ namespace softhd {
 ///
 /// T is the identity on the clamped face X1 = 0 and preserves the mid-surface's length.
 struct ArcMap {
-  double length = 10.0;
-  double thickness = 0.1;
+  double length = 10.0;              ///< L, along X1 (the clamp is at X1 = 0)
+  double thickness = 0.1;            ///< t, along X3
   double angle = 3.141592653589793;  ///< θ in (0, 2π]
 
   /// Throws InvalidArgument for a non-positive length or thickness, θ outside
   /// (0, 2π], or R ≤ thickness/2 (the inner surface would fold).
   void validate() const;
+  /// T(X).
   Eigen::Vector3d operator()(const Eigen::Vector3d& X) const;
+  /// det ∇T(X) = 1 − z/R.
   double jacobian(const Eigen::Vector3d& X) const;
   /// The cloud mapped by T, volumes multiplied by det ∇T (exact for a cell-centred
   /// cloud to second order in the cell size; the mapped volumes sum to ∫ det ∇T).
@@ -47,6 +49,7 @@ class NodalMap {
  public:
   /// Throws InvalidArgument if the counts or dimensions of `source` and `deformed` differ.
   NodalMap(fe::Mesh source, const PointCloud& deformed);
+  /// The mesh the state was solved on.
   const fe::Mesh& source() const { return source_; }
   /// u_T(X) = T(X) − X at one reference point. Throws InvalidArgument outside the source body.
   Eigen::VectorXd displacement_at(const Eigen::VectorXd& X) const;

@@ -1,6 +1,6 @@
 #pragma once
 /// \file adjoint.hpp
-/// The adjoint gradient of a functional J(u(m), m) w.r.t. the control (SPEC §4):
+/// The adjoint gradient of a functional J(u(m), m) w.r.t. the control (docs/formulation.md §4.4):
 /// solve K λ = g = ∂J/∂u on the free dofs with the converged tangent, then dJ/dm_k = ∂J/∂m_k + ∫
 /// M_k (F a₀)·(∇λ a₀) dX, ∇λ = Σ_a λ_a ⊗ ∇N_a. (Sign: R(u; m) = ∂Π/∂u = 0 and ∂R/∂m_k · v = −∫ M_k
 /// (F a₀)·(∇v a₀) dX, so dJ/dm_k = −λ·∂R/∂m_k; checked by the Taylor test in

@@ -1,7 +1,7 @@
 #pragma once
 /// \file assembly.hpp
 /// Energy Π(u; m) = ∫ W(F) + W_m(F) dX, residual R = ∫ P ∇N dX and tangent
-/// K = ∫ ∇N C ∇N dX on the free dofs (SPEC §3), assembled in parallel with OpenMP.
+/// K = ∫ ∇N C ∇N dX on the free dofs (docs/formulation.md §3.5), assembled in parallel with OpenMP.
 ///
 /// Determinism: element energies, residuals and matrices are computed in parallel into
 /// per-element buffers (passes of a fixed number of elements) and added to the global
@@ -32,10 +32,15 @@ class Assembler {
   Assembler(Mesh mesh, std::shared_ptr<const Material> material, const Eigen::Vector3d& a0,
             const std::vector<DirichletConstraint>& constraints);
 
+  /// The mesh.
   const Mesh& mesh() const { return mesh_; }
+  /// Its quadrature data.
   const ReferenceGeometry& geometry() const { return geometry_; }
+  /// The numbering of the free dofs.
   const DofMap& dofs() const { return dofs_; }
+  /// The stored energy.
   const Material& material() const { return *material_; }
+  /// The unit fiber direction a₀.
   const Eigen::Vector3d& fiber() const { return a0_; }
 
   /// An all-zero tangent with the fixed sparsity pattern (free by free, lower triangle).
@@ -56,7 +61,7 @@ class Assembler {
   /// det F at every quadrature point, E by nq.
   Eigen::MatrixXd jacobians(const Eigen::VectorXd& u) const;
   /// w_q det J0 (F a₀)·(∇λ a₀) at every quadrature point (E by nq), ∇λ = Σ_a λ_a ⊗ ∇N_a:
-  /// the integrand of the adjoint control gradient (SPEC §4).
+  /// the integrand of the adjoint control gradient (docs/formulation.md §4.4).
   Eigen::MatrixXd fiber_sensitivity(const Eigen::VectorXd& u, const Eigen::VectorXd& lambda) const;
 
   /// Deformation gradient (3 by 3, plane strain in 2D) at point q of element e.

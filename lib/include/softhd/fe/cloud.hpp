@@ -1,9 +1,9 @@
 #pragma once
 /// \file cloud.hpp
-/// The moving point cloud of the deformed body (SPEC §1, §4) and the chain rule back to the
-/// displacement: the particles are the mesh nodes (x_i = X_i + u_i) or the quadrature points
-/// (x_q = Σ_a N_a(X_q) x_a); the volumes are the reference ones (V_i = ∫ N_i dX, or w_q det J0)
-/// or the deformed ones (V_i = ∫ N_i J dX, or w_q det J0 J_q).
+/// The moving point cloud of the deformed body (docs/formulation.md §1.2, §4.3) and the chain rule
+/// back to the displacement: the particles are the mesh nodes (x_i = X_i + u_i) or the quadrature
+/// points (x_q = Σ_a N_a(X_q) x_a); the volumes are the reference ones (V_i = ∫ N_i dX, or w_q det
+/// J0) or the deformed ones (V_i = ∫ N_i J dX, or w_q det J0 J_q).
 
 #include <Eigen/Core>
 
@@ -12,7 +12,9 @@
 
 namespace softhd::fe {
 
+/// The particles of the moving cloud: mesh nodes or quadrature points.
 enum class CloudPoints { kNodes, kQuadraturePoints };
+/// The particles' volumes: reference ones, or deformed ones (times J).
 enum class CloudVolumes { kReference, kDeformed };
 
 /// The deformed cloud for displacement u.

@@ -1,6 +1,6 @@
 #pragma once
 /// \file control.hpp
-/// Discretisations of the active tension m(X) (SPEC §4): nodal values on the mesh
+/// Discretisations of the active tension m(X) (docs/formulation.md §4.1): nodal values on the mesh
 /// vertices interpolated with Q1 (bi/trilinear) shape functions on every element (also on
 /// Q2 meshes), so bounds hold pointwise, or one value per element.
 
@@ -12,6 +12,7 @@
 
 namespace softhd::fe {
 
+/// Where the control values live: mesh vertices (Q1 interpolation) or elements (constant).
 enum class ControlKind { kVertex, kElement };
 
 /// Parses "vertex" / "element"; throws InvalidArgument otherwise.
@@ -20,8 +21,10 @@ ControlKind parse_control_kind(const std::string& name);
 /// The linear map m ↦ m(X_q) at the quadrature points, m(X_q) = Σ_k M_k(X_q) m_k.
 class ControlSpace {
  public:
+  /// The control space of `kind` on `mesh`, with `geometry` its quadrature data.
   ControlSpace(const Mesh& mesh, const ReferenceGeometry& geometry, ControlKind kind);
 
+  /// Vertex or element controls.
   ControlKind kind() const { return kind_; }
   /// Number of control values: vertices or elements.
   Eigen::Index size() const { return size_; }
@@ -31,7 +34,8 @@ class ControlSpace {
   Eigen::VectorXd from_quadrature(const Eigen::MatrixXd& v) const;
   /// Reference positions of the controls (vertices, or element centres): size by dim.
   Eigen::MatrixXd positions(const Mesh& mesh) const;
-  /// (M/2) ∫ m² + (ε/2) ∫ |∇m|² and its gradient w.r.t. m (SPEC §4); `gradient` may be null.
+  /// (M/2) ∫ m² + (ε/2) ∫ |∇m|² and its gradient w.r.t. m (docs/formulation.md §4.2); `gradient`
+  /// may be null.
   double regularisation(const Eigen::VectorXd& m, double M, double eps,
                         Eigen::VectorXd* gradient) const;
 

@@ -19,16 +19,17 @@ struct DirichletConstraint {
 
 /// Numbering of the free dofs.
 struct DofMap {
-  int dim = 3;
+  int dim = 3;                ///< components per node
   Eigen::Index num_dofs = 0;  ///< num_nodes · dim
-  Eigen::Index num_free = 0;
+  Eigen::Index num_free = 0;  ///< dofs not fixed by a constraint
   /// Free index of each dof, or -1 if it is fixed.
   Eigen::VectorXi free_index;
   /// Dof of each free index.
   Eigen::VectorXi free_dofs;
 
-  /// Full vector (fixed entries zero) from free values, and back.
+  /// Full vector (fixed entries zero) from free values.
   Eigen::VectorXd expand(const Eigen::VectorXd& free_values) const;
+  /// The free entries of a full vector.
   Eigen::VectorXd restrict(const Eigen::VectorXd& full_values) const;
 };
 

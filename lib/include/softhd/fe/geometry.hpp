@@ -2,7 +2,7 @@
 /// \file geometry.hpp
 /// Reference-configuration data at the quadrature points of a mesh, computed once:
 /// shape values, gradients dN/dX and weights w_q det(dX/dxi). Also the lumped nodal
-/// volumes V_i = ∫ N_i dX (SPEC §1).
+/// volumes V_i = ∫ N_i dX (docs/formulation.md §1.2).
 
 #include <Eigen/Core>
 
@@ -16,9 +16,13 @@ class ReferenceGeometry {
   /// Throws InvalidArgument if an element is inverted (det(dX/dxi) <= 0).
   explicit ReferenceGeometry(const Mesh& mesh);
 
+  /// The dimension d (2 or 3).
   int dim() const { return dim_; }
+  /// Nodes per element, (p+1)^d.
   int nodes_per_element() const { return nen_; }
+  /// Quadrature points per element, (p+1)^d.
   int points_per_element() const { return nq_; }
+  /// The number of elements E.
   Eigen::Index num_elements() const { return weights_.rows(); }
   /// Shape values: nq by nen (the same on every element).
   const Eigen::MatrixXd& shape_values() const { return N_; }

@@ -13,6 +13,7 @@
 
 namespace softhd::fe {
 
+/// The sparse direct solvers for the symmetric positive definite tangent.
 enum class LinearSolverType {
   kEigenLLT,   ///< Eigen::SimplicialLLT (AMD ordering)
   kEigenLDLT,  ///< Eigen::SimplicialLDLT (AMD ordering)
@@ -24,6 +25,8 @@ std::string to_string(LinearSolverType type);
 /// Inverse of to_string; throws InvalidArgument listing the valid names.
 LinearSolverType parse_linear_solver(const std::string& name);
 
+/// A sparse symmetric positive definite direct solver: analyse a pattern once, factorise
+/// matrices with that pattern, solve with the last factorisation.
 class LinearSolver {
  public:
   virtual ~LinearSolver() = default;
@@ -46,6 +49,7 @@ class LinearSolver {
   virtual bool factorize(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& K) = 0;
   /// x = K⁻¹ b with the last successful factorisation.
   virtual Eigen::VectorXd solve(const Eigen::VectorXd& b) const = 0;
+  /// Which solver this is.
   virtual LinearSolverType type() const = 0;
 
  private:
@@ -53,6 +57,7 @@ class LinearSolver {
   Eigen::SparseMatrix<double, Eigen::ColMajor, int> shifted_;
 };
 
+/// A new solver of the given type.
 std::unique_ptr<LinearSolver> make_linear_solver(LinearSolverType type);
 
 }  // namespace softhd::fe

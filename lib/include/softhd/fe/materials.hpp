@@ -1,6 +1,6 @@
 #pragma once
 /// \file materials.hpp
-/// Polyconvex stored energies W(F, H, J) (SPEC §3) and the active fiber term
+/// Polyconvex stored energies W(F, H, J) (docs/formulation.md §3.2) and the active fiber term
 /// W_m = −½ m |F a₀|². A material supplies W and its derivatives w.r.t. F, H, J;
 /// kinematics.hpp turns them into P and C. Materials are immutable and safe to share
 /// between threads.
@@ -21,7 +21,7 @@ class Material {
   /// the second derivatives.
   virtual EnergyDerivatives evaluate(const Eigen::Matrix3d& F, const Eigen::Matrix3d& H, double J,
                                      bool second) const = 0;
-  /// The coefficient a of |F|²: the active tension must satisfy m < 2a (SPEC §3).
+  /// The coefficient a of |F|²: the active tension must satisfy m < 2a (docs/formulation.md §3.3).
   virtual double a() const = 0;
   /// A stiffness scale (for tolerances), e.g. a + b + c.
   virtual double stiffness_scale() const = 0;

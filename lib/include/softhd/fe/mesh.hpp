@@ -1,6 +1,6 @@
 #pragma once
 /// \file mesh.hpp
-/// Structured Lagrange meshes of a box (SPEC §3): 8-node (Q1) and 27-node (Q2)
+/// Structured Lagrange meshes of a box (docs/formulation.md §3.5): 8-node (Q1) and 27-node (Q2)
 /// hexahedra in 3D, 4-node and 9-node quadrilaterals in 2D (plane strain).
 
 #include <Eigen/Core>
@@ -31,13 +31,19 @@ struct Mesh {
   Eigen::VectorXi vertex_nodes;
   /// Named boundary faces ("x0", "x1", "y0", "y1", and in 3D "z0", "z1"): sorted node ids.
   std::map<std::string, std::vector<int>> boundary_nodes;
+  ///@{
   /// Structured-box data, used to locate points: lower corner, upper corner, cells.
   Eigen::VectorXd box_lo, box_hi;
   Eigen::VectorXi cells;
+  ///@}
 
+  /// The number of nodes.
   Eigen::Index num_nodes() const { return nodes.rows(); }
+  /// The number of elements.
   Eigen::Index num_elements() const { return elements.rows(); }
+  /// The number of vertices (element corners).
   Eigen::Index num_vertices() const { return vertex_nodes.size(); }
+  /// Nodes per element, (p+1)^dim.
   int nodes_per_element() const { return static_cast<int>(elements.cols()); }
 
   /// Node ids of a named face; throws InvalidArgument naming the face if unknown.
@@ -47,7 +53,10 @@ struct Mesh {
 /// Counts of a structured box mesh in 64 bits (they can exceed 2^31 before anything is
 /// allocated), and an estimate of the memory a state solve on it needs.
 struct MeshSize {
+  ///@{
+  /// Counts of the mesh and of the problem on it.
   std::int64_t nodes = 0, elements = 0, dofs = 0, quadrature_points = 0;
+  ///@}
   /// Estimated bytes: mesh, quadrature data, the sparse tangent and its factor (taken as
   /// twice the tangent), and a handful of dof vectors. An estimate, not a bound.
   double bytes = 0.0;

@@ -1,8 +1,8 @@
 #pragma once
 /// \file newton.hpp
-/// Newton–Raphson for the equilibrium R(u; m) = 0 (SPEC §3): energy-based backtracking
-/// line search that never accepts det F <= 0 at a quadrature point, adaptive load stepping
-/// on m when a load step fails, warm start from any state, and the factorisation of the
+/// Newton–Raphson for the equilibrium R(u; m) = 0 (docs/formulation.md §3.6): energy-based
+/// backtracking line search that never accepts det F <= 0 at a quadrature point, adaptive load
+/// stepping on m when a load step fails, warm start from any state, and the factorisation of the
 /// converged tangent kept for the adjoint. Non-convergence is a status in the summary,
 /// never an exception; misuse (wrong sizes, invalid options) throws InvalidArgument.
 
@@ -16,12 +16,14 @@
 
 namespace softhd::fe {
 
+/// Settings of NewtonSolver; defaults per field (docs/formulation.md §3.6).
 struct NewtonOptions {
   /// Newton iterations allowed per load step.
   int max_iterations = 25;
   /// Converged when |R|₂ <= relative_tolerance · R_ref + absolute_tolerance, with R_ref =
   /// |R(0; m)|₂ (the unbalanced fiber force of the load step), or |R(u₀; m)|₂ if that is 0.
   double relative_tolerance = 1e-9;
+  /// The absolute part of the test above (a force).
   double absolute_tolerance = 0.0;
   /// If > 0, convergence also needs the last Newton correction to be small:
   /// |Δu|_∞ <= displacement_tolerance · |u|_∞ (the test of FEniCS-style solvers). Soft
@@ -36,6 +38,7 @@ struct NewtonOptions {
   double armijo = 1e-4;
   /// Step shrink factor and maximum number of shrinks of the line search.
   double backtrack = 0.5;
+  /// See backtrack.
   int max_line_search_steps = 40;
   /// Nonmonotone (watchdog) line search: a full step that raises the energy is taken
   /// tentatively and kept only if the next full step ends below the Armijo line of the
@@ -45,6 +48,7 @@ struct NewtonOptions {
   /// smallest one tried before giving up; increments halve on failure and double after
   /// a step that converged in fewer than max_iterations / 2 iterations.
   double initial_load_increment = 1.0;
+  /// See initial_load_increment.
   double min_load_increment = 1.0 / 4096.0;
   /// Take the first iteration of each load step with the tangent at the last converged
   /// state (u_t, m_t): u_t − K(u_t, m_t)⁻¹ R(u_t; m_{t+Δ}) is the first-order (Euler)
@@ -79,12 +83,14 @@ struct NewtonOptions {
   bool IsValid(std::string* error) const;
 };
 
+/// How a Newton solve ended.
 enum class NewtonStatus {
   kConverged,
   kLoadIncrementTooSmall,  ///< a load step failed with the smallest increment
   kTooManyLoadSteps,
   kTooManyIterations,  ///< max_total_iterations reached
 };
+/// A short name of the status.
 std::string to_string(NewtonStatus status);
 
 /// One Newton iteration.
@@ -101,23 +107,28 @@ struct NewtonIteration {
   bool truncated = false;   ///< PCG stopped at negative curvature (Newton–CG direction)
 };
 
+/// The result of NewtonSolver::solve: status, counts, residuals and timings.
 struct NewtonSummary {
-  NewtonStatus status = NewtonStatus::kConverged;
-  int newton_iterations = 0;  ///< total, over all load steps
-  int load_steps = 0;         ///< attempted (successful + failed)
-  int failed_load_steps = 0;
-  double final_load = 0.0;  ///< fraction of the change of m reached (1 on success)
-  double residual = 0.0;    ///< final |R|₂
-  double residual_reference = 0.0;
-  double energy = 0.0;  ///< final Π
+  NewtonStatus status = NewtonStatus::kConverged;  ///< converged, or why not
+  int newton_iterations = 0;                       ///< total, over all load steps
+  int load_steps = 0;                              ///< attempted (successful + failed)
+  int failed_load_steps = 0;        ///< load steps that did not converge (then halved)
+  double final_load = 0.0;          ///< fraction of the change of m reached (1 on success)
+  double residual = 0.0;            ///< final |R|₂
+  double residual_reference = 0.0;  ///< R_ref of the convergence test
+  double energy = 0.0;              ///< final Π
+  ///@{
+  /// Wall time (seconds) of assembly, factorisations, solves and the whole solve.
   double seconds_assembly = 0.0, seconds_factorization = 0.0, seconds_solve = 0.0,
          seconds_total = 0.0;
-  int assemblies = 0;         ///< evaluations of Π, R or K (line searches included)
-  int factorizations = 0;     ///< numeric factorisations (shift searches included)
-  int krylov_iterations = 0;  ///< PCG iterations of the Newton directions
-  std::vector<NewtonIteration> iterations;
-  std::string message;  ///< why a failure happened
+  ///@}
+  int assemblies = 0;                       ///< evaluations of Π, R or K (line searches included)
+  int factorizations = 0;                   ///< numeric factorisations (shift searches included)
+  int krylov_iterations = 0;                ///< PCG iterations of the Newton directions
+  std::vector<NewtonIteration> iterations;  ///< one record per Newton iteration
+  std::string message;                      ///< why a failure happened
 
+  /// True if status is kConverged.
   bool converged() const { return status == NewtonStatus::kConverged; }
   /// One line: status, iterations, load steps, residual, time.
   std::string BriefReport() const;
@@ -127,13 +138,14 @@ struct NewtonSummary {
 
 /// A displacement (all num_dofs entries, fixed ones zero) in equilibrium with m_qp.
 struct State {
-  Eigen::VectorXd u;
-  Eigen::MatrixXd m_qp;
+  Eigen::VectorXd u;     ///< displacement, num_dofs entries
+  Eigen::MatrixXd m_qp;  ///< the control at the quadrature points, E by nq
 };
 
 /// The reference state u = 0, m = 0 of an assembler (a valid cold start).
 State rest_state(const Assembler& assembler);
 
+/// Newton–Raphson with line search and load stepping for R(u; m) = 0 on one assembler.
 class NewtonSolver {
  public:
   /// The assembler must outlive the solver. Throws InvalidArgument on invalid options.
@@ -152,6 +164,7 @@ class NewtonSolver {
   bool converged() const { return converged_; }
   /// What the last solve_converged_tangent did.
   const TangentSolveReport& last_tangent_solve() const { return last_tangent_solve_; }
+  /// The options given at construction.
   const NewtonOptions& options() const { return options_; }
 
  private:

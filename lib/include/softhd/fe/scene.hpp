@@ -1,7 +1,7 @@
 #pragma once
 /// \file scene.hpp
-/// Scene files (JSON, SPEC §5/§6): the body (structured box mesh), material, fibers,
-/// clamp, control space and bounds. The "target" object belongs to the optimiser and is
+/// Scene files (JSON, docs/formulation.md §5.1/§6.2): the body (structured box mesh), material,
+/// fibers, clamp, control space and bounds. The "target" object belongs to the optimiser and is
 /// kept as raw JSON text. Invalid files throw FileError naming the key and what was
 /// expected.
 ///
@@ -29,22 +29,32 @@
 
 namespace softhd::fe {
 
+/// A parsed scene file (docs/guide.md lists every key).
 struct Scene {
-  std::string name;
+  std::string name;    ///< "name", or the file name
   std::string source;  ///< file name (for messages)
+  ///@{
+  /// mesh.lower and mesh.upper: the box's corners (2 or 3 entries).
   Eigen::VectorXd lower, upper;
-  Eigen::VectorXi cells;
-  int order = 2;
-  std::shared_ptr<const Material> material;
-  std::string material_model;
-  Eigen::Vector3d fibers = Eigen::Vector3d::UnitX();
-  std::vector<DirichletConstraint> constraints;  ///< the clamp, then the extra constraints
-  ControlKind control_kind = ControlKind::kVertex;
+  ///@}
+  Eigen::VectorXi cells;                              ///< mesh.cells: elements per axis
+  int order = 2;                                      ///< mesh.order: 1 (Q1) or 2 (Q2)
+  std::shared_ptr<const Material> material;           ///< from "material"
+  std::string material_model;                         ///< material.model
+  Eigen::Vector3d fibers = Eigen::Vector3d::UnitX();  ///< "fibers", normalised
+  std::vector<DirichletConstraint> constraints;       ///< the clamp, then the extra constraints
+  ControlKind control_kind = ControlKind::kVertex;    ///< control.space
+  ///@{
+  /// control.lower, control.upper and control.initial (default 0).
   double control_lower = 0.0, control_upper = 0.0, control_initial = 0.0;
+  ///@}
   std::string target_json;  ///< raw "target" object, empty if absent
 
+  /// The body's dimension (2 or 3).
   int dim() const { return static_cast<int>(lower.size()); }
+  /// The structured box mesh.
   Mesh make_mesh() const;
+  /// The assembler of the body: mesh, material, fibers and constraints.
   Assembler make_assembler() const;
 };
 

@@ -1,6 +1,6 @@
 #pragma once
 /// \file state_solver.hpp
-/// The state equation as the optimiser sees it (SPEC §4): a control vector m in, the
+/// The state equation as the optimiser sees it (docs/formulation.md §4): a control vector m in, the
 /// equilibrium displacement out, warm-started from the previous solve, and the adjoint
 /// gradient dJ/dm for any ∂J/∂u at the last converged state, solved with its tangent.
 
@@ -12,15 +12,19 @@
 
 namespace softhd::fe {
 
+/// The state equation m ↦ u(m) with warm starts and the adjoint gradient, for one body.
 class StateSolver {
  public:
+  /// A solver for `assembler`'s body with controls of kind `control`.
   StateSolver(Assembler assembler, ControlKind control, NewtonOptions options = {});
   /// The scene's body, material, clamp and control space.
   explicit StateSolver(const Scene& scene, NewtonOptions options = {});
   StateSolver(const StateSolver&) = delete;  // the Newton solver refers to the assembler
   StateSolver& operator=(const StateSolver&) = delete;
 
+  /// The body's assembler.
   const Assembler& assembler() const { return assembler_; }
+  /// The control space.
   const ControlSpace& control() const { return control_; }
 
   /// Equilibrium for the control m (control().size() values), starting from the last

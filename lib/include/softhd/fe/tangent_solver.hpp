@@ -18,6 +18,7 @@
 
 namespace softhd::fe {
 
+/// Options of TangentSolver.
 struct TangentSolverOptions {
   /// Sparse direct solver that makes the factorisations.
   LinearSolverType linear_solver = LinearSolverType::kCholmod;
@@ -41,16 +42,17 @@ struct TangentSolverOptions {
 
 /// What one solve did.
 struct TangentSolveReport {
-  bool ok = false;            ///< a solution was returned
-  bool factorized = false;    ///< this solve factorised its matrix
-  int factorizations = 0;     ///< numeric factorisations made (shift search included)
-  int krylov_iterations = 0;  ///< PCG iterations (0 after a direct solve)
-  double shift = 0.0;         ///< μ of a direct solve with K + μ I (0 if none)
-  bool truncated = false;     ///< PCG stopped at negative curvature (a descent direction)
-  double seconds_factorization = 0.0;
-  double seconds_solve = 0.0;
+  bool ok = false;                     ///< a solution was returned
+  bool factorized = false;             ///< this solve factorised its matrix
+  int factorizations = 0;              ///< numeric factorisations made (shift search included)
+  int krylov_iterations = 0;           ///< PCG iterations (0 after a direct solve)
+  double shift = 0.0;                  ///< μ of a direct solve with K + μ I (0 if none)
+  bool truncated = false;              ///< PCG stopped at negative curvature (a descent direction)
+  double seconds_factorization = 0.0;  ///< wall time of the factorisations
+  double seconds_solve = 0.0;          ///< wall time of PCG or the triangular solves
 };
 
+/// Solves with Newton tangents, reusing one factorisation as a PCG preconditioner.
 class TangentSolver {
  public:
   /// `pattern`: lower triangle with the sparsity of every matrix to be solved.
@@ -72,6 +74,7 @@ class TangentSolver {
   bool has_factorization() const { return have_factor_; }
   /// Forgets the kept factorisation (the next solve factorises).
   void drop_factorization() { have_factor_ = false; }
+  /// The options given at construction.
   const TangentSolverOptions& options() const { return options_; }
 
  private:

@@ -1,6 +1,6 @@
 #pragma once
 /// \file cloud_io.hpp
-/// Reading and writing point clouds (SPEC §1, §6) as text or PLY files.
+/// Reading and writing point clouds (docs/formulation.md §1.1, §6.1) as text or PLY files.
 ///
 /// Every problem with a file (missing, unreadable, malformed, a non-finite
 /// coordinate, a volume <= 0, ...) throws softhd::FileError with a one-line
@@ -14,8 +14,9 @@
 
 namespace softhd {
 
-/// The readers below on bytes already in memory; `name` stands for the file in messages.
+/// read_text_cloud() on bytes already in memory; `name` stands for the file in messages.
 PointCloud parse_text_cloud(const std::string& data, const std::string& name, int dim = 0);
+/// read_ply_cloud() on bytes already in memory; `name` stands for the file in messages.
 PointCloud parse_ply_cloud(const std::string& data, const std::string& name);
 
 /// Reads a cloud from `path`: PLY when the name ends in `.ply` (any case),

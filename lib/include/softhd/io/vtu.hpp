@@ -1,9 +1,9 @@
 #pragma once
 /// \file vtu.hpp
-/// ParaView output (SPEC §6): VTK XML unstructured grids (.vtu, ascii) of a deformed
-/// mesh or a point cloud, and .pvd collections that make a series of them a time line.
-/// Q2 elements are written as 2^dim linear sub-cells through their nodes, so nodal
-/// data are shown exactly.
+/// ParaView output (docs/formulation.md §6.2): VTK XML unstructured grids (.vtu, ascii) of a
+/// deformed mesh or a point cloud, and .pvd collections that make a series of them a time line. Q2
+/// elements are written as 2^dim linear sub-cells through their nodes, so nodal data are shown
+/// exactly.
 
 #include <Eigen/Core>
 #include <string>
@@ -17,8 +17,8 @@ namespace softhd {
 
 /// A named field: one row per point (or per cell), one column per component.
 struct VtuField {
-  std::string name;
-  Eigen::MatrixXd values;
+  std::string name;        ///< the field's name in ParaView
+  Eigen::MatrixXd values;  ///< rows: points or cells; columns: components
 };
 
 /// The mesh moved by the displacement u (num_nodes · dim entries, node-major), with
