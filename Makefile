@@ -3,7 +3,7 @@
 BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: deps build test demo bench bench-quick docs clean format
+.PHONY: deps build test demo bench bench-quick fuzz docs clean format
 
 deps:
 	@scripts/install-deps.sh
@@ -30,6 +30,18 @@ bench: build
 
 bench-quick: build
 	@scripts/run_benchmarks.sh --quick $(BUILD_DIR) $(BUILD_DIR)/bench-quick $(BUILD_DIR)/bench-quick/benchmarks.md
+
+# libFuzzer targets (clang, ASan+UBSan) in their own tree, each run for FUZZ_SECONDS.
+FUZZ_DIR ?= build-fuzz
+FUZZ_SECONDS ?= 600
+fuzz: deps
+	@mkdir -p $(FUZZ_DIR)
+	@cmake -S . -B $(FUZZ_DIR) -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=None \
+	  "-DCMAKE_CXX_FLAGS=-O1 -g1 -Wno-pass-failed" -DSOFTHD_SANITIZE=ON -DSOFTHD_FUZZ=ON \
+	  -DSOFTHD_BUILD_TESTS=OFF -DSOFTHD_BUILD_APPS=OFF -DSOFTHD_BUILD_BENCH=OFF \
+	  > $(FUZZ_DIR)/configure.log 2>&1 || (cat $(FUZZ_DIR)/configure.log; exit 1)
+	@cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzz_text_cloud fuzz_ply_cloud fuzz_scene fuzz_checkpoint
+	@scripts/fuzz.sh $(FUZZ_DIR) $(FUZZ_SECONDS)
 
 # The API reference of the public headers (Doxygen): $(BUILD_DIR)/docs/html/index.html.
 docs: deps

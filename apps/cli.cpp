@@ -46,8 +46,15 @@ double parse_number(const std::string& text, const std::string& what) {
   errno = 0;
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size() || errno == ERANGE || !std::isfinite(v)) {
+  if (text.empty() || end != text.c_str() + text.size()) {
     throw UsageError(what + ": expected a finite number, got '" + text + "'");
+  }
+  if (errno == ERANGE && std::fabs(v) < 1.0) {
+    throw UsageError(what + ": " + text +
+                     " is below the smallest normal double (2.2e-308); use 0 or a larger value");
+  }
+  if (errno == ERANGE || !std::isfinite(v)) {
+    throw UsageError(what + ": " + text + " is not a finite double (at most 1.8e308 in magnitude)");
   }
   return v;
 }
@@ -65,6 +72,19 @@ long Args::integer(const std::string& name, long fallback) {
   const long n = std::strtol(v->c_str(), &end, 10);
   if (v->empty() || end != v->c_str() + v->size() || errno == ERANGE) {
     throw UsageError(name + ": expected an integer, got '" + *v + "'");
+  }
+  return n;
+}
+
+long Args::integer(const std::string& name, long fallback, long lo, long hi) {
+  const std::optional<std::string> v = value(name);
+  if (!v) return fallback;
+  errno = 0;
+  char* end = nullptr;
+  const long n = std::strtol(v->c_str(), &end, 10);
+  if (v->empty() || end != v->c_str() + v->size() || errno == ERANGE || n < lo || n > hi) {
+    throw UsageError(name + ": expected an integer from " + std::to_string(lo) + " to " +
+                     std::to_string(hi) + ", got '" + *v + "'");
   }
   return n;
 }

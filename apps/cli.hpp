@@ -32,6 +32,8 @@ class Args {
   double number(const std::string& name, double fallback);
   /// An integer given to `--name`, or `fallback`.
   long integer(const std::string& name, long fallback);
+  /// An integer in [lo, hi] given to `--name`, or `fallback`; the error names the range.
+  long integer(const std::string& name, long fallback, long lo, long hi);
   /// The remaining positional arguments; throws UsageError for an unknown option.
   std::vector<std::string> finish();
 

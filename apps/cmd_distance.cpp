@@ -1,9 +1,11 @@
 // softhd distance: ρ̃_H between two cloud files (docs/formulation.md §2, §6).
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <stdexcept>
 
 #include "cli.hpp"
 #include "commands.hpp"
@@ -70,9 +72,7 @@ int run_distance(const std::vector<std::string>& tokens) {
   opt.params.epsilon = args.number("--eps", opt.params.epsilon);
   opt.method = method_from_string(args.value("--method").value_or("exact"));
   opt.tolerance = args.number("--tol", opt.tolerance);
-  const long threads = args.integer("--threads", 0);
-  if (threads < 0 || threads > 4096) throw UsageError("--threads must be >= 0");
-  opt.threads = static_cast<int>(threads);
+  opt.threads = static_cast<int>(args.integer("--threads", 0, 0, 4096));
   const long dim = args.integer("--dim", 0);
   if (dim != 0 && dim != 2 && dim != 3) throw UsageError("--dim must be 2 or 3");
   const std::optional<std::string> grad_path = args.value("--grad");
@@ -94,6 +94,9 @@ int run_distance(const std::vector<std::string>& tokens) {
   req.gradient_points = req.gradient_volumes = grad_path.has_value();
   const HausdorffTarget target(Y, opt);
   const HausdorffResult r = target.evaluate(X, req);
+  // Clouds within kMaxCoordinate give finite results; anything else is a bug, not input.
+  if (!std::isfinite(r.rho) || !std::isfinite(r.A) || !std::isfinite(r.B))
+    throw std::runtime_error("non-finite result (rho " + std::to_string(r.rho) + ")");
   if (grad_path) write_gradient(*grad_path, X, r);
 
   if (json) {

@@ -55,6 +55,7 @@ constexpr const char* kUsage =
     "  --factorize-every-step classical Newton: factorise every tangent instead of\n"
     "                         reusing a factorisation as a PCG preconditioner\n"
     "  --threads N            threads of the assembly (default 0: OMP_NUM_THREADS or all cores)\n"
+    "  --max-memory GIB       refuse meshes whose estimated memory exceeds this (default 8)\n"
     "  --write-control-nodes FILE  write the control nodes with their current values and stop\n";
 
 struct Args {
@@ -67,6 +68,7 @@ struct Args {
   double intermediate_tol = 1e-9;
   bool factorize_every_step = false;
   double uniform = 0.0;
+  double memory_limit = softhd::fe::kDefaultMemoryLimit;
   std::vector<Eigen::VectorXd> probes;
 };
 
@@ -138,6 +140,11 @@ bool parse(int argc, char** argv, Args* a) {
       if (!(k >= 0 && k <= 8 && k == static_cast<int>(k)))
         throw softhd::InvalidArgument("--coarse-levels expects an integer from 0 to 8");
       a->coarse_levels = static_cast<int>(k);
+    } else if (s == "--max-memory") {
+      const double g = parse_number(value(), s);
+      if (!(g > 0.0 && g <= 1e6))
+        throw softhd::InvalidArgument("--max-memory expects GiB in (0, 1e6]");
+      a->memory_limit = g * (1u << 30);
     } else if (s == "--write-cloud") {
       a->write_cloud = value();
     } else if (s == "--write-control-nodes") {
@@ -204,7 +211,7 @@ State start_state(const Scene& scene, const Assembler& assembler, const Eigen::M
 
 int forward(const Args& args) {
   const auto t0 = std::chrono::steady_clock::now();
-  const Scene scene = load_scene(args.scene);
+  const Scene scene = load_scene(args.scene, args.memory_limit);
   const Assembler assembler = scene.make_assembler();
   const ControlSpace control(assembler.mesh(), assembler.geometry(), scene.control_kind);
   const Eigen::MatrixXd positions = control.positions(assembler.mesh());

@@ -1,7 +1,7 @@
 // softhd optimise: track a target point cloud with the fiber tension m
-// (docs/formulation.md §4, §5). Progress one line per iteration; history.csv, control.csv,
-// VTU/PVD, summary.json and a checkpoint written atomically every iteration (resumable with
-// --resume).
+// (docs/formulation.md §4, §5). Progress one line per iteration; history.csv, summary.json
+// (status "interrupted" until the end) and the checkpoint log kept up to date as the run
+// goes (resumable with --resume).
 
 #include <chrono>
 #include <cmath>
@@ -16,6 +16,7 @@
 #include "cli.hpp"
 #include "commands.hpp"
 #include "softhd/control/bounded_optimizer.hpp"
+#include "softhd/control/run_log.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/shape_tracking.hpp"
 #include "softhd/control/targets.hpp"
@@ -54,7 +55,10 @@ options:
   --tikhonov-grad E  (E/2) int |grad m|^2 (default 0)
   --vtu-every K      VTU output every K iterations (default 10; 0: start and end only)
   --threads T        OpenMP threads (default: all)
-  --resume           continue from DIR/checkpoint.json
+  --max-memory GIB   refuse meshes whose estimated memory exceeds this (default 8)
+  --resume           continue the run recorded in DIR/checkpoint.bin: the same run
+                     as an uninterrupted one (limits count over all resumes); a
+                     checkpoint of another scene, target or options is refused
   --json             print summary.json on stdout at the end
   --quiet            no progress lines
   --help             this text
@@ -69,7 +73,7 @@ scene targets ("target" in the scene file):
 
 writes: history.csv, control.csv (readable by 'softhd forward --control'),
 body_NNNN.vtu, target.vtu, body.pvd, body_final.ply, target.ply, summary.json,
-checkpoint.json, and convergence.png when python3 with matplotlib is available.
+checkpoint.bin, and convergence.png when python3 with matplotlib is available.
 )";
 
 /// Nodal values of the control (for VTU): vertex controls interpolated bilinearly at
@@ -102,13 +106,42 @@ struct Target {
   std::string description;
 };
 
+// Counts of the arc target's sampling grid: integers from 1 to 1e6, and a grid whose
+// estimated memory (about 100 bytes a point with the distance's trees) fits the limit.
+Eigen::Vector3i arc_grid(const fe::Scene& scene, const nlohmann::json& t, double memory_limit) {
+  // Default resolution: a cell-centred grid twice as fine as the mesh's nodes.
+  Eigen::Vector3i counts = (2 * scene.order * scene.cells).head<3>();
+  if (t.contains("cells")) {
+    const nlohmann::json& c = t["cells"];
+    if (!c.is_array() || c.size() != 3)
+      throw InvalidArgument(scene.source + ": target.cells must be an array of 3 integers");
+    for (int k = 0; k < 3; ++k) {
+      if (!c[k].is_number_integer() || c[k].get<double>() < 1 || c[k].get<double>() > 1e6)
+        throw InvalidArgument(scene.source +
+                              ": target.cells must hold integers from 1 to 1e6, got " + c.dump());
+      counts[k] = c[k].get<int>();
+    }
+  }
+  const double points = double(counts[0]) * counts[1] * counts[2];
+  if (points * 100.0 > memory_limit)
+    throw ResourceError(
+        scene.source + ": target.cells asks for " + std::to_string(points) + " points, about " +
+        std::to_string(points * 100.0 / (1u << 30)) + " GiB, above the memory limit of " +
+        std::to_string(memory_limit / (1u << 30)) + " GiB (raise the limit: --max-memory GIB)");
+  return counts;
+}
+
 Target make_target(const fe::Scene& scene, const fe::Mesh& mesh,
-                   const std::optional<std::string>& file, int dim_hint) {
+                   const std::optional<std::string>& file, int dim_hint, double memory_limit) {
   if (file) return {read_cloud(*file, dim_hint), std::nullopt, "cloud file " + *file};
   if (scene.target_json.empty())
     throw InvalidArgument(scene.source + ": the scene has no \"target\"; give --target FILE");
   const nlohmann::json t = nlohmann::json::parse(scene.target_json);
-  const std::string kind = t.value("kind", "");
+  if (!t.is_object())
+    throw InvalidArgument(scene.source + ": key 'target' must be an object, got " + t.dump());
+  if (!t.contains("kind") || !t["kind"].is_string())
+    throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\"");
+  const std::string kind = t["kind"].get<std::string>();
   if (kind == "arc") {
     if (scene.dim() != 3) throw InvalidArgument(scene.source + ": target.kind arc needs a 3D body");
     ArcMap T;
@@ -120,13 +153,7 @@ Target make_target(const fe::Scene& scene, const fe::Mesh& mesh,
       T.angle = t["angle"].get<double>();
     }
     T.validate();
-    // Default resolution: a cell-centred grid twice as fine as the mesh's nodes.
-    Eigen::Vector3i counts = (2 * scene.order * scene.cells).head<3>();
-    if (t.contains("cells")) {
-      if (!t["cells"].is_array() || t["cells"].size() != 3)
-        throw InvalidArgument(scene.source + ": target.cells must be an array of 3 integers");
-      for (int k = 0; k < 3; ++k) counts[k] = t["cells"][k].get<int>();
-    }
+    const Eigen::Vector3i counts = arc_grid(scene, t, memory_limit);
     const PointCloud grid = sample_box_grid(scene.lower, scene.upper, counts);
     std::ostringstream d;
     d << "arc of " << T.angle * 180.0 / M_PI << " degrees, " << counts[0] << "x" << counts[1] << "x"
@@ -144,7 +171,7 @@ Target make_target(const fe::Scene& scene, const fe::Mesh& mesh,
     if (!t["solved_on"].is_string())
       throw InvalidArgument(scene.source + ": target.solved_on must be a scene path string");
     const fs::path source = (dir / t["solved_on"].get<std::string>()).lexically_normal();
-    const NodalMap T(fe::load_scene(source.string()).make_mesh(), cloud);
+    const NodalMap T(fe::load_scene(source.string(), memory_limit).make_mesh(), cloud);
     return {cloud, T.displacement(mesh),
             "cloud file " + f.string() + " (deformed nodes of " + source.string() + ")"};
   }
@@ -166,28 +193,38 @@ std::string csv_row(const std::vector<double>& v) {
   return s.str();
 }
 
+bool vtu_due(long every, int iteration) { return every > 0 && iteration % every == 0; }
+
 const char* kHistoryHeader =
     "iteration,evaluation,J,rho,A,B,rho_over_floor,projected_gradient_norm,newton_iterations,"
     "seconds_state,seconds_distance,seconds_adjoint,seconds";
 
 }  // namespace
 
-int run_optimise(const std::vector<std::string>& tokens) {
-  Args args(tokens);
-  if (args.flag("--help")) {
-    std::cout << kUsage;
-    return 0;
-  }
-  const std::optional<std::string> out_opt = args.value("--out");
-  const std::optional<std::string> target_file = args.value("--target");
-  BoundedOptimizerOptions opt;
-  opt.max_iterations = static_cast<int>(args.integer("--max-iter", 200));
+namespace {
+
+struct OptimiseArgs {
+  std::optional<std::string> out, target_file;
+  std::string scene_file;
+  ShapeTrackingOptions tracking;
+  ShapeObjectiveOptions objective;
+  double memory_limit = fe::kDefaultMemoryLimit;
+  long vtu_every = 10;
+  bool resume = false, json = false, quiet = false;
+};
+
+OptimiseArgs parse_optimise(Args& args) {
+  OptimiseArgs a;
+  a.out = args.value("--out");
+  a.target_file = args.value("--target");
+  BoundedOptimizerOptions& opt = a.tracking.optimizer;
+  opt.max_iterations = static_cast<int>(args.integer("--max-iter", 200, 1, 1000000));
   opt.max_evaluations = 5 * opt.max_iterations + 20;
   opt.max_seconds = args.number("--max-seconds", 0.0);
   opt.relative_change = args.number("--rel-tol", 1e-6);
   opt.algorithm = algorithm_from_string(args.value("--algorithm").value_or("mma"));
   opt.move_limit = args.number("--move-limit", 0.1);
-  ShapeObjectiveOptions so;
+  ShapeObjectiveOptions& so = a.objective;
   so.particles = particles_from_string(args.value("--particles").value_or("nodes"));
   so.volumes = particle_volumes_from_string(args.value("--volumes").value_or("reference"));
   so.hausdorff.params.alpha = args.number("--alpha", so.hausdorff.params.alpha);
@@ -196,148 +233,92 @@ int run_optimise(const std::vector<std::string>& tokens) {
   so.hausdorff.params.epsilon = args.number("--eps", so.hausdorff.params.epsilon);
   so.tikhonov_mass = args.number("--tikhonov-mass", 0.0);
   so.tikhonov_gradient = args.number("--tikhonov-grad", 0.0);
-  const long threads = args.integer("--threads", 0);
-  if (threads < 0 || threads > 4096) throw UsageError("--threads must be >= 0");
-  so.hausdorff.threads = static_cast<int>(threads);
-  set_threads(static_cast<int>(threads));  // the FE assembly too
-  const long vtu_every = args.integer("--vtu-every", 10);
-  if (vtu_every < 0) throw UsageError("--vtu-every must be >= 0");
-  const bool resume = args.flag("--resume"), json = args.flag("--json"),
-             quiet = args.flag("--quiet");
+  so.hausdorff.threads = static_cast<int>(args.integer("--threads", 0, 0, 4096));
+  set_threads(so.hausdorff.threads);  // the FE assembly too
+  a.vtu_every = args.integer("--vtu-every", 10, 0, 1000000000);
+  const double gib = args.number("--max-memory", a.memory_limit / (1u << 30));
+  if (!(gib > 0.0 && gib <= 1e6)) throw UsageError("--max-memory: expected GiB in (0, 1e6]");
+  a.memory_limit = gib * (1u << 30);
+  a.resume = args.flag("--resume");
+  a.json = args.flag("--json");
+  a.quiet = args.flag("--quiet");
   const std::vector<std::string> pos = args.finish();
   if (pos.size() != 1) throw UsageError("expected one scene file (see --help)");
+  a.scene_file = pos[0];
   opt.validate();
   so.hausdorff.params.validate();
+  return a;
+}
 
-  // The problem: scene, mesh, control space, target.
-  const fe::Scene scene = fe::load_scene(pos[0]);
-  const fe::Assembler assembler = scene.make_assembler();
-  const fe::Mesh& mesh = assembler.mesh();
-  const fe::ControlSpace space(mesh, assembler.geometry(), scene.control_kind);
-  const Target target = make_target(scene, mesh, target_file, scene.dim());
-  if (target.cloud.dim() != scene.dim())
-    throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
-                          "D but the scene's body is " + std::to_string(scene.dim()) + "D");
-  const fs::path out = out_opt ? fs::path(*out_opt) : fs::path("results") / scene.name;
-  fs::create_directories(out);
+std::string file_hash(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  const std::string bytes = s.str();
+  return content_hash(bytes.data(), bytes.size());
+}
 
-  ShapeObjective objective(assembler, space, HausdorffTarget(target.cloud, so.hausdorff), so);
+std::string body_name(int iteration) {
+  char name[32];
+  std::snprintf(name, sizeof name, "body_%04d.vtu", iteration);
+  return name;
+}
 
-  // Start: the scene's initial control, or the checkpoint.
-  Eigen::VectorXd m0 = Eigen::VectorXd::Constant(space.size(), scene.control_initial);
-  std::vector<std::string> history_rows;
-  ShapeTrackingOptions to;
-  to.optimizer = opt;
-  const fs::path checkpoint = out / "checkpoint.json";
-  if (resume) {
-    std::ifstream in(checkpoint);
-    if (!in) throw FileError("--resume: cannot open '" + checkpoint.string() + "'");
-    nlohmann::json c;
-    try {
-      in >> c;
-      const std::vector<double> m = c.at("control").get<std::vector<double>>();
-      if (static_cast<Eigen::Index>(m.size()) != space.size())
-        throw FileError(checkpoint.string() + ": control has " + std::to_string(m.size()) +
-                        " values, the scene has " + std::to_string(space.size()));
-      m0 = Eigen::Map<const Eigen::VectorXd>(m.data(), space.size());
-      to.iteration_offset = c.at("iteration").get<int>();
-      to.evaluation_offset = c.at("evaluations").get<int>();
-      to.seconds_offset = c.at("seconds").get<double>();
-      history_rows = c.at("history").get<std::vector<std::string>>();
-    } catch (const nlohmann::json::exception& e) {
-      throw FileError(checkpoint.string() + ": not a softhd checkpoint (" + e.what() + ")");
-    }
-  }
-  const Eigen::VectorXd lower = Eigen::VectorXd::Constant(space.size(), scene.control_lower);
-  const Eigen::VectorXd upper = Eigen::VectorXd::Constant(space.size(), scene.control_upper);
+// The files of a run in its directory: body VTUs and their PVD, and history.csv and
+// summary.json, rewritten as the run goes.
+class RunFiles {
+ public:
+  RunFiles(fs::path dir, const ShapeObjective& objective, const fe::ControlSpace& space)
+      : dir_(std::move(dir)), objective_(objective), space_(space) {}
+  const fs::path& dir() const { return dir_; }
 
-  std::vector<std::pair<double, std::string>> pvd;
-  auto write_body = [&](int iteration, const Eigen::VectorXd& m, const Eigen::VectorXd& u) {
-    const HausdorffResult r = objective.fields(u);
-    std::vector<VtuField> point{{"m", control_at_nodes(mesh, space, m)}};
+  HausdorffResult write_body(int iteration, const Eigen::VectorXd& m, const Eigen::VectorXd& u) {
+    const fe::Assembler& a = objective_.assembler();
+    const HausdorffResult r = objective_.fields(u);
+    std::vector<VtuField> point{{"m", control_at_nodes(a.mesh(), space_, m)}};
     std::vector<VtuField> cell;
-    if (so.particles == Particles::nodes) point.push_back({"d_tilde", r.field_moving});
-    const Eigen::MatrixXd J = assembler.jacobians(u);
-    cell.push_back({"J", J.rowwise().mean()});
-    if (space.kind() == fe::ControlKind::kElement) cell.push_back({"m", m});
-    char name[32];
-    std::snprintf(name, sizeof name, "body_%04d.vtu", iteration);
-    write_vtu_mesh((out / name).string(), mesh, u, point, cell);
-    pvd.emplace_back(iteration, name);
-    write_pvd((out / "body.pvd").string(), pvd);
+    if (objective_.options().particles == Particles::nodes)
+      point.push_back({"d_tilde", r.field_moving});
+    cell.push_back({"J", a.jacobians(u).rowwise().mean()});
+    if (space_.kind() == fe::ControlKind::kElement) cell.push_back({"m", m});
+    write_vtu_mesh((dir_ / body_name(iteration)).string(), a.mesh(), u, point, cell);
+    list_body(iteration);
     return r;
-  };
-
-  if (!quiet) {
-    std::fprintf(stderr, "softhd optimise %s: %ld nodes, %ld controls, target %ld points (%s)\n",
-                 scene.name.c_str(), static_cast<long>(mesh.num_nodes()),
-                 static_cast<long>(space.size()), static_cast<long>(target.cloud.size()),
-                 target.description.c_str());
   }
-  ShapeTrackingCallbacks cb;
-  cb.on_start = [&](const ShapeTrackingSummary& start) {
-    if (!quiet) {
-      std::fprintf(stderr, "  rho start %.6g, floor self %s, floor matched %s\n", start.rho_start,
-                   start.floor_self      ? std::to_string(*start.floor_self).c_str()
-                   : start.floor_matched ? "computed at the end"
-                                         : "n/a (skipped: target too large)",
-                   start.floor_matched ? std::to_string(*start.floor_matched).c_str()
-                                       : "n/a (no known map)");
-      std::fprintf(stderr, "  %5s %12s %12s %10s %10s %7s %8s\n", "iter", "J", "rho", "rho/floor",
-                   "|P grad|", "newton", "seconds");
-    }
-    if (!resume) write_body(0, m0.cwiseMax(lower).cwiseMin(upper), objective.last_state().u);
-  };
-  cb.on_failure = [&](const std::string& report) {
-    if (!quiet) std::fprintf(stderr, "  state solve failed (step rejected): %s\n", report.c_str());
-  };
-  cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd& m) {
-    history_rows.push_back(
+  /// Lists a body VTU in body.pvd (once), e.g. one an earlier process of the run wrote.
+  void list_body(int iteration) {
+    if (!pvd_.empty() && pvd_.back().second == body_name(iteration)) return;
+    if (!fs::exists(dir_ / body_name(iteration))) return;
+    pvd_.emplace_back(iteration, body_name(iteration));
+    write_pvd((dir_ / "body.pvd").string(), pvd_);
+  }
+  void add_row(const TrackingIteration& it) {
+    rows_.push_back(
         csv_row({double(it.iteration), double(it.evaluation), it.J, it.rho, it.A, it.B,
                  it.rho_over_floor, it.projected_gradient_norm, double(it.newton_iterations),
                  it.seconds_state, it.seconds_distance, it.seconds_adjoint, it.seconds}));
-    if (!quiet)
-      std::fprintf(stderr, "  %5d %12.6g %12.6g %10.4g %10.3g %7d %8.1f\n", it.iteration, it.J,
-                   it.rho, it.rho_over_floor, it.projected_gradient_norm, it.newton_iterations,
-                   it.seconds);
-    nlohmann::json c;
-    c["scene"] = pos[0];
-    c["iteration"] = it.iteration;
-    c["evaluations"] = it.evaluation;
-    c["seconds"] = it.seconds;
-    c["control"] = std::vector<double>(m.data(), m.data() + m.size());
-    c["history"] = history_rows;
-    write_file_atomically(checkpoint.string(), c.dump());
-    if (vtu_every > 0 && it.iteration % vtu_every == 0)
-      write_body(it.iteration, m, objective.last_state().u);
-  };
-
-  const ShapeTrackingSummary s =
-      track_shape(objective, lower, upper, m0, target.map_displacement, to, cb);
-  const Eigen::VectorXd& u = s.displacement;
-  const int iterations = s.iterations;
-  const HausdorffResult fields = write_body(iterations, s.control, u);
-  write_vtu_cloud((out / "target.vtu").string(), target.cloud, {{"d_tilde", fields.field_target}});
-  write_ply_cloud((out / "target.ply").string(), target.cloud);
-  write_ply_cloud((out / "body_final.ply").string(), objective.particles(u));
-  {
+  }
+  void write_history() const {
     std::ostringstream h;
     h << kHistoryHeader << '\n';
-    for (const std::string& r : history_rows) h << r << '\n';
-    write_file_atomically((out / "history.csv").string(), h.str());
-    fe::write_control_file((out / "control.csv").string(), space.positions(mesh), s.control);
+    for (const std::string& r : rows_) h << r << '\n';
+    write_file_atomically((dir_ / "history.csv").string(), h.str());
   }
-  nlohmann::json sum;
-  sum["scene"] = pos[0];
-  sum["target"] = target.description;
-  sum["target_points"] = target.cloud.size();
-  sum["nodes"] = mesh.num_nodes();
-  sum["controls"] = space.size();
-  sum["algorithm"] = to_string(opt.algorithm);
-  sum["particles"] = to_string(so.particles);
-  sum["volumes"] = to_string(so.volumes);
-  sum["rho_start"] = s.rho_start;
-  sum["floor_self"] = optional_json(s.floor_self);
+  void write_summary(const nlohmann::json& sum) const {
+    write_file_atomically((dir_ / "summary.json").string(), sum.dump(2) + "\n");
+  }
+
+ private:
+  fs::path dir_;
+  const ShapeObjective& objective_;
+  const fe::ControlSpace& space_;
+  std::vector<std::string> rows_;
+  std::vector<std::pair<double, std::string>> pvd_;
+};
+
+// summary.json's entries about the end of the run.
+void add_final(const ShapeTrackingSummary& s, nlohmann::json& sum) {
+  sum["floor_self"] = optional_json(s.floor_self);  // with a known map, made at the end
   sum["floor_matched"] = optional_json(s.floor_matched);
   sum["rho_final"] = s.rho_final;
   sum["J_final"] = s.J_final;
@@ -345,6 +326,7 @@ int run_optimise(const std::vector<std::string>& tokens) {
       optional_json(s.floor() ? std::optional<double>(s.rho_final / *s.floor()) : std::nullopt);
   sum["iterations"] = s.iterations;
   sum["evaluations"] = s.evaluations;
+  sum["replayed_evaluations"] = s.replayed_evaluations;
   sum["failed_evaluations"] = s.failed_evaluations;
   sum["termination"] = s.termination;
   sum["converged"] = s.converged;
@@ -356,25 +338,149 @@ int run_optimise(const std::vector<std::string>& tokens) {
   sum["seconds_distance"] = s.seconds_distance;
   sum["seconds_adjoint"] = s.seconds_adjoint;
   sum["seconds_optimizer"] = s.seconds_optimizer;
-  write_file_atomically((out / "summary.json").string(), sum.dump(2) + "\n");
+}
 
+void print_start(const ShapeTrackingSummary& start) {
+  std::fprintf(
+      stderr, "  rho start %.6g, floor self %s, floor matched %s\n", start.rho_start,
+      start.floor_self      ? std::to_string(*start.floor_self).c_str()
+      : start.floor_matched ? "computed at the end"
+                            : "n/a (skipped: target too large)",
+      start.floor_matched ? std::to_string(*start.floor_matched).c_str() : "n/a (no known map)");
+  std::fprintf(stderr, "  %5s %12s %12s %10s %10s %7s %8s\n", "iter", "J", "rho", "rho/floor",
+               "|P grad|", "newton", "seconds");
+}
+
+void print_end(const ShapeTrackingSummary& s, const fs::path& out) {
+  std::fprintf(stderr, "  %s after %d iterations, %.1f s\n", s.termination.c_str(), s.iterations,
+               s.seconds);
+  std::fprintf(stderr, "  rho %.6g -> %.6g (%.3g x floor)", s.rho_start, s.rho_final,
+               s.floor() ? s.rho_final / *s.floor() : std::nan(""));
+  if (s.shape_error_max)
+    std::fprintf(stderr, ", shape error max %.4g rms %.4g", *s.shape_error_max, *s.shape_error_rms);
+  std::fprintf(stderr, "\n  results in %s\n", out.string().c_str());
+}
+
+fs::path output_directory(const OptimiseArgs& a, const fe::Scene& scene) {
+  const fs::path out = a.out ? fs::path(*a.out) : fs::path("results") / scene.name;
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec || !fs::is_directory(out))
+    throw FileError("--out: cannot create the directory '" + out.string() + "'" +
+                    (ec ? " (" + ec.message() + ")" : ""));
+  return out;
+}
+
+}  // namespace
+
+int run_optimise(const std::vector<std::string>& tokens) {
+  Args args(tokens);
+  if (args.flag("--help")) {
+    std::cout << kUsage;
+    return 0;
+  }
+  OptimiseArgs a = parse_optimise(args);
+  const ShapeObjectiveOptions& so = a.objective;
+
+  // The problem: scene, mesh, control space, target.
+  const fe::Scene scene = fe::load_scene(a.scene_file, a.memory_limit);
+  const fe::Assembler assembler = scene.make_assembler();
+  const fe::Mesh& mesh = assembler.mesh();
+  const fe::ControlSpace space(mesh, assembler.geometry(), scene.control_kind);
+  const Target target = make_target(scene, mesh, a.target_file, scene.dim(), a.memory_limit);
+  if (target.cloud.dim() != scene.dim())
+    throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
+                          "D but the scene's body is " + std::to_string(scene.dim()) + "D");
+  const fs::path out = output_directory(a, scene);
+  ShapeTrackingOptions& to = a.tracking;
+  to.checkpoint = (out / "checkpoint.bin").string();
+  to.resume = a.resume;
+  to.fingerprint["scene"] = file_hash(a.scene_file);
+  if (a.resume && !fs::exists(to.checkpoint))
+    throw FileError("--resume: no checkpoint '" + to.checkpoint + "'");
+  if (a.resume) read_run_log(to.checkpoint);  // a malformed one refused before any output
+
+  ShapeObjective objective(assembler, space, HausdorffTarget(target.cloud, so.hausdorff), so);
+  const Eigen::VectorXd m0 = Eigen::VectorXd::Constant(space.size(), scene.control_initial);
+  const Eigen::VectorXd lower = Eigen::VectorXd::Constant(space.size(), scene.control_lower);
+  const Eigen::VectorXd upper = Eigen::VectorXd::Constant(space.size(), scene.control_upper);
+  RunFiles files(out, objective, space);
+  nlohmann::json sum;
+  sum["scene"] = a.scene_file;
+  sum["target"] = target.description;
+  sum["target_points"] = target.cloud.size();
+  sum["nodes"] = mesh.num_nodes();
+  sum["controls"] = space.size();
+  sum["algorithm"] = to_string(to.optimizer.algorithm);
+  sum["particles"] = to_string(so.particles);
+  sum["volumes"] = to_string(so.volumes);
+  if (!a.quiet)
+    std::fprintf(stderr, "softhd optimise %s: %ld nodes, %ld controls, target %ld points (%s)\n",
+                 scene.name.c_str(), static_cast<long>(mesh.num_nodes()),
+                 static_cast<long>(space.size()), static_cast<long>(target.cloud.size()),
+                 target.description.c_str());
+
+  // From here on the directory always holds history.csv and summary.json; a resumed run
+  // keeps the earlier process's until it has new rows.
+  sum["status"] = "interrupted";  // until the run ends: a killed run leaves this
+  if (!a.resume || !fs::exists(out / "history.csv")) files.write_history();
+  if (!a.resume || !fs::exists(out / "summary.json")) files.write_summary(sum);
+
+  ShapeTrackingCallbacks cb;
+  cb.on_start = [&](const ShapeTrackingSummary& start) {
+    sum["rho_start"] = start.rho_start;
+    sum["floor_self"] = optional_json(start.floor_self);
+    sum["floor_matched"] = optional_json(start.floor_matched);
+    if (!a.quiet) print_start(start);
+    files.write_body(0, m0.cwiseMax(lower).cwiseMin(upper), objective.last_state().u);
+  };
+  cb.on_failure = [&](const std::string& report) {
+    if (!a.quiet)
+      std::fprintf(stderr, "  state solve failed (step rejected): %s\n", report.c_str());
+  };
+  cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd& m) {
+    files.add_row(it);
+    if (!a.quiet)
+      std::fprintf(stderr, "  %5d %12.6g %12.6g %10.4g %10.3g %7d %8.1f%s\n", it.iteration, it.J,
+                   it.rho, it.rho_over_floor, it.projected_gradient_norm, it.newton_iterations,
+                   it.seconds, it.replayed ? " (from the checkpoint)" : "");
+    // A replayed iteration's VTU was written by the process that made it.
+    if (vtu_due(a.vtu_every, it.iteration)) {
+      if (it.replayed)
+        files.list_body(it.iteration);
+      else
+        files.write_body(it.iteration, m, objective.last_state().u);
+    }
+    if (it.replayed) return;
+    files.write_history();
+    nlohmann::json now = sum;
+    now["iterations"] = it.iteration;
+    now["evaluations"] = it.evaluation;
+    now["J"] = it.J;
+    now["rho"] = it.rho;
+    now["seconds"] = it.seconds;
+    files.write_summary(now);
+  };
+
+  const ShapeTrackingSummary s =
+      track_shape(objective, lower, upper, m0, target.map_displacement, to, cb);
+  const HausdorffResult fields = files.write_body(s.iterations, s.control, s.displacement);
+  write_vtu_cloud((out / "target.vtu").string(), target.cloud, {{"d_tilde", fields.field_target}});
+  write_ply_cloud((out / "target.ply").string(), target.cloud);
+  write_ply_cloud((out / "body_final.ply").string(), objective.particles(s.displacement));
+  files.write_history();
+  fe::write_control_file((out / "control.csv").string(), space.positions(mesh), s.control);
+  sum["status"] = "finished";
+  add_final(s, sum);
+  files.write_summary(sum);
 #ifdef SOFTHD_PLOT_SCRIPT
   const std::string plot = std::string("/usr/bin/python3 ") + SOFTHD_PLOT_SCRIPT + " " +
                            out.string() + " >/dev/null 2>&1";
-  if (std::system(plot.c_str()) != 0 && !quiet)
+  if (std::system(plot.c_str()) != 0 && !a.quiet)
     std::fprintf(stderr, "  (convergence.png not drawn: needs python3-matplotlib)\n");
 #endif
-  if (!quiet) {
-    std::fprintf(stderr, "  %s after %d iterations, %.1f s\n", s.termination.c_str(), s.iterations,
-                 s.seconds);
-    std::fprintf(stderr, "  rho %.6g -> %.6g (%.3g x floor)", s.rho_start, s.rho_final,
-                 s.floor() ? s.rho_final / *s.floor() : std::nan(""));
-    if (s.shape_error_max)
-      std::fprintf(stderr, ", shape error max %.4g rms %.4g", *s.shape_error_max,
-                   *s.shape_error_rms);
-    std::fprintf(stderr, "\n  results in %s\n", out.string().c_str());
-  }
-  if (json) std::cout << sum.dump(2) << '\n';
+  if (!a.quiet) print_end(s, out);
+  if (a.json) std::cout << sum.dump(2) << '\n';
   return 0;
 }
 

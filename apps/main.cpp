@@ -2,6 +2,7 @@
 // into one line on stderr and a non-zero exit code (2 for bad input).
 
 #include <exception>
+#include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -38,6 +39,10 @@ int main(int argc, char** argv) {
     std::cerr << "softhd: unknown command '" << command << "' (see softhd --help)\n";
     return 2;
   } catch (const softhd::Error& e) {
+    std::cerr << "softhd " << command << ": error: " << e.what() << '\n';
+    return 2;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // The environment, not softhd: a path that cannot be read, created or listed.
     std::cerr << "softhd " << command << ": error: " << e.what() << '\n';
     return 2;
   } catch (const std::bad_alloc&) {

@@ -49,6 +49,10 @@ function(softhd_target_defaults target)
       -fno-sanitize-recover=undefined)
     target_link_options(${target} PRIVATE -fsanitize=address,undefined)
   endif()
+  if(SOFTHD_FUZZ)
+    # Coverage instrumentation for libFuzzer everywhere; only fuzz targets link its main.
+    target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link)
+  endif()
 endfunction()
 
 # CHOLMOD (SuiteSparse) for the sparse Cholesky of the FE tangent, used through Eigen's

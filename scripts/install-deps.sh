@@ -9,6 +9,7 @@ packages=(
   libeigen3-dev libnanoflann-dev libnlopt-cxx-dev libgtest-dev nlohmann-json3-dev
   libsuitesparse-dev libopenblas0-pthread
   python3 python3-matplotlib python3-numpy
+  clang libclang-rt-14-dev libomp-14-dev
   doxygen
 )
 

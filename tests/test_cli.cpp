@@ -155,6 +155,50 @@ TEST_F(Cli, BadInputGivesExitCode2AndOneLine) {
   expect_bad_input("distance " + good + " " + good + " --frobnicate", "unknown option");
   expect_bad_input("distance " + good, "expected two cloud files");
   expect_bad_input("launch", "unknown command 'launch'");
+  // Coordinates whose squares overflow: refused naming the limit, never rho = 0 or NaN.
+  const std::string far = write("far.txt", "1e155 0 0\n");
+  const std::string origin = write("origin.txt", "0 0 0\n");
+  for (const char* method : {"exact", "tree", "nearest"}) {
+    expect_bad_input("distance " + far + " " + origin + " --method " + method,
+                     "above the limit of 1e+150");
+    expect_bad_input(
+        "distance " + origin + " " + write("huge.txt", "1e308 0 0\n") + " --method " + method,
+        "target cloud has a coordinate of magnitude 1e+308");
+  }
+  expect_bad_input("distance " + good + " " + good + " --eps 1e-320",
+                   "--eps: 1e-320 is below the smallest normal double");
+  expect_bad_input("distance " + good + " " + good + " --eps 1e400",
+                   "--eps: 1e400 is not a finite");
+  expect_bad_input("distance " + good + " " + good + " --threads 99999",
+                   "--threads: expected an integer from 0 to 4096, got '99999'");
+  // A binary PLY declaring 2 vertices but holding 3: refused, not cut to 2.
+  std::string ply =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 2\n"
+      "property double x\nproperty double y\nproperty double z\nend_header\n";
+  const double xyz[9] = {0, 0, 0, 1, 0, 0, 2, 0, 0};
+  ply.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
+  expect_bad_input("distance " + good + " " + write("three.ply", ply), "three.ply");
+}
+
+TEST_F(Cli, ForwardRefusesMeshesBeyondTheLimits) {
+  const std::string scene = R"({"mesh": {"type": "box", "lower": [0, 0, 0], "upper": [1, 1, 1],
+    "cells": CELLS, "order": 1}, "material": {"model": "mooney_rivlin", "a": 1e5, "b": 2e4,
+    "c": 3e5}, "fibers": [1, 0, 0], "clamp": ["x0"],
+    "control": {"space": "vertex", "lower": -1e5, "upper": 0}})";
+  auto with_cells = [&](const std::string& name, const std::string& cells) {
+    std::string s = scene;
+    s.replace(s.find("CELLS"), 5, cells);
+    return write(name, s);
+  };
+  // The issue's segfault: 65536 x 65536 x 2 nodes overflowed int.
+  expect_bad_input("forward " + with_cells("a.json", "[65535, 65535, 1]"),
+                   "above the memory limit of 8 GiB");
+  expect_bad_input("forward " + with_cells("b.json", "[1000, 1000, 1000]"),
+                   "1003003001 nodes and 1000000000 elements: it needs about");
+  expect_bad_input("forward " + with_cells("c.json", "[1290, 1290, 1290]") + " --max-memory 1e6",
+                   "more than the 2147483647 one run can index");
+  expect_bad_input("forward " + with_cells("d.json", "[4, 4, 4]") + " --max-memory 1e-6",
+                   "above the memory limit of");
 }
 
 TEST_F(Cli, HelpIsPrintedAndSucceeds) {

@@ -354,8 +354,12 @@ TEST_F(CloudIo, PlyBinaryFloatWithExtraPropertiesAndFaces) {
   const std::string with_empty = header.substr(0, header.find("element vertex")) + empty_element +
                                  header.substr(header.find("element vertex"));
   EXPECT_EQ(softhd::read_cloud(write("b3.ply", with_empty + body)).size(), 2);
-  // A trailing byte after the last element is ignored in binary files.
+  // A trailing line break after the last element is tolerated in binary files ...
   EXPECT_EQ(softhd::read_cloud(write("b2.ply", header + body + "\n")).size(), 2);
+  // ... but a third vertex under "element vertex 2" is refused, not dropped.
+  const std::string third = body.substr(0, body.size() / 2 - 1);
+  expect_error<FileError>([&] { softhd::read_cloud(write("b4.ply", header + body + third)); },
+                          "bytes of data after the last element");
 }
 
 TEST_F(CloudIo, PlyBinaryIntegerCoordinates2D) {

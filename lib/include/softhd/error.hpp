@@ -30,6 +30,12 @@ class FileError : public Error {
   using Error::Error;
 };
 
+/// A problem larger than the configured limits (memory estimate, index range).
+class ResourceError : public Error {
+ public:
+  using Error::Error;
+};
+
 /// A numerical operation that cannot be carried out on valid input (e.g. a solve with a
 /// tangent that is not positive definite).
 class NumericalError : public Error {

@@ -20,6 +20,12 @@
 
 namespace softhd {
 
+/// Largest |coordinate| the distance accepts: squared distances between points this far
+/// out (up to (2·1e150)²·3 ≈ 1.2e301) and their sums stay finite in double. Clouds beyond it
+/// are refused (InvalidArgument naming the limit); rescale them (ρ̃ scales with the
+/// coordinates when ε is scaled along).
+constexpr double kMaxCoordinate = 1e150;
+
 /// The functional's parameters; defaults are the paper's.
 struct HausdorffParams {
   double alpha = 4.0;     ///< exponent of the kernel mean I (α > 0); larger is closer to min

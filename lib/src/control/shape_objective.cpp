@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <optional>
 
 #include "softhd/error.hpp"
 #include "softhd/fe/adjoint.hpp"
@@ -41,7 +42,7 @@ struct ShapeObjective::Impl {
         control(c),
         target(std::move(t)),
         options(std::move(o)),
-        newton(a, options.newton) {
+        newton(std::in_place, a, options.newton) {
     const fe::Mesh& mesh = a.mesh();
     dim = mesh.dim;
     // Clamped nodes (no free dof) are not differentiated.
@@ -54,19 +55,14 @@ struct ShapeObjective::Impl {
     cache.push_back({Eigen::VectorXd(), fe::rest_state(a)});
   }
 
-  struct Cached {
-    Eigen::VectorXd m;  // empty for the rest state
-    fe::State state;
-  };
-
   const fe::Assembler& assembler;
   const fe::ControlSpace& control;
   HausdorffTarget target;
   ShapeObjectiveOptions options;
-  fe::NewtonSolver newton;
+  std::optional<fe::NewtonSolver> newton;  // optional: reset_solver() makes a new one
   int dim = 3;
   Eigen::Array<bool, Eigen::Dynamic, 1> differentiate;
-  std::deque<Cached> cache;  // most recent first
+  std::deque<WarmStart> cache;  // most recent first
 
   fe::CloudPoints cloud_points() const {
     return options.particles == Particles::nodes ? fe::CloudPoints::kNodes
@@ -134,6 +130,28 @@ const HausdorffTarget& ShapeObjective::target() const { return impl_->target; }
 const ShapeObjectiveOptions& ShapeObjective::options() const { return impl_->options; }
 const fe::Assembler& ShapeObjective::assembler() const { return impl_->assembler; }
 
+const std::deque<WarmStart>& ShapeObjective::warm_starts() const { return impl_->cache; }
+
+void ShapeObjective::reset_solver() {
+  impl_->newton.emplace(impl_->assembler, impl_->options.newton);
+}
+
+void ShapeObjective::restore_warm_starts(const std::vector<WarmStart>& states) {
+  Impl& d = *impl_;
+  if (states.empty() || static_cast<int>(states.size()) > d.options.warm_start_states)
+    throw InvalidArgument("warm starts: expected 1 to " +
+                          std::to_string(d.options.warm_start_states) + " states, got " +
+                          std::to_string(states.size()));
+  const fe::State& rest = d.cache.back().state;  // the shapes every state has
+  for (const WarmStart& w : states) {
+    if ((w.m.size() != 0 && w.m.size() != d.control.size()) || w.state.u.size() != rest.u.size() ||
+        w.state.m_qp.rows() != rest.m_qp.rows() || w.state.m_qp.cols() != rest.m_qp.cols() ||
+        !w.state.u.allFinite() || !w.state.m_qp.allFinite() || !w.m.allFinite())
+      throw InvalidArgument("warm starts: a state does not fit this problem");
+  }
+  d.cache.assign(states.begin(), states.end());
+}
+
 HausdorffResult ShapeObjective::fields(const Eigen::VectorXd& u) const {
   HausdorffRequest req;
   req.fields = true;
@@ -150,7 +168,7 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
   // State: warm start from the cached state with the nearest control.
   auto t0 = std::chrono::steady_clock::now();
   fe::State state = d.nearest_state(m);
-  const fe::NewtonSummary ns = d.newton.solve(d.control.to_quadrature(m), &state);
+  const fe::NewtonSummary ns = d.newton->solve(d.control.to_quadrature(m), &state);
   ev.newton_iterations = ns.newton_iterations;
   ev.factorizations = ns.factorizations;
   ev.seconds_state = seconds_since(t0);
@@ -182,8 +200,8 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
     // Adjoint: K λ = ∂ρ̃/∂u, then dJ/dm = ∂J_reg/∂m + ∫ M_k (F a₀)·(∇λ a₀) dX.
     t0 = std::chrono::steady_clock::now();
     const Eigen::VectorXd g = d.displacement_gradient(state.u, r);
-    const Eigen::VectorXd lambda = fe::solve_adjoint(d.assembler, d.newton, g);
-    ev.factorizations += d.newton.last_tangent_solve().factorizations;
+    const Eigen::VectorXd lambda = fe::solve_adjoint(d.assembler, *d.newton, g);
+    ev.factorizations += d.newton->last_tangent_solve().factorizations;
     ev.gradient = reg_gradient + fe::control_gradient(d.assembler, d.control, state.u, lambda);
     ev.seconds_adjoint = seconds_since(t0);
   }

@@ -1,9 +1,14 @@
 #include "softhd/control/shape_tracking.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <exception>
 #include <limits>
+#include <memory>
 
 #include "softhd/error.hpp"
 
@@ -30,19 +35,194 @@ std::optional<TrackingIteration> first_below(const std::vector<TrackingIteration
   return std::nullopt;
 }
 
+namespace {
+
+template <class Matrix>
+std::string hash_of(const Matrix& a) {
+  return content_hash(a.data(), static_cast<std::size_t>(a.size()) * sizeof(a.data()[0]));
+}
+
+// Serves evaluations from a checkpoint while it lasts, then evaluates and logs them.
+class Recorder {
+ public:
+  Recorder(ShapeObjective& objective, const ShapeTrackingOptions& options,
+           const RunFingerprint& fingerprint)
+      : objective_(objective), t_base_(Clock::now()) {
+    if (options.checkpoint.empty()) return;
+    if (options.resume) {
+      log_ = read_run_log(options.checkpoint);
+      check_fingerprint(log_.fingerprint, fingerprint, options.checkpoint);
+    }
+    writer_ = std::make_unique<RunLogWriter>(options.checkpoint, fingerprint, &log_);
+  }
+
+  bool replaying() const { return next_ < log_.evaluations.size(); }
+  double seconds() const {
+    return base_ + std::chrono::duration<double>(Clock::now() - t_base_).count();
+  }
+  std::size_t replayed() const { return std::min(next_, log_.evaluations.size()); }
+  double logged_seconds() const {
+    return log_.evaluations.empty() ? 0.0 : log_.evaluations.back().seconds;
+  }
+
+  /// The evaluation at m: from the log, or made (and logged).
+  ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient, fe::State* best) {
+    if (replaying()) {
+      const LoggedEvaluation& e = log_.evaluations[next_];
+      if (e.x.size() != m.size() || std::memcmp(e.x.data(), m.data(), m.size() * 8) != 0 ||
+          e.gradient != gradient)
+        throw InvalidArgument("the checkpoint's evaluation " + std::to_string(next_ + 1) +
+                              " is at another control than the resumed run asks for (a "
+                              "different build or optimiser?); start afresh without resume");
+      ++next_;
+      base_ = e.seconds;
+      t_base_ = Clock::now();
+      return e.result;
+    }
+    restore(best);
+    ++next_;
+    LoggedEvaluation e{m, gradient, objective_.evaluate(m, gradient), 0.0};
+    e.seconds = seconds();
+    if (writer_) writer_->append(e);
+    return e.result;
+  }
+  /// After an accepted iteration: the warm-start states, unless still replaying.
+  void snapshot(int iterations, const fe::State& best) {
+    if (!writer_ || next_ <= log_.evaluations.size()) return;
+    RunSnapshot s;
+    s.evaluations = static_cast<std::int64_t>(next_);
+    s.iterations = iterations;
+    s.states.assign(objective_.warm_starts().begin(), objective_.warm_starts().end());
+    s.best = best;
+    writer_->write_states(s);
+    // The solver's kept factorisations are not in the checkpoint: a resumed run starts
+    // here with a new solver, so the uninterrupted run does too.
+    objective_.reset_solver();
+  }
+  /// The warm-start states and the best state the log ended with, once replay is over.
+  void restore(fe::State* best) {
+    if (restored_ || !log_.has_snapshot || log_.evaluations.empty()) return;
+    objective_.restore_warm_starts(log_.snapshot.states);
+    const fe::State& b = log_.snapshot.best;
+    if (b.u.size() != best->u.size() || b.m_qp.rows() != best->m_qp.rows() ||
+        b.m_qp.cols() != best->m_qp.cols())
+      throw InvalidArgument("the checkpoint's best state does not fit this problem");
+    *best = b;
+    objective_.reset_solver();  // as the uninterrupted run did at its snapshot
+    restored_ = true;
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  ShapeObjective& objective_;
+  RunLog log_;
+  std::unique_ptr<RunLogWriter> writer_;
+  std::size_t next_ = 0;  // evaluations served or made
+  double base_ = 0.0;
+  Clock::time_point t_base_;
+  bool restored_ = false;
+};
+
+// The record of an accepted iteration from the evaluation that produced it.
+TrackingIteration record(const IterationRecord& rec, const ShapeEvaluation& last,
+                         const std::optional<double>& floor) {
+  TrackingIteration it;
+  it.iteration = rec.iteration;
+  it.evaluation = rec.evaluation;
+  it.J = last.J;
+  it.rho = last.rho;
+  it.A = last.A;
+  it.B = last.B;
+  it.rho_over_floor = floor ? last.rho / *floor : std::numeric_limits<double>::quiet_NaN();
+  it.projected_gradient_norm = rec.projected_gradient_norm;
+  it.newton_iterations = last.newton_iterations;
+  it.factorizations = last.factorizations;
+  it.seconds_state = last.seconds_state;
+  it.seconds_distance = last.seconds_distance;
+  it.seconds_adjoint = last.seconds_adjoint;
+  return it;
+}
+
+// The final state (the best control's, re-solved from the nearest warm start) and the
+// summary's totals.
+void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimizerSummary& r,
+            const std::optional<Eigen::VectorXd>& map_displacement, fe::State* best_state,
+            ShapeTrackingSummary* s) {
+  // The states at the end too, so that a finished run resumed replays all of it; then, in a
+  // run resumed after its end, the states it ended with.
+  recorder.snapshot(r.iterations, *best_state);
+  recorder.restore(best_state);
+  // The best control's state, evaluated again from its own state (Newton stops at once
+  // there, so the final ρ̃ is the one the optimiser saw).
+  objective.remember_state(r.x, *best_state);
+  const ShapeEvaluation final_eval = objective.evaluate(r.x, false);
+  if (!final_eval.ok)
+    throw Error("the state solve at the best control failed: " + final_eval.failure);
+  s->control = r.x;
+  s->displacement = objective.last_state().u;
+  s->rho_final = final_eval.rho;
+  s->J_final = final_eval.J;
+  s->iterations = r.iterations;
+  s->evaluations = r.evaluations;
+  s->failed_evaluations = r.failed_evaluations;
+  s->termination = r.termination;
+  s->converged = r.converged;
+  s->replayed_evaluations = static_cast<int>(recorder.replayed());
+  if (map_displacement) {
+    const auto [mx, rms] =
+        shape_error(objective.assembler().mesh(), s->displacement, *map_displacement);
+    s->shape_error_max = mx;
+    s->shape_error_rms = rms;
+  }
+  s->seconds = recorder.seconds();
+  s->seconds_optimizer =
+      std::max(0.0, s->seconds - s->seconds_state - s->seconds_distance - s->seconds_adjoint);
+}
+
+}  // namespace
+
+RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::VectorXd& lower,
+                               const Eigen::VectorXd& upper, const Eigen::VectorXd& m0,
+                               const ShapeTrackingOptions& options) {
+  RunFingerprint f = options.fingerprint;
+  const fe::Mesh& mesh = objective.assembler().mesh();
+  f["mesh"] = hash_of(mesh.nodes) + "/" + hash_of(mesh.elements);
+  f["constraints"] = hash_of(objective.assembler().dofs().free_index);
+  f["controls"] = std::to_string(m0.size()) + " values, bounds " + hash_of(lower) + "/" +
+                  hash_of(upper) + ", start " + hash_of(m0);
+  const PointCloud& Y = objective.target().cloud();
+  f["target"] =
+      std::to_string(Y.size()) + " points " + hash_of(Y.points()) + "/" + hash_of(Y.volumes());
+  const ShapeObjectiveOptions& so = objective.options();
+  const HausdorffOptions& h = so.hausdorff;
+  f["distance"] = "alpha " + exact_text(h.params.alpha) + " beta " + exact_text(h.params.beta) +
+                  " gamma " + exact_text(h.params.gamma) + " eps " + exact_text(h.params.epsilon) +
+                  " method " + to_string(h.method) + " tol " + exact_text(h.tolerance);
+  f["threads"] = std::to_string(h.threads > 0 ? h.threads : omp_get_max_threads());
+  f["objective"] = "particles " + to_string(so.particles) + " volumes " + to_string(so.volumes) +
+                   " tikhonov " + exact_text(so.tikhonov_mass) + " " +
+                   exact_text(so.tikhonov_gradient) + " warm starts " +
+                   std::to_string(so.warm_start_states);
+  const BoundedOptimizerOptions& o = options.optimizer;
+  f["optimiser"] = to_string(o.algorithm) + " rel-tol " + exact_text(o.relative_change) +
+                   " target " + exact_text(o.target_value) + " penalty " +
+                   exact_text(o.failure_penalty) + " move limit " + exact_text(o.move_limit) +
+                   " round " + std::to_string(o.round_evaluations);
+  return f;
+}
+
 ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorXd& lower,
                                  const Eigen::VectorXd& upper, const Eigen::VectorXd& m0_in,
                                  const std::optional<Eigen::VectorXd>& map_displacement,
                                  const ShapeTrackingOptions& options,
                                  const ShapeTrackingCallbacks& callbacks) {
-  using Clock = std::chrono::steady_clock;
-  const auto t_start = Clock::now();
   const fe::Mesh& mesh = objective.assembler().mesh();
   if (map_displacement && map_displacement->size() != mesh.num_nodes() * mesh.dim)
     throw InvalidArgument("track_shape: the known map has the wrong number of entries");
   if (m0_in.size() != lower.size() || lower.size() != upper.size())
     throw InvalidArgument("track_shape: m0, lower and upper differ in size");
   const Eigen::VectorXd m0 = m0_in.cwiseMax(lower).cwiseMin(upper);
+  Recorder recorder(objective, options, run_fingerprint(objective, lower, upper, m0_in, options));
 
   ShapeTrackingSummary s;
   // Floors (docs/formulation.md §2.2, §5.3): the target against itself, and the body deformed
@@ -61,72 +241,56 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   s.rho_start = start.rho;
   if (callbacks.on_start) callbacks.on_start(s);
 
-  // The objective for the optimiser, remembering the last evaluation for the records.
+  // The objective for the optimiser, remembering the last evaluation for the records. An
+  // exception inside it would be swallowed by NLopt: kept and rethrown after minimise.
   ShapeEvaluation last;
+  fe::State best_state = objective.last_state();  // the state of the best control so far
+  bool last_replayed = false;
+  std::exception_ptr error;
   const BoundedObjective f = [&](const Eigen::VectorXd& m, double& value, Eigen::VectorXd* g) {
-    last = objective.evaluate(m, g != nullptr);
+    if (error) return false;
+    try {
+      last_replayed = recorder.replaying();
+      last = recorder.evaluate(m, g != nullptr, &best_state);
+    } catch (...) {
+      error = std::current_exception();
+      return false;
+    }
     s.seconds_state += last.seconds_state;
     s.seconds_distance += last.seconds_distance;
     s.seconds_adjoint += last.seconds_adjoint;
     s.newton_iterations += last.newton_iterations;
     s.factorizations += last.factorizations;
     if (!last.ok) {
-      if (callbacks.on_failure) callbacks.on_failure(last.failure);
+      if (callbacks.on_failure && !last_replayed) callbacks.on_failure(last.failure);
       return false;
     }
     value = last.J;
     if (g) *g = last.gradient;
     return true;
   };
-  fe::State best_state = objective.last_state();  // the state of the best control so far
   const auto on_iteration = [&](const IterationRecord& rec, const Eigen::VectorXd& m) {
-    best_state = objective.last_state();
-    TrackingIteration it;
-    it.iteration = options.iteration_offset + rec.iteration;
-    it.evaluation = options.evaluation_offset + rec.evaluation;
-    it.J = last.J;
-    it.rho = last.rho;
-    it.A = last.A;
-    it.B = last.B;
-    it.rho_over_floor = floor ? last.rho / *floor : std::numeric_limits<double>::quiet_NaN();
-    it.projected_gradient_norm = rec.projected_gradient_norm;
-    it.newton_iterations = last.newton_iterations;
-    it.factorizations = last.factorizations;
-    it.seconds_state = last.seconds_state;
-    it.seconds_distance = last.seconds_distance;
-    it.seconds_adjoint = last.seconds_adjoint;
-    it.seconds =
-        options.seconds_offset + std::chrono::duration<double>(Clock::now() - t_start).count();
+    if (error) return;
+    if (!last_replayed) best_state = objective.last_state();  // else restored from the log
+    TrackingIteration it = record(rec, last, floor);
+    it.seconds = recorder.seconds();
+    it.replayed = last_replayed;
     s.history.push_back(it);
-    if (callbacks.on_iteration) callbacks.on_iteration(it, m);
+    try {
+      // The snapshot after the callback: an iteration in the log had its outputs written.
+      if (callbacks.on_iteration) callbacks.on_iteration(it, m);
+      recorder.snapshot(rec.iteration, best_state);
+    } catch (...) {
+      error = std::current_exception();
+    }
   };
-  const BoundedOptimizerSummary r = minimise(f, m0, lower, upper, options.optimizer, on_iteration);
-
-  // The final state: the best control's, evaluated again from its own state (Newton stops
-  // at once there, so the final ρ̃ is the one the optimiser saw).
-  objective.remember_state(r.x, best_state);
-  const ShapeEvaluation final_eval = objective.evaluate(r.x, false);
-  if (!final_eval.ok)
-    throw Error("the state solve at the best control failed: " + final_eval.failure);
+  BoundedOptimizerOptions opt = options.optimizer;
+  if (opt.max_seconds > 0.0)  // a total over the resumes
+    opt.max_seconds = std::max(1e-9, opt.max_seconds - recorder.logged_seconds());
+  const BoundedOptimizerSummary r = minimise(f, m0, lower, upper, opt, on_iteration);
+  if (error) std::rethrow_exception(error);
+  finish(objective, recorder, r, map_displacement, &best_state, &s);
   if (self_floor && map_displacement) s.floor_self = Y.evaluate(Y.cloud()).rho;
-  s.control = r.x;
-  s.displacement = objective.last_state().u;
-  s.rho_final = final_eval.rho;
-  s.J_final = final_eval.J;
-  s.iterations = options.iteration_offset + r.iterations;
-  s.evaluations = options.evaluation_offset + r.evaluations;
-  s.failed_evaluations = r.failed_evaluations;
-  s.termination = r.termination;
-  s.converged = r.converged;
-  if (map_displacement) {
-    const auto [mx, rms] = shape_error(mesh, s.displacement, *map_displacement);
-    s.shape_error_max = mx;
-    s.shape_error_rms = rms;
-  }
-  const double run = std::chrono::duration<double>(Clock::now() - t_start).count();
-  s.seconds = options.seconds_offset + run;
-  s.seconds_optimizer =
-      std::max(0.0, run - s.seconds_state - s.seconds_distance - s.seconds_adjoint);
   return s;
 }
 

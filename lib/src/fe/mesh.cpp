@@ -1,7 +1,9 @@
 #include "softhd/fe/mesh.hpp"
 
 #include <algorithm>
+#include <climits>
 #include <cmath>
+#include <sstream>
 
 #include "softhd/error.hpp"
 
@@ -14,6 +16,46 @@ const std::vector<int>& Mesh::face(const std::string& name) const {
                           "' (expected one of x0, x1, y0, y1" + (dim == 3 ? ", z0, z1)" : ")"));
   }
   return it->second;
+}
+
+MeshSize box_mesh_size(const Eigen::VectorXd& cells, int order) {
+  const int dim = static_cast<int>(cells.size());
+  double nodes = 1.0, elements = 1.0;
+  for (int d = 0; d < dim; ++d) {
+    nodes *= order * cells[d] + 1.0;
+    elements *= cells[d];
+  }
+  const double nen = std::pow(order + 1.0, dim), qp_per_element = nen;
+  const double dofs = nodes * dim;
+  const double quadrature = elements * qp_per_element;
+  // The tangent couples a node with the (2p+1)^dim nodes of the elements around it.
+  const double tangent_nonzeros = dofs * dim * std::pow(2.0 * order + 1.0, dim);
+  MeshSize s;
+  constexpr double kInt64 = 9.2e18;  // the counts are exact below this
+  s.nodes = static_cast<std::int64_t>(std::min(nodes, kInt64));
+  s.elements = static_cast<std::int64_t>(std::min(elements, kInt64));
+  s.dofs = static_cast<std::int64_t>(std::min(dofs, kInt64));
+  s.quadrature_points = static_cast<std::int64_t>(std::min(quadrature, kInt64));
+  s.bytes = nodes * dim * 8.0 + elements * (nen + std::pow(2.0, dim)) * 4.0 +
+            quadrature * (dim * nen * 8.0 + 24.0) + 3.0 * tangent_nonzeros * 12.0 +
+            10.0 * dofs * 8.0;
+  return s;
+}
+
+void check_mesh_size(const MeshSize& size, double memory_limit, const std::string& what) {
+  std::ostringstream msg;
+  msg.precision(3);
+  msg << what << " has " << size.nodes << " nodes and " << size.elements << " elements";
+  if (size.bytes > memory_limit) {
+    msg << ": it needs about " << size.bytes / (1u << 30) << " GiB, above the memory limit of "
+        << memory_limit / (1u << 30) << " GiB (raise the limit: --max-memory GIB)";
+    throw ResourceError(msg.str());
+  }
+  if (size.dofs > INT_MAX || size.quadrature_points > INT_MAX) {
+    msg << " (" << size.dofs << " dofs, " << size.quadrature_points
+        << " quadrature points): more than the 2147483647 one run can index";
+    throw ResourceError(msg.str());
+  }
 }
 
 Mesh make_box_mesh(const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
@@ -32,6 +74,7 @@ Mesh make_box_mesh(const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
     }
     if (cells[d] < 1) throw InvalidArgument("box mesh: cells must be >= 1 along every axis");
   }
+  check_mesh_size(box_mesh_size(cells.cast<double>(), order), INFINITY, "box mesh");
   Mesh m;
   m.dim = dim;
   m.order = order;

@@ -1,5 +1,6 @@
 #include "softhd/fe/scene.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -83,11 +84,11 @@ std::shared_ptr<const Material> read_material(const Reader& r, const json& m, st
 
 }  // namespace
 
-Scene parse_scene(const std::string& text, const std::string& source) {
+Scene parse_scene(const std::string& text, const std::string& source, double memory_limit) {
   json doc;
   try {
     doc = json::parse(text);
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, or out_of_range for 1e400
     throw FileError("scene " + source + ": not valid JSON (" + e.what() + ")");
   }
   const Reader r(source);
@@ -112,6 +113,7 @@ Scene parse_scene(const std::string& text, const std::string& source) {
   const double order = r.number(mesh, "order", "mesh.order");
   if (order != 1 && order != 2) r.fail("mesh.order", "must be 1 or 2");
   s.order = static_cast<int>(order);
+  check_mesh_size(box_mesh_size(cells, s.order), memory_limit, "scene " + source + ": the mesh");
   s.material = read_material(r, r.object(doc, "material", "material"), &s.material_model);
   const Eigen::VectorXd f = r.numbers(doc, "fibers", "fibers", 3, 3);
   if (!(f.norm() > 0.0)) r.fail("fibers", "must be a non-zero vector");
@@ -128,7 +130,13 @@ Scene parse_scene(const std::string& text, const std::string& source) {
     for (const json& c : doc["constraints"]) {
       const Eigen::VectorXd comps = r.numbers(c, "components", "constraints[].components", 1, 3);
       DirichletConstraint dc{r.string(c, "face", "constraints[].face"), {}};
-      for (double k : comps) dc.components.push_back(static_cast<int>(k));
+      for (double k : comps) {
+        if (!(k >= 0 && k < s.dim() && k == std::floor(k)))
+          r.fail("constraints[].components", "must hold axis indices 0 to " +
+                                                 std::to_string(s.dim() - 1) + ", got " +
+                                                 c["components"].dump());
+        dc.components.push_back(static_cast<int>(k));
+      }
       s.constraints.push_back(dc);
     }
   }
@@ -155,12 +163,12 @@ Scene parse_scene(const std::string& text, const std::string& source) {
   return s;
 }
 
-Scene load_scene(const std::string& path) {
+Scene load_scene(const std::string& path, double memory_limit) {
   std::ifstream in(path);
   if (!in) throw FileError("scene " + path + ": cannot open the file");
   std::stringstream ss;
   ss << in.rdbuf();
-  return parse_scene(ss.str(), path);
+  return parse_scene(ss.str(), path, memory_limit);
 }
 
 Mesh Scene::make_mesh() const { return make_box_mesh(lower, upper, cells, order); }

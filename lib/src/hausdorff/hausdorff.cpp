@@ -45,6 +45,16 @@ void validate_options(const HausdorffOptions& options) {
     throw InvalidArgument(msg.str());
   }
 }
+// Refuses coordinates whose squares could overflow (see kMaxCoordinate).
+void check_coordinates(const PointCloud& cloud, const char* which) {
+  const double largest = cloud.points().cwiseAbs().maxCoeff();
+  if (largest > kMaxCoordinate) {
+    std::ostringstream msg;
+    msg << which << " cloud has a coordinate of magnitude " << largest << ", above the limit of "
+        << kMaxCoordinate << " (rescale the clouds and epsilon)";
+    throw InvalidArgument(msg.str());
+  }
+}
 }  // namespace
 
 std::string to_string(Method method) {
@@ -95,6 +105,7 @@ struct HausdorffTarget::Impl {
 
 HausdorffTarget::HausdorffTarget(PointCloud target, HausdorffOptions options) {
   validate_options(options);
+  check_coordinates(target, "target");
   impl_ = std::make_unique<Impl>(std::move(target), options);
 }
 HausdorffTarget::~HausdorffTarget() = default;
@@ -111,6 +122,7 @@ HausdorffResult HausdorffTarget::evaluate(const PointCloud& moving,
     throw InvalidArgument("moving cloud is " + std::to_string(moving.dim()) +
                           "D but the target is " + std::to_string(impl_->cloud.dim()) + "D");
   }
+  check_coordinates(moving, "moving");
   if (request.differentiate.size() != 0 && request.differentiate.size() != moving.size()) {
     throw InvalidArgument("differentiate mask has " + std::to_string(request.differentiate.size()) +
                           " entries for " + std::to_string(moving.size()) + " moving points");

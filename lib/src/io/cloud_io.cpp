@@ -147,7 +147,11 @@ int split_fields(const std::string& path, std::size_t line, const char* p, const
 
 PointCloud read_text_cloud(const std::string& path, int dim) {
   check_dim(dim);
-  const std::string data = read_file(path);
+  return parse_text_cloud(read_file(path), path, dim);
+}
+
+PointCloud parse_text_cloud(const std::string& data, const std::string& path, int dim) {
+  check_dim(dim);
   const char* p = data.data();
   const char* const end = p + data.size();
   if (data.compare(0, 3, "\xEF\xBB\xBF") == 0) p += 3;  // UTF-8 byte order mark
@@ -487,6 +491,14 @@ void read_ply_binary(const std::string& path, const std::string& data, const Ply
       }
     }
   }
+  // A line break some tools append is tolerated; more data means the header's counts are
+  // too small (a third vertex under "element vertex 2" would otherwise be dropped silently).
+  const bool line_break =
+      end - p <= 2 && std::all_of(p, end, [](char c) { return c == '\n' || c == '\r'; });
+  if (!line_break) {
+    fail(path, std::to_string(end - p) +
+                   " bytes of data after the last element (the header's counts are too small)");
+  }
 }
 
 // Reads whitespace-separated tokens; `line` is that of the last token read.
@@ -567,7 +579,10 @@ void read_ply_ascii(const std::string& path, const std::string& data, const PlyH
 }  // namespace
 
 PointCloud read_ply_cloud(const std::string& path) {
-  const std::string data = read_file(path);
+  return parse_ply_cloud(read_file(path), path);
+}
+
+PointCloud parse_ply_cloud(const std::string& data, const std::string& path) {
   const PlyHeader h = parse_ply_header(path, data);
   std::vector<double> values;  // rows of x, y, [z,] volume
   if (h.binary) {

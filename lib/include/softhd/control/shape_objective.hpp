@@ -13,6 +13,7 @@
 ///     dJ/dm_k = ∂J_reg/∂m_k + ∫ M_k (F a₀)·(∇λ a₀) dX.
 
 #include <Eigen/Core>
+#include <deque>
 #include <memory>
 #include <string>
 
@@ -66,6 +67,12 @@ struct ShapeEvaluation {
   std::string failure;  ///< the Newton report of a failed solve
 };
 
+/// A converged state kept for warm starts, with its control (empty for the rest state).
+struct WarmStart {
+  Eigen::VectorXd m;  ///< the control (empty for the rest state)
+  fe::State state;    ///< its converged state
+};
+
 /// J(m) and dJ/dm for one body, control space and target. Keeps the last converged
 /// states for warm starts and the target's trees across evaluations. Not thread-safe.
 class ShapeObjective {
@@ -92,6 +99,17 @@ class ShapeObjective {
   const ShapeObjectiveOptions& options() const;
   /// The body's assembler.
   const fe::Assembler& assembler() const;
+  /// The warm-start states, most recent first (what the next evaluation starts from).
+  const std::deque<WarmStart>& warm_starts() const;
+  /// Replaces the warm-start states (e.g. from a checkpoint), so that the next evaluation
+  /// is bitwise the one an uninterrupted run would make. Throws InvalidArgument if the
+  /// list is empty, longer than warm_start_states, or a size does not fit the problem.
+  void restore_warm_starts(const std::vector<WarmStart>& states);
+  /// Replaces the state solver by a new one, forgetting what it keeps between solves (its
+  /// factorisations and path tangent): later evaluations then depend on earlier ones only
+  /// through the warm starts, which a checkpoint can save. Costs a factorisation at the
+  /// next solve.
+  void reset_solver();
   /// Per-point fields d̃ of the last converged state (moving cloud, target cloud).
   HausdorffResult fields(const Eigen::VectorXd& u) const;
 

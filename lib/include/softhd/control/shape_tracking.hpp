@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "softhd/control/bounded_optimizer.hpp"
+#include "softhd/control/run_log.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/fe/mesh.hpp"
 
@@ -37,7 +38,8 @@ struct TrackingIteration {
   /// Wall time (seconds) of this evaluation's state solve, distance and adjoint.
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
   ///@}
-  double seconds = 0.0;  ///< wall time since the start of the run (plus a resumed offset)
+  double seconds = 0.0;   ///< wall time of the run (over all resumes)
+  bool replayed = false;  ///< served from the checkpoint of a resumed run (no state at hand)
 };
 
 /// Settings of track_shape(); defaults per field.
@@ -46,11 +48,17 @@ struct ShapeTrackingOptions {
   /// The self floor ρ̃(Ω_d, Ω_d) costs M² pairs: skipped (nullopt) above this many, e.g. for a
   /// 1e6-point scan (1e12 pairs, ~20 minutes on 2 cores). The default costs ~15 s.
   double self_floor_max_pairs = 1e10;
-  ///@{
-  /// A resumed run continues counting from these (checkpoint values).
-  int iteration_offset = 0, evaluation_offset = 0;
-  double seconds_offset = 0.0;
-  ///@}
+  /// Checkpoint log (run_log.hpp) written as the run goes; empty: none.
+  std::string checkpoint;
+  /// Continue the run recorded in `checkpoint`: the optimiser starts again and its
+  /// evaluations are served from the log (bitwise, x checked) until it runs out, so the
+  /// resumed run is the uninterrupted one, and the stopping limits (iterations,
+  /// evaluations, wall clock) count over the whole run. A checkpoint whose fingerprint
+  /// differs is refused (InvalidArgument naming the key); a malformed one (FileError).
+  bool resume = false;
+  /// The caller's part of the fingerprint (e.g. a content hash of the scene file);
+  /// track_shape adds the mesh, controls, target, objective and optimiser settings.
+  RunFingerprint fingerprint;
 };
 
 /// The result of track_shape(): floors, final values, why it stopped, the shape error and
@@ -66,7 +74,7 @@ struct ShapeTrackingSummary {
   double rho_final = 0.0, J_final = 0.0;
   ///@}
   ///@{
-  /// Accepted iterations, evaluations and failed evaluations, including offsets.
+  /// Accepted iterations, evaluations and failed evaluations, over all resumes.
   int iterations = 0, evaluations = 0, failed_evaluations = 0;
   ///@}
   std::string termination;  ///< why the optimiser stopped, one line
@@ -75,7 +83,7 @@ struct ShapeTrackingSummary {
   /// Max and RMS of |x_i − T(X_i)| over the nodes (with a known map only).
   std::optional<double> shape_error_max, shape_error_rms;
   ///@}
-  double seconds = 0.0;  ///< this run's wall time plus the offset
+  double seconds = 0.0;  ///< wall time over all resumes
   ///@{
   /// Total wall time (seconds) of the state solves, distances and adjoints.
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
@@ -85,7 +93,8 @@ struct ShapeTrackingSummary {
   int factorizations = 0;                  ///< numeric factorisations (state solves and adjoints)
   Eigen::VectorXd control;                 ///< the best m found
   Eigen::VectorXd displacement;            ///< its state u
-  std::vector<TrackingIteration> history;  ///< this run's accepted iterations
+  std::vector<TrackingIteration> history;  ///< accepted iterations (replayed ones included)
+  int replayed_evaluations = 0;            ///< served from the checkpoint
 };
 
 /// Max and RMS over the nodes of |x_i − T(X_i)| = |u_i − u_T,i| (node-major vectors).
@@ -101,6 +110,11 @@ struct ShapeTrackingCallbacks {
   /// A failed state solve (the step is rejected and the run goes on).
   std::function<void(const std::string& report)> on_failure;
 };
+
+/// The fingerprint track_shape records for a run (the caller's entries plus its own).
+RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::VectorXd& lower,
+                               const Eigen::VectorXd& upper, const Eigen::VectorXd& m0,
+                               const ShapeTrackingOptions& options);
 
 /// Minimises J(m) over lower ≤ m ≤ upper from m0 (clamped into the bounds).
 /// `map_displacement` (optional) is u_T = T(X) − X at the nodes, for the matched floor and

@@ -4,6 +4,7 @@
 /// hexahedra in 3D, 4-node and 9-node quadrilaterals in 2D (plane strain).
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -49,8 +50,33 @@ struct Mesh {
   const std::vector<int>& face(const std::string& name) const;
 };
 
+/// Counts of a structured box mesh in 64 bits (they can exceed 2^31 before anything is
+/// allocated), and an estimate of the memory a state solve on it needs.
+struct MeshSize {
+  ///@{
+  /// Counts of the mesh and of the problem on it.
+  std::int64_t nodes = 0, elements = 0, dofs = 0, quadrature_points = 0;
+  ///@}
+  /// Estimated bytes: mesh, quadrature data, the sparse tangent and its factor (taken as
+  /// twice the tangent), and a handful of dof vectors. An estimate, not a bound.
+  double bytes = 0.0;
+};
+
+/// The counts of make_box_mesh(lo, hi, cells, order) without building it. `cells` may
+/// hold any values >= 1 (computed in floating point where the products could overflow).
+MeshSize box_mesh_size(const Eigen::VectorXd& cells, int order);
+
+/// Default memory limit of check_mesh_size: 8 GiB.
+constexpr double kDefaultMemoryLimit = 8.0 * (1u << 30);
+
+/// Throws ResourceError naming `what`, the counts, the estimated size and the limit if
+/// the estimate exceeds `memory_limit` bytes, or if nodes or dofs exceed the int range
+/// the element connectivity is indexed with.
+void check_mesh_size(const MeshSize& size, double memory_limit, const std::string& what);
+
 /// Structured mesh of the box [lo, hi] (lo, hi of size 2 or 3) with `cells` elements per
-/// axis and Lagrange order 1 or 2. Throws InvalidArgument on bad sizes.
+/// axis and Lagrange order 1 or 2. Throws InvalidArgument on bad sizes and ResourceError
+/// if the node or dof count exceeds the int range (nothing is allocated then).
 Mesh make_box_mesh(const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
                    const Eigen::VectorXi& cells, int order);
 

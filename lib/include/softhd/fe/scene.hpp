@@ -58,9 +58,12 @@ struct Scene {
   Assembler make_assembler() const;
 };
 
-/// Parses JSON text; `source` names it in error messages. Throws FileError.
-Scene parse_scene(const std::string& json_text, const std::string& source);
-/// Reads and parses a scene file. Throws FileError.
-Scene load_scene(const std::string& path);
+/// Parses JSON text; `source` names it in error messages. Throws FileError, and
+/// ResourceError (before building anything) if the mesh's estimated memory exceeds
+/// `memory_limit` bytes (see check_mesh_size).
+Scene parse_scene(const std::string& json_text, const std::string& source,
+                  double memory_limit = kDefaultMemoryLimit);
+/// Reads and parses a scene file. Throws FileError or ResourceError.
+Scene load_scene(const std::string& path, double memory_limit = kDefaultMemoryLimit);
 
 }  // namespace softhd::fe

@@ -14,6 +14,11 @@
 
 namespace softhd {
 
+/// read_text_cloud() on bytes already in memory; `name` stands for the file in messages.
+PointCloud parse_text_cloud(const std::string& data, const std::string& name, int dim = 0);
+/// read_ply_cloud() on bytes already in memory; `name` stands for the file in messages.
+PointCloud parse_ply_cloud(const std::string& data, const std::string& name);
+
 /// Reads a cloud from `path`: PLY when the name ends in `.ply` (any case),
 /// text otherwise. `dim` is 0 (decide from the file), 2 or 3; for a PLY file a
 /// non-zero `dim` must agree with the file (z present <=> 3D).
