@@ -197,7 +197,7 @@ bool vtu_due(long every, int iteration) { return every > 0 && iteration % every 
 
 const char* kHistoryHeader =
     "iteration,evaluation,J,rho,A,B,rho_over_floor,projected_gradient_norm,newton_iterations,"
-    "seconds_state,seconds_distance,seconds_adjoint,seconds";
+    "factorizations,seconds_state,seconds_distance,seconds_adjoint,seconds";
 
 }  // namespace
 
@@ -293,10 +293,10 @@ class RunFiles {
     write_pvd((dir_ / "body.pvd").string(), pvd_);
   }
   void add_row(const TrackingIteration& it) {
-    rows_.push_back(
-        csv_row({double(it.iteration), double(it.evaluation), it.J, it.rho, it.A, it.B,
-                 it.rho_over_floor, it.projected_gradient_norm, double(it.newton_iterations),
-                 it.seconds_state, it.seconds_distance, it.seconds_adjoint, it.seconds}));
+    rows_.push_back(csv_row(
+        {double(it.iteration), double(it.evaluation), it.J, it.rho, it.A, it.B, it.rho_over_floor,
+         it.projected_gradient_norm, double(it.newton_iterations), double(it.factorizations),
+         it.seconds_state, it.seconds_distance, it.seconds_adjoint, it.seconds}));
   }
   void write_history() const {
     std::ostringstream h;
@@ -334,6 +334,7 @@ void add_final(const ShapeTrackingSummary& s, nlohmann::json& sum) {
   sum["shape_error_rms"] = optional_json(s.shape_error_rms);
   sum["seconds"] = s.seconds;
   sum["newton_iterations"] = s.newton_iterations;
+  sum["factorizations"] = s.factorizations;
   sum["seconds_state"] = s.seconds_state;
   sum["seconds_distance"] = s.seconds_distance;
   sum["seconds_adjoint"] = s.seconds_adjoint;
