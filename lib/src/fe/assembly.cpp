@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "softhd/error.hpp"
+#include "softhd/parallel.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -14,14 +15,6 @@
 namespace softhd::fe {
 
 namespace {
-
-int max_threads() {
-#ifdef _OPENMP
-  return omp_get_max_threads();
-#else
-  return 1;
-#endif
-}
 
 int thread_id() {
 #ifdef _OPENMP
@@ -180,7 +173,7 @@ bool Assembler::evaluate(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp, 
   const Eigen::Index chunk = std::min(kChunk, E);
   std::vector<double> rbuf(want_r ? chunk * nd : 0);
   std::vector<double> kbuf(want_K ? chunk * nd * nd : 0);
-  std::vector<ElementWork> work(max_threads(), ElementWork(dim, nen, nq));
+  std::vector<ElementWork> work(softhd::max_threads(), ElementWork(dim, nen, nq));
   for (Eigen::Index start = 0; start < E; start += chunk) {
     const Eigen::Index n = std::min(chunk, E - start);
 #pragma omp parallel for schedule(static) if (n >= 8)
