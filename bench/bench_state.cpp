@@ -6,6 +6,8 @@
 //                                  cold start, warm start after +5 % m, adjoint cost, split
 //                                  of the time per Newton iteration; run it with
 //                                  OMP_NUM_THREADS=1 and =2 to compare threads
+//                                  (SOFTHD_BENCH_REPORT=1: the warm solve's iteration
+//                                  table, with PCG iterations and factorisations)
 //   bench_state assembly SCENE     assembly times, 1 and 2 threads (minimum of 7)
 //   bench_state refine             bending plate, m = -1e4 X3/0.1: tip displacement for Q2
 //                                  and Q1 at refinements
