@@ -7,26 +7,14 @@
 
 #include <atomic>
 #include <cstring>
-#include <random>
 #include <thread>
 #include <vector>
 
+#include "hausdorff_reference.hpp"
 #include "softhd/hausdorff.hpp"
 
 namespace softhd::test {
 namespace {
-
-PointCloud random_cloud(int n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0), v(0.5, 2.0);
-  Eigen::MatrixXd p(n, 3);
-  Eigen::VectorXd w(n);
-  for (int i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) p(i, k) = u(rng);
-    w[i] = v(rng);
-  }
-  return PointCloud(p, w);
-}
 
 bool same_bits(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
   return a.rows() == b.rows() && a.cols() == b.cols() &&
@@ -47,14 +35,14 @@ TEST_P(Concurrency, ManyThreadsOnOneTargetGiveTheSerialResults) {
   HausdorffOptions o;
   o.method = GetParam();
   o.threads = 2;  // OpenMP inside every evaluation as well
-  const HausdorffTarget target(random_cloud(2000, 1), o);
+  const HausdorffTarget target(random_cloud(2000, 3, 1, -1.0, 1.0), o);
   constexpr int kClouds = 8, kThreads = 8, kRepeats = 4;
   std::vector<PointCloud> moving;
   std::vector<HausdorffResult> serial;
   HausdorffRequest req;
   req.gradient_points = req.gradient_volumes = req.fields = true;
   for (int c = 0; c < kClouds; ++c) {
-    moving.push_back(random_cloud(500 + 100 * c, 100 + c));
+    moving.push_back(random_cloud(500 + 100 * c, 3, 100 + c, -1.0, 1.0));
     serial.push_back(target.evaluate(moving.back(), req));
   }
   std::atomic<int> mismatches{0}, evaluations{0};

@@ -6,9 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <random>
 
 #include "expect_error.hpp"
+#include "hausdorff_reference.hpp"
 #include "softhd/fe/mesh.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/hausdorff.hpp"
@@ -89,22 +89,10 @@ TEST(SceneInput, ConstraintComponentsAndHugeNumbersAreRefused) {
                           "scene s.json: not valid JSON");
 }
 
-PointCloud random_cloud(int n, std::mt19937& rng) {
-  std::uniform_real_distribution<double> u(-1.0, 1.0), v(0.5, 2.0);
-  Eigen::MatrixXd p(n, 3);
-  Eigen::VectorXd w(n);
-  for (int i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) p(i, k) = u(rng);
-    w[i] = v(rng);
-  }
-  return PointCloud(p, w);
-}
-
 // ρ̃ is built from distances and ε only (volumes enter as ratios), so scaling every
 // coordinate and ε by s scales ρ̃, A and B by s. s = 10^k, k from −150 to 150.
 TEST(Coordinates, RhoScalesWithTheCoordinatesOverTheWholeAcceptedRange) {
-  std::mt19937 rng(7);
-  const PointCloud X = random_cloud(40, rng), Y = random_cloud(30, rng);
+  const PointCloud X = random_cloud(40, 3, 7, -1.0, 1.0), Y = random_cloud(30, 3, 8, -1.0, 1.0);
   for (Method method : {Method::exact, Method::tree}) {
     HausdorffOptions o;
     o.method = method;

@@ -47,9 +47,11 @@ bool NewtonOptions::IsValid(std::string* error) const {
     return fail("intermediate_tolerance must be in (0, 1)");
   if (!(adjoint_tolerance > 0.0 && adjoint_tolerance < 1.0))
     return fail("adjoint_tolerance must be in (0, 1)");
-  if (tangent.max_krylov_iterations < 1) return fail("tangent.max_krylov_iterations must be >= 1");
-  if (tangent.refactor_after_iterations < 1)
-    return fail("tangent.refactor_after_iterations must be >= 1");
+  try {
+    tangent.validate();  // one set of checks for the tangent solver's options
+  } catch (const InvalidArgument& e) {
+    return fail(e.what());
+  }
   return true;
 }
 

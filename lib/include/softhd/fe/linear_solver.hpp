@@ -40,8 +40,6 @@ class LinearSolver {
   /// of numeric factorisations made.
   double factorize_shifted(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& K,
                            bool allow_shift = true, int* attempts = nullptr);
-  /// Forgets the shift of the previous factorize_shifted (the next search starts at 0).
-  void reset_shift() { last_shift_ = 0.0; }
   /// Symbolic analysis of the pattern (lower triangle); call again only if it changes.
   virtual void analyze(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& pattern) = 0;
   /// Numeric factorisation of a matrix with the analysed pattern. Returns false if the
