@@ -13,6 +13,7 @@
 #include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/cloud.hpp"
+#include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
@@ -41,9 +42,11 @@ constexpr const char* kUsage =
     "                         V_i = int N_i J dX as a point cloud (.ply binary, else text), in\n"
     "                         node order: a target for softhd optimise\n"
     "  --coarse-levels K      grid sequencing: first solve on the mesh with half the cells\n"
-    "                         (K times, coarsest first; cell counts must stay even) and start\n"
-    "                         each finer Newton solve from the coarser state interpolated\n"
-    "                         onto its nodes (default 0: start from rest)\n"
+    "                         along every even axis (K times, coarsest first) and start each\n"
+    "                         finer Newton solve from the coarser state interpolated onto its\n"
+    "                         nodes; 0 starts from rest (default auto: halve while an axis is\n"
+    "                         even and the coarse mesh keeps >= 32 elements; a coarse solve\n"
+    "                         that fails makes the start the rest state)\n"
     "  --json                 print a JSON summary (probes, energy, volume, iterations, ...)\n"
     "  --linear-solver NAME   eigen-llt, eigen-ldlt or cholmod (default cholmod)\n"
     "  --step-tol T           converged also needs the last Newton correction\n"
@@ -61,7 +64,7 @@ constexpr const char* kUsage =
 struct Args {
   std::string scene, control_file, out_dir = "out", write_nodes, linear_solver, write_cloud;
   bool has_uniform = false, json = false, verbose = false;
-  int coarse_levels = 0;
+  int coarse_levels = -1;  // automatic
   int threads = 0;
   double step_tol = 1e-10;
   double load_increment = 1.0;
@@ -136,9 +139,10 @@ bool parse(int argc, char** argv, Args* a) {
         throw softhd::InvalidArgument("--threads expects an integer from 0 to 1024");
       a->threads = static_cast<int>(t);
     } else if (s == "--coarse-levels") {
-      const double k = parse_number(value(), s);
-      if (!(k >= 0 && k <= 8 && k == static_cast<int>(k)))
-        throw softhd::InvalidArgument("--coarse-levels expects an integer from 0 to 8");
+      const std::string v = value();
+      const double k = v == "auto" ? -1.0 : parse_number(v, s);
+      if (!(k >= -1 && k <= 8 && k == static_cast<int>(k)))
+        throw softhd::InvalidArgument("--coarse-levels expects auto or an integer from 0 to 8");
       a->coarse_levels = static_cast<int>(k);
     } else if (s == "--max-memory") {
       const double g = parse_number(value(), s);
@@ -170,43 +174,6 @@ Eigen::VectorXd control_values(const Scene& scene, const ControlSpace& control, 
       control.size(), args.has_uniform ? args.uniform : scene.control_initial);
   if (!args.control_file.empty()) m = read_control_file(args.control_file, control.positions(mesh));
   return m;
-}
-
-/// The starting state for `assembler` (the scene's mesh) and m_qp: the rest state, or with
-/// levels > 0 the equilibrium on the mesh with half the cells (itself started with
-/// levels − 1) interpolated onto this mesh's nodes by the coarse shape functions.
-State start_state(const Scene& scene, const Assembler& assembler, const Eigen::MatrixXd& m_qp,
-                  const Args& args, int levels, const NewtonOptions& options) {
-  State state = rest_state(assembler);
-  if (levels == 0) return state;
-  Scene coarse = scene;
-  for (Eigen::Index k = 0; k < coarse.cells.size(); ++k) {
-    if (coarse.cells[k] % 2 != 0)
-      throw softhd::InvalidArgument("--coarse-levels: " + std::to_string(coarse.cells[k]) +
-                                    " cells along axis " + std::to_string(k + 1) +
-                                    " cannot be halved");
-    coarse.cells[k] /= 2;
-  }
-  const Assembler ca = coarse.make_assembler();
-  const ControlSpace cc(ca.mesh(), ca.geometry(), coarse.control_kind);
-  const Eigen::MatrixXd mq = cc.to_quadrature(control_values(coarse, cc, ca.mesh(), args));
-  State cs = start_state(coarse, ca, mq, args, levels - 1, options);
-  NewtonSolver newton(ca, options);
-  const NewtonSummary summary = newton.solve(mq, &cs);
-  std::ostringstream cells;
-  cells << coarse.cells.transpose();
-  std::cerr << "coarse level (cells " << cells.str() << "): " << summary.BriefReport() << "\n";
-  if (!summary.converged())
-    throw softhd::Error("--coarse-levels: the state on the coarser mesh did not converge");
-  // Prolongation: u(X) = Σ_a N_a(ξ) u_a of the coarse element containing each node.
-  const Mesh& cm = ca.mesh();
-  Eigen::MatrixXd y = cm.nodes;
-  for (Eigen::Index n = 0; n < cm.num_nodes(); ++n)
-    for (int c = 0; c < cm.dim; ++c) y(n, c) += cs.u[n * cm.dim + c];
-  const softhd::NodalMap P(cm, softhd::PointCloud(y, Eigen::VectorXd::Ones(cm.num_nodes())));
-  state.u = P.displacement(assembler.mesh());
-  state.m_qp = m_qp;  // Newton starts at full load from the interpolated state
-  return state;
 }
 
 int forward(const Args& args) {
@@ -249,7 +216,11 @@ int forward(const Args& args) {
     options.tangent.linear_solver = parse_linear_solver(args.linear_solver);
   NewtonSolver newton(assembler, options);
   const Eigen::MatrixXd m_qp = control.to_quadrature(m);
-  State state = start_state(scene, assembler, m_qp, args, args.coarse_levels, options);
+  GridSequencingOptions grid;
+  grid.levels = args.coarse_levels;
+  GridSequencingReport grid_report;
+  State state = grid_sequenced_start(scene, assembler, m, options, grid, &grid_report);
+  std::cerr << grid_report.BriefReport();
   const NewtonSummary summary = newton.solve(m_qp, &state);
   const Eigen::MatrixXd J = assembler.jacobians(state.u);
   std::filesystem::create_directories(args.out_dir);
