@@ -259,6 +259,19 @@ int forward(const Args& args) {
     j["krylov_iterations"] = summary.krylov_iterations;
     j["load_steps"] = summary.load_steps;
     j["dofs"] = assembler.dofs().num_free;
+    // Solve time: the coarse levels' Newton solves and the fine one (no file I/O).
+    double solve_seconds = summary.seconds_total;
+    nlohmann::json levels = nlohmann::json::array();
+    for (const GridLevelReport& level : grid_report.levels) {
+      solve_seconds += level.newton.seconds_total;
+      levels.push_back(
+          {{"cells", std::vector<int>(level.cells.data(), level.cells.data() + level.cells.size())},
+           {"newton_iterations", level.newton.newton_iterations},
+           {"factorizations", level.newton.factorizations},
+           {"seconds", level.newton.seconds_total}});
+    }
+    j["coarse_levels"] = levels;
+    j["seconds_solve"] = solve_seconds;
     j["seconds"] = seconds;
     j["vtu"] = vtu;
     std::cout << j.dump(2) << "\n";
