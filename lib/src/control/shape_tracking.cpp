@@ -53,7 +53,9 @@ class Recorder {
       log_ = read_run_log(options.checkpoint);
       check_fingerprint(log_.fingerprint, fingerprint, options.checkpoint);
     }
-    writer_ = std::make_unique<RunLogWriter>(options.checkpoint, fingerprint, &log_);
+    // A fresh run gets a new run id and removes an earlier run's states file.
+    writer_ = std::make_unique<RunLogWriter>(options.checkpoint, fingerprint,
+                                             options.resume ? &log_ : nullptr);
   }
 
   bool replaying() const { return next_ < log_.evaluations.size(); }
@@ -203,6 +205,11 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
                    " tikhonov " + exact_text(so.tikhonov_mass) + " " +
                    exact_text(so.tikhonov_gradient) + " warm starts " +
                    std::to_string(so.warm_start_states);
+  if (const fe::Assembler* coarse = objective.coarse_level()) {
+    f["objective"] += " coarse level " + hash_of(coarse->mesh().nodes) + " from " +
+                      std::to_string(so.coarse_correction_iterations) + " iterations";
+  }
+  f["checkpoint"] = "every " + std::to_string(options.checkpoint_every) + " iterations";
   const BoundedOptimizerOptions& o = options.optimizer;
   f["optimiser"] = to_string(o.algorithm) + " rel-tol " + exact_text(o.relative_change) +
                    " target " + exact_text(o.target_value) + " penalty " +
@@ -221,6 +228,8 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     throw InvalidArgument("track_shape: the known map has the wrong number of entries");
   if (m0_in.size() != lower.size() || lower.size() != upper.size())
     throw InvalidArgument("track_shape: m0, lower and upper differ in size");
+  if (options.checkpoint_every < 1)
+    throw InvalidArgument("track_shape: checkpoint_every must be >= 1");
   const Eigen::VectorXd m0 = m0_in.cwiseMax(lower).cwiseMin(upper);
   Recorder recorder(objective, options, run_fingerprint(objective, lower, upper, m0_in, options));
 
@@ -279,7 +288,8 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     try {
       // The snapshot after the callback: an iteration in the log had its outputs written.
       if (callbacks.on_iteration) callbacks.on_iteration(it, m);
-      recorder.snapshot(rec.iteration, best_state);
+      if (rec.iteration % options.checkpoint_every == 0)
+        recorder.snapshot(rec.iteration, best_state);
     } catch (...) {
       error = std::current_exception();
     }
