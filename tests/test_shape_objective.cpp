@@ -131,6 +131,7 @@ TEST(ShapeObjective, TwoLevelStartsReachTheSameStateWithFewerFineIterations) {
   PointCloud Y = random_cloud(50, 3, 4, 0.0, 1.0);
   ShapeObjectiveOptions o;
   o.newton.relative_tolerance = 1e-12;
+  o.newton.displacement_tolerance = 1e-11;  // both paths end on the same state, soft modes too
   o.coarse_correction_iterations = 0;  // always take the coarse-corrected start
   ShapeObjective plain(A, space, HausdorffTarget(Y), o);
   ShapeObjective two_level(A, space, HausdorffTarget(Y), o);
@@ -141,7 +142,7 @@ TEST(ShapeObjective, TwoLevelStartsReachTheSameStateWithFewerFineIterations) {
   ASSERT_TRUE(a.ok && b.ok) << a.failure << b.failure;
   const Eigen::VectorXd& ua = plain.last_state().u;
   EXPECT_LT((two_level.last_state().u - ua).lpNorm<Eigen::Infinity>(),
-            1e-8 * ua.lpNorm<Eigen::Infinity>());
+            1e-9 * ua.lpNorm<Eigen::Infinity>());
   EXPECT_NEAR(b.J, a.J, 1e-10 * a.J);
   EXPECT_LT((b.gradient - a.gradient).norm(), 1e-6 * a.gradient.norm());
   EXPECT_LT(b.newton_iterations, a.newton_iterations);
@@ -150,7 +151,7 @@ TEST(ShapeObjective, TwoLevelStartsReachTheSameStateWithFewerFineIterations) {
   ASSERT_TRUE(c.ok && d.ok) << c.failure << d.failure;
   const Eigen::VectorXd& uc = plain.last_state().u;
   EXPECT_LT((two_level.last_state().u - uc).lpNorm<Eigen::Infinity>(),
-            1e-8 * uc.lpNorm<Eigen::Infinity>());
+            1e-9 * uc.lpNorm<Eigen::Infinity>());
   EXPECT_NEAR(d.J, c.J, 1e-10 * c.J);
 }
 
