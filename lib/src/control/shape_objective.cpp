@@ -141,7 +141,6 @@ struct ShapeObjective::Impl {
     }
     return cache[best];
   }
-  const fe::State& nearest_state(const Eigen::VectorXd& m) const { return nearest(m).state; }
 
   /// The state at m (docs/formulation.md §4.7) from the warm start nearest to m, or after
   /// a large step from the coarse-corrected start. Adds the fine iterations to `ev`.
