@@ -253,7 +253,8 @@ constexpr double kRounding =
 
 // Every sum of every outer point within τ of the long-double reference (relative to S,
 // H, and the sums of the vector terms' norms), with small boxes and n = 3 or 4 points
-// per axis so that every operation occurs on clouds of a few thousand points.
+// per axis so that every operation occurs on clouds of a few thousand points; above
+// α = 16 the leaf pairs pruned point by point must occur too.
 TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
   const SumCase sc = GetParam();
   const PointCloud X = shaped_cloud(sc.sources, 2400, sc.dim, 7);
@@ -301,12 +302,14 @@ TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
     }
     total.p2p += ops.p2p, total.m2p += ops.m2p, total.p2l += ops.p2l, total.m2l += ops.m2l;
     total.prune += ops.prune;
+    total.point_pruned += ops.point_pruned;
   }
   // The operations checked by this case must have occurred (else the test would not
   // check them); interpolation is off above α = 16 (pruning only).
   EXPECT_GT(total.p2p, 0);
   if (sc.alpha > 16.0) {
     EXPECT_GT(total.prune, 0);
+    EXPECT_GT(total.point_pruned, 0);  // leaf pairs pruned point by point
   }
   if (sc.expect_all) {
     EXPECT_GT(total.prune, 0);
@@ -326,6 +329,8 @@ std::vector<SumCase> sum_cases() {
     out.push_back({Shape::clusters, Shape::cube, d, 4.0, false});
     out.push_back({Shape::plane, Shape::plane, d, 4.0, false});
     out.push_back({Shape::cube, Shape::cube, d, 40.0, false});
+    out.push_back({Shape::clusters, Shape::cube, d, 64.0, false});
+    out.push_back({Shape::sphere, Shape::sphere, d, 200.0, false});
   }
   return out;
 }

@@ -94,8 +94,10 @@ struct Pass {
   Eigen::VectorXd w, h, c, oc;  // source weights, coefficients, scales; outer scales
   std::vector<NodeMoments> mw, mh;
   PairSources src;
-  std::vector<double> log_low;  // 4 per outer node: log min_{o∈T} of the unscaled lower bound
-  std::vector<double> kappa;    // per outer node: max c_o (scale of its locals)
+  std::vector<double> log_low;    // 4 per outer node: log min_{o∈T} of the unscaled lower bound
+  bool point_prune = false;       // pruning regime: leaf pairs also pruned point by point
+  std::vector<double> point_low;  // 4 per outer point (tree order, point_prune only)
+  std::vector<double> kappa;      // per outer node: max c_o (scale of its locals)
   std::vector<char> has_local, has_proxy;
   std::vector<double> log_weight, log_share;  // 4 per source node (prepare_sources)
   std::vector<Box> obox, sbox;                // interpolation boxes (eligible nodes)
@@ -247,6 +249,7 @@ void prepare_outer(Pass& p, const PassOuter& in, int threads) {
   const size_t nn = nodes.size();
   p.oc = ot.permute(Eigen::Map<const Eigen::VectorXd>(in.scale, ot.size()));
   p.log_low.assign(4 * nn, kInf);
+  if (p.point_prune) p.point_low.assign(4 * static_cast<size_t>(ot.size()), kInf);
   p.kappa.assign(nn, 0.0);
   std::vector<double> cmin(nn, kInf);
   std::vector<int> cut;
@@ -273,6 +276,7 @@ void prepare_outer(Pass& p, const PassOuter& in, int threads) {
       const double lc = p.alpha * std::log(p.oc[q]);
       const double v[4] = {std::log(s.S) - lc, std::log(s.Gm) - lc, std::log(s.H), std::log(s.G2m)};
       for (int k = 0; k < 4; ++k) p.log_low[4 * id + k] = std::min(p.log_low[4 * id + k], v[k]);
+      if (p.point_prune) std::copy(v, v + 4, &p.point_low[4 * static_cast<size_t>(q)]);
       p.kappa[id] = std::max(p.kappa[id], p.oc[q]);
       cmin[id] = std::min(cmin[id], p.oc[q]);
     }
@@ -350,6 +354,28 @@ Op choose(const Pass& p, int t, int s, double gap) {
     if (fits(e.value, e.grad)) return options[i].op;
   }
   return kNone;
+}
+
+/// Whether source node s may be dropped for the outer point o (tree position q) alone:
+/// the prune test of choose() with o's own lower bounds and its own distance to the box.
+/// The boxes dropped for o are still disjoint, so the budget argument is unchanged.
+bool prunable_for_point(const Pass& p, const double* o, Eigen::Index q, int s) {
+  const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
+  double g2 = 0.0;
+  for (int k = 0; k < p.d; ++k) {
+    const double gap = std::max({S.lo[k] - o[k], o[k] - S.hi[k], 0.0});
+    g2 += gap * gap;
+  }
+  const double l = std::log(std::sqrt(g2) + p.eps);
+  for (int k = 0; k < 4; ++k) {
+    if (!p.want[k]) continue;
+    const double lw = p.log_weight[4 * static_cast<size_t>(s) + k];
+    if (lw == -kInf) continue;
+    const double lb = p.log_tau + p.point_low[4 * static_cast<size_t>(q) + k] +
+                      p.log_share[4 * static_cast<size_t>(s) + k];
+    if (!(lw - ((k == kS || k == kH) ? p.alpha : p.alpha + 1.0) * l <= lb)) return false;
+  }
+  return true;
 }
 
 /// One task's planning state. `spent` is shared by the tasks: the planned near and far
@@ -498,9 +524,12 @@ PairSources proxy_sources(const Pass& p, const ProxySet& ps) {
 }
 
 /// Runs one task's interactions, then interpolates its boxes' locals to their points.
-void execute(const Pass& p, const std::vector<Interaction>& list, const std::vector<int>& sslot,
-             const std::vector<ProxySet>& sprox, const std::vector<int>& oslot,
-             std::vector<ProxySet>& oprox, std::vector<Acc>& acc) {
+/// Returns the number of direct pairs skipped by pruning point by point.
+std::int64_t execute(const Pass& p, const std::vector<Interaction>& list,
+                     const std::vector<int>& sslot, const std::vector<ProxySet>& sprox,
+                     const std::vector<int>& oslot, std::vector<ProxySet>& oprox,
+                     std::vector<Acc>& acc) {
+  std::int64_t skipped = 0;
   const Eigen::MatrixXd& X = p.ot->points();
   std::vector<int> touched;
   for (const Interaction& it : list) {
@@ -513,9 +542,14 @@ void execute(const Pass& p, const std::vector<Interaction>& list, const std::vec
             ? p.slice(S)
             : proxy_sources(p, sprox[static_cast<size_t>(sslot[static_cast<size_t>(it.s)])]);
     if (to_points) {
+      const bool point_prune = it.op == kP2P && p.point_prune;
       for (Eigen::Index q = T.begin; q < T.end; ++q) {
         double o[3] = {0.0, 0.0, 0.0};
         for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
+        if (point_prune && prunable_for_point(p, o, q, it.s)) {
+          skipped += size_of(S);
+          continue;
+        }
         acc[static_cast<size_t>(q)].add(pair_sums(o, p.oc[q], src, *p.power, p.eps, p.flags));
       }
       continue;
@@ -558,6 +592,7 @@ void execute(const Pass& p, const std::vector<Interaction>& list, const std::vec
                                       p.power->scalar(p.oc[q] / p.kappa[static_cast<size_t>(t)]));
     }
   }
+  return skipped;
 }
 
 /// Counts of the planned work: per-operation counts and the stats' kernel and basis work.
@@ -609,6 +644,7 @@ void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const P
   p.eps = set.eps;
   p.log_tau = std::log(set.tau);
   p.power = set.power;
+  p.point_prune = p.alpha > cfg.max_interp_alpha;
   prepare_sources(p, src);
   prepare_outer(p, outer, set.threads);
 }
@@ -725,8 +761,12 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
 #pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads)
   for (size_t i = 0; i < snodes.size(); ++i) source_proxies(p, snodes[i], sprox[i]);
   std::vector<Acc> acc(static_cast<size_t>(p.ot->size()));
-#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads)
-  for (size_t r = 0; r < roots.size(); ++r) execute(p, lists[r], sslot, sprox, oslot, oprox, acc);
+  std::int64_t skipped = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : skipped)
+  for (size_t r = 0; r < roots.size(); ++r)
+    skipped += execute(p, lists[r], sslot, sprox, oslot, oprox, acc);
+  stats.near_pairs -= skipped;
+  if (ops_ != nullptr) ops_->point_pruned = skipped;
 
   const int d = p.d;
   PassSums out = allocate_sums(p.ot->size(), d, p.flags);
