@@ -303,6 +303,7 @@ TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
     total.p2p += ops.p2p, total.m2p += ops.m2p, total.p2l += ops.p2l, total.m2l += ops.m2l;
     total.prune += ops.prune;
     total.point_pruned += ops.point_pruned;
+    total.m2m += ops.m2m, total.l2l += ops.l2l;
   }
   // The operations checked by this case must have occurred (else the test would not
   // check them); interpolation is off above α = 16 (pruning only).
@@ -316,6 +317,8 @@ TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
     EXPECT_GT(total.m2p, 0);
     EXPECT_GT(total.p2l, 0);
     EXPECT_GT(total.m2l, 0);
+    EXPECT_GT(total.m2m, 0);  // upward translations
+    EXPECT_GT(total.l2l, 0);  // downward translations
   }
 }
 

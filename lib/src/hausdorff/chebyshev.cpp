@@ -48,6 +48,40 @@ Box interpolation_box(const double* lo, const double* hi, int d) {
   return b;
 }
 
+void make_translation(const ChebyshevRule& rule, const Box& outer, const Box& inner, int d,
+                      Translation& t) {
+  const int n = rule.n;
+  for (int k = 0; k < d; ++k)
+    for (int i = 0; i < n; ++i)
+      rule.basis((inner.c[k] + inner.a[k] * rule.xi[i] - outer.c[k]) / outer.a[k], &t.E[k][i * n]);
+}
+
+void tensor_apply(const Translation& t, bool transpose, int n, int d, const double* in, double f,
+                  double* out) {
+  constexpr int kMax = kMaxChebyshev * kMaxChebyshev * kMaxChebyshev;
+  double buf[2][kMax];
+  int total = 1;
+  for (int k = 0; k < d; ++k) total *= n;
+  const double* src = in;
+  int stride = 1;
+  for (int k = d - 1, which = 0; k >= 0; --k, which ^= 1, stride *= n) {
+    double M[kMaxChebyshev * kMaxChebyshev];  // M[i n + j] = M_k(i, j)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) M[i * n + j] = transpose ? t.E[k][j * n + i] : t.E[k][i * n + j];
+    double* dst = buf[which];
+    const int block = n * stride;
+    for (int base = 0; base < total; base += block)
+      for (int i = 0; i < n; ++i)
+        for (int inner = 0; inner < stride; ++inner) {
+          double sum = 0.0;
+          for (int j = 0; j < n; ++j) sum += M[i * n + j] * src[base + j * stride + inner];
+          dst[base + i * stride + inner] = sum;
+        }
+    src = dst;
+  }
+  for (int q = 0; q < total; ++q) out[q] += f * src[q];
+}
+
 namespace {
 
 /// Squared distance between box T and box S, with half-width `widen` replacing the

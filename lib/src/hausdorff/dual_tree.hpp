@@ -47,6 +47,7 @@ int degree_for(double tau);
 struct DualTreeOps {
   std::int64_t p2p = 0, m2p = 0, p2l = 0, m2l = 0, prune = 0;
   std::int64_t point_pruned = 0;  ///< direct pairs skipped by pruning point by point
+  std::int64_t m2m = 0, l2l = 0;  ///< translations between a box's grid and a child's
 };
 
 std::unique_ptr<PairSumBackend> make_dual_tree_backend(const DualTreeConfig& config,
