@@ -169,6 +169,50 @@ std::string bound_name(const ::testing::TestParamInfo<BoundCase>& info) {
 
 INSTANTIATE_TEST_SUITE_P(Hausdorff, ChebyshevBound, ::testing::ValuesIn(bound_cases()), bound_name);
 
+// M2M and L2L between a box and a box inside it are exact (the inner grid interpolates
+// the outer box's tensor polynomials exactly): checked against direct anterpolation and
+// direct evaluation of the outer interpolant, with the independent Lagrange products.
+TEST(ChebyshevTranslation, UpwardAndDownwardAreExact) {
+  const int n = 5;
+  detail::Box outer, inner;
+  const double oc[3] = {0.1, -0.2, 0.3}, oa[3] = {0.5, 0.3, 0.2};
+  const double ic[3] = {0.3, -0.1, 0.25}, ia[3] = {0.2, 0.15, 0.05};
+  for (int k = 0; k < 3; ++k) {
+    outer.c[k] = oc[k], outer.a[k] = oa[k];
+    inner.c[k] = ic[k], inner.a[k] = ia[k];
+  }
+  const detail::ChebyshevRule rule(n);
+  detail::Translation E;
+  detail::make_translation(rule, outer, inner, 3, E);
+  std::mt19937_64 gen(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const size_t P = n * n * n;
+  // Upward: weights of points of the inner box, anterpolated into the inner grid and
+  // translated, against anterpolation into the outer grid directly.
+  std::vector<double> w_inner(P, 0.0), w_outer(P, 0.0), translated(P, 0.0);
+  for (int m = 0; m < 30; ++m) {
+    double x[3];
+    for (int k = 0; k < 3; ++k) x[k] = inner.c[k] + inner.a[k] * u(gen);
+    const double w = 0.5 + 0.5 * u(gen);
+    for (size_t q = 0; q < P; ++q) {
+      w_inner[q] += w * tensor_lagrange(inner, n, q, x);
+      w_outer[q] += w * tensor_lagrange(outer, n, q, x);
+    }
+  }
+  detail::tensor_apply(E, true, n, 3, w_inner.data(), 1.0, translated.data());
+  for (size_t q = 0; q < P; ++q) EXPECT_NEAR(translated[q], w_outer[q], 1e-12) << "M2M " << q;
+  // Downward: values at the outer grid, the outer interpolant at the inner grid points.
+  std::vector<double> f(P), down(P, 0.0);
+  for (double& v : f) v = u(gen);
+  detail::tensor_apply(E, false, n, 3, f.data(), 2.0, down.data());
+  const Grid gi = grid(inner, n);
+  for (size_t i = 0; i < P; ++i) {
+    double v = 0.0;
+    for (size_t q = 0; q < P; ++q) v += f[q] * tensor_lagrange(outer, n, q, gi.pts[i].data());
+    EXPECT_NEAR(down[i], 2.0 * v, 1e-12) << "L2L " << i;
+  }
+}
+
 // ---------------------------------------------------------------------------------
 // The sums against a long-double reference.
 
