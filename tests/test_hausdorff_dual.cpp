@@ -91,6 +91,7 @@ struct BoundCase {
   int n;
   bool interp_t, interp_s;
   double alpha;
+  bool along_z = false;  // S placed along the flat axis of T (else in the x-y plane)
 };
 
 class ChebyshevBound : public ::testing::TestWithParam<BoundCase> {};
@@ -106,7 +107,11 @@ TEST_P(ChebyshevBound, HoldsAtTheSampledWorstCase) {
   S.a[0] = 0.1, S.a[1] = 0.25, S.a[2] = 0.2;
   const double half = std::sqrt(0.3 * 0.3 + 0.2 * 0.2 + 0.05 * 0.05) +
                       std::sqrt(0.1 * 0.1 + 0.25 * 0.25 + 0.2 * 0.2);
-  S.c[0] = bc.separation * half * 0.8, S.c[1] = bc.separation * half * 0.6;
+  if (bc.along_z) {
+    S.c[2] = bc.separation * half;
+  } else {
+    S.c[0] = bc.separation * half * 0.8, S.c[1] = bc.separation * half * 0.6;
+  }
   const detail::LogBounds lb =
       detail::interpolation_log_bound(T, bc.interp_t, S, bc.interp_s, 3, bc.n, bc.alpha, eps);
   ASSERT_TRUE(std::isfinite(lb.value)) << "no bound for separated boxes";
@@ -139,6 +144,7 @@ TEST_P(ChebyshevBound, HoldsAtTheSampledWorstCase) {
   // Rounding of the interpolation sums themselves: 1e-13 of the kernel's size.
   EXPECT_LE(worst_v, bound_v + 1e-13 * size_v) << "value";
   EXPECT_LE(worst_g, bound_g + 1e-13 * size_v) << "gradient";
+  RecordProperty("bound_over_worst", std::to_string(bound_v / worst_v));
   // Measured: the bound is 20-900 times the sampled worst error. It must be useful
   // (below the kernel's size) once the boxes are well separated.
   if (bc.separation >= 6.0 || (bc.separation >= 3.0 && bc.n == 6)) {
@@ -156,6 +162,14 @@ std::vector<BoundCase> bound_cases() {
         out.push_back({sep, n, true, false, alpha});
         if (n == 3) out.push_back({sep, n, true, true, alpha});
       }
+  // Nearly touching boxes, and boxes along the flat axis of T.
+  for (double sep : {1.1, 1.5, 3.0}) {
+    out.push_back({sep, 6, false, true, 4.0, true});
+    out.push_back({sep, 6, true, false, 4.0, true});
+    out.push_back({sep, 3, true, true, 4.0, true});
+  }
+  out.push_back({1.1, 6, false, true, 4.0, false});
+  out.push_back({1.1, 6, true, false, 4.0, false});
   return out;
 }
 
@@ -164,6 +178,7 @@ std::string bound_name(const ::testing::TestParamInfo<BoundCase>& info) {
   std::string s = "sep" + std::to_string(static_cast<int>(b.separation * 10)) + "_n" +
                   std::to_string(b.n) + "_a" + std::to_string(static_cast<int>(b.alpha * 10));
   s += b.interp_t && b.interp_s ? "_M2L" : (b.interp_t ? "_P2L" : "_M2P");
+  if (b.along_z) s += "_z";
   return s;
 }
 
