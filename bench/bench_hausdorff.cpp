@@ -280,8 +280,57 @@ PointCloud arc_faces(Eigen::Index m, unsigned seed) {
   return PointCloud(p);
 }
 
+// m random points on the surfaces of a synthetic indoor scene (area-weighted), a
+// stand-in for a laser scan (no real scan is kept in the repository): the floor, ceiling
+// and walls of a 6 × 4 × 3 room, a table and a cabinet; the whole scan shifted by `shift`
+// along x (a second, slightly misaligned scan).
+PointCloud room_scan(Eigen::Index m, unsigned seed, double shift) {
+  struct Face {
+    int axis;             // the fixed coordinate
+    double value;         // its value
+    double lo[3], hi[3];  // ranges of the other two coordinates
+  };
+  std::vector<Face> faces;
+  auto box = [&](const double lo[3], const double hi[3], bool bottom) {
+    for (int k = 0; k < 3; ++k)
+      for (int side = 0; side < 2; ++side) {
+        if (k == 2 && side == 0 && !bottom) continue;
+        Face f{k, side == 0 ? lo[k] : hi[k], {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+        faces.push_back(f);
+      }
+  };
+  const double room_lo[3] = {0, 0, 0}, room_hi[3] = {6, 4, 3};
+  const double table_lo[3] = {2, 1.5, 0}, table_hi[3] = {3.5, 2.5, 0.8};
+  const double cab_lo[3] = {5, 0, 0}, cab_hi[3] = {6, 0.6, 2};
+  box(room_lo, room_hi, true);
+  box(table_lo, table_hi, false);
+  box(cab_lo, cab_hi, false);
+  std::vector<double> area;
+  double total = 0.0;
+  for (const Face& f : faces) {
+    double a = 1.0;
+    for (int k = 0; k < 3; ++k)
+      if (k != f.axis) a *= f.hi[k] - f.lo[k];
+    total += a;
+    area.push_back(total);
+  }
+  std::mt19937_64 gen(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Eigen::MatrixXd p(m, 3);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const double pick = u(gen) * total;
+    const size_t fi =
+        static_cast<size_t>(std::lower_bound(area.begin(), area.end(), pick) - area.begin());
+    const Face& f = faces[std::min(fi, faces.size() - 1)];
+    for (int k = 0; k < 3; ++k)
+      p(i, k) = k == f.axis ? f.value : f.lo[k] + u(gen) * (f.hi[k] - f.lo[k]);
+    p(i, 0) += shift;
+  }
+  return PointCloud(p);
+}
+
 struct GoalConfig {
-  std::string name = "cube";  // cube | asym
+  std::string name = "cube";  // cube | asym | room
   double n = 1e5, m = 1e5, tau = 1e-4, alpha = 4.0;
   int exact_sample = 0;  // 0: time exact on the full clouds; K: on K target points, scaled
   int error_sample = 500;
@@ -295,14 +344,15 @@ PointCloud first_rows(const PointCloud& c, Eigen::Index k) {
   return PointCloud(c.points().topRows(k), c.volumes().head(k));
 }
 
+std::pair<PointCloud, PointCloud> goal_clouds(const GoalConfig& g) {
+  const auto n = static_cast<Eigen::Index>(g.n), m = static_cast<Eigen::Index>(g.m);
+  if (g.name == "asym") return {plate_nodes(), arc_faces(m, 8)};
+  if (g.name == "room") return {room_scan(n, 11, 0.02), room_scan(m, 12, 0.0)};
+  return {uniform_cube(n, 0.0, 1), uniform_cube(m, 0.05, 2)};
+}
+
 int run_goal(const GoalConfig& g) {
-  const auto [X, Y] =
-      g.name == "asym"
-          ? std::pair<PointCloud, PointCloud>{plate_nodes(),
-                                              arc_faces(static_cast<Eigen::Index>(g.m), 8)}
-          : std::pair<PointCloud, PointCloud>{
-                uniform_cube(static_cast<Eigen::Index>(g.n), 0.0, 1),
-                uniform_cube(static_cast<Eigen::Index>(g.m), 0.05, 2)};
+  const auto [X, Y] = goal_clouds(g);
   HausdorffOptions base;
   base.threads = g.threads;
   base.params.alpha = g.alpha;
@@ -390,22 +440,25 @@ int goal_main(int argc, char** argv) {
     else
       throw std::runtime_error("unknown argument " + arg);
   }
-  if (g.name != "cube" && g.name != "asym") throw std::runtime_error("--goal cube|asym");
+  if (g.name != "cube" && g.name != "asym" && g.name != "room")
+    throw std::runtime_error("--goal cube|asym|room");
   return run_goal(g);
 }
 
 void usage() {
-  std::cout << "usage: bench_hausdorff [--min-n N] [--max-n N] [--repeats R] [--csv FILE]\n"
-               "       [--exact-max N] [--shapes a,b,...] [--taus t1,t2,...]\n"
-               "       [--modes value,value+grad] [--methods nearest,exact,tree]\n"
-               "       [--budget SECONDS]\n"
-               "       [--threads T] [--quick]\n"
-               "  --quick: sizes 1e3..1e4, one repeat, shapes cube,plate, taus 1e-2,1e-6\n"
-               "   or: bench_hausdorff --goal cube|asym [--n N] [--m M] [--tau T] [--alpha A]\n"
-               "       [--exact-sample K] [--error-sample K] [--methods ...] [--csv FILE]\n"
-               "  --goal: one case of issue 13 (asym: the 5 555 plate nodes against M points\n"
-               "  on the arc's faces), value + gradient; exact timed on K target points and\n"
-               "  scaled by M/K when --exact-sample K is given; the work split per method.\n";
+  std::cout
+      << "usage: bench_hausdorff [--min-n N] [--max-n N] [--repeats R] [--csv FILE]\n"
+         "       [--exact-max N] [--shapes a,b,...] [--taus t1,t2,...]\n"
+         "       [--modes value,value+grad] [--methods nearest,exact,tree]\n"
+         "       [--budget SECONDS]\n"
+         "       [--threads T] [--quick]\n"
+         "  --quick: sizes 1e3..1e4, one repeat, shapes cube,plate, taus 1e-2,1e-6\n"
+         "   or: bench_hausdorff --goal cube|asym|room [--n N] [--m M] [--tau T] [--alpha A]\n"
+         "       [--exact-sample K] [--error-sample K] [--methods ...] [--csv FILE]\n"
+         "  --goal: one case of issue 13 (asym: the 5 555 plate nodes against M points\n"
+         "  on the arc's faces; room: N and M points of a synthetic indoor scan),\n"
+         "  value + gradient; exact timed on K target points and\n"
+         "  scaled by M/K when --exact-sample K is given; the work split per method.\n";
 }
 
 }  // namespace
