@@ -12,8 +12,11 @@
 // (P = n^d points per box); otherwise the larger node is split, and leaf pairs (or
 // small pairs) are summed directly (P2P) with the vectorised kernel. Above
 // max_interp_alpha (pruning only), a leaf pair's source box is also pruned point by
-// point, with each outer point's own lower bound and distance to the box. After the
-// traversal each box's locals are interpolated to its points (L2P).
+// point, with each outer point's own lower bound and distance to the box. Proxy weights
+// are computed upwards (M2M from children's grids, anterpolation from the points of
+// children without grids) and locals pushed downwards (L2L to children's grids, L2P to
+// the points of the others): both translations are exact for tensor polynomials of
+// degree n − 1, so they add no error term.
 //
 // Budget. Before the traversal, a lower bound L(o) of every sum is computed from one
 // source leaf near o (all terms ≥ 0). Pair (T, S) may use an approximation with error
