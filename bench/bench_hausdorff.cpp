@@ -338,6 +338,7 @@ struct GoalConfig {
   std::string csv = "bench_hausdorff_goal.csv";
   int threads = 0;
   bool fallback = true;  // --no-fallback: method tree never sums a pass exactly
+  int repeats = 1;       // --repeats R: each method R times, interleaved; medians
 };
 
 PointCloud first_rows(const PointCloud& c, Eigen::Index k) {
@@ -351,6 +352,35 @@ std::pair<PointCloud, PointCloud> goal_clouds(const GoalConfig& g) {
   return {uniform_cube(n, 0.0, 1), uniform_cube(m, 0.05, 2)};
 }
 
+/// One timed evaluation of `method` (value + gradient w.r.t. the moving points, with
+/// fields): wall and process CPU seconds, scaled by M/K when exact is timed on K targets.
+struct GoalRun {
+  double wall = 0.0, cpu = 0.0;
+  HausdorffResult res;
+};
+GoalRun time_method(const GoalConfig& g, const PointCloud& X, const PointCloud& Y,
+                    const HausdorffOptions& o, std::string& exact_basis) {
+  HausdorffRequest r;
+  r.fields = true;
+  r.gradient_points = o.method != Method::nearest;
+  GoalRun run;
+  const bool sample = o.method == Method::exact && g.exact_sample > 0;
+  // Pair work is 2·N·M (value + gradient of the points): time it on K target points.
+  const double scale = sample ? static_cast<double>(Y.size()) / g.exact_sample : 1.0;
+  const softhd::HausdorffTarget target(sample ? first_rows(Y, g.exact_sample) : Y, o);
+  const std::clock_t c0 = std::clock();
+  run.res = target.evaluate(X, r);
+  run.cpu = scale * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+  run.wall = scale * run.res.seconds;
+  if (sample) exact_basis = "sample:" + std::to_string(g.exact_sample);
+  return run;
+}
+
+double median_of(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? NAN : v[v.size() / 2];
+}
+
 int run_goal(const GoalConfig& g) {
   const auto [X, Y] = goal_clouds(g);
   HausdorffOptions base;
@@ -359,46 +389,48 @@ int run_goal(const GoalConfig& g) {
   base.tolerance = g.tau;
   base.tree_fallback = g.fallback;
   std::ofstream csv(g.csv, std::ios::app);
-  csv << "case,N,M,alpha,tau,method,seconds,exact_seconds,exact_basis,speedup,err_S_sample,"
-         "near_pairs,far_kernel,far_basis,node_pairs,plan_s,exact_passes,passes\n";
+  csv << "case,N,M,alpha,tau,method,seconds,exact_seconds,exact_basis,speedup,cpu_seconds,"
+         "cpu_speedup,repeats,err_S_sample,near_pairs,far_kernel,far_basis,node_pairs,plan_s,"
+         "exact_passes,passes\n";
   std::cerr << g.name << " N=" << X.size() << " M=" << Y.size() << " alpha=" << g.alpha
             << " tau=" << g.tau << "\n";
   HausdorffOptions exact = base;
   exact.method = Method::exact;
   const ExactReference ref = subset_reference(X, Y, g.error_sample, exact);
-  double exact_s = NAN;
+  // Methods interleaved per repeat, so that each one meets the machine's load at
+  // several times; medians of wall and CPU time.
   std::string exact_basis = "full";
-  for (const std::string& method : g.methods) {
-    HausdorffOptions o = base;
-    o.method = softhd::method_from_string(method);
-    HausdorffRequest r;  // value + gradient w.r.t. the moving points, with fields
-    r.fields = true;
-    r.gradient_points = o.method != Method::nearest;
-    double seconds;
-    HausdorffResult res;
-    if (o.method == Method::exact && g.exact_sample > 0) {
-      // Pair work is 2·N·M (value + gradient of the points): time it on K target points.
-      const PointCloud Ys = first_rows(Y, g.exact_sample);
-      const softhd::HausdorffTarget target(Ys, o);
-      res = target.evaluate(X, r);
-      seconds = res.seconds * static_cast<double>(Y.size()) / g.exact_sample;
-      exact_basis = "sample:" + std::to_string(g.exact_sample);
-    } else {
-      const softhd::HausdorffTarget target(Y, o);
-      res = target.evaluate(X, r);
-      seconds = res.seconds;
+  std::vector<std::vector<GoalRun>> runs(g.methods.size());
+  for (int rep = 0; rep < g.repeats; ++rep)
+    for (size_t m = 0; m < g.methods.size(); ++m) {
+      HausdorffOptions o = base;
+      o.method = softhd::method_from_string(g.methods[m]);
+      runs[m].push_back(time_method(g, X, Y, o, exact_basis));
     }
-    if (o.method == Method::exact) exact_s = seconds;
+  double exact_s = NAN, exact_cpu = NAN;
+  std::vector<double> wall(g.methods.size()), cpu(g.methods.size());
+  for (size_t m = 0; m < g.methods.size(); ++m) {
+    std::vector<double> w, c;
+    for (const GoalRun& run : runs[m]) w.push_back(run.wall), c.push_back(run.cpu);
+    wall[m] = median_of(w), cpu[m] = median_of(c);
+    if (g.methods[m] == "exact") exact_s = wall[m], exact_cpu = cpu[m];
+  }
+  for (size_t m = 0; m < g.methods.size(); ++m) {
+    const HausdorffResult& res = runs[m].front().res;
     Errors e;
-    if (o.method == Method::tree) e = measure(res, ref, base.params.epsilon, g.alpha);
+    if (softhd::method_from_string(g.methods[m]) == Method::tree)
+      e = measure(res, ref, base.params.epsilon, g.alpha);
     const softhd::SumWork& w = res.work;
     csv << g.name << ',' << X.size() << ',' << Y.size() << ',' << g.alpha << ',' << num(g.tau)
-        << ',' << method << ',' << num(seconds) << ',' << num(exact_s) << ',' << exact_basis << ','
-        << num(exact_s / seconds) << ',' << num(e.S) << ',' << w.near_pairs << ',' << w.far_kernel
-        << ',' << w.far_basis << ',' << w.node_pairs << ',' << num(w.plan_seconds) << ','
-        << w.exact_passes << ',' << w.passes << '\n';
-    std::cerr << "  " << method << " " << seconds << " s"
-              << (std::isnan(exact_s) ? "" : ", exact/this " + num(exact_s / seconds))
+        << ',' << g.methods[m] << ',' << num(wall[m]) << ',' << num(exact_s) << ',' << exact_basis
+        << ',' << num(exact_s / wall[m]) << ',' << num(cpu[m]) << ',' << num(exact_cpu / cpu[m])
+        << ',' << g.repeats << ',' << num(e.S) << ',' << w.near_pairs << ',' << w.far_kernel << ','
+        << w.far_basis << ',' << w.node_pairs << ',' << num(w.plan_seconds) << ',' << w.exact_passes
+        << ',' << w.passes << '\n';
+    std::cerr << "  " << g.methods[m] << " " << wall[m] << " s (cpu " << cpu[m] << " s)"
+              << (std::isnan(exact_s) ? ""
+                                      : ", exact/this " + num(exact_s / wall[m]) + " (cpu " +
+                                            num(exact_cpu / cpu[m]) + ")")
               << (std::isnan(e.S) ? "" : ", err_S " + num(e.S)) << ", near " << w.near_pairs
               << " far " << w.far_kernel << " basis " << w.far_basis << " node pairs "
               << w.node_pairs << " plan " << num(w.plan_seconds) << " s, exact passes "
@@ -437,6 +469,8 @@ int goal_main(int argc, char** argv) {
       g.threads = std::stoi(value());
     else if (arg == "--no-fallback")
       g.fallback = false;
+    else if (arg == "--repeats")
+      g.repeats = std::max(1, std::stoi(value()));
     else
       throw std::runtime_error("unknown argument " + arg);
   }
