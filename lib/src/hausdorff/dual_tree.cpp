@@ -338,20 +338,23 @@ Op choose(const Pass& p, int t, int s, double gap) {
   for (int i = 0; i < count; ++i) {
     const bool it = options[i].op != kM2P, is = options[i].op != kP2L;
     // Cheap necessary condition: every bound of the operation is at least the
-    // one-axis bound of its widest interpolated axis with |u| ≥ (gap + ε)^(−α) and the
-    // largest ellipse (B = gap).
-    double a_max = 0.0;
+    // one-axis bound of its widest interpolated axis (half-width a), with
+    // |u| ≥ (gap + ε)^(−α) and the largest ellipse the bound searches,
+    // ρ ≤ √2 R/a + 1, R the largest distance between the two boxes (chebyshev.cpp).
+    const Box& bt = it ? p.obox[static_cast<size_t>(t)] : tb;
+    const Box& bs = is ? p.sbox[static_cast<size_t>(s)] : sb;
+    double a_max = 0.0, far2 = 0.0;
     for (int k = 0; k < p.d; ++k) {
-      if (it) a_max = std::max(a_max, p.obox[static_cast<size_t>(t)].a[k]);
-      if (is) a_max = std::max(a_max, p.sbox[static_cast<size_t>(s)].a[k]);
+      if (it) a_max = std::max(a_max, bt.a[k]);
+      if (is) a_max = std::max(a_max, bs.a[k]);
+      const double span = std::fabs(bt.c[k] - bs.c[k]) + bt.a[k] + bs.a[k];
+      far2 += span * span;
     }
-    const double u = gap / a_max, rho = u + std::sqrt(u * u + 1.0);
+    const double rho = std::sqrt(2.0 * far2) / a_max + 1.0;
     const double least =
         std::log(4.0) - p.alpha * l - (p.n - 1) * std::log(rho) - std::log(rho - 1.0);
     if (!fits(least, least - l)) continue;
-    const LogBounds e = interpolation_log_bound(it ? p.obox[static_cast<size_t>(t)] : tb, it,
-                                                is ? p.sbox[static_cast<size_t>(s)] : sb, is, p.d,
-                                                p.n, p.alpha, p.eps);
+    const LogBounds e = interpolation_log_bound(bt, it, bs, is, p.d, p.n, p.alpha, p.eps);
     if (fits(e.value, e.grad)) return options[i].op;
   }
   return kNone;
