@@ -210,6 +210,11 @@ TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
   };
   expect_refused((dir_ / "missing.json").string(), "missing.json");
   expect_refused(scene() + " --algorithm newton", "unknown algorithm 'newton'");
+  expect_refused(scene() + " --method nearest", "--method: nearest has no gradient");
+  expect_refused(scene() + " --method fast", "unknown method 'fast'");
+  expect_refused(scene() + " --method tree --tol 2", "tolerance");
+  expect_refused(scene() + " --coarse-level on", "--coarse-level: expected auto or off");
+  expect_refused(scene() + " --checkpoint-every 0", "--checkpoint-every");
   expect_refused(scene() + " --out " + out() + " --resume", "checkpoint.bin");
   expect_refused(scene() + " --max-iter 0", "--max-iter");
   expect_refused(scene() + " --max-iter 4294967297", "--max-iter: expected an integer from 1");
