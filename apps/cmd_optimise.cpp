@@ -52,8 +52,10 @@ options:
   --particles P      nodes | quadrature: the moving cloud (default nodes)
   --volumes V        reference | deformed particle volumes (default reference)
   --alpha A --beta B --gamma G --eps E   functional parameters (default 4 4 2 1e-3)
-  --method M         exact | tree: the distance's pair sums (default exact)
-  --tol T            tree: relative error bound on every kernel sum (default 1e-6)
+  --method M         exact | tree: the distance's pair sums (default tree; it sums
+                     exactly wherever its far field would not be cheaper)
+  --tol T            tree: relative error bound on every kernel sum (default 1e-2,
+                     which ends the bending and torsion runs at exact's rho/floor)
   --tikhonov-mass M  (M/2) int m^2 (default 0)
   --tikhonov-grad E  (E/2) int |grad m|^2 (default 0)
   --vtu-every K      VTU output every K iterations (default 10; 0: start and end only)
@@ -240,10 +242,12 @@ OptimiseArgs parse_optimise(Args& args) {
   so.hausdorff.params.beta = args.number("--beta", so.hausdorff.params.beta);
   so.hausdorff.params.gamma = args.number("--gamma", so.hausdorff.params.gamma);
   so.hausdorff.params.epsilon = args.number("--eps", so.hausdorff.params.epsilon);
-  so.hausdorff.method = method_from_string(args.value("--method").value_or("exact"));
+  so.hausdorff.method = method_from_string(args.value("--method").value_or("tree"));
   if (so.hausdorff.method == Method::nearest)
     throw UsageError("--method: nearest has no gradient; expected exact or tree");
-  so.hausdorff.tolerance = args.number("--tol", so.hausdorff.tolerance);
+  // τ = 1e-2 ends the bending and torsion optimisations at the exact method's ρ̃/floor
+  // (docs/guide.md section 5); the tree's cost model sums exactly where that is cheaper.
+  so.hausdorff.tolerance = args.number("--tol", 1e-2);
   so.tikhonov_mass = args.number("--tikhonov-mass", 0.0);
   so.tikhonov_gradient = args.number("--tikhonov-grad", 0.0);
   so.hausdorff.threads = static_cast<int>(args.integer("--threads", 0, 0, 4096));
