@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/cloud.hpp"
+#include "softhd/fe/forward.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
@@ -172,43 +172,6 @@ Eigen::VectorXd control_values(const Scene& scene, const ControlSpace& control, 
   return m;
 }
 
-/// The starting state for `assembler` (the scene's mesh) and m_qp: the rest state, or with
-/// levels > 0 the equilibrium on the mesh with half the cells (itself started with
-/// levels − 1) interpolated onto this mesh's nodes by the coarse shape functions.
-State start_state(const Scene& scene, const Assembler& assembler, const Eigen::MatrixXd& m_qp,
-                  const Args& args, int levels, const NewtonOptions& options) {
-  State state = rest_state(assembler);
-  if (levels == 0) return state;
-  Scene coarse = scene;
-  for (Eigen::Index k = 0; k < coarse.cells.size(); ++k) {
-    if (coarse.cells[k] % 2 != 0)
-      throw softhd::InvalidArgument("--coarse-levels: " + std::to_string(coarse.cells[k]) +
-                                    " cells along axis " + std::to_string(k + 1) +
-                                    " cannot be halved");
-    coarse.cells[k] /= 2;
-  }
-  const Assembler ca = coarse.make_assembler();
-  const ControlSpace cc(ca.mesh(), ca.geometry(), coarse.control_kind);
-  const Eigen::MatrixXd mq = cc.to_quadrature(control_values(coarse, cc, ca.mesh(), args));
-  State cs = start_state(coarse, ca, mq, args, levels - 1, options);
-  NewtonSolver newton(ca, options);
-  const NewtonSummary summary = newton.solve(mq, &cs);
-  std::ostringstream cells;
-  cells << coarse.cells.transpose();
-  std::cerr << "coarse level (cells " << cells.str() << "): " << summary.BriefReport() << "\n";
-  if (!summary.converged())
-    throw softhd::Error("--coarse-levels: the state on the coarser mesh did not converge");
-  // Prolongation: u(X) = Σ_a N_a(ξ) u_a of the coarse element containing each node.
-  const Mesh& cm = ca.mesh();
-  Eigen::MatrixXd y = cm.nodes;
-  for (Eigen::Index n = 0; n < cm.num_nodes(); ++n)
-    for (int c = 0; c < cm.dim; ++c) y(n, c) += cs.u[n * cm.dim + c];
-  const softhd::NodalMap P(cm, softhd::PointCloud(y, Eigen::VectorXd::Ones(cm.num_nodes())));
-  state.u = P.displacement(assembler.mesh());
-  state.m_qp = m_qp;  // Newton starts at full load from the interpolated state
-  return state;
-}
-
 int forward(const Args& args) {
   const auto t0 = std::chrono::steady_clock::now();
   const Scene scene = load_scene(args.scene, args.memory_limit);
@@ -220,15 +183,7 @@ int forward(const Args& args) {
     write_control_file(args.write_nodes, positions, m);
     return 0;
   }
-  for (Eigen::Index k = 0; k < m.size(); ++k) {
-    if (!(m[k] >= scene.control_lower && m[k] <= scene.control_upper)) {
-      std::ostringstream os;
-      os << "control value " << m[k] << " at node " << k << " (" << positions.row(k)
-         << ") is outside the scene's bounds [" << scene.control_lower << ", "
-         << scene.control_upper << "]";
-      throw softhd::InvalidArgument(os.str());
-    }
-  }
+  check_control_bounds(scene, control, assembler.mesh(), m);
   for (const Eigen::VectorXd& X : args.probes) {
     Eigen::VectorXd xi;
     if (X.size() != scene.dim() || locate(assembler.mesh(), X, &xi) < 0) {
@@ -238,7 +193,8 @@ int forward(const Args& args) {
     }
   }
   softhd::set_threads(args.threads);
-  NewtonOptions options;
+  ForwardOptions fo;
+  NewtonOptions& options = fo.newton;
   options.verbose = args.verbose;
   options.displacement_tolerance = args.step_tol;
   options.initial_load_increment = args.load_increment;
@@ -247,10 +203,15 @@ int forward(const Args& args) {
   options.tangent.reuse_factorization = !args.factorize_every_step;
   if (!args.linear_solver.empty())
     options.tangent.linear_solver = parse_linear_solver(args.linear_solver);
-  NewtonSolver newton(assembler, options);
-  const Eigen::MatrixXd m_qp = control.to_quadrature(m);
-  State state = start_state(scene, assembler, m_qp, args, args.coarse_levels, options);
-  const NewtonSummary summary = newton.solve(m_qp, &state);
+  fo.coarse_levels = args.coarse_levels;
+  fo.on_coarse_level = [](const std::string& report) { std::cerr << report << "\n"; };
+  const LevelControl control_of = [&](const Scene& level, const ControlSpace& space) {
+    if (&level == &scene) return m;  // the finest level's values, read above
+    return control_values(level, space, level.make_mesh(), args);
+  };
+  const ForwardResult fr = solve_forward(scene, assembler, control, control_of, fo);
+  const State& state = fr.state;
+  const NewtonSummary& summary = fr.summary;
   const Eigen::MatrixXd J = assembler.jacobians(state.u);
   std::filesystem::create_directories(args.out_dir);
   const std::string vtu = (std::filesystem::path(args.out_dir) / "forward.vtu").string();
@@ -258,10 +219,7 @@ int forward(const Args& args) {
   if (!args.write_cloud.empty() && summary.converged()) {
     const softhd::PointCloud cloud =
         deformed_cloud(assembler, state.u, CloudPoints::kNodes, CloudVolumes::kDeformed);
-    if (std::filesystem::path(args.write_cloud).extension() == ".ply")
-      softhd::write_ply_cloud(args.write_cloud, cloud);
-    else
-      softhd::write_text_cloud(args.write_cloud, cloud);
+    softhd::write_cloud(args.write_cloud, cloud);
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -278,11 +236,9 @@ int forward(const Args& args) {
                         {"u", std::vector<double>(u.data(), u.data() + u.size())}});
     }
     j["probes"] = probes;
-    double energy = 0.0;
-    assembler.evaluate(state.u, state.m_qp, &energy, nullptr, nullptr);
-    j["energy"] = energy;
-    j["volume"] = assembler.deformed_volume(state.u);
-    j["min_J"] = J.minCoeff();
+    j["energy"] = fr.energy;
+    j["volume"] = fr.volume;
+    j["min_J"] = fr.min_J;
     j["newton_iterations"] = summary.newton_iterations;
     j["factorizations"] = summary.factorizations;
     j["krylov_iterations"] = summary.krylov_iterations;
