@@ -66,7 +66,7 @@ nlopt::algorithm nlopt_algorithm(Algorithm a) {
 }
 
 // Why the driver asked NLopt to stop (NLopt only knows "forced stop").
-enum class Stop { none, iterations, relative_change, target, time };
+enum class Stop { none, iterations, relative_change, target, time, requested };
 
 // The scale of f for one NLopt run. MMA's conservative approximation adds, per variable,
 // (|g_j| σ_j + ρ/2) Δz_j² / (σ_j² − Δz_j²) to the linear term, ρ starting at 1 in every run
@@ -167,10 +167,16 @@ struct Driver {
         gz.size() ? projected_gradient_norm(z, gz, zlo, zhi) : std::nan("");
     rec.seconds = seconds();
     summary.history.push_back(rec);
-    if (on_iteration) on_iteration(rec, summary.x);
     Stop s = Stop::none;
+    try {
+      if (on_iteration) on_iteration(rec, summary.x);
+    } catch (const StopRequest&) {
+      s = Stop::requested;
+    }
     if (std::fabs(previous - f) > options.relative_change * std::fabs(f)) small_changes = 0;
-    if (f <= options.target_value) {
+    if (s == Stop::requested) {
+      // the caller's observer ended the run
+    } else if (f <= options.target_value) {
       s = Stop::target;
     } else if (std::fabs(previous - f) <= options.relative_change * std::fabs(f) &&
                ++small_changes >= 3) {
@@ -350,6 +356,9 @@ BoundedOptimizerSummary minimise(
       break;
     case Stop::time:
       d.summary.termination = "the wall-clock limit was reached";
+      break;
+    case Stop::requested:
+      d.summary.termination = "stopped by the caller";
       break;
     case Stop::none:
       d.summary.termination = nlopt_reason;

@@ -276,13 +276,19 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     it.seconds = recorder.seconds();
     it.replayed = last_replayed;
     s.history.push_back(it);
+    bool stop = false;
     try {
       // The snapshot after the callback: an iteration in the log had its outputs written.
-      if (callbacks.on_iteration) callbacks.on_iteration(it, m);
+      try {
+        if (callbacks.on_iteration) callbacks.on_iteration(it, m);
+      } catch (const StopRequest&) {
+        stop = true;  // minimise() ends the run after this iteration
+      }
       recorder.snapshot(rec.iteration, best_state);
     } catch (...) {
       error = std::current_exception();
     }
+    if (stop) throw StopRequest{};
   };
   BoundedOptimizerOptions opt = options.optimizer;
   if (opt.max_seconds > 0.0)  // a total over the resumes

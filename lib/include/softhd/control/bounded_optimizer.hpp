@@ -76,12 +76,17 @@ struct BoundedOptimizerSummary {
   std::vector<IterationRecord> history;  ///< one record per accepted iteration
 };
 
+/// Thrown by an `on_iteration` observer of minimise() to end the run after that iteration:
+/// minimise() then returns normally, with the termination "stopped by the caller" and
+/// converged false. A signal, not an error (not derived from std::exception).
+struct StopRequest {};
+
 /// Minimises f(x) subject to lower ≤ x ≤ upper.
 ///
 /// Internally the variables are z = x / s with s = max(|lower|, |upper|) per
 /// component (so z is O(1)), and f is divided by |f(x0)| (or 1 if it is 0).
 /// `on_iteration` (optional) is called after each accepted iteration with its record
-/// and the current best x; it may write a checkpoint. Throws InvalidArgument for
+/// and the current best x; it may write a checkpoint, and throw StopRequest to end the run. Throws InvalidArgument for
 /// inconsistent bounds or a start outside them (naming the component).
 BoundedOptimizerSummary minimise(
     const BoundedObjective& objective, const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,

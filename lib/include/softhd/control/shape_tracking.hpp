@@ -105,7 +105,8 @@ std::pair<double, double> shape_error(const fe::Mesh& mesh, const Eigen::VectorX
 struct ShapeTrackingCallbacks {
   /// After the start state is solved and the floors are known (history still empty).
   std::function<void(const ShapeTrackingSummary&)> on_start;
-  /// After each accepted iteration, with the best control so far.
+  /// After each accepted iteration, with the best control so far. Throwing StopRequest
+  /// ends the run after this iteration (termination "stopped by the caller").
   std::function<void(const TrackingIteration&, const Eigen::VectorXd& m)> on_iteration;
   /// A failed state solve (the step is rejected and the run goes on).
   std::function<void(const std::string& report)> on_failure;
