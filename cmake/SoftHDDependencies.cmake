@@ -33,6 +33,25 @@ if(NOT TARGET NLopt::nlopt_cxx)
 endif()
 softhd_require(NLopt_FOUND libnlopt-cxx-dev "NLopt with its C++ API")
 
+# The Python module (python/): built when pybind11 and the Python headers are found, unless
+# SOFTHD_BUILD_PYTHON is set OFF. Debian: pybind11-dev, python3-dev (and python3-numpy).
+find_package(Python3 COMPONENTS Interpreter Development.Module QUIET)
+if(Python3_Development.Module_FOUND)
+  set(PYBIND11_FINDPYTHON ON)
+  find_package(pybind11 CONFIG QUIET)
+endif()
+if(Python3_Development.Module_FOUND AND pybind11_FOUND)
+  option(SOFTHD_BUILD_PYTHON "Build the Python module softhd (pybind11)" ON)
+else()
+  option(SOFTHD_BUILD_PYTHON "Build the Python module softhd (pybind11)" OFF)
+  message(STATUS "softhd: the Python module is not built (needs the Debian packages "
+    "pybind11-dev and python3-dev)")
+endif()
+if(SOFTHD_BUILD_PYTHON)
+  softhd_require(Python3_Development.Module_FOUND python3-dev "the Python headers")
+  softhd_require(pybind11_FOUND pybind11-dev "pybind11")
+endif()
+
 if(SOFTHD_BUILD_TESTS)
   find_package(GTest CONFIG QUIET)
   softhd_require(GTest_FOUND libgtest-dev "GoogleTest")
