@@ -1,4 +1,4 @@
-"""Independent implementations of the regularised Hausdorff distance of SPEC §2
+"""Independent implementations of the regularised Hausdorff distance of docs/formulation.md §2
 (docs/formulation.md §2), written from the formulas, not from the library:
 
 - rho_numpy: NumPy, float64, all pairs at once (small clouds; the tests' oracle);
@@ -25,7 +25,7 @@ def _directed_numpy(P, VP, Q, VQ, alpha, beta, eps):
 
 
 def rho_numpy(X, Y, VX=None, VY=None, alpha=4.0, beta=4.0, gamma=2.0, eps=1e-3):
-    """(rho, A, B) of SPEC §2, NumPy float64 (small clouds)."""
+    """(rho, A, B) of docs/formulation.md §2, NumPy float64 (small clouds)."""
     X, Y = np.asarray(X, float), np.asarray(Y, float)
     VX = np.ones(len(X)) if VX is None else np.asarray(VX, float)
     VY = np.ones(len(Y)) if VY is None else np.asarray(VY, float)
@@ -48,7 +48,7 @@ def _directed_torch(P, VP, Q, VQ, alpha, beta, eps, chunk):
 
 
 def rho_torch(X, Y, VX=None, VY=None, alpha=4.0, beta=4.0, gamma=2.0, eps=1e-3, chunk=1024):
-    """rho of SPEC §2 in plain PyTorch (differentiable in every tensor argument)."""
+    """rho of docs/formulation.md §2 in plain PyTorch (differentiable in every tensor argument)."""
     import torch
 
     VX = torch.ones(X.shape[0], dtype=X.dtype) if VX is None else VX

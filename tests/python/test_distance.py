@@ -1,4 +1,4 @@
-"""softhd.distance / Target against an independent NumPy oracle of SPEC §2 and against the
+"""softhd.distance / Target against an independent NumPy oracle of docs/formulation.md §2 and against the
 command-line tool (the same library call: equal to 1e-14)."""
 
 import numpy as np

@@ -1,5 +1,5 @@
 """softhd.torch.HausdorffLoss: gradcheck in float64, float32, weights, the target, and
-agreement with a plain PyTorch implementation of SPEC §2 (spec_reference.rho_torch)."""
+agreement with a plain PyTorch implementation of docs/formulation.md §2 (spec_reference.rho_torch)."""
 
 import pytest
 
