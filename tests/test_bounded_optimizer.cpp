@@ -164,6 +164,33 @@ TEST(BoundedOptimizer, StopsOnIterationsTargetAndFailedStart) {
   EXPECT_FALSE(s.converged);
 }
 
+// An iteration observer that throws StopRequest ends the run after that iteration, with
+// the best point so far and its own termination.
+TEST(BoundedOptimizer, ObserverCanStopTheRun) {
+  const BoundedObjective f = [](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+    v = (x.array() - 0.25).pow(4).sum() + 1.0;
+    if (g) *g = 4 * (x.array() - 0.25).cube().matrix();
+    return true;
+  };
+  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(3, -1), hi = Eigen::VectorXd::Constant(3, 1);
+  BoundedOptimizerOptions o;
+  o.relative_change = 0.0;
+  int calls = 0;
+  Eigen::VectorXd seen;
+  const BoundedOptimizerSummary s = minimise(
+      f, Eigen::VectorXd::Constant(3, 0.9), lo, hi, o,
+      [&](const IterationRecord& rec, const Eigen::VectorXd& x) {
+        ++calls;
+        seen = x;
+        if (rec.iteration == 3) throw StopRequest{};
+      });
+  EXPECT_EQ(calls, 3);
+  EXPECT_EQ(s.iterations, 3);
+  EXPECT_EQ(s.termination, "stopped by the caller");
+  EXPECT_FALSE(s.converged);
+  EXPECT_EQ(s.x, seen);
+}
+
 TEST(BoundedOptimizer, RejectsInconsistentInput) {
   const BoundedObjective f = [](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
     v = x.squaredNorm();
