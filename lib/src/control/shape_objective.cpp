@@ -9,22 +9,24 @@
 #include "softhd/fe/adjoint.hpp"
 #include "softhd/fe/cloud.hpp"
 #include "softhd/fe/geometry.hpp"
+#include "softhd/enum_names.hpp"
 
 namespace softhd {
 
-std::string to_string(Particles p) { return p == Particles::nodes ? "nodes" : "quadrature"; }
-std::string to_string(ParticleVolumes v) {
-  return v == ParticleVolumes::reference ? "reference" : "deformed";
-}
+namespace {
+constexpr EnumNames<Particles, 2> kParticles{
+    {{Particles::nodes, "nodes"}, {Particles::quadrature, "quadrature"}}};
+constexpr EnumNames<ParticleVolumes, 2> kVolumes{
+    {{ParticleVolumes::reference, "reference"}, {ParticleVolumes::deformed, "deformed"}}};
+}  // namespace
+
+std::string to_string(Particles p) { return enum_name(kParticles, p); }
+std::string to_string(ParticleVolumes v) { return enum_name(kVolumes, v); }
 Particles particles_from_string(const std::string& name) {
-  if (name == "nodes") return Particles::nodes;
-  if (name == "quadrature") return Particles::quadrature;
-  throw InvalidArgument("unknown particles '" + name + "' (expected nodes or quadrature)");
+  return enum_from_name(kParticles, name, "particles");
 }
 ParticleVolumes particle_volumes_from_string(const std::string& name) {
-  if (name == "reference") return ParticleVolumes::reference;
-  if (name == "deformed") return ParticleVolumes::deformed;
-  throw InvalidArgument("unknown volumes '" + name + "' (expected reference or deformed)");
+  return enum_from_name(kVolumes, name, "volumes");
 }
 
 namespace {

@@ -2,15 +2,19 @@
 
 #include <Eigen/LU>
 
+#include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/shape.hpp"
 
 namespace softhd::fe {
 
+namespace {
+constexpr EnumNames<ControlKind, 2> kControlKinds{
+    {{ControlKind::kVertex, "vertex"}, {ControlKind::kElement, "element"}}};
+}  // namespace
+
 ControlKind parse_control_kind(const std::string& name) {
-  if (name == "vertex") return ControlKind::kVertex;
-  if (name == "element") return ControlKind::kElement;
-  throw InvalidArgument("control space must be \"vertex\" or \"element\", got \"" + name + "\"");
+  return enum_from_name(kControlKinds, name, "control space");
 }
 
 ControlSpace::ControlSpace(const Mesh& mesh, const ReferenceGeometry& g, ControlKind kind)
