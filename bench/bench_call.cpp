@@ -16,8 +16,9 @@
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::fprintf(stderr, "usage: bench_call MOVING TARGET [--repeats R] [--threads T] "
-                         "[--method M] [--grad]\n");
+    std::fprintf(stderr,
+                 "usage: bench_call MOVING TARGET [--repeats R] [--threads T] "
+                 "[--method M] [--grad]\n");
     return 2;
   }
   int repeats = 5;
@@ -45,8 +46,7 @@ int main(int argc, char** argv) {
   for (int r = 0; r < repeats; ++r) {
     const auto t0 = std::chrono::steady_clock::now();
     rho = softhd::hausdorff(X, Y, options, request).rho;
-    seconds.push_back(
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
   std::sort(seconds.begin(), seconds.end());
   std::printf("{\"rho\": %.17g, \"min_seconds\": %.9g, \"median_seconds\": %.9g}\n", rho,

@@ -177,13 +177,13 @@ TEST(BoundedOptimizer, ObserverCanStopTheRun) {
   o.relative_change = 0.0;
   int calls = 0;
   Eigen::VectorXd seen;
-  const BoundedOptimizerSummary s = minimise(
-      f, Eigen::VectorXd::Constant(3, 0.9), lo, hi, o,
-      [&](const IterationRecord& rec, const Eigen::VectorXd& x) {
-        ++calls;
-        seen = x;
-        if (rec.iteration == 3) throw StopRequest{};
-      });
+  const BoundedOptimizerSummary s =
+      minimise(f, Eigen::VectorXd::Constant(3, 0.9), lo, hi, o,
+               [&](const IterationRecord& rec, const Eigen::VectorXd& x) {
+                 ++calls;
+                 seen = x;
+                 if (rec.iteration == 3) throw StopRequest{};
+               });
   EXPECT_EQ(calls, 3);
   EXPECT_EQ(s.iterations, 3);
   EXPECT_EQ(s.termination, "stopped by the caller");

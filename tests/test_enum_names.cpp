@@ -1,11 +1,10 @@
 // The enum name tables (softhd/enum_names.hpp) and the parsers built on them.
 
-#include "softhd/enum_names.hpp"
-
 #include <gtest/gtest.h>
 
 #include "expect_error.hpp"
 #include "softhd/control/shape_objective.hpp"
+#include "softhd/enum_names.hpp"
 #include "softhd/fe/control.hpp"
 
 namespace softhd {

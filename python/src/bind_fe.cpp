@@ -46,8 +46,8 @@ std::vector<Eigen::VectorXd> probe_points(const PyScene& s, const Eigen::MatrixX
 PyForward forward(const PyScene& s, const py::object& control, const Eigen::MatrixXd& probes,
                   int coarse_levels, int threads) {
   // control: None (the scene's initial value), a number (uniform) or one value per control.
-  const bool uniform = control.is_none() || py::isinstance<py::float_>(control) ||
-                       py::isinstance<py::int_>(control);
+  const bool uniform =
+      control.is_none() || py::isinstance<py::float_>(control) || py::isinstance<py::int_>(control);
   const double value = control.is_none() ? s.scene.control_initial
                        : uniform         ? control.cast<double>()
                                          : 0.0;
@@ -115,20 +115,26 @@ void bind_fe(py::module_& m) {
             if (!(max_memory_gib > 0.0 && max_memory_gib <= 1e6))
               throw InvalidArgument("max_memory_gib must be in (0, 1e6]");
             py::gil_scoped_release release;
-            return std::make_unique<PyScene>(fe::load_scene(path.string(), max_memory_gib * (1u << 30)));
+            return std::make_unique<PyScene>(
+                fe::load_scene(path.string(), max_memory_gib * (1u << 30)));
           },
           py::arg("path"), py::arg("max_memory_gib") = 8.0)
       .def_property_readonly("name", [](const PyScene& s) { return s.scene.name; })
       .def_property_readonly("dim", [](const PyScene& s) { return s.scene.dim(); })
-      .def_property_readonly("nodes", [](const PyScene& s) { return to_numpy(s.assembler.mesh().nodes); })
+      .def_property_readonly("nodes",
+                             [](const PyScene& s) { return to_numpy(s.assembler.mesh().nodes); })
       .def_property_readonly("num_controls", [](const PyScene& s) { return s.control.size(); })
-      .def_property_readonly("control_positions",
-                             [](const PyScene& s) { return to_numpy(s.control.positions(s.assembler.mesh())); })
-      .def_property_readonly("control_bounds", [](const PyScene& s) {
-        return py::make_tuple(s.scene.control_lower, s.scene.control_upper);
-      })
-      .def_property_readonly("control_initial", [](const PyScene& s) { return s.scene.control_initial; })
-      .def_property_readonly("has_target", [](const PyScene& s) { return !s.scene.target_json.empty(); })
+      .def_property_readonly(
+          "control_positions",
+          [](const PyScene& s) { return to_numpy(s.control.positions(s.assembler.mesh())); })
+      .def_property_readonly("control_bounds",
+                             [](const PyScene& s) {
+                               return py::make_tuple(s.scene.control_lower, s.scene.control_upper);
+                             })
+      .def_property_readonly("control_initial",
+                             [](const PyScene& s) { return s.scene.control_initial; })
+      .def_property_readonly("has_target",
+                             [](const PyScene& s) { return !s.scene.target_json.empty(); })
       .def("forward", &forward, py::arg("control") = py::none(), py::kw_only(),
            py::arg("probes") = Eigen::MatrixXd(0, 0), py::arg("coarse_levels") = 0,
            py::arg("threads") = 0);

@@ -48,8 +48,8 @@ HausdorffResult evaluate(const HausdorffTarget& target, const Array& X,
 std::string result_repr(const HausdorffResult& r) {
   std::ostringstream s;
   s.precision(10);
-  s << "DistanceResult(rho=" << r.rho << ", A=" << r.A << ", B=" << r.B
-    << ", seconds=" << r.seconds << ")";
+  s << "DistanceResult(rho=" << r.rho << ", A=" << r.A << ", B=" << r.B << ", seconds=" << r.seconds
+    << ")";
   return s.str();
 }
 
@@ -64,23 +64,33 @@ void bind_hausdorff(py::module_& m) {
       .def_readonly("B", &HausdorffResult::B, "moving-over-target mean")
       .def_property_readonly(
           "field_target",
-          [](py::object self) { return vector_view(self.cast<const HausdorffResult&>().field_target, self); },
+          [](py::object self) {
+            return vector_view(self.cast<const HausdorffResult&>().field_target, self);
+          },
           "(M,) d~_X(y_j), with fields=True")
       .def_property_readonly(
           "field_moving",
-          [](py::object self) { return vector_view(self.cast<const HausdorffResult&>().field_moving, self); },
+          [](py::object self) {
+            return vector_view(self.cast<const HausdorffResult&>().field_moving, self);
+          },
           "(N,) d~_Y(x_i), with fields=True")
       .def_property_readonly(
           "gradient",
-          [](py::object self) { return matrix_view(self.cast<const HausdorffResult&>().gradient_points, self); },
+          [](py::object self) {
+            return matrix_view(self.cast<const HausdorffResult&>().gradient_points, self);
+          },
           "(N, d) d rho / d x_i, with gradient=True")
       .def_property_readonly(
           "gradient_volumes",
-          [](py::object self) { return vector_view(self.cast<const HausdorffResult&>().gradient_volumes, self); },
+          [](py::object self) {
+            return vector_view(self.cast<const HausdorffResult&>().gradient_volumes, self);
+          },
           "(N,) d rho / d V_i, with gradient_volumes=True")
       .def_property_readonly(
           "gradient_target",
-          [](py::object self) { return matrix_view(self.cast<const HausdorffResult&>().gradient_target, self); },
+          [](py::object self) {
+            return matrix_view(self.cast<const HausdorffResult&>().gradient_target, self);
+          },
           "(M, d) d rho / d y_j, with gradient_target=True")
       .def_readonly("kernel_evaluations", &HausdorffResult::kernel_evaluations)
       .def_readonly("seconds", &HausdorffResult::seconds, "wall time of the evaluation (C++)")
@@ -101,8 +111,7 @@ void bind_hausdorff(py::module_& m) {
   // Test hook for the no-copy promise: the address of the data the argument caster hands to
   // C++ for an Array argument (the same caster as every cloud argument).
   m.def(
-      "_data_address",
-      [](const Array& a) { return reinterpret_cast<std::uintptr_t>(a.data()); },
+      "_data_address", [](const Array& a) { return reinterpret_cast<std::uintptr_t>(a.data()); },
       py::arg("a").noconvert());
 }
 

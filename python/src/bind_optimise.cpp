@@ -35,7 +35,8 @@ struct OptimiseArgs {
 };
 
 SceneTarget make_target(const PyScene& s, const std::optional<Array>& points,
-                        const std::optional<Array>& volumes, const std::optional<std::string>& file) {
+                        const std::optional<Array>& volumes,
+                        const std::optional<std::string>& file) {
   if (file) return file_target(*file, s.scene.dim());
   if (!points) return scene_target(s.scene, s.assembler.mesh());
   check_cloud(*points, volumes, "target");
@@ -104,16 +105,19 @@ void bind_records(py::module_& m) {
       .def_property_readonly("rho", [](const PyIteration& i) { return i.record.rho; })
       .def_property_readonly("A", [](const PyIteration& i) { return i.record.A; })
       .def_property_readonly("B", [](const PyIteration& i) { return i.record.B; })
-      .def_property_readonly("rho_over_floor", [](const PyIteration& i) { return i.record.rho_over_floor; })
+      .def_property_readonly("rho_over_floor",
+                             [](const PyIteration& i) { return i.record.rho_over_floor; })
       .def_property_readonly("projected_gradient_norm",
                              [](const PyIteration& i) { return i.record.projected_gradient_norm; })
-      .def_property_readonly("newton_iterations", [](const PyIteration& i) { return i.record.newton_iterations; })
+      .def_property_readonly("newton_iterations",
+                             [](const PyIteration& i) { return i.record.newton_iterations; })
       .def_property_readonly("seconds", [](const PyIteration& i) { return i.record.seconds; })
-      .def_property_readonly("control", [](const PyIteration& i) { return i.control; },
-                             "the best control so far (a copy)")
+      .def_property_readonly(
+          "control", [](const PyIteration& i) { return i.control; },
+          "the best control so far (a copy)")
       .def("__repr__", [](const PyIteration& i) {
-        return "Iteration(" + std::to_string(i.record.iteration) + ", J=" + std::to_string(i.record.J) +
-               ", rho=" + std::to_string(i.record.rho) + ")";
+        return "Iteration(" + std::to_string(i.record.iteration) +
+               ", J=" + std::to_string(i.record.J) + ", rho=" + std::to_string(i.record.rho) + ")";
       });
 }
 
@@ -125,29 +129,41 @@ void bind_optimise(py::module_& m) {
       .def_property_readonly("rho_start", [](const PyOptimise& r) { return r.summary.rho_start; })
       .def_property_readonly("rho_final", [](const PyOptimise& r) { return r.summary.rho_final; })
       .def_property_readonly("J_final", [](const PyOptimise& r) { return r.summary.J_final; })
-      .def_property_readonly("floor_self", [](const PyOptimise& r) { return optional(r.summary.floor_self); })
-      .def_property_readonly("floor_matched", [](const PyOptimise& r) { return optional(r.summary.floor_matched); })
+      .def_property_readonly("floor_self",
+                             [](const PyOptimise& r) { return optional(r.summary.floor_self); })
+      .def_property_readonly("floor_matched",
+                             [](const PyOptimise& r) { return optional(r.summary.floor_matched); })
       .def_property_readonly("iterations", [](const PyOptimise& r) { return r.summary.iterations; })
-      .def_property_readonly("evaluations", [](const PyOptimise& r) { return r.summary.evaluations; })
-      .def_property_readonly("failed_evaluations", [](const PyOptimise& r) { return r.summary.failed_evaluations; })
-      .def_property_readonly("termination", [](const PyOptimise& r) { return r.summary.termination; })
+      .def_property_readonly("evaluations",
+                             [](const PyOptimise& r) { return r.summary.evaluations; })
+      .def_property_readonly("failed_evaluations",
+                             [](const PyOptimise& r) { return r.summary.failed_evaluations; })
+      .def_property_readonly("termination",
+                             [](const PyOptimise& r) { return r.summary.termination; })
       .def_property_readonly("converged", [](const PyOptimise& r) { return r.summary.converged; })
-      .def_property_readonly("shape_error_max", [](const PyOptimise& r) { return optional(r.summary.shape_error_max); })
-      .def_property_readonly("shape_error_rms", [](const PyOptimise& r) { return optional(r.summary.shape_error_rms); })
+      .def_property_readonly(
+          "shape_error_max",
+          [](const PyOptimise& r) { return optional(r.summary.shape_error_max); })
+      .def_property_readonly(
+          "shape_error_rms",
+          [](const PyOptimise& r) { return optional(r.summary.shape_error_rms); })
       .def_property_readonly("seconds", [](const PyOptimise& r) { return r.summary.seconds; })
       .def_property_readonly("control", [](const PyOptimise& r) { return r.summary.control; })
-      .def_property_readonly("displacements",
-                             [](const PyOptimise& r) { return node_rows(r.summary.displacement, r.dim); })
-      .def_property_readonly("history", [](const PyOptimise& r) {
-        std::vector<PyIteration> h;
-        for (const TrackingIteration& it : r.summary.history) h.push_back({it, Eigen::VectorXd()});
-        return h;
-      })
+      .def_property_readonly(
+          "displacements",
+          [](const PyOptimise& r) { return node_rows(r.summary.displacement, r.dim); })
+      .def_property_readonly("history",
+                             [](const PyOptimise& r) {
+                               std::vector<PyIteration> h;
+                               for (const TrackingIteration& it : r.summary.history)
+                                 h.push_back({it, Eigen::VectorXd()});
+                               return h;
+                             })
       .def_property_readonly("target", [](const PyOptimise& r) { return r.target; })
       .def("__repr__", [](const PyOptimise& r) {
-        return "OptimiseResult(" + r.summary.termination + ", iterations=" +
-               std::to_string(r.summary.iterations) + ", rho_final=" +
-               std::to_string(r.summary.rho_final) + ")";
+        return "OptimiseResult(" + r.summary.termination +
+               ", iterations=" + std::to_string(r.summary.iterations) +
+               ", rho_final=" + std::to_string(r.summary.rho_final) + ")";
       });
 
   m.def(
@@ -158,8 +174,8 @@ void bind_optimise(py::module_& m) {
          const std::string& volumes_kind, double alpha, double beta, double gamma, double eps,
          const std::string& method, double tol, double tikhonov_mass, double tikhonov_grad,
          const py::object& callback, int threads) {
-        OptimiseArgs a{max_iter, max_seconds, rel_tol, move_limit, algorithm, particles,
-                       volumes_kind, tikhonov_mass, tikhonov_grad};
+        OptimiseArgs a{max_iter,  max_seconds,  rel_tol,       move_limit,   algorithm,
+                       particles, volumes_kind, tikhonov_mass, tikhonov_grad};
         HausdorffOptions h;
         h.params = {alpha, beta, gamma, eps};
         h.method = method_from_string(method);

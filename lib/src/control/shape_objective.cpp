@@ -5,11 +5,11 @@
 #include <deque>
 #include <optional>
 
+#include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/adjoint.hpp"
 #include "softhd/fe/cloud.hpp"
 #include "softhd/fe/geometry.hpp"
-#include "softhd/enum_names.hpp"
 
 namespace softhd {
 

@@ -38,9 +38,9 @@ void check_control_bounds(const Scene& scene, const ControlSpace& control, const
   for (Eigen::Index k = 0; k < m.size(); ++k) {
     if (!(m[k] >= scene.control_lower && m[k] <= scene.control_upper)) {
       std::ostringstream os;
-      os << "control value " << m[k] << " at node " << k << " ("
-         << control.positions(mesh).row(k) << ") is outside the scene's bounds ["
-         << scene.control_lower << ", " << scene.control_upper << "]";
+      os << "control value " << m[k] << " at node " << k << " (" << control.positions(mesh).row(k)
+         << ") is outside the scene's bounds [" << scene.control_lower << ", "
+         << scene.control_upper << "]";
       throw InvalidArgument(os.str());
     }
   }

@@ -86,8 +86,8 @@ struct StopRequest {};
 /// Internally the variables are z = x / s with s = max(|lower|, |upper|) per
 /// component (so z is O(1)), and f is divided by |f(x0)| (or 1 if it is 0).
 /// `on_iteration` (optional) is called after each accepted iteration with its record
-/// and the current best x; it may write a checkpoint, and throw StopRequest to end the run. Throws InvalidArgument for
-/// inconsistent bounds or a start outside them (naming the component).
+/// and the current best x; it may write a checkpoint, and throw StopRequest to end the run. Throws
+/// InvalidArgument for inconsistent bounds or a start outside them (naming the component).
 BoundedOptimizerSummary minimise(
     const BoundedObjective& objective, const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
     const Eigen::VectorXd& upper, const BoundedOptimizerOptions& options = {},
