@@ -140,6 +140,9 @@ void bind_optimise(py::module_& m) {
                              [](const PyOptimise& r) { return r.summary.failed_evaluations; })
       .def_property_readonly("termination",
                              [](const PyOptimise& r) { return r.summary.termination; })
+      .def_property_readonly(
+          "status", [](const PyOptimise& r) { return to_string(r.summary.status); },
+          "why it stopped: iteration_limit, relative_change, stopped, ... (converged or not)")
       .def_property_readonly("converged", [](const PyOptimise& r) { return r.summary.converged; })
       .def_property_readonly(
           "shape_error_max",
@@ -160,11 +163,8 @@ void bind_optimise(py::module_& m) {
                                return h;
                              })
       .def_property_readonly("target", [](const PyOptimise& r) { return r.target; })
-      .def("__repr__", [](const PyOptimise& r) {
-        return "OptimiseResult(" + r.summary.termination +
-               ", iterations=" + std::to_string(r.summary.iterations) +
-               ", rho_final=" + std::to_string(r.summary.rho_final) + ")";
-      });
+      .def("__repr__",
+           [](const PyOptimise& r) { return "OptimiseResult(" + r.summary.BriefReport() + ")"; });
 
   m.def(
       "optimise",

@@ -32,6 +32,7 @@ def test_callback_returning_false_stops_the_run(manufactured):
     r = softhd.optimise(scene, target, max_iter=20, callback=callback)
     assert r.iterations == 2 and len(r.history) == 2
     assert r.termination == "stopped by the caller" and not r.converged
+    assert r.status == "stopped"
     assert [s[0] for s in seen] == [1, 2]
     assert seen[0][2] == (scene.num_controls,)
     assert r.J_final == seen[1][1] and r.J_final < r.rho_start
@@ -44,6 +45,8 @@ def test_callback_returning_none_continues(manufactured):
     r = softhd.optimise(scene, target, max_iter=3, callback=lambda rec: calls.append(rec))
     assert r.iterations == 3 == len(calls)
     assert r.termination == "the iteration limit was reached"
+    assert r.status == "iteration_limit"
+    assert "iteration_limit (the iteration limit was reached): 3 iterations" in repr(r)
 
 
 def test_callback_exception_propagates(manufactured):

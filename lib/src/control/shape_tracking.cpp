@@ -165,6 +165,7 @@ void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimize
   s->iterations = r.iterations;
   s->evaluations = r.evaluations;
   s->failed_evaluations = r.failed_evaluations;
+  s->status = r.status;
   s->termination = r.termination;
   s->converged = r.converged;
   s->replayed_evaluations = static_cast<int>(recorder.replayed());

@@ -62,10 +62,30 @@ struct IterationRecord {
   double seconds = 0.0;                  ///< wall time since the start of minimise()
 };
 
+/// Why minimise() stopped.
+enum class OptimizerStatus {
+  iteration_limit,   ///< max_iterations accepted iterations
+  evaluation_limit,  ///< max_evaluations evaluations
+  time_limit,        ///< max_seconds of wall time
+  relative_change,   ///< J changed by ≤ relative_change three iterations in a row (converged)
+  target_value,      ///< J ≤ target_value (converged)
+  nlopt_converged,   ///< NLopt reports convergence (converged)
+  no_progress,       ///< no progress within the smallest move limit (converged)
+  stopped,           ///< an on_iteration observer threw StopRequest
+  start_failed,      ///< the evaluation at the starting point failed
+  nlopt_failure,     ///< NLopt stopped otherwise (round-off, a rejected problem; see termination)
+};
+
+/// "iteration_limit", "relative_change", ...: the enumerator's name.
+std::string to_string(OptimizerStatus status);
+/// True for the statuses that mean a tolerance or the target value was reached.
+bool is_converged(OptimizerStatus status);
+
 /// What minimise() did: why it stopped, the best point and the accepted iterations.
 struct BoundedOptimizerSummary {
-  std::string termination;               ///< why it stopped, one line
-  bool converged = false;                ///< stopped on a tolerance or the target value
+  OptimizerStatus status = OptimizerStatus::nlopt_failure;  ///< why it stopped
+  std::string termination;                                  ///< why it stopped, one line
+  bool converged = false;                                   ///< is_converged(status)
   double initial_value = 0.0;            ///< f at the start (NaN if that evaluation failed)
   double final_value = 0.0;              ///< f at the best point
   Eigen::VectorXd x;                     ///< the best point found
@@ -74,6 +94,9 @@ struct BoundedOptimizerSummary {
   int failed_evaluations = 0;            ///< evaluations that returned false (rejected points)
   double seconds = 0.0;                  ///< wall time of minimise()
   std::vector<IterationRecord> history;  ///< one record per accepted iteration
+
+  /// One line: status, iterations, evaluations, J from start to end, time.
+  std::string BriefReport() const;
 };
 
 /// Thrown by an `on_iteration` observer of minimise() to end the run after that iteration:

@@ -77,8 +77,9 @@ struct ShapeTrackingSummary {
   /// Accepted iterations, evaluations and failed evaluations, over all resumes.
   int iterations = 0, evaluations = 0, failed_evaluations = 0;
   ///@}
-  std::string termination;  ///< why the optimiser stopped, one line
-  bool converged = false;   ///< stopped on a tolerance, not on a limit
+  OptimizerStatus status = OptimizerStatus::nlopt_failure;  ///< why the optimiser stopped
+  std::string termination;                                  ///< why the optimiser stopped, one line
+  bool converged = false;  ///< stopped on a tolerance, not on a limit (is_converged(status))
   ///@{
   /// Max and RMS of |x_i − T(X_i)| over the nodes (with a known map only).
   std::optional<double> shape_error_max, shape_error_rms;
@@ -95,6 +96,9 @@ struct ShapeTrackingSummary {
   Eigen::VectorXd displacement;            ///< its state u
   std::vector<TrackingIteration> history;  ///< accepted iterations (replayed ones included)
   int replayed_evaluations = 0;            ///< served from the checkpoint
+
+  /// One line: status, iterations, evaluations, ρ̃ from start to end (and over the floor), time.
+  std::string BriefReport() const;
 };
 
 /// Max and RMS over the nodes of |x_i − T(X_i)| = |u_i − u_T,i| (node-major vectors).
