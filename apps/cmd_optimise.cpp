@@ -75,30 +75,6 @@ body_NNNN.vtu, target.vtu, body.pvd, body_final.ply, target.ply, summary.json,
 checkpoint.bin, and convergence.png when python3 with matplotlib is available.
 )";
 
-/// Nodal values of the control (for VTU): vertex controls interpolated bilinearly at
-/// every node (Q2 mid-nodes included), element controls as cell data elsewhere.
-Eigen::VectorXd control_at_nodes(const fe::Mesh& mesh, const fe::ControlSpace& space,
-                                 const Eigen::VectorXd& m) {
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(mesh.num_nodes());
-  if (space.kind() != fe::ControlKind::kVertex) return out;
-  for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n) {
-    Eigen::VectorXd xi;
-    const int e = fe::locate(mesh, mesh.nodes.row(n).transpose(), &xi);
-    if (e < 0) continue;
-    double value = 0.0;
-    for (int c = 0; c < mesh.element_vertices.cols(); ++c) {
-      double w = 1.0;
-      for (int k = 0; k < mesh.dim; ++k) {
-        const int bit = (c >> k) & 1;  // tensor-product corner order
-        w *= bit ? 0.5 * (1.0 + xi[k]) : 0.5 * (1.0 - xi[k]);
-      }
-      value += w * m[mesh.element_vertices(e, c)];
-    }
-    out[n] = value;
-  }
-  return out;
-}
-
 nlohmann::json optional_json(const std::optional<double>& v) {
   return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
 }
@@ -195,7 +171,7 @@ class RunFiles {
   HausdorffResult write_body(int iteration, const Eigen::VectorXd& m, const Eigen::VectorXd& u) {
     const fe::Assembler& a = objective_.assembler();
     const HausdorffResult r = objective_.fields(u);
-    std::vector<VtuField> point{{"m", control_at_nodes(a.mesh(), space_, m)}};
+    std::vector<VtuField> point{{"m", fe::control_at_nodes(a.mesh(), space_, m)}};
     std::vector<VtuField> cell;
     if (objective_.options().particles == Particles::nodes)
       point.push_back({"d_tilde", r.field_moving});

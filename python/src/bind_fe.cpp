@@ -118,7 +118,9 @@ void bind_fe(py::module_& m) {
             return std::make_unique<PyScene>(
                 fe::load_scene(path.string(), max_memory_gib * (1u << 30)));
           },
-          py::arg("path"), py::arg("max_memory_gib") = 8.0)
+          py::arg("path"), py::arg("max_memory_gib") = 8.0,
+          "Reads a scene file (JSON, docs/guide.md). Raises FileError for a missing or malformed "
+          "file, ResourceError if the mesh's estimated memory exceeds max_memory_gib.")
       .def_property_readonly("name", [](const PyScene& s) { return s.scene.name; })
       .def_property_readonly("dim", [](const PyScene& s) { return s.scene.dim(); })
       .def_property_readonly("nodes",
@@ -135,9 +137,25 @@ void bind_fe(py::module_& m) {
                              [](const PyScene& s) { return s.scene.control_initial; })
       .def_property_readonly("has_target",
                              [](const PyScene& s) { return !s.scene.target_json.empty(); })
+      .def(
+          "control_at_nodes",
+          [](const PyScene& s, const Eigen::VectorXd& m) {
+            if (m.size() != s.control.size())
+              throw InvalidArgument("the control has " + std::to_string(m.size()) +
+                                    " values but the scene has " +
+                                    std::to_string(s.control.size()) + " controls");
+            return fe::control_at_nodes(s.assembler.mesh(), s.control, m);
+          },
+          py::arg("control"),
+          "The control interpolated at every node (vertex controls; zeros for element ones).")
       .def("forward", &forward, py::arg("control") = py::none(), py::kw_only(),
            py::arg("probes") = Eigen::MatrixXd(0, 0), py::arg("coarse_levels") = 0,
-           py::arg("threads") = 0);
+           py::arg("threads") = 0,
+           "The equilibrium for the control m: None (the scene's control.initial), a number "
+           "(uniform) or an array of num_controls values within the scene's bounds. probes: "
+           "(P, dim) reference points where u is interpolated. coarse_levels: grid sequencing "
+           "(uniform controls only). Same solve as `softhd forward`. A Newton failure is "
+           "reported in the result (converged, status, report), not raised.");
 }
 
 }  // namespace softhd::python

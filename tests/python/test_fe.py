@@ -52,3 +52,14 @@ def test_equals_the_command_line_tool(scene_file, cli, tmp_path, scene_dict, pro
     assert f.min_J == pytest.approx(j["min_J"], rel=1e-14)
     np.testing.assert_allclose(f.probes[0], j["probes"][0]["u"], rtol=1e-14, atol=1e-300)
     assert f.newton_iterations == j["newton_iterations"]
+
+
+def test_control_at_nodes_reproduces_linear_fields(scene_file):
+    scene = softhd.Scene.load(scene_file(SMALL_2D))
+    X = scene.control_positions
+    m = -1e4 * (1.0 + X[:, 0] + 2.0 * X[:, 1])  # Q1 interpolation is exact for it
+    nodes = scene.nodes
+    np.testing.assert_allclose(scene.control_at_nodes(m),
+                               -1e4 * (1.0 + nodes[:, 0] + 2.0 * nodes[:, 1]), rtol=1e-13)
+    with pytest.raises(ValueError, match="controls"):
+        scene.control_at_nodes(m[:-1])

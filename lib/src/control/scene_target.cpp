@@ -47,15 +47,13 @@ Eigen::Vector3i arc_grid(const fe::Scene& scene, const nlohmann::json& t, double
 SceneTarget arc_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlohmann::json& t,
                        double memory_limit) {
   if (scene.dim() != 3) throw InvalidArgument(scene.source + ": target.kind arc needs a 3D body");
-  ArcMap T;
-  T.length = scene.upper[0] - scene.lower[0];
-  T.thickness = scene.upper[2] - scene.lower[2];
+  double angle = ArcMap().angle;
   if (t.contains("angle")) {
     if (!t["angle"].is_number())
       throw InvalidArgument(scene.source + ": target.angle must be a number (radians)");
-    T.angle = t["angle"].get<double>();
+    angle = t["angle"].get<double>();
   }
-  T.validate();
+  const ArcMap T = arc_map(scene, angle);
   const Eigen::Vector3i counts = arc_grid(scene, t, memory_limit);
   const PointCloud grid = sample_box_grid(scene.lower, scene.upper, counts);
   std::ostringstream d;
@@ -82,6 +80,16 @@ SceneTarget cloud_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlo
 }
 
 }  // namespace
+
+ArcMap arc_map(const fe::Scene& scene, double angle) {
+  if (scene.dim() != 3) throw InvalidArgument(scene.source + ": an arc map needs a 3D body");
+  ArcMap T;
+  T.length = scene.upper[0] - scene.lower[0];
+  T.thickness = scene.upper[2] - scene.lower[2];
+  T.angle = angle;
+  T.validate();
+  return T;
+}
 
 SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh, double memory_limit) {
   if (scene.target_json.empty())

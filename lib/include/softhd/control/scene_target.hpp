@@ -14,6 +14,7 @@
 #include <optional>
 #include <string>
 
+#include "softhd/control/targets.hpp"
 #include "softhd/fe/mesh.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/point_cloud.hpp"
@@ -26,6 +27,10 @@ struct SceneTarget {
   std::optional<Eigen::VectorXd> map_displacement;  ///< u_T at `mesh`'s nodes, if T is known
   std::string description;                          ///< one line for people
 };
+
+/// The arc map of a plate scene (3D box, clamped at X1 = lower): length and thickness from the
+/// box, total angle `angle`. Throws InvalidArgument for a 2D scene or an invalid map.
+ArcMap arc_map(const fe::Scene& scene, double angle);
 
 /// The scene's own target for the body `mesh` (the scene's mesh). Throws InvalidArgument
 /// naming the key for a missing or malformed "target", FileError for its files, and
