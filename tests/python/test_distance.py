@@ -120,3 +120,35 @@ def test_clouds_round_trip_through_files(rng, tmp_path):
         assert P.flags.c_contiguous and P.dtype == np.float64
     softhd.write_cloud(tmp_path / "ones.ply", X)
     assert np.all(softhd.read_cloud(tmp_path / "ones.ply")[1] == 1.0)
+
+
+def test_the_gil_is_released_during_the_computation(rng):
+    # With a huge switch interval Python threads trade the GIL only when its holder lets it
+    # go: the main loop below (which lets go at every sleep(0)) can run while the worker is
+    # inside softhd only if softhd released the GIL; otherwise it counts a handful at most.
+    import sys
+    import threading
+    import time
+
+    X, _ = random_cloud(rng, 3000)
+    Y, _ = random_cloud(rng, 3000)
+    done = threading.Event()
+    result = []
+
+    def work():
+        result.append(softhd.distance(X, Y, gradient=True, threads=1).rho)
+        done.set()
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1000.0)
+    try:
+        t = threading.Thread(target=work)
+        t.start()
+        count = 0
+        while not done.is_set():
+            count += 1
+            time.sleep(0)
+        t.join()
+    finally:
+        sys.setswitchinterval(interval)
+    assert result and count > 100
