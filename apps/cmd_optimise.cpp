@@ -141,8 +141,8 @@ OptimiseArgs parse_optimise(Args& args) {
   const std::vector<std::string> pos = args.finish();
   if (pos.size() != 1) throw UsageError("expected one scene file (see --help)");
   a.scene_file = pos[0];
-  opt.validate();
-  so.hausdorff.params.validate();
+  a.tracking.validate();
+  so.validate();
   return a;
 }
 

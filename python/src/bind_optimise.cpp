@@ -60,14 +60,14 @@ PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
   opt.relative_change = a.rel_tol;
   opt.algorithm = algorithm_from_string(a.algorithm);
   opt.move_limit = a.move_limit;
-  opt.validate();
+  to.validate();
   ShapeObjectiveOptions so;
   so.hausdorff = hausdorff;
   so.particles = particles_from_string(a.particles);
   so.volumes = particle_volumes_from_string(a.volumes);
   so.tikhonov_mass = a.tikhonov_mass;
   so.tikhonov_gradient = a.tikhonov_grad;
-  so.hausdorff.params.validate();
+  so.validate();
   ThreadScope scope(threads);
   ShapeTrackingCallbacks cb;
   if (!callback.is_none()) {

@@ -107,3 +107,16 @@ def test_optimise_errors(scene_file):
         softhd.optimise(scene, np.zeros((4, 3)))
     with pytest.raises(OSError, match="nothing.ply"):
         softhd.optimise(scene, "nothing.ply")
+
+
+@pytest.mark.parametrize("kwargs, field", [
+    (dict(tikhonov_mass=-1.0), "tikhonov_mass"),
+    (dict(tikhonov_grad=float("nan")), "tikhonov_gradient"),
+    (dict(rel_tol=-1.0), "relative_change"),
+    (dict(move_limit=-0.5), "move_limit"),
+    (dict(gamma=0.0), "gamma"),
+])
+def test_optimise_options_name_the_field(scene_file, kwargs, field):
+    scene = softhd.Scene.load(scene_file(SMALL_2D))
+    with pytest.raises(softhd.InvalidArgument, match=field):
+        softhd.optimise(scene, np.array([[0.0, 0.0], [2.0, 0.4]]), **kwargs)

@@ -98,15 +98,24 @@ struct ShapeObjective::Impl {
   }
 };
 
+void ShapeObjectiveOptions::validate() const {
+  hausdorff.params.validate();
+  if (!(tikhonov_mass >= 0.0))
+    throw InvalidArgument("tikhonov_mass (Tikhonov weight M) must be >= 0");
+  if (!(tikhonov_gradient >= 0.0))
+    throw InvalidArgument("tikhonov_gradient (Tikhonov weight eps_m) must be >= 0");
+  if (warm_start_states < 1) throw InvalidArgument("warm_start_states must be >= 1");
+  std::string error;
+  if (!newton.IsValid(&error)) throw InvalidArgument("newton: " + error);
+}
+
 ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::ControlSpace& control,
                                HausdorffTarget target, ShapeObjectiveOptions options) {
   if (target.cloud().dim() != assembler.mesh().dim) {
     throw InvalidArgument("the target cloud is " + std::to_string(target.cloud().dim()) +
                           "D but the body is " + std::to_string(assembler.mesh().dim) + "D");
   }
-  if (!(options.tikhonov_mass >= 0.0) || !(options.tikhonov_gradient >= 0.0))
-    throw InvalidArgument("Tikhonov weights M and eps_m must be >= 0");
-  if (options.warm_start_states < 1) throw InvalidArgument("warm_start_states must be >= 1");
+  options.validate();
   if (options.newton.absolute_tolerance == 0.0) {
     // A floor under the relative residual test: the optimiser's small control changes
     // make |R(0; m)| tiny, and 1e-9 of a tiny reference lies below the residual's

@@ -212,11 +212,19 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
   return f;
 }
 
+void ShapeTrackingOptions::validate() const {
+  optimizer.validate();
+  if (!(self_floor_max_pairs >= 0.0)) throw InvalidArgument("self_floor_max_pairs must be >= 0");
+  if (resume && checkpoint.empty())
+    throw InvalidArgument("resume needs a checkpoint file (the checkpoint field is empty)");
+}
+
 ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorXd& lower,
                                  const Eigen::VectorXd& upper, const Eigen::VectorXd& m0_in,
                                  const std::optional<Eigen::VectorXd>& map_displacement,
                                  const ShapeTrackingOptions& options,
                                  const ShapeTrackingCallbacks& callbacks) {
+  options.validate();
   const fe::Mesh& mesh = objective.assembler().mesh();
   if (map_displacement && map_displacement->size() != mesh.num_nodes() * mesh.dim)
     throw InvalidArgument("track_shape: the known map has the wrong number of entries");

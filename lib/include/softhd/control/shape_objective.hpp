@@ -46,6 +46,10 @@ struct ShapeObjectiveOptions {
   double tikhonov_gradient = 0.0;                        ///< ε_m ≥ 0 (paper: 0)
   fe::NewtonOptions newton;                              ///< state solver settings
   int warm_start_states = 8;  ///< converged states kept for warm starts (≥ 1)
+
+  /// Throws InvalidArgument naming the first invalid field (the distance's parameters and the
+  /// Newton options included).
+  void validate() const;
 };
 
 /// One evaluation of J(m).

@@ -59,6 +59,9 @@ struct ShapeTrackingOptions {
   /// The caller's part of the fingerprint (e.g. a content hash of the scene file);
   /// track_shape adds the mesh, controls, target, objective and optimiser settings.
   RunFingerprint fingerprint;
+
+  /// Throws InvalidArgument naming the first invalid field (the optimiser's included).
+  void validate() const;
 };
 
 /// The result of track_shape(): floors, final values, why it stopped, the shape error and
