@@ -10,9 +10,11 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/cloud.hpp"
 #include "softhd/fe/forward.hpp"
+#include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
@@ -41,9 +43,11 @@ constexpr const char* kUsage =
     "                         V_i = int N_i J dX as a point cloud (.ply binary, else text), in\n"
     "                         node order: a target for softhd optimise\n"
     "  --coarse-levels K      grid sequencing: first solve on the mesh with half the cells\n"
-    "                         (K times, coarsest first; cell counts must stay even) and start\n"
-    "                         each finer Newton solve from the coarser state interpolated\n"
-    "                         onto its nodes (default 0: start from rest)\n"
+    "                         along every even axis (K times, coarsest first) and start each\n"
+    "                         finer Newton solve from the coarser state interpolated onto its\n"
+    "                         nodes; 0 starts from rest (default auto: halve while an axis is\n"
+    "                         even and the coarse mesh keeps >= 32 elements; a coarse solve\n"
+    "                         that fails makes the start the rest state)\n"
     "  --json                 print a JSON summary (probes, energy, volume, iterations, ...)\n"
     "  --linear-solver NAME   eigen-llt, eigen-ldlt or cholmod (default cholmod)\n"
     "  --step-tol T           converged also needs the last Newton correction\n"
@@ -61,7 +65,7 @@ constexpr const char* kUsage =
 struct Args {
   std::string scene, control_file, out_dir = "out", write_nodes, linear_solver, write_cloud;
   bool has_uniform = false, json = false, verbose = false;
-  int coarse_levels = 0;
+  int coarse_levels = -1;  // automatic
   int threads = 0;
   double step_tol = 1e-10;
   double load_increment = 1.0;
@@ -136,9 +140,10 @@ bool parse(int argc, char** argv, Args* a) {
         throw softhd::InvalidArgument("--threads expects an integer from 0 to 1024");
       a->threads = static_cast<int>(t);
     } else if (s == "--coarse-levels") {
-      const double k = parse_number(value(), s);
-      if (!(k >= 0 && k <= 8 && k == static_cast<int>(k)))
-        throw softhd::InvalidArgument("--coarse-levels expects an integer from 0 to 8");
+      const std::string v = value();
+      const double k = v == "auto" ? -1.0 : parse_number(v, s);
+      if (!(k >= -1 && k <= 8 && k == static_cast<int>(k)))
+        throw softhd::InvalidArgument("--coarse-levels expects auto or an integer from 0 to 8");
       a->coarse_levels = static_cast<int>(k);
     } else if (s == "--max-memory") {
       const double g = parse_number(value(), s);
@@ -203,13 +208,9 @@ int forward(const Args& args) {
   options.tangent.reuse_factorization = !args.factorize_every_step;
   if (!args.linear_solver.empty())
     options.tangent.linear_solver = parse_linear_solver(args.linear_solver);
-  fo.coarse_levels = args.coarse_levels;
-  fo.on_coarse_level = [](const std::string& report) { std::cerr << report << "\n"; };
-  const LevelControl control_of = [&](const Scene& level, const ControlSpace& space) {
-    if (&level == &scene) return m;  // the finest level's values, read above
-    return control_values(level, space, level.make_mesh(), args);
-  };
-  const ForwardResult fr = solve_forward(scene, assembler, control, control_of, fo);
+  fo.grid.levels = args.coarse_levels;
+  const ForwardResult fr = solve_forward(scene, assembler, control, m, fo);
+  std::cerr << fr.grid.BriefReport();
   const State& state = fr.state;
   const NewtonSummary& summary = fr.summary;
   const Eigen::MatrixXd J = assembler.jacobians(state.u);
@@ -244,6 +245,17 @@ int forward(const Args& args) {
     j["krylov_iterations"] = summary.krylov_iterations;
     j["load_steps"] = summary.load_steps;
     j["dofs"] = assembler.dofs().num_free;
+    // Solve time: the coarse levels' Newton solves and the fine one (no file I/O).
+    nlohmann::json levels = nlohmann::json::array();
+    for (const GridLevelReport& level : fr.grid.levels) {
+      levels.push_back(
+          {{"cells", std::vector<int>(level.cells.data(), level.cells.data() + level.cells.size())},
+           {"newton_iterations", level.newton.newton_iterations},
+           {"factorizations", level.newton.factorizations},
+           {"seconds", level.newton.seconds_total}});
+    }
+    j["coarse_levels"] = levels;
+    j["seconds_solve"] = fr.seconds_solve;
     j["seconds"] = seconds;
     j["vtu"] = vtu;
     std::cout << j.dump(2) << "\n";

@@ -20,6 +20,7 @@
 #include "softhd/control/scene_target.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/shape_tracking.hpp"
+#include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/io/cloud_io.hpp"
@@ -53,6 +54,11 @@ options:
   --tikhonov-mass M  (M/2) int m^2 (default 0)
   --tikhonov-grad E  (E/2) int |grad m|^2 (default 0)
   --vtu-every K      VTU output every K iterations (default 10; 0: start and end only)
+  --checkpoint-every K  save the warm-start states every K iterations (default 5): a
+                     resume recomputes at most the K-1 iterations after the last save
+  --coarse-level C   auto | off: two-level starts, a large control step solved first on
+                     the mesh with half the cells along the even axes (default auto: when
+                     that mesh has >= 32 elements)
   --threads T        OpenMP threads (default: all)
   --max-memory GIB   refuse meshes whose estimated memory exceeds this (default 8)
   --resume           continue the run recorded in DIR/checkpoint.bin: the same run
@@ -107,6 +113,7 @@ struct OptimiseArgs {
   double memory_limit = fe::kDefaultMemoryLimit;
   long vtu_every = 10;
   bool resume = false, json = false, quiet = false;
+  bool coarse_level = true;
 };
 
 OptimiseArgs parse_optimise(Args& args) {
@@ -132,6 +139,11 @@ OptimiseArgs parse_optimise(Args& args) {
   so.hausdorff.threads = static_cast<int>(args.integer("--threads", 0, 0, 4096));
   set_threads(so.hausdorff.threads);  // the FE assembly too
   a.vtu_every = args.integer("--vtu-every", 10, 0, 1000000000);
+  a.tracking.checkpoint_every = static_cast<int>(args.integer("--checkpoint-every", 5, 1, 1000000));
+  const std::string coarse = args.value("--coarse-level").value_or("auto");
+  if (coarse != "auto" && coarse != "off")
+    throw UsageError("--coarse-level: expected auto or off, got '" + coarse + "'");
+  a.coarse_level = coarse == "auto";
   const double gib = args.number("--max-memory", a.memory_limit / (1u << 30));
   if (!(gib > 0.0 && gib <= 1e6)) throw UsageError("--max-memory: expected GiB in (0, 1e6]");
   a.memory_limit = gib * (1u << 30);
@@ -301,6 +313,11 @@ int run_optimise(const std::vector<std::string>& tokens) {
   if (a.resume) read_run_log(to.checkpoint);  // a malformed one refused before any output
 
   ShapeObjective objective(assembler, space, HausdorffTarget(target.cloud, so.hausdorff), so);
+  std::optional<fe::Assembler> coarse;
+  if (a.coarse_level && fe::grid_levels(scene, fe::GridSequencingOptions{}) > 0) {
+    coarse.emplace(fe::coarsened(scene).make_assembler());
+    objective.use_coarse_level(*coarse);
+  }
   const Eigen::VectorXd m0 = Eigen::VectorXd::Constant(space.size(), scene.control_initial);
   const Eigen::VectorXd lower = Eigen::VectorXd::Constant(space.size(), scene.control_lower);
   const Eigen::VectorXd upper = Eigen::VectorXd::Constant(space.size(), scene.control_upper);

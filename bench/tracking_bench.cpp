@@ -3,11 +3,13 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <random>
 #include <sstream>
 
 #include "softhd/control/scene_target.hpp"
 #include "softhd/error.hpp"
+#include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/samplers.hpp"
 
 namespace softhd::bench {
@@ -182,6 +184,12 @@ Run run_tracking(std::vector<std::pair<std::string, std::string>> params, Body& 
     ShapeObjective objective(*body.assembler, *body.space,
                              HausdorffTarget(target, settings.objective.hausdorff),
                              settings.objective);
+    // Two-level starts as `softhd optimise` uses them by default (docs/formulation.md §4.7).
+    std::optional<fe::Assembler> coarse;
+    if (fe::grid_levels(body.scene, fe::GridSequencingOptions{}) > 0) {
+      coarse.emplace(fe::coarsened(body.scene).make_assembler());
+      objective.use_coarse_level(*coarse);
+    }
     const auto n = body.space->size();
     const Eigen::VectorXd lower = Eigen::VectorXd::Constant(n, body.scene.control_lower);
     const Eigen::VectorXd upper = Eigen::VectorXd::Constant(n, body.scene.control_upper);

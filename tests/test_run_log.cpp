@@ -48,10 +48,11 @@ struct Outcome {
 };
 
 // One process's worth of a run: a fresh objective (as after a restart), stopping with an
-// exception after `crash_after` iterations of this process (0: never).
+// exception after `crash_after` iterations of this process (0: never), saving its states
+// every `checkpoint_every` iterations.
 Outcome run(const std::string& checkpoint, bool resume, int max_iterations, int crash_after,
             const fe::Assembler& A, const fe::ControlSpace& space, const PointCloud& target,
-            double max_seconds = 0.0) {
+            double max_seconds = 0.0, int checkpoint_every = 1) {
   ShapeObjectiveOptions o;
   o.hausdorff.threads = 1;
   ShapeObjective J(A, space, HausdorffTarget(target, o.hausdorff), o);
@@ -62,6 +63,7 @@ Outcome run(const std::string& checkpoint, bool resume, int max_iterations, int 
   to.optimizer.move_limit = 0.1;
   to.optimizer.max_seconds = max_seconds;
   to.checkpoint = checkpoint;
+  to.checkpoint_every = checkpoint_every;
   to.resume = resume;
   to.fingerprint["scene"] = "beam";
   int fresh = 0;
@@ -128,6 +130,25 @@ TEST_F(ResumeIsTheSameRun, AfterSimulatedCrashes) {
   ASSERT_FALSE(r.interrupted);
   EXPECT_GT(r.summary.replayed_evaluations, 0);
   expect_same_run(reference.summary, r.summary);
+}
+
+// States saved every 3 iterations: a crash after 5 iterations keeps the log up to the
+// third, and the resumed run makes the fourth and fifth again, as the uninterrupted run did
+// (whose solver was renewed at the save, as the resumed one's is).
+TEST_F(ResumeIsTheSameRun, WhenStatesAreSavedEveryFewIterations) {
+  const std::string ref_log = temp_path("ref3.bin"), log = temp_path("every3.bin");
+  const Outcome reference = run(ref_log, false, 9, 0, A, space, target, 0.0, 3);
+  ASSERT_GE(reference.summary.iterations, 7) << reference.summary.termination;
+  ASSERT_TRUE(run(log, false, 9, 5, A, space, target, 0.0, 3).interrupted);
+  const RunLog saved = read_run_log(log);
+  EXPECT_EQ(saved.snapshot.iterations, 3);
+  const Outcome r = run(log, true, 9, 0, A, space, target, 0.0, 3);
+  ASSERT_FALSE(r.interrupted);
+  EXPECT_EQ(r.summary.replayed_evaluations, saved.snapshot.evaluations);
+  expect_same_run(reference.summary, r.summary);
+  // Another interval is another run: refused.
+  expect_error<InvalidArgument>([&] { run(log, true, 9, 0, A, space, target, 0.0, 2); },
+                                "checkpoint differs");
 }
 
 TEST_F(ResumeIsTheSameRun, IterationLimitIsATotalAndAFinishedRunStaysFinished) {

@@ -6,8 +6,10 @@
 
 #include "hausdorff_reference.hpp"
 #include "softhd/control/shape_objective.hpp"
+#include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/materials.hpp"
 #include "softhd/fe/mesh.hpp"
+#include "softhd/fe/scene.hpp"
 
 namespace softhd::test {
 namespace {
@@ -113,6 +115,35 @@ TEST(ShapeObjective, FailedStateSolveIsReportedNotThrown) {
   const ShapeEvaluation e = J.evaluate(Eigen::VectorXd::Constant(space.size(), 50.0), true);
   EXPECT_FALSE(e.ok);
   EXPECT_FALSE(e.failure.empty());
+}
+
+// Two-level starts change the path, never the state: a large step from rest lands on the
+// state (and J) of the plain warm start, with fewer fine Newton iterations.
+TEST(ShapeObjective, TwoLevelStartsReachTheSameStateWithFewerFineIterations) {
+  fe::Scene scene = fe::load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/bending.json");
+  scene.cells << 10, 1, 2;  // coarse level 5 x 1 x 1
+  const fe::Assembler A = scene.make_assembler();
+  const fe::Assembler coarse = fe::coarsened(scene).make_assembler();
+  const fe::ControlSpace space(A.mesh(), A.geometry(), scene.control_kind);
+  const Eigen::MatrixXd P = space.positions(A.mesh());
+  const Eigen::VectorXd m = -2.5e4 * (1.0 + P.col(2).array() / 0.1).matrix();  // ~half a turn
+  PointCloud Y = random_cloud(50, 3, 4, 0.0, 1.0);
+  ShapeObjectiveOptions o;
+  o.newton.relative_tolerance = 1e-12;
+  o.coarse_correction_iterations = 0;  // always take the coarse-corrected start
+  ShapeObjective plain(A, space, HausdorffTarget(Y), o);
+  ShapeObjective two_level(A, space, HausdorffTarget(Y), o);
+  two_level.use_coarse_level(coarse);
+  EXPECT_EQ(plain.coarse_level(), nullptr);
+  EXPECT_EQ(two_level.coarse_level(), &coarse);
+  const ShapeEvaluation a = plain.evaluate(m, true), b = two_level.evaluate(m, true);
+  ASSERT_TRUE(a.ok && b.ok) << a.failure << b.failure;
+  const Eigen::VectorXd& ua = plain.last_state().u;
+  EXPECT_LT((two_level.last_state().u - ua).lpNorm<Eigen::Infinity>(),
+            1e-8 * ua.lpNorm<Eigen::Infinity>());
+  EXPECT_NEAR(b.J, a.J, 1e-10 * a.J);
+  EXPECT_LT((b.gradient - a.gradient).norm(), 1e-6 * a.gradient.norm());
+  EXPECT_LT(b.newton_iterations, a.newton_iterations);
 }
 
 }  // namespace

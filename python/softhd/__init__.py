@@ -124,9 +124,10 @@ def write_cloud(path, points, volumes=None):
 def optimise(scene, target=None, *, max_iter=200, max_seconds=0.0, rel_tol=1e-6, algorithm="mma",
              move_limit=0.1, particles="nodes", volumes="reference", alpha=4.0, beta=4.0,
              gamma=2.0, eps=1e-3, method="exact", tol=1e-6, tikhonov_mass=0.0,
-             tikhonov_grad=0.0, callback=None, threads=0):
+             tikhonov_grad=0.0, coarse_level="auto", callback=None, threads=0):
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
-    target (``softhd optimise``; defaults as there). Returns an :class:`OptimiseResult`.
+    target (``softhd optimise``; defaults as there, e.g. coarse_level "auto": two-level starts
+    on the mesh with half the cells, or "off"). Returns an :class:`OptimiseResult`.
 
     target: None (the scene's own "target"), a cloud file path, an (M, d) array, or a tuple
     (points, volumes). callback(record): called after every accepted iteration with an
@@ -146,4 +147,4 @@ def optimise(scene, target=None, *, max_iter=200, max_seconds=0.0, rel_tol=1e-6,
                           particles=particles, volumes_kind=volumes, alpha=alpha, beta=beta,
                           gamma=gamma, eps=eps, method=method, tol=tol,
                           tikhonov_mass=tikhonov_mass, tikhonov_grad=tikhonov_grad,
-                          callback=callback, threads=threads)
+                          coarse_level=coarse_level, callback=callback, threads=threads)

@@ -46,26 +46,21 @@ std::vector<Eigen::VectorXd> probe_points(const PyScene& s, const Eigen::MatrixX
 PyForward forward(const PyScene& s, const py::object& control, const Eigen::MatrixXd& probes,
                   int coarse_levels, int threads) {
   // control: None (the scene's initial value), a number (uniform) or one value per control.
-  const bool uniform =
-      control.is_none() || py::isinstance<py::float_>(control) || py::isinstance<py::int_>(control);
-  const double value = control.is_none() ? s.scene.control_initial
-                       : uniform         ? control.cast<double>()
-                                         : 0.0;
-  Eigen::VectorXd m = uniform ? Eigen::VectorXd() : control.cast<Eigen::VectorXd>();
-  if (!uniform && coarse_levels > 0)
-    throw InvalidArgument("coarse_levels needs a uniform control (None or a number)");
+  Eigen::VectorXd m;
+  if (control.is_none() || py::isinstance<py::float_>(control) || py::isinstance<py::int_>(control))
+    m = Eigen::VectorXd::Constant(
+        s.control.size(), control.is_none() ? s.scene.control_initial : control.cast<double>());
+  else
+    m = control.cast<Eigen::VectorXd>();
   const std::vector<Eigen::VectorXd> points = probe_points(s, probes);
-  const fe::LevelControl control_of = [&](const fe::Scene&, const fe::ControlSpace& space) {
-    return uniform ? Eigen::VectorXd::Constant(space.size(), value) : m;
-  };
   fe::ForwardOptions options;
-  options.coarse_levels = coarse_levels;
+  options.grid.levels = coarse_levels;
   ThreadScope scope(threads);
   std::optional<fe::ForwardResult> r;
   Eigen::MatrixXd u_probes(points.size(), s.scene.dim());
   {
     py::gil_scoped_release release;
-    r.emplace(fe::solve_forward(s.scene, s.assembler, s.control, control_of, options));
+    r.emplace(fe::solve_forward(s.scene, s.assembler, s.control, m, options));
     for (size_t p = 0; p < points.size(); ++p)
       u_probes.row(static_cast<Eigen::Index>(p)) =
           fe::probe_displacement(s.assembler, r->state.u, points[p]).transpose();
@@ -149,12 +144,13 @@ void bind_fe(py::module_& m) {
           py::arg("control"),
           "The control interpolated at every node (vertex controls; zeros for element ones).")
       .def("forward", &forward, py::arg("control") = py::none(), py::kw_only(),
-           py::arg("probes") = Eigen::MatrixXd(0, 0), py::arg("coarse_levels") = 0,
+           py::arg("probes") = Eigen::MatrixXd(0, 0), py::arg("coarse_levels") = -1,
            py::arg("threads") = 0,
            "The equilibrium for the control m: None (the scene's control.initial), a number "
            "(uniform) or an array of num_controls values within the scene's bounds. probes: "
-           "(P, dim) reference points where u is interpolated. coarse_levels: grid sequencing "
-           "(uniform controls only). Same solve as `softhd forward`. A Newton failure is "
+           "(P, dim) reference points where u is interpolated. coarse_levels: grid sequencing, "
+           "-1 automatic (as softhd forward), 0 none, K levels. Same solve as `softhd forward`. A "
+           "Newton failure is "
            "reported in the result (converged, status, report), not raised.");
 }
 

@@ -9,6 +9,7 @@
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/shape_tracking.hpp"
 #include "softhd/error.hpp"
+#include "softhd/fe/grid_sequencing.hpp"
 
 namespace softhd::python {
 
@@ -32,6 +33,7 @@ struct OptimiseArgs {
   double max_seconds = 0.0, rel_tol = 1e-6, move_limit = 0.1;
   std::string algorithm = "mma", particles = "nodes", volumes = "reference";
   double tikhonov_mass = 0.0, tikhonov_grad = 0.0;
+  std::string coarse_level = "auto";  // two-level starts, as softhd optimise --coarse-level
 };
 
 SceneTarget make_target(const PyScene& s, const std::optional<Array>& points,
@@ -52,6 +54,9 @@ PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
                     const OptimiseArgs& a, const HausdorffOptions& hausdorff,
                     const py::object& callback, int threads) {
   if (a.max_iter < 1) throw InvalidArgument("max_iter must be >= 1");
+  if (a.coarse_level != "auto" && a.coarse_level != "off")
+    throw InvalidArgument("coarse_level must be \"auto\" or \"off\", got \"" + a.coarse_level +
+                          "\"");
   ShapeTrackingOptions to;
   BoundedOptimizerOptions& opt = to.optimizer;
   opt.max_iterations = a.max_iter;
@@ -82,6 +87,11 @@ PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
   py::gil_scoped_release release;
   const SceneTarget target = make_target(s, points, volumes, file);
   ShapeObjective objective(s.assembler, s.control, HausdorffTarget(target.cloud, so.hausdorff), so);
+  std::optional<fe::Assembler> coarse;  // as softhd optimise: a coarser mesh if there is one
+  if (a.coarse_level == "auto" && fe::grid_levels(s.scene, fe::GridSequencingOptions{}) > 0) {
+    coarse.emplace(fe::coarsened(s.scene).make_assembler());
+    objective.use_coarse_level(*coarse);
+  }
   const Eigen::Index n = s.control.size();
   const Eigen::VectorXd m0 = Eigen::VectorXd::Constant(n, s.scene.control_initial);
   const Eigen::VectorXd lower = Eigen::VectorXd::Constant(n, s.scene.control_lower);
@@ -173,9 +183,9 @@ void bind_optimise(py::module_& m) {
          const std::string& algorithm, double move_limit, const std::string& particles,
          const std::string& volumes_kind, double alpha, double beta, double gamma, double eps,
          const std::string& method, double tol, double tikhonov_mass, double tikhonov_grad,
-         const py::object& callback, int threads) {
-        OptimiseArgs a{max_iter,  max_seconds,  rel_tol,       move_limit,   algorithm,
-                       particles, volumes_kind, tikhonov_mass, tikhonov_grad};
+         const std::string& coarse_level, const py::object& callback, int threads) {
+        OptimiseArgs a{max_iter,  max_seconds,  rel_tol,       move_limit,    algorithm,
+                       particles, volumes_kind, tikhonov_mass, tikhonov_grad, coarse_level};
         HausdorffOptions h;
         h.params = {alpha, beta, gamma, eps};
         h.method = method_from_string(method);
@@ -188,7 +198,7 @@ void bind_optimise(py::module_& m) {
       py::arg("rel_tol"), py::arg("algorithm"), py::arg("move_limit"), py::arg("particles"),
       py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("eps"),
       py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"), py::arg("tikhonov_grad"),
-      py::arg("callback"), py::arg("threads"));
+      py::arg("coarse_level"), py::arg("callback"), py::arg("threads"));
 }
 
 }  // namespace softhd::python

@@ -86,10 +86,10 @@ def test_forward_errors(scene_file):
         scene.forward(np.zeros(scene.num_controls + 1))
     with pytest.raises(ValueError, match="not a point of the 2D body"):
         scene.forward(0.0, probes=[[5.0, 0.1]])
-    with pytest.raises(ValueError, match="cannot be halved"):
-        scene.forward(-1.0, coarse_levels=2)
-    with pytest.raises(ValueError, match="uniform"):
-        scene.forward(np.zeros(scene.num_controls), coarse_levels=1)
+    with pytest.raises(ValueError, match="can be halved"):  # 4x2 cells: 2x1, 1x1, then none
+        scene.forward(-1.0, coarse_levels=3)
+    with pytest.raises(ValueError, match="levels must be >= -1"):
+        scene.forward(-1.0, coarse_levels=-2)
     with pytest.raises(ValueError, match="threads"):
         scene.forward(0.0, threads=-2)
 
@@ -103,6 +103,8 @@ def test_optimise_errors(scene_file):
         softhd.optimise(scene, target, algorithm="nelder-mead")
     with pytest.raises(ValueError, match="max_iter"):
         softhd.optimise(scene, target, max_iter=0)
+    with pytest.raises(ValueError, match="coarse_level"):
+        softhd.optimise(scene, target, coarse_level="on")
     with pytest.raises(ValueError, match="3D but the scene's body is 2D"):
         softhd.optimise(scene, np.zeros((4, 3)))
     with pytest.raises(OSError, match="nothing.ply"):

@@ -35,8 +35,15 @@ def test_contraction_shortens_the_fibers(scene_file):
     # The same control given per node, and the same state reached by grid sequencing.
     g = scene.forward(np.full(scene.num_controls, -2e4), probes=[[2.0, 0.2]])
     np.testing.assert_array_equal(g.displacements, f.displacements)
-    c = scene.forward(-2e4, coarse_levels=1, probes=[[2.0, 0.2]])
-    np.testing.assert_allclose(c.probes, f.probes, rtol=1e-7, atol=1e-12)
+    for levels in (1, 2):
+        c = scene.forward(-2e4, coarse_levels=levels, probes=[[2.0, 0.2]])
+        assert c.converged
+        np.testing.assert_allclose(c.probes, f.probes, rtol=1e-7, atol=1e-12)
+    # A non-uniform control through the grid sequence reaches the same equilibrium too.
+    m = np.linspace(-3e4, 0.0, scene.num_controls)
+    np.testing.assert_allclose(scene.forward(m, coarse_levels=1).displacements,
+                               scene.forward(m, coarse_levels=0).displacements, rtol=1e-6,
+                               atol=1e-12)
 
 
 @pytest.mark.parametrize("scene_dict, probe", [(SMALL_2D, [2.0, 0.3]),

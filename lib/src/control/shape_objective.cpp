@@ -10,6 +10,7 @@
 #include "softhd/fe/adjoint.hpp"
 #include "softhd/fe/cloud.hpp"
 #include "softhd/fe/geometry.hpp"
+#include "softhd/fe/grid_sequencing.hpp"
 
 namespace softhd {
 
@@ -65,6 +66,34 @@ struct ShapeObjective::Impl {
   int dim = 3;
   Eigen::Array<bool, Eigen::Dynamic, 1> differentiate;
   std::deque<WarmStart> cache;  // most recent first
+  // Two-level starts (use_coarse_level): the coarse body, its solver and its quadrature
+  // points' reference positions.
+  const fe::Assembler* coarse = nullptr;
+  std::optional<fe::NewtonSolver> coarse_newton;
+  bool coarse_active = true;  // false after a small step, until a hard fine solve
+  Eigen::MatrixXd coarse_points;
+
+  Eigen::MatrixXd coarse_control(const Eigen::VectorXd& m) const {
+    const Eigen::VectorXd v = fe::control_at(assembler.mesh(), control.kind(), m, coarse_points);
+    return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+        v.data(), coarse->mesh().num_elements(), coarse->geometry().points_per_element());
+  }
+  /// The fine start u + P(u_c(m) − u_c(m_old)): the coarse equilibria at the warm start's
+  /// control m_old (from the restricted warm state) and at m, their difference prolongated.
+  /// Returns false if a coarse solve fails; `iterations` counts the coarse iterations to m.
+  bool coarse_corrected(const Eigen::VectorXd& m, const WarmStart& warm, fe::State* start,
+                        int* iterations) {
+    fe::State c{fe::prolongate(assembler.mesh(), warm.state.u, coarse->mesh()),
+                coarse_control(warm.m.size() ? warm.m : Eigen::VectorXd::Zero(m.size()))};
+    if (!coarse_newton->solve(c.m_qp, &c).converged()) return false;
+    const Eigen::VectorXd u_old = c.u;
+    const fe::NewtonSummary to_m = coarse_newton->solve(coarse_control(m), &c);
+    *iterations = to_m.newton_iterations;
+    if (!to_m.converged()) return false;
+    start->u = warm.state.u + fe::prolongate(coarse->mesh(), c.u - u_old, assembler.mesh());
+    start->m_qp = control.to_quadrature(m);
+    return true;
+  }
 
   fe::CloudPoints cloud_points() const {
     return options.particles == Particles::nodes ? fe::CloudPoints::kNodes
@@ -84,7 +113,7 @@ struct ShapeObjective::Impl {
   }
 
   /// The cached state whose control is nearest to m (the rest state counts as m = 0).
-  const fe::State& nearest_state(const Eigen::VectorXd& m) const {
+  const WarmStart& nearest(const Eigen::VectorXd& m) const {
     size_t best = 0;
     double best_d = INFINITY;
     for (size_t k = 0; k < cache.size(); ++k) {
@@ -94,7 +123,40 @@ struct ShapeObjective::Impl {
         best = k;
       }
     }
-    return cache[best].state;
+    return cache[best];
+  }
+  const fe::State& nearest_state(const Eigen::VectorXd& m) const { return nearest(m).state; }
+
+  /// The state at m (docs/formulation.md §4.7) from the warm start nearest to m, or after
+  /// a large step from the coarse-corrected start. Adds the fine iterations to `ev`.
+  fe::NewtonSummary solve_state(const Eigen::VectorXd& m, fe::State* state, ShapeEvaluation* ev) {
+    const WarmStart& warm = nearest(m);
+    *state = warm.state;
+    const Eigen::MatrixXd m_qp = control.to_quadrature(m);
+    const auto counted = [ev](const fe::NewtonSummary& s) {
+      ev->newton_iterations += s.newton_iterations;
+      ev->factorizations += s.factorizations;
+      return s;
+    };
+    if (coarse && coarse_active) {
+      int iterations = 0;
+      fe::State start;
+      const bool ok = coarse_corrected(m, warm, &start, &iterations);
+      if (ok && iterations >= options.coarse_correction_iterations) {
+        const fe::NewtonSummary s = counted(newton->solve(m_qp, &start));
+        if (s.converged()) {
+          *state = start;
+          return s;
+        }
+      } else if (ok && iterations > 0) {
+        coarse_active = false;  // small steps now: the coarse solves would only cost
+      }
+    }
+    const fe::NewtonSummary s = counted(newton->solve(m_qp, state));
+    // A hard fine solve: large steps again, so the coarse level is tried again.
+    if (coarse && s.newton_iterations >= 2 * options.coarse_correction_iterations)
+      coarse_active = true;
+    return s;
   }
 };
 
@@ -105,6 +167,8 @@ void ShapeObjectiveOptions::validate() const {
   if (!(tikhonov_gradient >= 0.0))
     throw InvalidArgument("tikhonov_gradient (Tikhonov weight eps_m) must be >= 0");
   if (warm_start_states < 1) throw InvalidArgument("warm_start_states must be >= 1");
+  if (coarse_correction_iterations < 0)
+    throw InvalidArgument("coarse_correction_iterations must be >= 0");
   std::string error;
   if (!newton.IsValid(&error)) throw InvalidArgument("newton: " + error);
 }
@@ -143,8 +207,19 @@ const fe::Assembler& ShapeObjective::assembler() const { return impl_->assembler
 
 const std::deque<WarmStart>& ShapeObjective::warm_starts() const { return impl_->cache; }
 
+void ShapeObjective::use_coarse_level(const fe::Assembler& coarse) {
+  Impl& d = *impl_;
+  d.coarse = &coarse;
+  d.coarse_newton.emplace(coarse, d.options.newton);
+  d.coarse_points = fe::quadrature_positions(coarse.mesh(), coarse.geometry());
+}
+
+const fe::Assembler* ShapeObjective::coarse_level() const { return impl_->coarse; }
+
 void ShapeObjective::reset_solver() {
   impl_->newton.emplace(impl_->assembler, impl_->options.newton);
+  if (impl_->coarse) impl_->coarse_newton.emplace(*impl_->coarse, impl_->options.newton);
+  impl_->coarse_active = true;
 }
 
 void ShapeObjective::restore_warm_starts(const std::vector<WarmStart>& states) {
@@ -178,10 +253,8 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
   ShapeEvaluation ev;
   // State: warm start from the cached state with the nearest control.
   auto t0 = std::chrono::steady_clock::now();
-  fe::State state = d.nearest_state(m);
-  const fe::NewtonSummary ns = d.newton->solve(d.control.to_quadrature(m), &state);
-  ev.newton_iterations = ns.newton_iterations;
-  ev.factorizations = ns.factorizations;
+  fe::State state;
+  const fe::NewtonSummary ns = d.solve_state(m, &state, &ev);
   ev.seconds_state = seconds_since(t0);
   if (!ns.converged()) {
     ev.failure = ns.BriefReport();

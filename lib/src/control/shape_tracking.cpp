@@ -53,7 +53,9 @@ class Recorder {
       log_ = read_run_log(options.checkpoint);
       check_fingerprint(log_.fingerprint, fingerprint, options.checkpoint);
     }
-    writer_ = std::make_unique<RunLogWriter>(options.checkpoint, fingerprint, &log_);
+    // A fresh run gets a new run id and removes an earlier run's states file.
+    writer_ = std::make_unique<RunLogWriter>(options.checkpoint, fingerprint,
+                                             options.resume ? &log_ : nullptr);
   }
 
   bool replaying() const { return next_ < log_.evaluations.size(); }
@@ -204,6 +206,11 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
                    " tikhonov " + exact_text(so.tikhonov_mass) + " " +
                    exact_text(so.tikhonov_gradient) + " warm starts " +
                    std::to_string(so.warm_start_states);
+  if (const fe::Assembler* coarse = objective.coarse_level()) {
+    f["objective"] += " coarse level " + hash_of(coarse->mesh().nodes) + " from " +
+                      std::to_string(so.coarse_correction_iterations) + " iterations";
+  }
+  f["checkpoint"] = "every " + std::to_string(options.checkpoint_every) + " iterations";
   const BoundedOptimizerOptions& o = options.optimizer;
   f["optimiser"] = to_string(o.algorithm) + " rel-tol " + exact_text(o.relative_change) +
                    " target " + exact_text(o.target_value) + " penalty " +
@@ -215,6 +222,7 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
 void ShapeTrackingOptions::validate() const {
   optimizer.validate();
   if (!(self_floor_max_pairs >= 0.0)) throw InvalidArgument("self_floor_max_pairs must be >= 0");
+  if (checkpoint_every < 1) throw InvalidArgument("checkpoint_every must be >= 1");
   if (resume && checkpoint.empty())
     throw InvalidArgument("resume needs a checkpoint file (the checkpoint field is empty)");
 }
@@ -293,7 +301,8 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
       } catch (const StopRequest&) {
         stop = true;  // minimise() ends the run after this iteration
       }
-      recorder.snapshot(rec.iteration, best_state);
+      if (rec.iteration % options.checkpoint_every == 0)
+        recorder.snapshot(rec.iteration, best_state);
     } catch (...) {
       error = std::current_exception();
     }

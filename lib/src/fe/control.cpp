@@ -4,6 +4,7 @@
 
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
+#include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/shape.hpp"
 
 namespace softhd::fe {
@@ -123,24 +124,8 @@ double ControlSpace::regularisation(const Eigen::VectorXd& m, double Mreg, doubl
 
 Eigen::VectorXd control_at_nodes(const Mesh& mesh, const ControlSpace& space,
                                  const Eigen::VectorXd& m) {
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(mesh.num_nodes());
-  if (space.kind() != ControlKind::kVertex) return out;
-  for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n) {
-    Eigen::VectorXd xi;
-    const int e = locate(mesh, mesh.nodes.row(n).transpose(), &xi);
-    if (e < 0) continue;
-    double value = 0.0;
-    for (int c = 0; c < mesh.element_vertices.cols(); ++c) {
-      double w = 1.0;
-      for (int k = 0; k < mesh.dim; ++k) {
-        const int bit = (c >> k) & 1;  // tensor-product corner order
-        w *= bit ? 0.5 * (1.0 + xi[k]) : 0.5 * (1.0 - xi[k]);
-      }
-      value += w * m[mesh.element_vertices(e, c)];
-    }
-    out[n] = value;
-  }
-  return out;
+  if (space.kind() != ControlKind::kVertex) return Eigen::VectorXd::Zero(mesh.num_nodes());
+  return control_at(mesh, ControlKind::kVertex, m, mesh.nodes);
 }
 
 }  // namespace softhd::fe

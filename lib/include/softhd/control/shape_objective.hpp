@@ -46,6 +46,11 @@ struct ShapeObjectiveOptions {
   double tikhonov_gradient = 0.0;                        ///< ε_m ≥ 0 (paper: 0)
   fe::NewtonOptions newton;                              ///< state solver settings
   int warm_start_states = 8;  ///< converged states kept for warm starts (≥ 1)
+  /// With a coarse level (ShapeObjective::use_coarse_level): the coarse-corrected start is
+  /// used when the coarse solve to the new control needs at least this many Newton
+  /// iterations (a large step); smaller steps keep the warm start and its path predictor,
+  /// which is better for them (bending: 3 fine iterations instead of 5).
+  int coarse_correction_iterations = 6;
 
   /// Throws InvalidArgument naming the first invalid field (the distance's parameters and the
   /// Newton options included).
@@ -109,6 +114,13 @@ class ShapeObjective {
   /// is bitwise the one an uninterrupted run would make. Throws InvalidArgument if the
   /// list is empty, longer than warm_start_states, or a size does not fit the problem.
   void restore_warm_starts(const std::vector<WarmStart>& states);
+  /// Two-level starts (docs/formulation.md §4.7): before each state solve, the coarse body
+  /// `coarse` (the same body on a coarser mesh, e.g. fe::coarsened(scene)) is solved at the
+  /// warm start's control and at m, and a large step starts the fine solve from the warm
+  /// state plus the prolongated coarse change. `coarse` must outlive the objective.
+  void use_coarse_level(const fe::Assembler& coarse);
+  /// The coarse body of use_coarse_level, or null.
+  const fe::Assembler* coarse_level() const;
   /// Replaces the state solver by a new one, forgetting what it keeps between solves (its
   /// factorisations and path tangent): later evaluations then depend on earlier ones only
   /// through the warm starts, which a checkpoint can save. Costs a factorisation at the

@@ -50,6 +50,11 @@ struct ShapeTrackingOptions {
   double self_floor_max_pairs = 1e10;
   /// Checkpoint log (run_log.hpp) written as the run goes; empty: none.
   std::string checkpoint;
+  /// The warm-start states are saved every this many iterations (and at the end); a
+  /// resume continues from the last save, recomputing the evaluations after it. Each save
+  /// renews the state solver (its kept factorisation is not saved), which costs a
+  /// factorisation, hence not every iteration.
+  int checkpoint_every = 5;
   /// Continue the run recorded in `checkpoint`: the optimiser starts again and its
   /// evaluations are served from the log (bitwise, x checked) until it runs out, so the
   /// resumed run is the uninterrupted one, and the stopping limits (iterations,

@@ -1,0 +1,172 @@
+#include "softhd/fe/grid_sequencing.hpp"
+
+#include <sstream>
+
+#include "softhd/error.hpp"
+#include "softhd/fe/shape.hpp"
+
+namespace softhd::fe {
+
+void GridSequencingOptions::validate() const {
+  if (levels < -1) throw InvalidArgument("grid sequencing: levels must be >= -1");
+  if (min_elements < 1) throw InvalidArgument("grid sequencing: min_elements must be >= 1");
+}
+
+std::string GridSequencingReport::BriefReport() const {
+  std::ostringstream os;
+  for (const GridLevelReport& level : levels)
+    os << "coarse level (cells " << level.cells.transpose() << "): " << level.newton.BriefReport()
+       << "\n";
+  if (fell_back_to_rest) os << "coarse level did not converge: the fine solve starts from rest\n";
+  return os.str();
+}
+
+Scene coarsened(const Scene& scene) {
+  Scene coarse = scene;
+  bool halved = false;
+  for (Eigen::Index k = 0; k < coarse.cells.size(); ++k) {
+    if (coarse.cells[k] % 2 == 0) {
+      coarse.cells[k] /= 2;
+      halved = true;
+    }
+  }
+  if (!halved) {
+    std::ostringstream os;
+    os << "grid sequencing: no cell count of (" << scene.cells.transpose() << ") can be halved";
+    throw InvalidArgument(os.str());
+  }
+  return coarse;
+}
+
+int grid_levels(const Scene& scene, const GridSequencingOptions& options) {
+  options.validate();
+  if (options.levels >= 0) {
+    Scene s = scene;
+    for (int l = 0; l < options.levels; ++l) s = coarsened(s);  // throws if it cannot
+    return options.levels;
+  }
+  int levels = 0;
+  Scene s = scene;
+  while (true) {
+    bool even = false;
+    for (Eigen::Index k = 0; k < s.cells.size(); ++k) even = even || s.cells[k] % 2 == 0;
+    if (!even) return levels;
+    const Scene c = coarsened(s);
+    if (c.cells.prod() < options.min_elements) return levels;
+    s = c;
+    ++levels;
+  }
+}
+
+Eigen::VectorXd control_at(const Mesh& mesh, ControlKind kind, const Eigen::VectorXd& m,
+                           const Eigen::MatrixXd& X) {
+  Eigen::VectorXd values(X.rows()), xi, N;
+  Eigen::MatrixXd dN;
+  for (Eigen::Index p = 0; p < X.rows(); ++p) {
+    const int e = locate(mesh, X.row(p).transpose(), &xi);
+    if (e < 0) {
+      std::ostringstream os;
+      os << "control_at: the point (" << X.row(p) << ") is outside the body";
+      throw InvalidArgument(os.str());
+    }
+    if (kind == ControlKind::kElement) {
+      values[p] = m[e];
+      continue;
+    }
+    // m(X) = Σ_a M_a(ξ) m_a over the element's vertices (Q1 shape functions)
+    lagrange_shape(mesh.dim, 1, xi, &N, &dN);
+    values[p] = 0.0;
+    for (int a = 0; a < N.size(); ++a) values[p] += N[a] * m[mesh.element_vertices(e, a)];
+  }
+  return values;
+}
+
+Eigen::MatrixXd quadrature_positions(const Mesh& mesh, const ReferenceGeometry& geometry) {
+  const int nq = geometry.points_per_element(), nen = geometry.nodes_per_element();
+  const Eigen::MatrixXd& N = geometry.shape_values();  // nq by nen
+  Eigen::MatrixXd X(mesh.num_elements() * nq, mesh.dim), Xe(nen, mesh.dim);
+  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e) {
+    for (int a = 0; a < nen; ++a) Xe.row(a) = mesh.nodes.row(mesh.elements(e, a));
+    X.middleRows(e * nq, nq) = N * Xe;  // X_q = Σ_a N_a(ξ_q) X_a
+  }
+  return X;
+}
+
+Eigen::VectorXd prolongate(const Mesh& coarse, const Eigen::VectorXd& u_coarse, const Mesh& fine) {
+  if (coarse.dim != fine.dim || u_coarse.size() != coarse.num_nodes() * coarse.dim)
+    throw InvalidArgument("prolongate: the coarse field does not match its mesh");
+  const int d = fine.dim;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(fine.num_nodes() * d), xi, N;
+  Eigen::MatrixXd dN;
+  for (Eigen::Index n = 0; n < fine.num_nodes(); ++n) {
+    const int e = locate(coarse, fine.nodes.row(n).transpose(), &xi);
+    if (e < 0) throw InvalidArgument("prolongate: fine node " + std::to_string(n) + " is outside");
+    lagrange_shape(d, coarse.order, xi, &N, &dN);
+    // u(X_n) = Σ_a N_a(ξ) u_a
+    for (int a = 0; a < N.size(); ++a)
+      u.segment(n * d, d) += N[a] * u_coarse.segment(coarse.elements(e, a) * d, d);
+  }
+  return u;
+}
+
+namespace {
+
+// Quadrature values (E by nq) on `assembler`'s mesh of the fine control field.
+Eigen::MatrixXd control_on(const Assembler& assembler, const Mesh& fine, ControlKind kind,
+                           const Eigen::VectorXd& m) {
+  const Eigen::VectorXd v =
+      control_at(fine, kind, m, quadrature_positions(assembler.mesh(), assembler.geometry()));
+  const int nq = assembler.geometry().points_per_element();
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      v.data(), assembler.mesh().num_elements(), nq);
+}
+
+// The converged state on `scene` (levels − 1 coarser levels first) under the fine field.
+bool solve_level(const Scene& scene, const Mesh& fine, ControlKind kind, const Eigen::VectorXd& m,
+                 int levels, const NewtonOptions& newton, GridSequencingReport* report, Mesh* mesh,
+                 State* state) {
+  const Assembler assembler = scene.make_assembler();
+  const Eigen::MatrixXd m_qp = control_on(assembler, fine, kind, m);
+  *state = rest_state(assembler);
+  if (levels > 0) {
+    Mesh coarse_mesh;
+    State coarse;
+    if (!solve_level(coarsened(scene), fine, kind, m, levels - 1, newton, report, &coarse_mesh,
+                     &coarse))
+      return false;
+    state->u = prolongate(coarse_mesh, coarse.u, assembler.mesh());
+  }
+  NewtonSolver solver(assembler, newton);
+  const NewtonSummary summary = solver.solve(m_qp, state);
+  report->levels.push_back({scene.cells, summary});
+  *mesh = assembler.mesh();
+  return summary.converged();
+}
+
+}  // namespace
+
+State grid_sequenced_start(const Scene& scene, const Assembler& fine, const Eigen::VectorXd& m,
+                           const NewtonOptions& newton, const GridSequencingOptions& options,
+                           GridSequencingReport* report) {
+  GridSequencingReport local;
+  if (!report) report = &local;
+  *report = GridSequencingReport{};
+  const int levels = grid_levels(scene, options);
+  const ControlSpace control(fine.mesh(), fine.geometry(), scene.control_kind);
+  if (m.size() != control.size())
+    throw InvalidArgument("grid sequencing: m must have one value per control");
+  State state = rest_state(fine);
+  state.m_qp = control.to_quadrature(m);  // the fine solve starts at full load
+  if (levels == 0) return rest_state(fine);
+  Mesh coarse_mesh;
+  State coarse;
+  if (!solve_level(coarsened(scene), fine.mesh(), scene.control_kind, m, levels - 1, newton, report,
+                   &coarse_mesh, &coarse)) {
+    report->fell_back_to_rest = true;
+    return rest_state(fine);
+  }
+  state.u = prolongate(coarse_mesh, coarse.u, fine.mesh());
+  return state;
+}
+
+}  // namespace softhd::fe
