@@ -91,15 +91,18 @@ enum class Stop { none, iterations, relative_change, target, time, requested };
 // (J changing in the 4th digit for 3-5 iterations after every round's restart). Scaling f
 // so that the largest gradient component in z is kMmaGradient makes ρ = 1 small against
 // the variables that matter from the first step; f / |f(x0)| is kept if it is larger.
+// The target is adapted per round (Driver::adapt_mma_gradient): a round whose first step is
+// rejected (late in a run, where |g| is small and such a step overshoots) makes the next
+// rounds 10x more conservative; a first step accepted relaxes it 2x, up to kMmaGradient.
 constexpr double kMmaGradient = 100.0;
 
-double round_scale(const Eigen::VectorXd& gz, double report_scale,
+double round_scale(const Eigen::VectorXd& gz, double report_scale, double mma_gradient,
                    const BoundedOptimizerOptions& options) {
   if (options.algorithm != Algorithm::mma && options.algorithm != Algorithm::ccsaq)
     return report_scale;
   const double gmax = gz.size() ? gz.lpNorm<Eigen::Infinity>() : 0.0;
   if (!(gmax > 0.0) || !std::isfinite(gmax)) return report_scale;
-  return std::min(report_scale, gmax / kMmaGradient);
+  return std::min(report_scale, gmax / mma_gradient);
 }
 
 struct Driver {
@@ -126,6 +129,16 @@ struct Driver {
   Eigen::VectorXd z0, g0;
   double f0 = 0.0;
   bool first_pending = true;
+  double mma_gradient = kMmaGradient;  // see round_scale
+  int round_new_evaluations = 0;       // evaluations made in the current round
+  bool round_first_improved = false;   // the round's first new evaluation improved f
+
+  /// After a round: more conservative after a rejected first step, less after an accepted one.
+  void adapt_mma_gradient() {
+    if (round_new_evaluations == 0) return;
+    mma_gradient =
+        round_first_improved ? std::min(kMmaGradient, 2.0 * mma_gradient) : 0.1 * mma_gradient;
+  }
 
   double seconds() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -146,6 +159,7 @@ struct Driver {
       const Eigen::VectorXd x = scale.cwiseProduct(z);
       ok = objective(x, f, want_grad ? &gx : nullptr) && std::isfinite(f) &&
            (!want_grad || (gx.size() == z.size() && gx.allFinite()));
+      if (round_new_evaluations++ == 0) round_first_improved = ok && f < summary.final_value;
     }
     if (!ok) {
       ++summary.failed_evaluations;
@@ -318,7 +332,8 @@ BoundedOptimizerSummary minimise(
       d.box_hi = hi;
     }
     d.recentre = false;
-    d.fscale = round_scale(d.scale.cwiseProduct(d.g0), d.report_scale, options);
+    d.fscale = round_scale(d.scale.cwiseProduct(d.g0), d.report_scale, d.mma_gradient, options);
+    d.round_new_evaluations = 0;
     nlopt::opt opt(nlopt_algorithm(options.algorithm), static_cast<unsigned>(n));
     opt.set_lower_bounds(std::vector<double>(lo.data(), lo.data() + n));
     opt.set_upper_bounds(std::vector<double>(hi.data(), hi.data() + n));
@@ -362,6 +377,7 @@ BoundedOptimizerSummary minimise(
       }
     }
     if (d.stop != Stop::none || delta <= 0.0) break;
+    d.adapt_mma_gradient();
     if (d.recentre) continue;  // progress up to the box's side: same move limit, new centre
     // Next round: keep the move limit after progress, halve it otherwise.
     if (!(d.summary.final_value < round_start)) delta *= 0.5;

@@ -70,7 +70,8 @@ struct ShapeObjective::Impl {
   // points' reference positions.
   const fe::Assembler* coarse = nullptr;
   std::optional<fe::NewtonSolver> coarse_newton;
-  bool coarse_active = true;  // false after a small step, until a hard fine solve
+  bool coarse_active = true;           // false after a small step, until a hard fine solve
+  std::deque<WarmStart> coarse_cache;  // coarse equilibria by control, most recent first
   Eigen::MatrixXd coarse_points;
 
   Eigen::MatrixXd coarse_control(const Eigen::VectorXd& m) const {
@@ -79,20 +80,37 @@ struct ShapeObjective::Impl {
         v.data(), coarse->mesh().num_elements(), coarse->geometry().points_per_element());
   }
   /// The fine start u + P(u_c(m) − u_c(m_old)): the coarse equilibria at the warm start's
-  /// control m_old (from the restricted warm state) and at m, their difference prolongated.
-  /// Returns false if a coarse solve fails; `iterations` counts the coarse iterations to m.
+  /// control m_old (kept from an earlier evaluation, else solved from the restricted warm
+  /// state) and at m, their difference prolongated. Returns false if a coarse solve fails;
+  /// `iterations` counts the coarse iterations to m.
   bool coarse_corrected(const Eigen::VectorXd& m, const WarmStart& warm, fe::State* start,
                         int* iterations) {
-    fe::State c{fe::prolongate(assembler.mesh(), warm.state.u, coarse->mesh()),
-                coarse_control(warm.m.size() ? warm.m : Eigen::VectorXd::Zero(m.size()))};
-    if (!coarse_newton->solve(c.m_qp, &c).converged()) return false;
+    const Eigen::VectorXd m_old = warm.m.size() ? warm.m : Eigen::VectorXd::Zero(m.size());
+    fe::State c;
+    if (!kept_coarse_state(m_old, &c)) {
+      c = {fe::prolongate(assembler.mesh(), warm.state.u, coarse->mesh()), coarse_control(m_old)};
+      if (!coarse_newton->solve(c.m_qp, &c).converged()) return false;
+    }
     const Eigen::VectorXd u_old = c.u;
     const fe::NewtonSummary to_m = coarse_newton->solve(coarse_control(m), &c);
     *iterations = to_m.newton_iterations;
     if (!to_m.converged()) return false;
+    coarse_cache.push_front({m, c});
+    while (static_cast<int>(coarse_cache.size()) > options.warm_start_states)
+      coarse_cache.pop_back();
     start->u = warm.state.u + fe::prolongate(coarse->mesh(), c.u - u_old, assembler.mesh());
     start->m_qp = control.to_quadrature(m);
     return true;
+  }
+  /// The coarse equilibrium kept for exactly the control m, if any.
+  bool kept_coarse_state(const Eigen::VectorXd& m, fe::State* state) const {
+    for (const WarmStart& w : coarse_cache) {
+      if (w.m.size() == m.size() && w.m == m) {
+        *state = w.state;
+        return true;
+      }
+    }
+    return false;
   }
 
   fe::CloudPoints cloud_points() const {
@@ -220,6 +238,7 @@ void ShapeObjective::reset_solver() {
   impl_->newton.emplace(impl_->assembler, impl_->options.newton);
   if (impl_->coarse) impl_->coarse_newton.emplace(*impl_->coarse, impl_->options.newton);
   impl_->coarse_active = true;
+  impl_->coarse_cache.clear();  // like the solver's, not in a checkpoint
 }
 
 void ShapeObjective::restore_warm_starts(const std::vector<WarmStart>& states) {

@@ -36,7 +36,7 @@ LinearSolverType parse_linear_solver(const std::string& name) {
 double LinearSolver::factorize_shifted(const Sparse& K, bool allow_shift, int* attempts) {
   double dmax = 0.0;
   for (int j = 0; j < K.outerSize(); ++j) dmax = std::max(dmax, std::abs(K.coeff(j, j)));
-  double shift = last_shift_ > 0.0 ? 0.1 * last_shift_ : 0.0;
+  double shift = last_shift_ > 0.0 ? 0.01 * last_shift_ : 0.0;
   if (shift < 1e-8 * dmax || !allow_shift) shift = 0.0;
   bool ok = false;
   int count = 0;
