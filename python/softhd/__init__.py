@@ -20,7 +20,8 @@ for files, ``softhd.ResourceError`` and ``softhd.NumericalError``. The message i
 Threads
 -------
 Computations release the GIL. ``threads=0`` uses OpenMP's default (OMP_NUM_THREADS, else all
-cores); a positive count applies to that call only.
+cores; note that ``import torch`` may lower it for the whole process); a positive count applies
+to that call only.
 """
 
 import os as _os

@@ -70,7 +70,9 @@ class HausdorffLoss(torch.nn.Module):
 
     alpha, beta, gamma, eps: the functional's parameters (paper defaults 4, 4, 2, 1e-3; eps is
     an absolute length). method: "exact" (all pairs) or "tree" (every kernel sum within
-    relative tolerance tol). threads: OpenMP threads (0: all).
+    relative tolerance tol). threads: OpenMP threads; 0 (default): torch.get_num_threads(), the
+    count PyTorch itself uses (importing torch may lower the process's OpenMP default, e.g. to 1
+    on a machine whose cores are hyperthreads of one physical core).
 
     forward(X, Y, VX=None, VY=None): X (N, d) and Y (M, d) CPU tensors (d = 2 or 3), float32 or
     float64; VX (N,) and VY (M,) optional positive volumes (weights; only their ratios matter).
@@ -87,7 +89,10 @@ class HausdorffLoss(torch.nn.Module):
                             threads=threads)
 
     def forward(self, X, Y, VX=None, VY=None):
-        return HausdorffFunction.apply(X, Y, VX, VY, self.options)
+        options = dict(self.options)
+        if options["threads"] == 0:
+            options["threads"] = torch.get_num_threads()
+        return HausdorffFunction.apply(X, Y, VX, VY, options)
 
     def extra_repr(self):
         return ", ".join(f"{k}={v}" for k, v in self.options.items())

@@ -92,3 +92,19 @@ def test_misuse():
         st.HausdorffLoss()(X.numpy(), Y)
     with pytest.raises(ValueError, match="eps"):
         st.HausdorffLoss(eps=-1.0)(X, Y)
+
+
+def test_threads_default_to_torchs_count(monkeypatch):
+    import softhd
+
+    seen = []
+    real = softhd.distance
+    def spy(*args, **kwargs):
+        seen.append(kwargs["threads"])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(softhd, "distance", spy)
+    X, Y, _, _ = clouds()
+    st.HausdorffLoss()(X, Y)
+    st.HausdorffLoss(threads=2)(X, Y)
+    assert seen == [torch.get_num_threads(), 2]
