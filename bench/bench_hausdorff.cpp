@@ -280,8 +280,57 @@ PointCloud arc_faces(Eigen::Index m, unsigned seed) {
   return PointCloud(p);
 }
 
+// m random points on the surfaces of a synthetic indoor scene (area-weighted), a
+// stand-in for a laser scan (no real scan is kept in the repository): the floor, ceiling
+// and walls of a 6 × 4 × 3 room, a table and a cabinet; the whole scan shifted by `shift`
+// along x (a second, slightly misaligned scan).
+PointCloud room_scan(Eigen::Index m, unsigned seed, double shift) {
+  struct Face {
+    int axis;             // the fixed coordinate
+    double value;         // its value
+    double lo[3], hi[3];  // ranges of the other two coordinates
+  };
+  std::vector<Face> faces;
+  auto box = [&](const double lo[3], const double hi[3], bool bottom) {
+    for (int k = 0; k < 3; ++k)
+      for (int side = 0; side < 2; ++side) {
+        if (k == 2 && side == 0 && !bottom) continue;
+        Face f{k, side == 0 ? lo[k] : hi[k], {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+        faces.push_back(f);
+      }
+  };
+  const double room_lo[3] = {0, 0, 0}, room_hi[3] = {6, 4, 3};
+  const double table_lo[3] = {2, 1.5, 0}, table_hi[3] = {3.5, 2.5, 0.8};
+  const double cab_lo[3] = {5, 0, 0}, cab_hi[3] = {6, 0.6, 2};
+  box(room_lo, room_hi, true);
+  box(table_lo, table_hi, false);
+  box(cab_lo, cab_hi, false);
+  std::vector<double> area;
+  double total = 0.0;
+  for (const Face& f : faces) {
+    double a = 1.0;
+    for (int k = 0; k < 3; ++k)
+      if (k != f.axis) a *= f.hi[k] - f.lo[k];
+    total += a;
+    area.push_back(total);
+  }
+  std::mt19937_64 gen(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Eigen::MatrixXd p(m, 3);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const double pick = u(gen) * total;
+    const size_t fi =
+        static_cast<size_t>(std::lower_bound(area.begin(), area.end(), pick) - area.begin());
+    const Face& f = faces[std::min(fi, faces.size() - 1)];
+    for (int k = 0; k < 3; ++k)
+      p(i, k) = k == f.axis ? f.value : f.lo[k] + u(gen) * (f.hi[k] - f.lo[k]);
+    p(i, 0) += shift;
+  }
+  return PointCloud(p);
+}
+
 struct GoalConfig {
-  std::string name = "cube";  // cube | asym
+  std::string name = "cube";  // cube | asym | room
   double n = 1e5, m = 1e5, tau = 1e-4, alpha = 4.0;
   int exact_sample = 0;  // 0: time exact on the full clouds; K: on K target points, scaled
   int error_sample = 500;
@@ -289,66 +338,99 @@ struct GoalConfig {
   std::string csv = "bench_hausdorff_goal.csv";
   int threads = 0;
   bool fallback = true;  // --no-fallback: method tree never sums a pass exactly
+  int repeats = 1;       // --repeats R: each method R times, interleaved; medians
 };
 
 PointCloud first_rows(const PointCloud& c, Eigen::Index k) {
   return PointCloud(c.points().topRows(k), c.volumes().head(k));
 }
 
+std::pair<PointCloud, PointCloud> goal_clouds(const GoalConfig& g) {
+  const auto n = static_cast<Eigen::Index>(g.n), m = static_cast<Eigen::Index>(g.m);
+  if (g.name == "asym") return {plate_nodes(), arc_faces(m, 8)};
+  if (g.name == "room") return {room_scan(n, 11, 0.02), room_scan(m, 12, 0.0)};
+  return {uniform_cube(n, 0.0, 1), uniform_cube(m, 0.05, 2)};
+}
+
+/// One timed evaluation of `method` (value + gradient w.r.t. the moving points, with
+/// fields): wall and process CPU seconds, scaled by M/K when exact is timed on K targets.
+struct GoalRun {
+  double wall = 0.0, cpu = 0.0;
+  HausdorffResult res;
+};
+GoalRun time_method(const GoalConfig& g, const PointCloud& X, const PointCloud& Y,
+                    const HausdorffOptions& o, std::string& exact_basis) {
+  HausdorffRequest r;
+  r.fields = true;
+  r.gradient_points = o.method != Method::nearest;
+  GoalRun run;
+  const bool sample = o.method == Method::exact && g.exact_sample > 0;
+  // Pair work is 2·N·M (value + gradient of the points): time it on K target points.
+  const double scale = sample ? static_cast<double>(Y.size()) / g.exact_sample : 1.0;
+  const softhd::HausdorffTarget target(sample ? first_rows(Y, g.exact_sample) : Y, o);
+  const std::clock_t c0 = std::clock();
+  run.res = target.evaluate(X, r);
+  run.cpu = scale * static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+  run.wall = scale * run.res.seconds;
+  if (sample) exact_basis = "sample:" + std::to_string(g.exact_sample);
+  return run;
+}
+
+double median_of(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? NAN : v[v.size() / 2];
+}
+
 int run_goal(const GoalConfig& g) {
-  const auto [X, Y] =
-      g.name == "asym"
-          ? std::pair<PointCloud, PointCloud>{plate_nodes(),
-                                              arc_faces(static_cast<Eigen::Index>(g.m), 8)}
-          : std::pair<PointCloud, PointCloud>{
-                uniform_cube(static_cast<Eigen::Index>(g.n), 0.0, 1),
-                uniform_cube(static_cast<Eigen::Index>(g.m), 0.05, 2)};
+  const auto [X, Y] = goal_clouds(g);
   HausdorffOptions base;
   base.threads = g.threads;
   base.params.alpha = g.alpha;
   base.tolerance = g.tau;
   base.tree_fallback = g.fallback;
   std::ofstream csv(g.csv, std::ios::app);
-  csv << "case,N,M,alpha,tau,method,seconds,exact_seconds,exact_basis,speedup,err_S_sample,"
-         "near_pairs,far_kernel,far_basis,node_pairs,plan_s,exact_passes,passes\n";
+  csv << "case,N,M,alpha,tau,method,seconds,exact_seconds,exact_basis,speedup,cpu_seconds,"
+         "cpu_speedup,repeats,err_S_sample,near_pairs,far_kernel,far_basis,node_pairs,plan_s,"
+         "exact_passes,passes\n";
   std::cerr << g.name << " N=" << X.size() << " M=" << Y.size() << " alpha=" << g.alpha
             << " tau=" << g.tau << "\n";
   HausdorffOptions exact = base;
   exact.method = Method::exact;
   const ExactReference ref = subset_reference(X, Y, g.error_sample, exact);
-  double exact_s = NAN;
+  // Methods interleaved per repeat, so that each one meets the machine's load at
+  // several times; medians of wall and CPU time.
   std::string exact_basis = "full";
-  for (const std::string& method : g.methods) {
-    HausdorffOptions o = base;
-    o.method = softhd::method_from_string(method);
-    HausdorffRequest r;  // value + gradient w.r.t. the moving points, with fields
-    r.fields = true;
-    r.gradient_points = o.method != Method::nearest;
-    double seconds;
-    HausdorffResult res;
-    if (o.method == Method::exact && g.exact_sample > 0) {
-      // Pair work is 2·N·M (value + gradient of the points): time it on K target points.
-      const PointCloud Ys = first_rows(Y, g.exact_sample);
-      const softhd::HausdorffTarget target(Ys, o);
-      res = target.evaluate(X, r);
-      seconds = res.seconds * static_cast<double>(Y.size()) / g.exact_sample;
-      exact_basis = "sample:" + std::to_string(g.exact_sample);
-    } else {
-      const softhd::HausdorffTarget target(Y, o);
-      res = target.evaluate(X, r);
-      seconds = res.seconds;
+  std::vector<std::vector<GoalRun>> runs(g.methods.size());
+  for (int rep = 0; rep < g.repeats; ++rep)
+    for (size_t m = 0; m < g.methods.size(); ++m) {
+      HausdorffOptions o = base;
+      o.method = softhd::method_from_string(g.methods[m]);
+      runs[m].push_back(time_method(g, X, Y, o, exact_basis));
     }
-    if (o.method == Method::exact) exact_s = seconds;
+  double exact_s = NAN, exact_cpu = NAN;
+  std::vector<double> wall(g.methods.size()), cpu(g.methods.size());
+  for (size_t m = 0; m < g.methods.size(); ++m) {
+    std::vector<double> w, c;
+    for (const GoalRun& run : runs[m]) w.push_back(run.wall), c.push_back(run.cpu);
+    wall[m] = median_of(w), cpu[m] = median_of(c);
+    if (g.methods[m] == "exact") exact_s = wall[m], exact_cpu = cpu[m];
+  }
+  for (size_t m = 0; m < g.methods.size(); ++m) {
+    const HausdorffResult& res = runs[m].front().res;
     Errors e;
-    if (o.method == Method::tree) e = measure(res, ref, base.params.epsilon, g.alpha);
+    if (softhd::method_from_string(g.methods[m]) == Method::tree)
+      e = measure(res, ref, base.params.epsilon, g.alpha);
     const softhd::SumWork& w = res.work;
     csv << g.name << ',' << X.size() << ',' << Y.size() << ',' << g.alpha << ',' << num(g.tau)
-        << ',' << method << ',' << num(seconds) << ',' << num(exact_s) << ',' << exact_basis << ','
-        << num(exact_s / seconds) << ',' << num(e.S) << ',' << w.near_pairs << ',' << w.far_kernel
-        << ',' << w.far_basis << ',' << w.node_pairs << ',' << num(w.plan_seconds) << ','
-        << w.exact_passes << ',' << w.passes << '\n';
-    std::cerr << "  " << method << " " << seconds << " s"
-              << (std::isnan(exact_s) ? "" : ", exact/this " + num(exact_s / seconds))
+        << ',' << g.methods[m] << ',' << num(wall[m]) << ',' << num(exact_s) << ',' << exact_basis
+        << ',' << num(exact_s / wall[m]) << ',' << num(cpu[m]) << ',' << num(exact_cpu / cpu[m])
+        << ',' << g.repeats << ',' << num(e.S) << ',' << w.near_pairs << ',' << w.far_kernel << ','
+        << w.far_basis << ',' << w.node_pairs << ',' << num(w.plan_seconds) << ',' << w.exact_passes
+        << ',' << w.passes << '\n';
+    std::cerr << "  " << g.methods[m] << " " << wall[m] << " s (cpu " << cpu[m] << " s)"
+              << (std::isnan(exact_s) ? ""
+                                      : ", exact/this " + num(exact_s / wall[m]) + " (cpu " +
+                                            num(exact_cpu / cpu[m]) + ")")
               << (std::isnan(e.S) ? "" : ", err_S " + num(e.S)) << ", near " << w.near_pairs
               << " far " << w.far_kernel << " basis " << w.far_basis << " node pairs "
               << w.node_pairs << " plan " << num(w.plan_seconds) << " s, exact passes "
@@ -387,25 +469,30 @@ int goal_main(int argc, char** argv) {
       g.threads = std::stoi(value());
     else if (arg == "--no-fallback")
       g.fallback = false;
+    else if (arg == "--repeats")
+      g.repeats = std::max(1, std::stoi(value()));
     else
       throw std::runtime_error("unknown argument " + arg);
   }
-  if (g.name != "cube" && g.name != "asym") throw std::runtime_error("--goal cube|asym");
+  if (g.name != "cube" && g.name != "asym" && g.name != "room")
+    throw std::runtime_error("--goal cube|asym|room");
   return run_goal(g);
 }
 
 void usage() {
-  std::cout << "usage: bench_hausdorff [--min-n N] [--max-n N] [--repeats R] [--csv FILE]\n"
-               "       [--exact-max N] [--shapes a,b,...] [--taus t1,t2,...]\n"
-               "       [--modes value,value+grad] [--methods nearest,exact,tree]\n"
-               "       [--budget SECONDS]\n"
-               "       [--threads T] [--quick]\n"
-               "  --quick: sizes 1e3..1e4, one repeat, shapes cube,plate, taus 1e-2,1e-6\n"
-               "   or: bench_hausdorff --goal cube|asym [--n N] [--m M] [--tau T] [--alpha A]\n"
-               "       [--exact-sample K] [--error-sample K] [--methods ...] [--csv FILE]\n"
-               "  --goal: one case of issue 13 (asym: the 5 555 plate nodes against M points\n"
-               "  on the arc's faces), value + gradient; exact timed on K target points and\n"
-               "  scaled by M/K when --exact-sample K is given; the work split per method.\n";
+  std::cout
+      << "usage: bench_hausdorff [--min-n N] [--max-n N] [--repeats R] [--csv FILE]\n"
+         "       [--exact-max N] [--shapes a,b,...] [--taus t1,t2,...]\n"
+         "       [--modes value,value+grad] [--methods nearest,exact,tree]\n"
+         "       [--budget SECONDS]\n"
+         "       [--threads T] [--quick]\n"
+         "  --quick: sizes 1e3..1e4, one repeat, shapes cube,plate, taus 1e-2,1e-6\n"
+         "   or: bench_hausdorff --goal cube|asym|room [--n N] [--m M] [--tau T] [--alpha A]\n"
+         "       [--exact-sample K] [--error-sample K] [--methods ...] [--csv FILE]\n"
+         "  --goal: one case of issue 13 (asym: the 5 555 plate nodes against M points\n"
+         "  on the arc's faces; room: N and M points of a synthetic indoor scan),\n"
+         "  value + gradient; exact timed on K target points and\n"
+         "  scaled by M/K when --exact-sample K is given; the work split per method.\n";
 }
 
 }  // namespace

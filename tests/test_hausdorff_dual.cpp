@@ -91,6 +91,7 @@ struct BoundCase {
   int n;
   bool interp_t, interp_s;
   double alpha;
+  bool along_z = false;  // S placed along the flat axis of T (else in the x-y plane)
 };
 
 class ChebyshevBound : public ::testing::TestWithParam<BoundCase> {};
@@ -106,7 +107,11 @@ TEST_P(ChebyshevBound, HoldsAtTheSampledWorstCase) {
   S.a[0] = 0.1, S.a[1] = 0.25, S.a[2] = 0.2;
   const double half = std::sqrt(0.3 * 0.3 + 0.2 * 0.2 + 0.05 * 0.05) +
                       std::sqrt(0.1 * 0.1 + 0.25 * 0.25 + 0.2 * 0.2);
-  S.c[0] = bc.separation * half * 0.8, S.c[1] = bc.separation * half * 0.6;
+  if (bc.along_z) {
+    S.c[2] = bc.separation * half;
+  } else {
+    S.c[0] = bc.separation * half * 0.8, S.c[1] = bc.separation * half * 0.6;
+  }
   const detail::LogBounds lb =
       detail::interpolation_log_bound(T, bc.interp_t, S, bc.interp_s, 3, bc.n, bc.alpha, eps);
   ASSERT_TRUE(std::isfinite(lb.value)) << "no bound for separated boxes";
@@ -139,6 +144,7 @@ TEST_P(ChebyshevBound, HoldsAtTheSampledWorstCase) {
   // Rounding of the interpolation sums themselves: 1e-13 of the kernel's size.
   EXPECT_LE(worst_v, bound_v + 1e-13 * size_v) << "value";
   EXPECT_LE(worst_g, bound_g + 1e-13 * size_v) << "gradient";
+  RecordProperty("bound_over_worst", std::to_string(bound_v / worst_v));
   // Measured: the bound is 20-900 times the sampled worst error. It must be useful
   // (below the kernel's size) once the boxes are well separated.
   if (bc.separation >= 6.0 || (bc.separation >= 3.0 && bc.n == 6)) {
@@ -156,6 +162,14 @@ std::vector<BoundCase> bound_cases() {
         out.push_back({sep, n, true, false, alpha});
         if (n == 3) out.push_back({sep, n, true, true, alpha});
       }
+  // Nearly touching boxes, and boxes along the flat axis of T.
+  for (double sep : {1.1, 1.5, 3.0}) {
+    out.push_back({sep, 6, false, true, 4.0, true});
+    out.push_back({sep, 6, true, false, 4.0, true});
+    out.push_back({sep, 3, true, true, 4.0, true});
+  }
+  out.push_back({1.1, 6, false, true, 4.0, false});
+  out.push_back({1.1, 6, true, false, 4.0, false});
   return out;
 }
 
@@ -164,10 +178,55 @@ std::string bound_name(const ::testing::TestParamInfo<BoundCase>& info) {
   std::string s = "sep" + std::to_string(static_cast<int>(b.separation * 10)) + "_n" +
                   std::to_string(b.n) + "_a" + std::to_string(static_cast<int>(b.alpha * 10));
   s += b.interp_t && b.interp_s ? "_M2L" : (b.interp_t ? "_P2L" : "_M2P");
+  if (b.along_z) s += "_z";
   return s;
 }
 
 INSTANTIATE_TEST_SUITE_P(Hausdorff, ChebyshevBound, ::testing::ValuesIn(bound_cases()), bound_name);
+
+// M2M and L2L between a box and a box inside it are exact (the inner grid interpolates
+// the outer box's tensor polynomials exactly): checked against direct anterpolation and
+// direct evaluation of the outer interpolant, with the independent Lagrange products.
+TEST(ChebyshevTranslation, UpwardAndDownwardAreExact) {
+  const int n = 5;
+  detail::Box outer, inner;
+  const double oc[3] = {0.1, -0.2, 0.3}, oa[3] = {0.5, 0.3, 0.2};
+  const double ic[3] = {0.3, -0.1, 0.25}, ia[3] = {0.2, 0.15, 0.05};
+  for (int k = 0; k < 3; ++k) {
+    outer.c[k] = oc[k], outer.a[k] = oa[k];
+    inner.c[k] = ic[k], inner.a[k] = ia[k];
+  }
+  const detail::ChebyshevRule rule(n);
+  detail::Translation E;
+  detail::make_translation(rule, outer, inner, 3, E);
+  std::mt19937_64 gen(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const size_t P = n * n * n;
+  // Upward: weights of points of the inner box, anterpolated into the inner grid and
+  // translated, against anterpolation into the outer grid directly.
+  std::vector<double> w_inner(P, 0.0), w_outer(P, 0.0), translated(P, 0.0);
+  for (int m = 0; m < 30; ++m) {
+    double x[3];
+    for (int k = 0; k < 3; ++k) x[k] = inner.c[k] + inner.a[k] * u(gen);
+    const double w = 0.5 + 0.5 * u(gen);
+    for (size_t q = 0; q < P; ++q) {
+      w_inner[q] += w * tensor_lagrange(inner, n, q, x);
+      w_outer[q] += w * tensor_lagrange(outer, n, q, x);
+    }
+  }
+  detail::tensor_apply(E, true, n, 3, w_inner.data(), 1.0, translated.data());
+  for (size_t q = 0; q < P; ++q) EXPECT_NEAR(translated[q], w_outer[q], 1e-12) << "M2M " << q;
+  // Downward: values at the outer grid, the outer interpolant at the inner grid points.
+  std::vector<double> f(P), down(P, 0.0);
+  for (double& v : f) v = u(gen);
+  detail::tensor_apply(E, false, n, 3, f.data(), 2.0, down.data());
+  const Grid gi = grid(inner, n);
+  for (size_t i = 0; i < P; ++i) {
+    double v = 0.0;
+    for (size_t q = 0; q < P; ++q) v += f[q] * tensor_lagrange(outer, n, q, gi.pts[i].data());
+    EXPECT_NEAR(down[i], 2.0 * v, 1e-12) << "L2L " << i;
+  }
+}
 
 // ---------------------------------------------------------------------------------
 // The sums against a long-double reference.
@@ -253,7 +312,8 @@ constexpr double kRounding =
 
 // Every sum of every outer point within τ of the long-double reference (relative to S,
 // H, and the sums of the vector terms' norms), with small boxes and n = 3 or 4 points
-// per axis so that every operation occurs on clouds of a few thousand points.
+// per axis so that every operation occurs on clouds of a few thousand points; above
+// α = 16 the leaf pairs pruned point by point must occur too.
 TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
   const SumCase sc = GetParam();
   const PointCloud X = shaped_cloud(sc.sources, 2400, sc.dim, 7);
@@ -301,18 +361,23 @@ TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
     }
     total.p2p += ops.p2p, total.m2p += ops.m2p, total.p2l += ops.p2l, total.m2l += ops.m2l;
     total.prune += ops.prune;
+    total.point_pruned += ops.point_pruned;
+    total.m2m += ops.m2m, total.l2l += ops.l2l;
   }
   // The operations checked by this case must have occurred (else the test would not
   // check them); interpolation is off above α = 16 (pruning only).
   EXPECT_GT(total.p2p, 0);
   if (sc.alpha > 16.0) {
     EXPECT_GT(total.prune, 0);
+    EXPECT_GT(total.point_pruned, 0);  // leaf pairs pruned point by point
   }
   if (sc.expect_all) {
     EXPECT_GT(total.prune, 0);
     EXPECT_GT(total.m2p, 0);
     EXPECT_GT(total.p2l, 0);
     EXPECT_GT(total.m2l, 0);
+    EXPECT_GT(total.m2m, 0);  // upward translations
+    EXPECT_GT(total.l2l, 0);  // downward translations
   }
 }
 
@@ -326,6 +391,8 @@ std::vector<SumCase> sum_cases() {
     out.push_back({Shape::clusters, Shape::cube, d, 4.0, false});
     out.push_back({Shape::plane, Shape::plane, d, 4.0, false});
     out.push_back({Shape::cube, Shape::cube, d, 40.0, false});
+    out.push_back({Shape::clusters, Shape::cube, d, 64.0, false});
+    out.push_back({Shape::sphere, Shape::sphere, d, 200.0, false});
   }
   return out;
 }

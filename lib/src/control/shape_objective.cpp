@@ -66,18 +66,14 @@ struct ShapeObjective::Impl {
   int dim = 3;
   Eigen::Array<bool, Eigen::Dynamic, 1> differentiate;
   std::deque<WarmStart> cache;  // most recent first
-  // Two-level starts (use_coarse_level): the coarse body, its solver and its quadrature
-  // points' reference positions.
+  // Two-level starts (use_coarse_level): the coarse body and its solver.
   const fe::Assembler* coarse = nullptr;
   std::optional<fe::NewtonSolver> coarse_newton;
   bool coarse_active = true;           // false after a small step, until a hard fine solve
   std::deque<WarmStart> coarse_cache;  // coarse equilibria by control, most recent first
-  Eigen::MatrixXd coarse_points;
 
   Eigen::MatrixXd coarse_control(const Eigen::VectorXd& m) const {
-    const Eigen::VectorXd v = fe::control_at(assembler.mesh(), control.kind(), m, coarse_points);
-    return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-        v.data(), coarse->mesh().num_elements(), coarse->geometry().points_per_element());
+    return fe::control_on_quadrature(*coarse, assembler.mesh(), control.kind(), m);
   }
   /// The fine start u + P(u_c(m) − u_c(m_old)): the coarse equilibria at the warm start's
   /// control m_old (kept from an earlier evaluation, else solved from the restricted warm
@@ -143,7 +139,6 @@ struct ShapeObjective::Impl {
     }
     return cache[best];
   }
-  const fe::State& nearest_state(const Eigen::VectorXd& m) const { return nearest(m).state; }
 
   /// The state at m (docs/formulation.md §4.7) from the warm start nearest to m, or after
   /// a large step from the coarse-corrected start. Adds the fine iterations to `ev`.
@@ -229,7 +224,6 @@ void ShapeObjective::use_coarse_level(const fe::Assembler& coarse) {
   Impl& d = *impl_;
   d.coarse = &coarse;
   d.coarse_newton.emplace(coarse, d.options.newton);
-  d.coarse_points = fe::quadrature_positions(coarse.mesh(), coarse.geometry());
 }
 
 const fe::Assembler* ShapeObjective::coarse_level() const { return impl_->coarse; }

@@ -92,6 +92,15 @@ Eigen::MatrixXd quadrature_positions(const Mesh& mesh, const ReferenceGeometry& 
   return X;
 }
 
+Eigen::MatrixXd control_on_quadrature(const Assembler& assembler, const Mesh& mesh,
+                                      ControlKind kind, const Eigen::VectorXd& m) {
+  const Eigen::VectorXd v =
+      control_at(mesh, kind, m, quadrature_positions(assembler.mesh(), assembler.geometry()));
+  const int nq = assembler.geometry().points_per_element();
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      v.data(), assembler.mesh().num_elements(), nq);
+}
+
 Eigen::VectorXd prolongate(const Mesh& coarse, const Eigen::VectorXd& u_coarse, const Mesh& fine) {
   if (coarse.dim != fine.dim || u_coarse.size() != coarse.num_nodes() * coarse.dim)
     throw InvalidArgument("prolongate: the coarse field does not match its mesh");
@@ -111,22 +120,12 @@ Eigen::VectorXd prolongate(const Mesh& coarse, const Eigen::VectorXd& u_coarse, 
 
 namespace {
 
-// Quadrature values (E by nq) on `assembler`'s mesh of the fine control field.
-Eigen::MatrixXd control_on(const Assembler& assembler, const Mesh& fine, ControlKind kind,
-                           const Eigen::VectorXd& m) {
-  const Eigen::VectorXd v =
-      control_at(fine, kind, m, quadrature_positions(assembler.mesh(), assembler.geometry()));
-  const int nq = assembler.geometry().points_per_element();
-  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-      v.data(), assembler.mesh().num_elements(), nq);
-}
-
 // The converged state on `scene` (levels − 1 coarser levels first) under the fine field.
 bool solve_level(const Scene& scene, const Mesh& fine, ControlKind kind, const Eigen::VectorXd& m,
                  int levels, const NewtonOptions& newton, GridSequencingReport* report, Mesh* mesh,
                  State* state) {
   const Assembler assembler = scene.make_assembler();
-  const Eigen::MatrixXd m_qp = control_on(assembler, fine, kind, m);
+  const Eigen::MatrixXd m_qp = control_on_quadrature(assembler, fine, kind, m);
   *state = rest_state(assembler);
   if (levels > 0) {
     Mesh coarse_mesh;

@@ -48,6 +48,40 @@ Box interpolation_box(const double* lo, const double* hi, int d) {
   return b;
 }
 
+void make_translation(const ChebyshevRule& rule, const Box& outer, const Box& inner, int d,
+                      Translation& t) {
+  const int n = rule.n;
+  for (int k = 0; k < d; ++k)
+    for (int i = 0; i < n; ++i)
+      rule.basis((inner.c[k] + inner.a[k] * rule.xi[i] - outer.c[k]) / outer.a[k], &t.E[k][i * n]);
+}
+
+void tensor_apply(const Translation& t, bool transpose, int n, int d, const double* in, double f,
+                  double* out) {
+  constexpr int kMax = kMaxChebyshev * kMaxChebyshev * kMaxChebyshev;
+  double buf[2][kMax];
+  int total = 1;
+  for (int k = 0; k < d; ++k) total *= n;
+  const double* src = in;
+  int stride = 1;
+  for (int k = d - 1, which = 0; k >= 0; --k, which ^= 1, stride *= n) {
+    double M[kMaxChebyshev * kMaxChebyshev];  // M[i n + j] = M_k(i, j)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) M[i * n + j] = transpose ? t.E[k][j * n + i] : t.E[k][i * n + j];
+    double* dst = buf[which];
+    const int block = n * stride;
+    for (int base = 0; base < total; base += block)
+      for (int i = 0; i < n; ++i)
+        for (int inner = 0; inner < stride; ++inner) {
+          double sum = 0.0;
+          for (int j = 0; j < n; ++j) sum += M[i * n + j] * src[base + j * stride + inner];
+          dst[base + i * stride + inner] = sum;
+        }
+    src = dst;
+  }
+  for (int q = 0; q < total; ++q) out[q] += f * src[q];
+}
+
 namespace {
 
 /// Squared distance between box T and box S, with half-width `widen` replacing the
@@ -63,29 +97,64 @@ double box_gap2(const Box& T, const Box& S, int d, bool which_t, int axis, doubl
   return g2;
 }
 
+/// min over the Bernstein ellipse with real half-axis A and imaginary half-axis B (centred
+/// at 0) of (Re d)² − (Im d)² for d = z − y, y real in [lo, hi]:
+///     min_{x∈[−1,1]} dist(A x, [lo, hi])² − B² (1 − x²).
+/// (For a given real part the boundary has the largest |Im z|, so the minimum over the
+/// filled ellipse lies on the boundary, z = A x ± i B √(1 − x²).) Each piece of [−1, 1] is
+/// a convex quadratic in x, minimised in closed form.
+double ellipse_min(double A, double B, double lo, double hi) {
+  double best = std::numeric_limits<double>::infinity();
+  auto outside = [&](double L, double x0, double x1) {  // dist = |L − A x| on [x0, x1]
+    if (x0 > x1) return;
+    const double x = std::clamp(L * A / (A * A + B * B), x0, x1);
+    best = std::min(best, (L - A * x) * (L - A * x) - B * B * (1.0 - x * x));
+  };
+  if (lo > -A) outside(lo, -1.0, std::min(1.0, lo / A));  // A x ≤ lo
+  if (hi < A) outside(hi, std::max(-1.0, hi / A), 1.0);   // A x ≥ hi
+  const double x0 = std::max(-1.0, lo / A), x1 = std::min(1.0, hi / A);
+  if (x0 <= x1) {  // A x inside [lo, hi]: dist = 0, smallest |x| gives the most negative
+    const double x = std::clamp(0.0, x0, x1);
+    best = std::min(best, -B * B * (1.0 - x * x));
+  }
+  return best;
+}
+
 /// log of the 1D bound e_j (value and gradient kernels) for one interpolated axis,
-/// minimised over a grid of ellipses.
+/// minimised over a grid of ellipses. With the other coordinates real, Re s is at least
+/// the squared gap of the boxes across the other axes plus ellipse_min along this one.
 LogBounds axis_log_bound(const Box& T, const Box& S, int d, bool which_t, int axis, int n,
                          double alpha, double eps) {
   const double inf = std::numeric_limits<double>::infinity();
   LogBounds best{inf, inf};
-  const double a = (which_t ? T : S).a[axis];
+  const Box& mine = which_t ? T : S;
+  const Box& other = which_t ? S : T;
+  const double a = mine.a[axis];
   const double D0 = std::sqrt(box_gap2(T, S, d, which_t, axis, a));
   if (!(D0 > 0.0)) return best;
-  const double u = D0 / a;
-  const double rho_max = u + std::sqrt(u * u + 1.0);  // B(ρ_max) = D0
-  static constexpr double kGrid[] = {0.03, 0.08, 0.15, 0.25, 0.35, 0.45,
-                                     0.55, 0.65, 0.75, 0.85, 0.93};
+  double across = 0.0;  // squared gap of the (real) boxes across the other axes
+  for (int k = 0; k < d; ++k) {
+    const double gap = std::max(0.0, std::fabs(T.c[k] - S.c[k]) - T.a[k] - S.a[k]);
+    if (k != axis) across += gap * gap;
+  }
+  const double lo = other.c[axis] - other.a[axis] - mine.c[axis];
+  const double hi = other.c[axis] + other.a[axis] - mine.c[axis];
+  // Analyticity needs A² + B² = a² (ρ² + ρ⁻²)/2 below the squared distance to the far
+  // side of the other box plus `across`: ρ < ρ_top.
+  const double far2 = std::max(lo * lo, hi * hi) + across;
+  const double rho_top = std::sqrt(2.0 * far2) / a + 1.0;
+  static constexpr double kGrid[] = {0.02, 0.05, 0.09, 0.14, 0.2,  0.27, 0.34, 0.41,
+                                     0.48, 0.55, 0.62, 0.69, 0.76, 0.83, 0.9,  0.96};
   for (double f : kGrid) {
-    const double rho = 1.0 + (rho_max - 1.0) * f;
+    const double rho = 1.0 + (rho_top - 1.0) * f;
     const double A = 0.5 * a * (rho + 1.0 / rho), B = 0.5 * a * (rho - 1.0 / rho);
-    const double Dm2 = box_gap2(T, S, d, which_t, axis, A);
-    if (!(Dm2 > B * B)) continue;
-    const double delta = std::sqrt(Dm2 - B * B);
+    const double re2 = across + ellipse_min(A, B, lo, hi);  // ≤ Re s
+    if (!(re2 > 0.0)) continue;
+    const double delta = std::sqrt(re2);
     const double common = std::log(4.0) - (n - 1) * std::log(rho) - std::log(rho - 1.0);
     const double value = common - alpha * std::log(delta + eps);
-    const double grad =
-        value - std::log(delta + eps) + 0.5 * std::log((Dm2 + B * B) / (Dm2 - B * B));
+    // ‖o − x‖² = Re s + 2 (Im d)² ≤ Re s + 2 B², |r|² = |s| ≥ Re s.
+    const double grad = value - std::log(delta + eps) + 0.5 * std::log(1.0 + 2.0 * B * B / re2);
     best.value = std::min(best.value, value);
     best.grad = std::min(best.grad, grad);
   }

@@ -45,6 +45,23 @@ struct Box {
 /// largest, or a tiny absolute width for a single point): interpolation boxes.
 Box interpolation_box(const double* lo, const double* hi, int d);
 
+/// Translation between a box and a box inside it, same n (M2M and L2L):
+/// E[k][i·n + j] = ℓ_j((c'_k + a'_k ξ_i − c_k)/a_k), the outer box's basis function j along
+/// axis k at the inner box's interpolation point i.
+struct Translation {
+  double E[3][kMaxChebyshev * kMaxChebyshev];
+};
+void make_translation(const ChebyshevRule& rule, const Box& outer, const Box& inner, int d,
+                      Translation& t);
+
+/// out += f · (M_0 ⊗ … ⊗ M_(d−1)) in on the n^d tensor grid (the last axis fastest), applied
+/// one axis at a time (d n^(d+1) products), with M_k = E_k (L2L: the outer box's interpolant
+/// at the inner box's points) or M_k = E_kᵀ (`transpose`, M2M: the outer box's weights
+/// Σ_x w_x L_q(x) from the inner box's weights). Both are exact, up to rounding: the inner
+/// grid interpolates the outer box's polynomials (degree n − 1 per axis) exactly.
+void tensor_apply(const Translation& t, bool transpose, int n, int d, const double* in, double f,
+                  double* out);
+
 /// Natural logarithms of bounds, per unit source weight, on the interpolation error of
 /// u and of the gradient kernel (above), for o in box T and x in box S, when the d
 /// coordinates of o (interp_t) and/or of x (interp_s) are interpolated at n points per

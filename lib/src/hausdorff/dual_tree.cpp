@@ -48,11 +48,10 @@ struct Acc {
   }
 };
 
-/// The interpolation points of one box (tree slot) and, for a source box, their weights.
+/// The interpolation points of one source box (tree slot) and their weights.
 struct ProxySet {
   std::vector<double> coord;             // d blocks of P coordinates
-  std::vector<double> weight, coef, sc;  // P each (source boxes)
-  std::vector<Acc> local;                // P (outer boxes)
+  std::vector<double> weight, coef, sc;  // P each
 };
 
 Box bounds_box(const KdNode& n, int d) {
@@ -94,11 +93,15 @@ struct Pass {
   Eigen::VectorXd w, h, c, oc;  // source weights, coefficients, scales; outer scales
   std::vector<NodeMoments> mw, mh;
   PairSources src;
-  std::vector<double> log_low;  // 4 per outer node: log min_{o∈T} of the unscaled lower bound
-  std::vector<double> kappa;    // per outer node: max c_o (scale of its locals)
+  std::vector<double> log_low;    // 4 per outer node: log min_{o∈T} of the unscaled lower bound
+  bool point_prune = false;       // pruning regime: leaf pairs also pruned point by point
+  std::vector<double> point_low;  // 4 per outer point (tree order, point_prune only)
+  std::vector<double> kappa;      // per outer node: max c_o (scale of its locals)
   std::vector<char> has_local, has_proxy;
   std::vector<double> log_weight, log_share;  // 4 per source node (prepare_sources)
   std::vector<Box> obox, sbox;                // interpolation boxes (eligible nodes)
+  int nf = 0;                                 // fields of an outer box's locals (P values each):
+  int field[4] = {-1, -1, -1, -1};            // first field of S, G (d), H, G2 (d), or −1
   double log_total[4] = {0.0, 0.0, 0.0, 0.0};
   ChebyshevRule rule{2};
 
@@ -247,6 +250,7 @@ void prepare_outer(Pass& p, const PassOuter& in, int threads) {
   const size_t nn = nodes.size();
   p.oc = ot.permute(Eigen::Map<const Eigen::VectorXd>(in.scale, ot.size()));
   p.log_low.assign(4 * nn, kInf);
+  if (p.point_prune) p.point_low.assign(4 * static_cast<size_t>(ot.size()), kInf);
   p.kappa.assign(nn, 0.0);
   std::vector<double> cmin(nn, kInf);
   std::vector<int> cut;
@@ -273,6 +277,7 @@ void prepare_outer(Pass& p, const PassOuter& in, int threads) {
       const double lc = p.alpha * std::log(p.oc[q]);
       const double v[4] = {std::log(s.S) - lc, std::log(s.Gm) - lc, std::log(s.H), std::log(s.G2m)};
       for (int k = 0; k < 4; ++k) p.log_low[4 * id + k] = std::min(p.log_low[4 * id + k], v[k]);
+      if (p.point_prune) std::copy(v, v + 4, &p.point_low[4 * static_cast<size_t>(q)]);
       p.kappa[id] = std::max(p.kappa[id], p.oc[q]);
       cmin[id] = std::min(cmin[id], p.oc[q]);
     }
@@ -333,23 +338,48 @@ Op choose(const Pass& p, int t, int s, double gap) {
   for (int i = 0; i < count; ++i) {
     const bool it = options[i].op != kM2P, is = options[i].op != kP2L;
     // Cheap necessary condition: every bound of the operation is at least the
-    // one-axis bound of its widest interpolated axis with |u| ≥ (gap + ε)^(−α) and the
-    // largest ellipse (B = gap).
-    double a_max = 0.0;
+    // one-axis bound of its widest interpolated axis (half-width a), with
+    // |u| ≥ (gap + ε)^(−α) and the largest ellipse the bound searches,
+    // ρ ≤ √2 R/a + 1, R the largest distance between the two boxes (chebyshev.cpp).
+    const Box& bt = it ? p.obox[static_cast<size_t>(t)] : tb;
+    const Box& bs = is ? p.sbox[static_cast<size_t>(s)] : sb;
+    double a_max = 0.0, far2 = 0.0;
     for (int k = 0; k < p.d; ++k) {
-      if (it) a_max = std::max(a_max, p.obox[static_cast<size_t>(t)].a[k]);
-      if (is) a_max = std::max(a_max, p.sbox[static_cast<size_t>(s)].a[k]);
+      if (it) a_max = std::max(a_max, bt.a[k]);
+      if (is) a_max = std::max(a_max, bs.a[k]);
+      const double span = std::fabs(bt.c[k] - bs.c[k]) + bt.a[k] + bs.a[k];
+      far2 += span * span;
     }
-    const double u = gap / a_max, rho = u + std::sqrt(u * u + 1.0);
+    const double rho = std::sqrt(2.0 * far2) / a_max + 1.0;
     const double least =
         std::log(4.0) - p.alpha * l - (p.n - 1) * std::log(rho) - std::log(rho - 1.0);
     if (!fits(least, least - l)) continue;
-    const LogBounds e = interpolation_log_bound(it ? p.obox[static_cast<size_t>(t)] : tb, it,
-                                                is ? p.sbox[static_cast<size_t>(s)] : sb, is, p.d,
-                                                p.n, p.alpha, p.eps);
+    const LogBounds e = interpolation_log_bound(bt, it, bs, is, p.d, p.n, p.alpha, p.eps);
     if (fits(e.value, e.grad)) return options[i].op;
   }
   return kNone;
+}
+
+/// Whether source node s may be dropped for the outer point o (tree position q) alone:
+/// the prune test of choose() with o's own lower bounds and its own distance to the box.
+/// The boxes dropped for o are still disjoint, so the budget argument is unchanged.
+bool prunable_for_point(const Pass& p, const double* o, Eigen::Index q, int s) {
+  const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
+  double g2 = 0.0;
+  for (int k = 0; k < p.d; ++k) {
+    const double gap = std::max({S.lo[k] - o[k], o[k] - S.hi[k], 0.0});
+    g2 += gap * gap;
+  }
+  const double l = std::log(std::sqrt(g2) + p.eps);
+  for (int k = 0; k < 4; ++k) {
+    if (!p.want[k]) continue;
+    const double lw = p.log_weight[4 * static_cast<size_t>(s) + k];
+    if (lw == -kInf) continue;
+    const double lb = p.log_tau + p.point_low[4 * static_cast<size_t>(q) + k] +
+                      p.log_share[4 * static_cast<size_t>(s) + k];
+    if (!(lw - ((k == kS || k == kH) ? p.alpha : p.alpha + 1.0) * l <= lb)) return false;
+  }
+  return true;
 }
 
 /// One task's planning state. `spent` is shared by the tasks: the planned near and far
@@ -459,21 +489,15 @@ void tensor_basis(const Pass& p, const Box& b, const double* x, double* L) {
     }
 }
 
-/// Anterpolation: the weights of source box s at its interpolation points,
-/// W_q = Σ_x w_x L_q(x) and, for inner sums, Σ_x h̃_x L_q(x) with h̃ = h (c/C)^α.
-void source_proxies(const Pass& p, int s, ProxySet& ps) {
-  const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
+/// Anterpolation into source box s: adds the points [begin, end) to the weights at its
+/// interpolation points, W_q += Σ_x w_x L_q(x) and, for inner sums, Σ_x h̃_x L_q(x) with
+/// h̃ = h (c/C)^α, C = the box's scale.
+void anterpolate(const Pass& p, int s, Eigen::Index begin, Eigen::Index end, ProxySet& ps) {
   const Box& b = p.sbox[static_cast<size_t>(s)];
-  ps.coord = grid_points(p, b);
   const size_t P = static_cast<size_t>(p.P);
   std::vector<double> L(P);
-  if (p.outer_kinds()) ps.weight.assign(P, 0.0);
-  if (p.want[kH]) {
-    ps.coef.assign(P, 0.0);
-    ps.sc.assign(P, p.mh[static_cast<size_t>(s)].scale);
-  }
   const Eigen::MatrixXd& X = p.st->points();
-  for (Eigen::Index q = S.begin; q < S.end; ++q) {
+  for (Eigen::Index q = begin; q < end; ++q) {
     double x[3] = {0.0, 0.0, 0.0};
     for (int k = 0; k < p.d; ++k) x[k] = X(q, k);
     tensor_basis(p, b, x, L.data());
@@ -483,6 +507,77 @@ void source_proxies(const Pass& p, int s, ProxySet& ps) {
       const double ht = p.h[q] * p.power->scalar(p.c[q] / ps.sc[0]);
       for (size_t j = 0; j < P; ++j) ps.coef[j] += ht * L[j];
     }
+  }
+}
+
+/// The proxies of source box s: from its marked children by translation (M2M; an inner
+/// weight is rescaled by (C_child/C)^α ≤ 1), from the points of the others.
+void source_proxies(const Pass& p, int s, const std::vector<int>& sslot,
+                    std::vector<ProxySet>& sprox) {
+  const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
+  ProxySet& ps = sprox[static_cast<size_t>(sslot[static_cast<size_t>(s)])];
+  const size_t P = static_cast<size_t>(p.P);
+  ps.coord = grid_points(p, p.sbox[static_cast<size_t>(s)]);
+  if (p.outer_kinds()) ps.weight.assign(P, 0.0);
+  if (p.want[kH]) {
+    ps.coef.assign(P, 0.0);
+    ps.sc.assign(P, p.mh[static_cast<size_t>(s)].scale);
+  }
+  if (S.right < 0) {
+    anterpolate(p, s, S.begin, S.end, ps);
+    return;
+  }
+  for (const int ch : {s + 1, S.right}) {
+    const KdNode& C = p.st->nodes()[static_cast<size_t>(ch)];
+    const int slot = sslot[static_cast<size_t>(ch)];
+    if (slot < 0) {
+      anterpolate(p, s, C.begin, C.end, ps);
+      continue;
+    }
+    const ProxySet& cs = sprox[static_cast<size_t>(slot)];
+    Translation E;
+    make_translation(p.rule, p.sbox[static_cast<size_t>(s)], p.sbox[static_cast<size_t>(ch)], p.d,
+                     E);
+    if (p.outer_kinds()) tensor_apply(E, true, p.n, p.d, cs.weight.data(), 1.0, ps.weight.data());
+    if (p.want[kH])
+      tensor_apply(E, true, p.n, p.d, cs.coef.data(), p.power->scalar(cs.sc[0] / ps.sc[0]),
+                   ps.coef.data());
+  }
+}
+
+/// Marks node id and its descendants that are `eligible` (every descendant of an
+/// ineligible node is ineligible: boxes with grids have more than P points).
+void mark_subtree(const KdTree& tree, const std::vector<char>& eligible, int id,
+                  std::vector<char>& mark) {
+  if (!eligible[static_cast<size_t>(id)] || mark[static_cast<size_t>(id)]) return;
+  mark[static_cast<size_t>(id)] = 1;
+  const KdNode& n = tree.nodes()[static_cast<size_t>(id)];
+  if (n.right < 0) return;
+  mark_subtree(tree, eligible, id + 1, mark);
+  mark_subtree(tree, eligible, n.right, mark);
+}
+
+/// Upward pass: the proxies of every marked source box, the deepest level first so that
+/// every box translates from its children (deterministic: each box is computed alone).
+void source_upward(const Pass& p, const std::vector<char>& mark, std::vector<int>& sslot,
+                   std::vector<ProxySet>& sprox, int threads) {
+  const std::vector<KdNode>& nodes = p.st->nodes();
+  std::vector<int> depth(nodes.size(), 0);
+  std::vector<std::vector<int>> level;
+  for (size_t id = 0; id < nodes.size(); ++id) {
+    if (nodes[id].right >= 0)
+      depth[id + 1] = depth[static_cast<size_t>(nodes[id].right)] = depth[id] + 1;
+    if (!mark[id]) continue;
+    if (level.size() <= static_cast<size_t>(depth[id]))
+      level.resize(static_cast<size_t>(depth[id]) + 1);
+    level[static_cast<size_t>(depth[id])].push_back(static_cast<int>(id));
+    sslot[id] = static_cast<int>(sprox.size());
+    sprox.emplace_back();
+  }
+  for (size_t l = level.size(); l-- > 0;) {
+    const std::vector<int>& ids = level[l];
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (size_t i = 0; i < ids.size(); ++i) source_proxies(p, ids[i], sslot, sprox);
   }
 }
 
@@ -497,73 +592,166 @@ PairSources proxy_sources(const Pass& p, const ProxySet& ps) {
   return src;
 }
 
-/// Runs one task's interactions, then interpolates its boxes' locals to their points.
-void execute(const Pass& p, const std::vector<Interaction>& list, const std::vector<int>& sslot,
-             const std::vector<ProxySet>& sprox, const std::vector<int>& oslot,
-             std::vector<ProxySet>& oprox, std::vector<Acc>& acc) {
+/// Adds one interpolation point's sums to an outer box's locals (the requested fields).
+void add_local(const Pass& p, const PairSums& s, int j, double* loc) {
+  auto at = [&](int field) { return loc + static_cast<size_t>(field) * p.P + j; };
+  if (p.field[kS] >= 0) *at(p.field[kS]) += s.S;
+  if (p.field[kH] >= 0) *at(p.field[kH]) += s.H;
+  for (int k = 0; k < p.d; ++k) {
+    if (p.field[kG] >= 0) *at(p.field[kG] + k) += s.G[k];
+    if (p.field[kG2] >= 0) *at(p.field[kG2] + k) += s.G2[k];
+  }
+}
+
+/// L2P: the locals of outer box t interpolated to its points [begin, end), the outer sums
+/// rescaled from κ_T to each point's own scale, (c_o/κ_T)^α ≤ 1.
+void locals_to_points(const Pass& p, int t, Eigen::Index begin, Eigen::Index end, const double* loc,
+                      std::vector<Acc>& acc) {
   const Eigen::MatrixXd& X = p.ot->points();
-  std::vector<int> touched;
+  const Box& b = p.obox[static_cast<size_t>(t)];
+  std::vector<double> L(static_cast<size_t>(p.P));
+  double v[8];
+  for (Eigen::Index q = begin; q < end; ++q) {
+    double o[3] = {0.0, 0.0, 0.0};
+    for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
+    tensor_basis(p, b, o, L.data());
+    for (int f = 0; f < p.nf; ++f) {
+      const double* lf = loc + static_cast<size_t>(f) * p.P;
+      double sum = 0.0;
+#pragma omp simd reduction(+ : sum)
+      for (int j = 0; j < p.P; ++j) sum += L[static_cast<size_t>(j)] * lf[j];
+      v[f] = sum;
+    }
+    PairSums s;
+    if (p.field[kS] >= 0) s.S = v[p.field[kS]];
+    if (p.field[kH] >= 0) s.H = v[p.field[kH]];
+    for (int k = 0; k < p.d; ++k) {
+      if (p.field[kG] >= 0) s.G[k] = v[p.field[kG] + k];
+      if (p.field[kG2] >= 0) s.G2[k] = v[p.field[kG2] + k];
+    }
+    acc[static_cast<size_t>(q)].add(s, p.power->scalar(p.oc[q] / p.kappa[static_cast<size_t>(t)]));
+  }
+}
+
+/// Downward pass over one task's subtree [root, end) (parents before children): a box's
+/// locals go to each child that carries locals by translation (L2L; the outer fields
+/// rescaled by (κ_child/κ_T)^α ≤ 1), to the points of the others (L2P).
+void downward(const Pass& p, int root, std::vector<std::vector<double>>& local,
+              std::vector<Acc>& acc) {
+  const std::vector<KdNode>& nodes = p.ot->nodes();
+  const size_t size = static_cast<size_t>(p.nf) * p.P;
+  for (size_t i = 0; i < local.size(); ++i) {
+    if (local[i].empty()) continue;
+    const int t = root + static_cast<int>(i);
+    const KdNode& T = nodes[static_cast<size_t>(t)];
+    if (T.right < 0) {
+      locals_to_points(p, t, T.begin, T.end, local[i].data(), acc);
+    } else {
+      for (const int ch : {t + 1, T.right}) {
+        const KdNode& C = nodes[static_cast<size_t>(ch)];
+        if (!p.has_local[static_cast<size_t>(ch)]) {
+          locals_to_points(p, t, C.begin, C.end, local[i].data(), acc);
+          continue;
+        }
+        std::vector<double>& cl = local[static_cast<size_t>(ch - root)];
+        if (cl.empty()) cl.assign(size, 0.0);
+        Translation E;
+        make_translation(p.rule, p.obox[static_cast<size_t>(t)], p.obox[static_cast<size_t>(ch)],
+                         p.d, E);
+        const double scale =
+            p.power->scalar(p.kappa[static_cast<size_t>(ch)] / p.kappa[static_cast<size_t>(t)]);
+        for (int f = 0; f < p.nf; ++f) {
+          const bool outer = p.field[kH] < 0 || f < p.field[kH];  // S, G come before H, G2
+          tensor_apply(E, false, p.n, p.d, local[i].data() + static_cast<size_t>(f) * p.P,
+                       outer ? scale : 1.0, cl.data() + static_cast<size_t>(f) * p.P);
+        }
+      }
+    }
+    std::vector<double>().swap(local[i]);
+  }
+}
+
+/// The end of node id's subtree in preorder (its nodes are [id, end)).
+int subtree_end(const KdTree& tree, int id) {
+  while (tree.nodes()[static_cast<size_t>(id)].right >= 0)
+    id = tree.nodes()[static_cast<size_t>(id)].right;
+  return id + 1;
+}
+
+/// Runs one task's interactions (outer subtree of `root`), then its downward pass.
+/// Returns the number of direct pairs skipped by pruning point by point.
+std::int64_t execute(const Pass& p, int root, const std::vector<Interaction>& list,
+                     const std::vector<int>& sslot, const std::vector<ProxySet>& sprox,
+                     std::vector<Acc>& acc) {
+  std::int64_t skipped = 0;
+  const Eigen::MatrixXd& X = p.ot->points();
+  std::vector<std::vector<double>> local(static_cast<size_t>(subtree_end(*p.ot, root) - root));
   for (const Interaction& it : list) {
     const KdNode& T = p.ot->nodes()[static_cast<size_t>(it.t)];
     const KdNode& S = p.st->nodes()[static_cast<size_t>(it.s)];
     if (it.op == kPrune) continue;
-    const bool to_points = it.op == kP2P || it.op == kM2P;
     const PairSources src =
         (it.op == kP2P || it.op == kP2L)
             ? p.slice(S)
             : proxy_sources(p, sprox[static_cast<size_t>(sslot[static_cast<size_t>(it.s)])]);
-    if (to_points) {
+    if (it.op == kP2P || it.op == kM2P) {
+      const bool point_prune = it.op == kP2P && p.point_prune;
       for (Eigen::Index q = T.begin; q < T.end; ++q) {
         double o[3] = {0.0, 0.0, 0.0};
         for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
+        if (point_prune && prunable_for_point(p, o, q, it.s)) {
+          skipped += size_of(S);
+          continue;
+        }
         acc[static_cast<size_t>(q)].add(pair_sums(o, p.oc[q], src, *p.power, p.eps, p.flags));
       }
       continue;
     }
-    ProxySet& loc = oprox[static_cast<size_t>(oslot[static_cast<size_t>(it.t)])];
-    if (loc.local.empty()) {
-      loc.coord = grid_points(p, p.obox[static_cast<size_t>(it.t)]);
-      loc.local.assign(static_cast<size_t>(p.P), Acc{});
-      touched.push_back(it.t);
-    }
+    std::vector<double>& loc = local[static_cast<size_t>(it.t - root)];
+    if (loc.empty()) loc.assign(static_cast<size_t>(p.nf) * p.P, 0.0);
+    const std::vector<double> grid = grid_points(p, p.obox[static_cast<size_t>(it.t)]);
     const double kappa = p.kappa[static_cast<size_t>(it.t)];
     for (int j = 0; j < p.P; ++j) {
       double o[3] = {0.0, 0.0, 0.0};
-      for (int k = 0; k < p.d; ++k) o[k] = loc.coord[static_cast<size_t>(k * p.P + j)];
-      loc.local[static_cast<size_t>(j)].add(pair_sums(o, kappa, src, *p.power, p.eps, p.flags));
+      for (int k = 0; k < p.d; ++k) o[k] = grid[static_cast<size_t>(k * p.P + j)];
+      add_local(p, pair_sums(o, kappa, src, *p.power, p.eps, p.flags), j, loc.data());
     }
   }
-  // L2P: outer sums rescaled from κ_T to each point's own scale, (c_o/κ_T)^α ≤ 1.
-  std::vector<double> L(static_cast<size_t>(p.P));
-  for (int t : touched) {
-    const KdNode& T = p.ot->nodes()[static_cast<size_t>(t)];
-    const ProxySet& loc = oprox[static_cast<size_t>(oslot[static_cast<size_t>(t)])];
-    const Box& b = p.obox[static_cast<size_t>(t)];
-    for (Eigen::Index q = T.begin; q < T.end; ++q) {
-      double o[3] = {0.0, 0.0, 0.0};
-      for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
-      tensor_basis(p, b, o, L.data());
-      PairSums s;
-      for (int j = 0; j < p.P; ++j) {
-        const Acc& a = loc.local[static_cast<size_t>(j)];
-        const double lj = L[static_cast<size_t>(j)];
-        s.S += lj * a.S;
-        s.H += lj * a.H;
-        for (int k = 0; k < p.d; ++k) {
-          s.G[k] += lj * a.G[k];
-          s.G2[k] += lj * a.G2[k];
-        }
+  downward(p, root, local, acc);
+  return skipped;
+}
+
+/// Basis work of the boxes with grids (`mark`): a leaf interpolates at its points; an
+/// inner box translates to or from each marked child (d n^(d+1) products per field) and
+/// interpolates at the points of the others.
+std::int64_t grid_work(const Pass& p, const KdTree& tree, const std::vector<char>& mark, int fields,
+                       std::int64_t& translations) {
+  std::int64_t work = 0;
+  std::int64_t per_translation = p.d;
+  for (int k = 0; k <= p.d; ++k) per_translation *= p.n;
+  const std::vector<KdNode>& nodes = tree.nodes();
+  for (size_t id = 0; id < nodes.size(); ++id) {
+    if (!mark[id]) continue;
+    if (nodes[id].right < 0) {
+      work += size_of(nodes[id]) * p.P;
+      continue;
+    }
+    for (const size_t ch : {id + 1, static_cast<size_t>(nodes[id].right)}) {
+      if (mark[ch]) {
+        work += per_translation * fields;
+        ++translations;
+      } else {
+        work += size_of(nodes[ch]) * p.P;
       }
-      acc[static_cast<size_t>(q)].add(s,
-                                      p.power->scalar(p.oc[q] / p.kappa[static_cast<size_t>(t)]));
     }
   }
+  return work;
 }
 
 /// Counts of the planned work: per-operation counts and the stats' kernel and basis work.
 void count_work(const Pass& p, const std::vector<std::vector<Interaction>>& lists,
-                const std::vector<int>& sslot_nodes, const std::vector<int>& oslot_nodes,
-                PassStats& st, DualTreeOps& ops) {
+                const std::vector<char>& smark, const std::vector<char>& omark, PassStats& st,
+                DualTreeOps& ops) {
   const double P = p.P;
   for (const auto& list : lists)
     for (const Interaction& it : list) {
@@ -587,8 +775,9 @@ void count_work(const Pass& p, const std::vector<std::vector<Interaction>>& list
           break;
       }
     }
-  for (int s : sslot_nodes) st.far_basis += size_of(p.st->nodes()[static_cast<size_t>(s)]) * p.P;
-  for (int t : oslot_nodes) st.far_basis += size_of(p.ot->nodes()[static_cast<size_t>(t)]) * p.P;
+  const int source_fields = (p.outer_kinds() ? 1 : 0) + (p.want[kH] ? 1 : 0);
+  st.far_basis = grid_work(p, *p.st, smark, source_fields, ops.m2m) +
+                 grid_work(p, *p.ot, omark, p.nf, ops.l2l);
 }
 
 /// The pass's settings, source data and outer lower bounds.
@@ -605,10 +794,16 @@ void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const P
   p.want[kS] = (p.flags & kOuterSum) != 0;
   p.want[kG] = (p.flags & kOuterGrad) != 0;
   p.want[kH] = p.want[kG2] = (p.flags & kInner) != 0;
+  for (int k = 0; k < 4; ++k)
+    if (p.want[k]) {
+      p.field[k] = p.nf;
+      p.nf += (k == kG || k == kG2) ? p.d : 1;
+    }
   p.alpha = set.power->alpha();
   p.eps = set.eps;
   p.log_tau = std::log(set.tau);
   p.power = set.power;
+  p.point_prune = p.alpha > cfg.max_interp_alpha;
   prepare_sources(p, src);
   prepare_outer(p, outer, set.threads);
 }
@@ -693,23 +888,17 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   if (!plan_tasks(p, roots, limit, set.threads, lists, visits))
     return fall_back(src, outer, set, visits, since(start));
 
-  // Slots of the boxes that carry interpolation points.
-  std::vector<int> sslot(p.st->nodes().size(), -1), oslot(p.ot->nodes().size(), -1);
-  std::vector<int> snodes, onodes;
+  // The boxes with grids: those the interactions use and their descendants with grids
+  // (reached by M2M and L2L).
+  std::vector<char> smark(p.st->nodes().size(), 0), omark(p.ot->nodes().size(), 0);
   for (const auto& list : lists)
     for (const Interaction& it : list) {
-      if ((it.op == kM2P || it.op == kM2L) && sslot[static_cast<size_t>(it.s)] < 0) {
-        sslot[static_cast<size_t>(it.s)] = static_cast<int>(snodes.size());
-        snodes.push_back(it.s);
-      }
-      if ((it.op == kP2L || it.op == kM2L) && oslot[static_cast<size_t>(it.t)] < 0) {
-        oslot[static_cast<size_t>(it.t)] = static_cast<int>(onodes.size());
-        onodes.push_back(it.t);
-      }
+      if (it.op == kM2P || it.op == kM2L) mark_subtree(*p.st, p.has_proxy, it.s, smark);
+      if (it.op == kP2L || it.op == kM2L) mark_subtree(*p.ot, p.has_local, it.t, omark);
     }
   PassStats stats;
   DualTreeOps ops;
-  count_work(p, lists, snodes, onodes, stats, ops);
+  count_work(p, lists, smark, omark, stats, ops);
   stats.node_pairs = visits;
   stats.plan_seconds = since(start);
   if (ops_ != nullptr) *ops_ = ops;
@@ -721,12 +910,16 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   if (cfg_.cost_model && planned > kFallBack * all_pairs)
     return fall_back(src, outer, set, visits, stats.plan_seconds);
 
-  std::vector<ProxySet> sprox(snodes.size()), oprox(onodes.size());
-#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads)
-  for (size_t i = 0; i < snodes.size(); ++i) source_proxies(p, snodes[i], sprox[i]);
+  std::vector<int> sslot(p.st->nodes().size(), -1);
+  std::vector<ProxySet> sprox;
+  source_upward(p, smark, sslot, sprox, set.threads);
   std::vector<Acc> acc(static_cast<size_t>(p.ot->size()));
-#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads)
-  for (size_t r = 0; r < roots.size(); ++r) execute(p, lists[r], sslot, sprox, oslot, oprox, acc);
+  std::int64_t skipped = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : skipped)
+  for (size_t r = 0; r < roots.size(); ++r)
+    skipped += execute(p, roots[r], lists[r], sslot, sprox, acc);
+  stats.near_pairs -= skipped;
+  if (ops_ != nullptr) ops_->point_pruned = skipped;
 
   const int d = p.d;
   PassSums out = allocate_sums(p.ot->size(), d, p.flags);

@@ -10,8 +10,13 @@
 //     P2L    S's points to T's interpolation points (locals)             cost P |S|
 //     M2L    S's interpolation points to T's                             cost P²
 // (P = n^d points per box); otherwise the larger node is split, and leaf pairs (or
-// small pairs) are summed directly (P2P) with the vectorised kernel. After the
-// traversal each box's locals are interpolated to its points (L2P).
+// small pairs) are summed directly (P2P) with the vectorised kernel. Above
+// max_interp_alpha (pruning only), a leaf pair's source box is also pruned point by
+// point, with each outer point's own lower bound and distance to the box. Proxy weights
+// are computed upwards (M2M from children's grids, anterpolation from the points of
+// children without grids) and locals pushed downwards (L2L to children's grids, L2P to
+// the points of the others): both translations are exact for tensor polynomials of
+// degree n − 1, so they add no error term.
 //
 // Budget. Before the traversal, a lower bound L(o) of every sum is computed from one
 // source leaf near o (all terms ≥ 0). Pair (T, S) may use an approximation with error
@@ -44,6 +49,8 @@ int degree_for(double tau);
 /// Counts of each operation of the last pass (tests check that each one was used).
 struct DualTreeOps {
   std::int64_t p2p = 0, m2p = 0, p2l = 0, m2l = 0, prune = 0;
+  std::int64_t point_pruned = 0;  ///< direct pairs skipped by pruning point by point
+  std::int64_t m2m = 0, l2l = 0;  ///< translations between a box's grid and a child's
 };
 
 std::unique_ptr<PairSumBackend> make_dual_tree_backend(const DualTreeConfig& config,

@@ -59,6 +59,11 @@ Eigen::VectorXd control_at(const Mesh& mesh, ControlKind kind, const Eigen::Vect
 /// Reference positions of the quadrature points of `mesh`: row e·nq + q is point q of e.
 Eigen::MatrixXd quadrature_positions(const Mesh& mesh, const ReferenceGeometry& geometry);
 
+/// The control field m of `kind` on `mesh` at the quadrature points of `assembler`'s mesh
+/// (E by nq, the layout of ControlSpace::to_quadrature): control_at those points.
+Eigen::MatrixXd control_on_quadrature(const Assembler& assembler, const Mesh& mesh,
+                                      ControlKind kind, const Eigen::VectorXd& m);
+
 /// Nodal displacements on `fine` of the coarse field u(X) = Σ_a N_a(ξ) u_a (the coarse
 /// element containing each fine node). Throws InvalidArgument if a node is outside.
 Eigen::VectorXd prolongate(const Mesh& coarse, const Eigen::VectorXd& u_coarse, const Mesh& fine);
