@@ -13,6 +13,7 @@
 #include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/cloud.hpp"
+#include "softhd/fe/forward.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/output.hpp"
@@ -187,15 +188,7 @@ int forward(const Args& args) {
     write_control_file(args.write_nodes, positions, m);
     return 0;
   }
-  for (Eigen::Index k = 0; k < m.size(); ++k) {
-    if (!(m[k] >= scene.control_lower && m[k] <= scene.control_upper)) {
-      std::ostringstream os;
-      os << "control value " << m[k] << " at node " << k << " (" << positions.row(k)
-         << ") is outside the scene's bounds [" << scene.control_lower << ", "
-         << scene.control_upper << "]";
-      throw softhd::InvalidArgument(os.str());
-    }
-  }
+  check_control_bounds(scene, control, assembler.mesh(), m);
   for (const Eigen::VectorXd& X : args.probes) {
     Eigen::VectorXd xi;
     if (X.size() != scene.dim() || locate(assembler.mesh(), X, &xi) < 0) {
@@ -205,7 +198,8 @@ int forward(const Args& args) {
     }
   }
   softhd::set_threads(args.threads);
-  NewtonOptions options;
+  ForwardOptions fo;
+  NewtonOptions& options = fo.newton;
   options.verbose = args.verbose;
   options.displacement_tolerance = args.step_tol;
   options.initial_load_increment = args.load_increment;
@@ -214,14 +208,11 @@ int forward(const Args& args) {
   options.tangent.reuse_factorization = !args.factorize_every_step;
   if (!args.linear_solver.empty())
     options.tangent.linear_solver = parse_linear_solver(args.linear_solver);
-  NewtonSolver newton(assembler, options);
-  const Eigen::MatrixXd m_qp = control.to_quadrature(m);
-  GridSequencingOptions grid;
-  grid.levels = args.coarse_levels;
-  GridSequencingReport grid_report;
-  State state = grid_sequenced_start(scene, assembler, m, options, grid, &grid_report);
-  std::cerr << grid_report.BriefReport();
-  const NewtonSummary summary = newton.solve(m_qp, &state);
+  fo.grid.levels = args.coarse_levels;
+  const ForwardResult fr = solve_forward(scene, assembler, control, m, fo);
+  std::cerr << fr.grid.BriefReport();
+  const State& state = fr.state;
+  const NewtonSummary& summary = fr.summary;
   const Eigen::MatrixXd J = assembler.jacobians(state.u);
   std::filesystem::create_directories(args.out_dir);
   const std::string vtu = (std::filesystem::path(args.out_dir) / "forward.vtu").string();
@@ -229,10 +220,7 @@ int forward(const Args& args) {
   if (!args.write_cloud.empty() && summary.converged()) {
     const softhd::PointCloud cloud =
         deformed_cloud(assembler, state.u, CloudPoints::kNodes, CloudVolumes::kDeformed);
-    if (std::filesystem::path(args.write_cloud).extension() == ".ply")
-      softhd::write_ply_cloud(args.write_cloud, cloud);
-    else
-      softhd::write_text_cloud(args.write_cloud, cloud);
+    softhd::write_cloud(args.write_cloud, cloud);
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -249,21 +237,17 @@ int forward(const Args& args) {
                         {"u", std::vector<double>(u.data(), u.data() + u.size())}});
     }
     j["probes"] = probes;
-    double energy = 0.0;
-    assembler.evaluate(state.u, state.m_qp, &energy, nullptr, nullptr);
-    j["energy"] = energy;
-    j["volume"] = assembler.deformed_volume(state.u);
-    j["min_J"] = J.minCoeff();
+    j["energy"] = fr.energy;
+    j["volume"] = fr.volume;
+    j["min_J"] = fr.min_J;
     j["newton_iterations"] = summary.newton_iterations;
     j["factorizations"] = summary.factorizations;
     j["krylov_iterations"] = summary.krylov_iterations;
     j["load_steps"] = summary.load_steps;
     j["dofs"] = assembler.dofs().num_free;
     // Solve time: the coarse levels' Newton solves and the fine one (no file I/O).
-    double solve_seconds = summary.seconds_total;
     nlohmann::json levels = nlohmann::json::array();
-    for (const GridLevelReport& level : grid_report.levels) {
-      solve_seconds += level.newton.seconds_total;
+    for (const GridLevelReport& level : fr.grid.levels) {
       levels.push_back(
           {{"cells", std::vector<int>(level.cells.data(), level.cells.data() + level.cells.size())},
            {"newton_iterations", level.newton.newton_iterations},
@@ -271,7 +255,7 @@ int forward(const Args& args) {
            {"seconds", level.newton.seconds_total}});
     }
     j["coarse_levels"] = levels;
-    j["seconds_solve"] = solve_seconds;
+    j["seconds_solve"] = fr.seconds_solve;
     j["seconds"] = seconds;
     j["vtu"] = vtu;
     std::cout << j.dump(2) << "\n";

@@ -17,16 +17,15 @@
 #include "commands.hpp"
 #include "softhd/control/bounded_optimizer.hpp"
 #include "softhd/control/run_log.hpp"
+#include "softhd/control/scene_target.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/shape_tracking.hpp"
-#include "softhd/control/targets.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/io/vtu.hpp"
 #include "softhd/parallel.hpp"
-#include "softhd/samplers.hpp"
 
 namespace softhd::cli {
 
@@ -85,109 +84,6 @@ writes: history.csv, control.csv (readable by 'softhd forward --control'),
 body_NNNN.vtu, target.vtu, body.pvd, body_final.ply, target.ply, summary.json,
 checkpoint.bin, and convergence.png when python3 with matplotlib is available.
 )";
-
-/// Nodal values of the control (for VTU): vertex controls interpolated bilinearly at
-/// every node (Q2 mid-nodes included), element controls as cell data elsewhere.
-Eigen::VectorXd control_at_nodes(const fe::Mesh& mesh, const fe::ControlSpace& space,
-                                 const Eigen::VectorXd& m) {
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(mesh.num_nodes());
-  if (space.kind() != fe::ControlKind::kVertex) return out;
-  for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n) {
-    Eigen::VectorXd xi;
-    const int e = fe::locate(mesh, mesh.nodes.row(n).transpose(), &xi);
-    if (e < 0) continue;
-    double value = 0.0;
-    for (int c = 0; c < mesh.element_vertices.cols(); ++c) {
-      double w = 1.0;
-      for (int k = 0; k < mesh.dim; ++k) {
-        const int bit = (c >> k) & 1;  // tensor-product corner order
-        w *= bit ? 0.5 * (1.0 + xi[k]) : 0.5 * (1.0 - xi[k]);
-      }
-      value += w * m[mesh.element_vertices(e, c)];
-    }
-    out[n] = value;
-  }
-  return out;
-}
-
-struct Target {
-  PointCloud cloud;
-  std::optional<Eigen::VectorXd> map_displacement;  // u_T at the nodes, if T is known
-  std::string description;
-};
-
-// Counts of the arc target's sampling grid: integers from 1 to 1e6, and a grid whose
-// estimated memory (about 100 bytes a point with the distance's trees) fits the limit.
-Eigen::Vector3i arc_grid(const fe::Scene& scene, const nlohmann::json& t, double memory_limit) {
-  // Default resolution: a cell-centred grid twice as fine as the mesh's nodes.
-  Eigen::Vector3i counts = (2 * scene.order * scene.cells).head<3>();
-  if (t.contains("cells")) {
-    const nlohmann::json& c = t["cells"];
-    if (!c.is_array() || c.size() != 3)
-      throw InvalidArgument(scene.source + ": target.cells must be an array of 3 integers");
-    for (int k = 0; k < 3; ++k) {
-      if (!c[k].is_number_integer() || c[k].get<double>() < 1 || c[k].get<double>() > 1e6)
-        throw InvalidArgument(scene.source +
-                              ": target.cells must hold integers from 1 to 1e6, got " + c.dump());
-      counts[k] = c[k].get<int>();
-    }
-  }
-  const double points = double(counts[0]) * counts[1] * counts[2];
-  if (points * 100.0 > memory_limit)
-    throw ResourceError(
-        scene.source + ": target.cells asks for " + std::to_string(points) + " points, about " +
-        std::to_string(points * 100.0 / (1u << 30)) + " GiB, above the memory limit of " +
-        std::to_string(memory_limit / (1u << 30)) + " GiB (raise the limit: --max-memory GIB)");
-  return counts;
-}
-
-Target make_target(const fe::Scene& scene, const fe::Mesh& mesh,
-                   const std::optional<std::string>& file, int dim_hint, double memory_limit) {
-  if (file) return {read_cloud(*file, dim_hint), std::nullopt, "cloud file " + *file};
-  if (scene.target_json.empty())
-    throw InvalidArgument(scene.source + ": the scene has no \"target\"; give --target FILE");
-  const nlohmann::json t = nlohmann::json::parse(scene.target_json);
-  if (!t.is_object())
-    throw InvalidArgument(scene.source + ": key 'target' must be an object, got " + t.dump());
-  if (!t.contains("kind") || !t["kind"].is_string())
-    throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\"");
-  const std::string kind = t["kind"].get<std::string>();
-  if (kind == "arc") {
-    if (scene.dim() != 3) throw InvalidArgument(scene.source + ": target.kind arc needs a 3D body");
-    ArcMap T;
-    T.length = scene.upper[0] - scene.lower[0];
-    T.thickness = scene.upper[2] - scene.lower[2];
-    if (t.contains("angle")) {
-      if (!t["angle"].is_number())
-        throw InvalidArgument(scene.source + ": target.angle must be a number (radians)");
-      T.angle = t["angle"].get<double>();
-    }
-    T.validate();
-    const Eigen::Vector3i counts = arc_grid(scene, t, memory_limit);
-    const PointCloud grid = sample_box_grid(scene.lower, scene.upper, counts);
-    std::ostringstream d;
-    d << "arc of " << T.angle * 180.0 / M_PI << " degrees, " << counts[0] << "x" << counts[1] << "x"
-      << counts[2] << " cell-centred grid";
-    return {T.apply(grid), T.displacement(mesh), d.str()};
-  }
-  if (kind == "cloud") {
-    if (!t.contains("file") || !t["file"].is_string())
-      throw InvalidArgument(scene.source + ": target.file must be a path string");
-    const fs::path dir = fs::path(scene.source).parent_path();
-    const fs::path f = (dir / t["file"].get<std::string>()).lexically_normal();
-    PointCloud cloud = read_cloud(f.string(), scene.dim());
-    if (!t.contains("solved_on")) return {cloud, std::nullopt, "cloud file " + f.string()};
-    // A manufactured target: the deformed nodes of a state solved on another scene's mesh.
-    if (!t["solved_on"].is_string())
-      throw InvalidArgument(scene.source + ": target.solved_on must be a scene path string");
-    const fs::path source = (dir / t["solved_on"].get<std::string>()).lexically_normal();
-    const NodalMap T(fe::load_scene(source.string(), memory_limit).make_mesh(), cloud);
-    return {cloud, T.displacement(mesh),
-            "cloud file " + f.string() + " (deformed nodes of " + source.string() + ")"};
-  }
-  throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\", got \"" + kind +
-                        "\"");
-}
 
 nlohmann::json optional_json(const std::optional<double>& v) {
   return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
@@ -267,8 +163,8 @@ OptimiseArgs parse_optimise(Args& args) {
   const std::vector<std::string> pos = args.finish();
   if (pos.size() != 1) throw UsageError("expected one scene file (see --help)");
   a.scene_file = pos[0];
-  opt.validate();
-  so.hausdorff.params.validate();
+  a.tracking.validate();
+  so.validate();
   return a;
 }
 
@@ -297,7 +193,7 @@ class RunFiles {
   HausdorffResult write_body(int iteration, const Eigen::VectorXd& m, const Eigen::VectorXd& u) {
     const fe::Assembler& a = objective_.assembler();
     const HausdorffResult r = objective_.fields(u);
-    std::vector<VtuField> point{{"m", control_at_nodes(a.mesh(), space_, m)}};
+    std::vector<VtuField> point{{"m", fe::control_at_nodes(a.mesh(), space_, m)}};
     std::vector<VtuField> cell;
     if (objective_.options().particles == Particles::nodes)
       point.push_back({"d_tilde", r.field_moving});
@@ -410,7 +306,10 @@ int run_optimise(const std::vector<std::string>& tokens) {
   const fe::Assembler assembler = scene.make_assembler();
   const fe::Mesh& mesh = assembler.mesh();
   const fe::ControlSpace space(mesh, assembler.geometry(), scene.control_kind);
-  const Target target = make_target(scene, mesh, a.target_file, scene.dim(), a.memory_limit);
+  if (!a.target_file && scene.target_json.empty())
+    throw InvalidArgument(scene.source + ": the scene has no \"target\"; give --target FILE");
+  const SceneTarget target = a.target_file ? file_target(*a.target_file, scene.dim())
+                                           : scene_target(scene, mesh, a.memory_limit);
   if (target.cloud.dim() != scene.dim())
     throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
                           "D but the scene's body is " + std::to_string(scene.dim()) + "D");

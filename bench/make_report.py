@@ -318,6 +318,30 @@ def section_forward(rows):
     return text
 
 
+def section_python(rows):
+    """The Python module against C++ and plain PyTorch (bench/bench_python.py, issue 14)."""
+    text = ("## Python module (issue 14)\n\n"
+            "`softhd.distance` against the same `softhd::hausdorff` call from C++ (exact, value "
+            "+ gradient; goal: overhead <= 5 %), and `softhd.torch.HausdorffLoss` value + "
+            "backward against a plain PyTorch implementation of formulation.md §2 (float64, "
+            "chunked `cdist` + `logsumexp`, autograd; goal >= 30x, values equal to 1e-12 "
+            "relative). Minimum and median seconds of the repeats (plain PyTorch: one run).\n\n")
+    out = []
+    by = {}
+    for r in rows:
+        by.setdefault(r["benchmark"], []).append(r)
+    for bench, rs in by.items():
+        base = num(rs[0], "min_seconds")
+        for r in rs:
+            ratio = num(r, "min_seconds") / base
+            out.append([bench, r["n"], r["implementation"], num(r, "min_seconds"),
+                        num(r, "median_seconds"), ratio, num(r, "relative_difference"),
+                        num(r, "overhead_inside_call")])
+    return text + table(["benchmark", "N = M", "implementation", "min s", "median s",
+                         "time / first row", "value rel. diff.",
+                         "Python wall − C++ time, within one call (fraction)"], out)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__)
     p.add_argument("out")
@@ -339,7 +363,8 @@ def main():
                 ("control", lambda r: section_control(r, out, a.report)),
                 ("stability", section_stability),
                 ("kernel", section_kernel),
-                ("forward_fenics", section_forward)]
+                ("forward_fenics", section_forward),
+                ("python", section_python)]
     for name, make in sections:
         rows = load(os.path.join(out, name + ".csv"))
         if rows:

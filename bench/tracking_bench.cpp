@@ -7,6 +7,7 @@
 #include <random>
 #include <sstream>
 
+#include "softhd/control/scene_target.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/samplers.hpp"
@@ -29,14 +30,7 @@ Body make_body(fe::Scene scene, const Eigen::Vector3i& cells, const Eigen::Vecto
   return b;
 }
 
-ArcMap arc_of(const fe::Scene& scene, double angle) {
-  ArcMap T;
-  T.length = scene.upper[0] - scene.lower[0];
-  T.thickness = scene.upper[2] - scene.lower[2];
-  T.angle = angle;
-  T.validate();
-  return T;
-}
+ArcMap arc_of(const fe::Scene& scene, double angle) { return arc_map(scene, angle); }
 
 Eigen::VectorXd arc_displacement(const ArcMap& T, const fe::Mesh& mesh,
                                  const Eigen::Vector3d& shift) {

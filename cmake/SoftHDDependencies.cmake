@@ -33,14 +33,56 @@ if(NOT TARGET NLopt::nlopt_cxx)
 endif()
 softhd_require(NLopt_FOUND libnlopt-cxx-dev "NLopt with its C++ API")
 
+# The Python module (python/): built when pybind11 and the Python headers are found, unless
+# SOFTHD_BUILD_PYTHON is set OFF. Debian: pybind11-dev, python3-dev (and python3-numpy).
+find_package(Python3 COMPONENTS Interpreter Development.Module QUIET)
+if(Python3_Development.Module_FOUND)
+  set(PYBIND11_FINDPYTHON ON)
+  find_package(pybind11 CONFIG QUIET)
+endif()
+if(SOFTHD_SANITIZE OR SOFTHD_FUZZ)
+  # An instrumented module needs an instrumented interpreter: the sanitizer and fuzz builds
+  # leave the Python module out (its tests run in the main suite).
+  option(SOFTHD_BUILD_PYTHON "Build the Python module softhd (pybind11)" OFF)
+elseif(Python3_Development.Module_FOUND AND pybind11_FOUND)
+  option(SOFTHD_BUILD_PYTHON "Build the Python module softhd (pybind11)" ON)
+else()
+  option(SOFTHD_BUILD_PYTHON "Build the Python module softhd (pybind11)" OFF)
+  message(STATUS "softhd: the Python module is not built (needs the Debian packages "
+    "pybind11-dev and python3-dev)")
+endif()
+if(SOFTHD_BUILD_PYTHON)
+  softhd_require(Python3_Development.Module_FOUND python3-dev "the Python headers")
+  softhd_require(pybind11_FOUND pybind11-dev "pybind11")
+endif()
+
 if(SOFTHD_BUILD_TESTS)
   find_package(GTest CONFIG QUIET)
   softhd_require(GTest_FOUND libgtest-dev "GoogleTest")
 endif()
 
+# SOFTHD_NATIVE: tune softhd's own targets (library, tools, tests, benchmarks, Python module)
+# for the build machine. Private to each target: users of the installed library are not
+# given -march=native (Eigen's alignment, the ABI-relevant part, is fixed in lib/).
+set(SOFTHD_NATIVE_FLAGS "")
+if(SOFTHD_NATIVE)
+  include(CheckCXXCompilerFlag)
+  check_cxx_compiler_flag(-march=native SOFTHD_HAS_MARCH_NATIVE)
+  check_cxx_compiler_flag(-mno-avx512f SOFTHD_HAS_NO_AVX512)
+  if(SOFTHD_HAS_MARCH_NATIVE)
+    list(APPEND SOFTHD_NATIVE_FLAGS -march=native)
+  endif()
+  if(SOFTHD_HAS_NO_AVX512)
+    # AVX2 at most: g++ 12 reports false -Wmaybe-uninitialized warnings inside
+    # Eigen's AVX-512 reductions, and the pair kernel is bound by sqrt and division,
+    # whose throughput AVX-512 does not raise on common CPUs.
+    list(APPEND SOFTHD_NATIVE_FLAGS -mno-avx512f)
+  endif()
+endif()
+
 # Per-target settings (no global flags): warnings, optional tuning and sanitizers.
 function(softhd_target_defaults target)
-  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic ${SOFTHD_NATIVE_FLAGS})
   # softhd never reads errno after a math call; without this flag g++ cannot
   # vectorise sqrt in the pair loops (it must keep a scalar errno path).
   target_compile_options(${target} PRIVATE -fno-math-errno)

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages softhd needs to build, test, run the demo, draw its
-# plots and build the API reference (doxygen), and only those that are missing.
+# plots, build and test the Python module (pybind11, pytest, PyTorch for softhd.torch) and
+# build the API reference (doxygen), and only those that are missing.
 # Safe to run again.
 set -euo pipefail
 
@@ -9,6 +10,7 @@ packages=(
   libeigen3-dev libnanoflann-dev libnlopt-cxx-dev libgtest-dev nlohmann-json3-dev
   libsuitesparse-dev libopenblas0-pthread
   python3 python3-matplotlib python3-numpy
+  python3-dev pybind11-dev python3-pytest python3-torch
   clang libclang-rt-14-dev libomp-14-dev
   doxygen
 )

@@ -3,7 +3,7 @@
 #
 #   scripts/run_benchmarks.sh [--quick] [--only a,b,...] BUILD_DIR OUT_DIR REPORT
 #
-# Benchmarks: kernel, hausdorff, resolution, control, stability, forward_fenics (--only picks some; the
+# Benchmarks: kernel, hausdorff, resolution, control, stability, forward_fenics, python (--only picks some; the
 # report then also uses the CSVs already in OUT_DIR for the others). Each writes
 # OUT_DIR/<name>.csv, its log OUT_DIR/<name>.log and OUT_DIR/<name>.meta (command, date,
 # commit, machine, load before and after); then bench/make_report.py writes REPORT and the
@@ -11,7 +11,7 @@
 # suite runs it). Exit code: non-zero if any benchmark or the report failed.
 set -euo pipefail
 quick=0
-only="kernel,hausdorff,resolution,control,stability,forward_fenics"
+only="kernel,hausdorff,resolution,control,stability,forward_fenics,python"
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1; shift ;;
@@ -52,12 +52,21 @@ run() {  # name command...
 }
 
 b="$build/bench"
+python_bench() {  # bench/bench_python.py, when the Python module is built
+  if [ ! -d "$build/python/softhd" ]; then
+    echo "== python: skipped (the Python module is not built: pybind11-dev, python3-dev)" >&2
+    return 0
+  fi
+  run python env PYTHONPATH="$build/python" /usr/bin/python3 "$here/bench/bench_python.py" \
+    --build "$build" --csv "$out/python.csv" "$@"
+}
 if [ $quick -eq 1 ]; then
   run kernel "$b/bench_kernel" --n 4000 --repeats 1 --csv "$out/kernel.csv"
   run hausdorff "$b/bench_hausdorff" --quick --csv "$out/hausdorff_ladder.csv"
   run resolution "$b/bench_resolution" --quick --csv "$out/resolution.csv"
   run control "$b/bench_control" --quick --csv "$out/control.csv"
   run stability "$b/bench_stability" --quick --csv "$out/stability.csv"
+  python_bench --n 2000 --torch-n 1000 --repeats 2
 else
   run kernel "$b/bench_kernel" --n 20000 --repeats 5 --csv "$out/kernel.csv"
   # The Hausdorff ladder and the N = M = 1e5 goal run of issue 3 (see bench/run_hausdorff.sh).
@@ -71,6 +80,8 @@ else
   # softhd forward against FEniCS (skipped, with a line, without python3-dolfin).
   run forward_fenics /usr/bin/python3 "$here/bench/bench_forward_fenics.py" "$build" \
     --repeats 3 --csv "$out/forward_fenics.csv"
+  # The Python module: overhead over C++ and HausdorffLoss against plain PyTorch (issue 14).
+  python_bench --n 10000 --torch-n 10000 --repeats 5
 fi
 /usr/bin/python3 "$here/bench/make_report.py" "$out" --report "$report" $([ $quick -eq 1 ] && echo --quick)
 echo "report: $report" >&2

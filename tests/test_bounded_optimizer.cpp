@@ -150,18 +150,53 @@ TEST(BoundedOptimizer, StopsOnIterationsTargetAndFailedStart) {
   BoundedOptimizerSummary s = minimise(f, x0, lo, hi, o);
   EXPECT_EQ(s.iterations, 2);
   EXPECT_EQ(s.termination, "the iteration limit was reached");
+  EXPECT_EQ(s.status, OptimizerStatus::iteration_limit);
+  EXPECT_FALSE(s.converged);
   o.max_iterations = 100;
   o.target_value = 1.001;
   s = minimise(f, x0, lo, hi, o);
   EXPECT_LE(s.final_value, 1.001);
   EXPECT_TRUE(s.converged);
   EXPECT_EQ(s.termination, "J reached the target value");
+  EXPECT_EQ(s.status, OptimizerStatus::target_value);
   const BoundedObjective broken = [](const Eigen::VectorXd&, double&, Eigen::VectorXd*) {
     return false;
   };
   s = minimise(broken, x0, lo, hi);
   EXPECT_EQ(s.termination, "the evaluation at the starting point failed");
+  EXPECT_EQ(s.status, OptimizerStatus::start_failed);
+  EXPECT_EQ(to_string(s.status), "start_failed");
   EXPECT_FALSE(s.converged);
+}
+
+// An iteration observer that throws StopRequest ends the run after that iteration, with
+// the best point so far and its own termination.
+TEST(BoundedOptimizer, ObserverCanStopTheRun) {
+  const BoundedObjective f = [](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+    v = (x.array() - 0.25).pow(4).sum() + 1.0;
+    if (g) *g = 4 * (x.array() - 0.25).cube().matrix();
+    return true;
+  };
+  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(3, -1), hi = Eigen::VectorXd::Constant(3, 1);
+  BoundedOptimizerOptions o;
+  o.relative_change = 0.0;
+  int calls = 0;
+  Eigen::VectorXd seen;
+  const BoundedOptimizerSummary s =
+      minimise(f, Eigen::VectorXd::Constant(3, 0.9), lo, hi, o,
+               [&](const IterationRecord& rec, const Eigen::VectorXd& x) {
+                 ++calls;
+                 seen = x;
+                 if (rec.iteration == 3) throw StopRequest{};
+               });
+  EXPECT_EQ(calls, 3);
+  EXPECT_EQ(s.iterations, 3);
+  EXPECT_EQ(s.termination, "stopped by the caller");
+  EXPECT_EQ(s.status, OptimizerStatus::stopped);
+  EXPECT_EQ(s.BriefReport().rfind("stopped (stopped by the caller): 3 iterations", 0), 0u)
+      << s.BriefReport();
+  EXPECT_FALSE(s.converged);
+  EXPECT_EQ(s.x, seen);
 }
 
 TEST(BoundedOptimizer, RejectsInconsistentInput) {

@@ -5,28 +5,44 @@
 #include <nlopt.hpp>
 #include <sstream>
 
+#include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 
 namespace softhd {
 
-std::string to_string(Algorithm a) {
-  switch (a) {
-    case Algorithm::mma:
-      return "mma";
-    case Algorithm::ccsaq:
-      return "ccsaq";
-    case Algorithm::lbfgs:
-      return "lbfgs";
-    case Algorithm::slsqp:
-      return "slsqp";
-  }
-  return "unknown";
-}
+namespace {
+constexpr EnumNames<Algorithm, 4> kAlgorithmNames{{{Algorithm::mma, "mma"},
+                                                   {Algorithm::ccsaq, "ccsaq"},
+                                                   {Algorithm::lbfgs, "lbfgs"},
+                                                   {Algorithm::slsqp, "slsqp"}}};
+}  // namespace
+
+std::string to_string(Algorithm a) { return enum_name(kAlgorithmNames, a); }
 
 Algorithm algorithm_from_string(const std::string& name) {
-  for (Algorithm a : {Algorithm::mma, Algorithm::ccsaq, Algorithm::lbfgs, Algorithm::slsqp})
-    if (to_string(a) == name) return a;
-  throw InvalidArgument("unknown algorithm '" + name + "' (expected mma, ccsaq, lbfgs or slsqp)");
+  return enum_from_name(kAlgorithmNames, name, "algorithm");
+}
+
+namespace {
+constexpr EnumNames<OptimizerStatus, 10> kStatusNames{{
+    {OptimizerStatus::iteration_limit, "iteration_limit"},
+    {OptimizerStatus::evaluation_limit, "evaluation_limit"},
+    {OptimizerStatus::time_limit, "time_limit"},
+    {OptimizerStatus::relative_change, "relative_change"},
+    {OptimizerStatus::target_value, "target_value"},
+    {OptimizerStatus::nlopt_converged, "nlopt_converged"},
+    {OptimizerStatus::no_progress, "no_progress"},
+    {OptimizerStatus::stopped, "stopped"},
+    {OptimizerStatus::start_failed, "start_failed"},
+    {OptimizerStatus::nlopt_failure, "nlopt_failure"},
+}};
+}  // namespace
+
+std::string to_string(OptimizerStatus status) { return enum_name(kStatusNames, status); }
+
+bool is_converged(OptimizerStatus status) {
+  return status == OptimizerStatus::relative_change || status == OptimizerStatus::target_value ||
+         status == OptimizerStatus::nlopt_converged || status == OptimizerStatus::no_progress;
 }
 
 void BoundedOptimizerOptions::validate() const {
@@ -66,7 +82,7 @@ nlopt::algorithm nlopt_algorithm(Algorithm a) {
 }
 
 // Why the driver asked NLopt to stop (NLopt only knows "forced stop").
-enum class Stop { none, iterations, relative_change, target, time };
+enum class Stop { none, iterations, relative_change, target, time, requested };
 
 // The scale of f for one NLopt run. MMA's conservative approximation adds, per variable,
 // (|g_j| σ_j + ρ/2) Δz_j² / (σ_j² − Δz_j²) to the linear term, ρ starting at 1 in every run
@@ -181,10 +197,16 @@ struct Driver {
         gz.size() ? projected_gradient_norm(z, gz, zlo, zhi) : std::nan("");
     rec.seconds = seconds();
     summary.history.push_back(rec);
-    if (on_iteration) on_iteration(rec, summary.x);
     Stop s = Stop::none;
+    try {
+      if (on_iteration) on_iteration(rec, summary.x);
+    } catch (const StopRequest&) {
+      s = Stop::requested;
+    }
     if (std::fabs(previous - f) > options.relative_change * std::fabs(f)) small_changes = 0;
-    if (f <= options.target_value) {
+    if (s == Stop::requested) {
+      // the caller's observer ended the run
+    } else if (f <= options.target_value) {
       s = Stop::target;
     } else if (std::fabs(previous - f) <= options.relative_change * std::fabs(f) &&
                ++small_changes >= 3) {
@@ -267,6 +289,7 @@ BoundedOptimizerSummary minimise(
   double f = 0.0;
   if (!objective(x0, f, &g) || !std::isfinite(f) || g.size() != n || !g.allFinite()) {
     d.summary.failed_evaluations = 1;
+    d.summary.status = OptimizerStatus::start_failed;
     d.summary.termination = "the evaluation at the starting point failed";
     d.summary.x = x0;
     d.summary.initial_value = d.summary.final_value = std::nan("");
@@ -280,6 +303,7 @@ BoundedOptimizerSummary minimise(
   d.summary.initial_value = d.summary.final_value = f;
   d.summary.x = x0;
   if (f <= options.target_value) {
+    d.summary.status = OptimizerStatus::target_value;
     d.summary.converged = true;
     d.summary.termination = "the starting value already reaches the target value";
     d.summary.seconds = d.seconds();
@@ -289,6 +313,7 @@ BoundedOptimizerSummary minimise(
   // NLopt on the whole box, or in rounds on a moving box of half-width
   // move_limit · (upper − lower) around the best point (move limits).
   std::string nlopt_reason;
+  OptimizerStatus nlopt_status = OptimizerStatus::nlopt_failure;  // goes with nlopt_reason
   double delta = options.move_limit;
   while (true) {
     Eigen::VectorXd lo = d.zlo, hi = d.zhi;
@@ -299,6 +324,7 @@ BoundedOptimizerSummary minimise(
     const int remaining = options.max_evaluations - d.summary.evaluations;
     if (remaining <= 0) {
       nlopt_reason = "the evaluation limit was reached";
+      nlopt_status = OptimizerStatus::evaluation_limit;
       break;
     }
     if (delta > 0.0) {
@@ -324,23 +350,31 @@ BoundedOptimizerSummary minimise(
       switch (r) {
         case nlopt::MAXEVAL_REACHED:
           nlopt_reason = "the evaluation limit was reached";
+          nlopt_status = OptimizerStatus::evaluation_limit;
           break;
         case nlopt::FTOL_REACHED:
         case nlopt::XTOL_REACHED:
         case nlopt::SUCCESS:
           nlopt_reason = "NLopt reports convergence";
+          nlopt_status = OptimizerStatus::nlopt_converged;
           break;
         default:
           nlopt_reason = "NLopt stopped (result code " + std::to_string(static_cast<int>(r)) + ")";
+          nlopt_status = OptimizerStatus::nlopt_failure;
       }
     } catch (const nlopt::forced_stop&) {
       // The driver's own stopping rules; see d.stop.
     } catch (const nlopt::roundoff_limited&) {
       nlopt_reason = "NLopt stopped: progress limited by round-off";
+      nlopt_status = OptimizerStatus::nlopt_failure;
     } catch (const std::invalid_argument& e) {
       nlopt_reason = std::string("NLopt rejected the problem: ") + e.what();
+      nlopt_status = OptimizerStatus::nlopt_failure;
     } catch (const std::runtime_error& e) {
-      if (d.stop == Stop::none) nlopt_reason = std::string("NLopt failed: ") + e.what();
+      if (d.stop == Stop::none) {
+        nlopt_reason = std::string("NLopt failed: ") + e.what();
+        nlopt_status = OptimizerStatus::nlopt_failure;
+      }
     }
     if (d.stop != Stop::none || delta <= 0.0) break;
     d.adapt_mma_gradient();
@@ -349,29 +383,36 @@ BoundedOptimizerSummary minimise(
     if (!(d.summary.final_value < round_start)) delta *= 0.5;
     if (delta < options.move_limit * 1e-3) {
       nlopt_reason = "no progress within the smallest move limit";
+      nlopt_status = OptimizerStatus::no_progress;
       break;
     }
   }
   switch (d.stop) {
     case Stop::iterations:
+      d.summary.status = OptimizerStatus::iteration_limit;
       d.summary.termination = "the iteration limit was reached";
       break;
     case Stop::relative_change:
+      d.summary.status = OptimizerStatus::relative_change;
       d.summary.termination = "the relative change of J fell below the tolerance";
-      d.summary.converged = true;
       break;
     case Stop::target:
+      d.summary.status = OptimizerStatus::target_value;
       d.summary.termination = "J reached the target value";
-      d.summary.converged = true;
       break;
     case Stop::time:
+      d.summary.status = OptimizerStatus::time_limit;
       d.summary.termination = "the wall-clock limit was reached";
       break;
+    case Stop::requested:
+      d.summary.status = OptimizerStatus::stopped;
+      d.summary.termination = "stopped by the caller";
+      break;
     case Stop::none:
+      d.summary.status = nlopt_status;
       d.summary.termination = nlopt_reason;
-      d.summary.converged = nlopt_reason == "NLopt reports convergence" ||
-                            nlopt_reason == "no progress within the smallest move limit";
   }
+  d.summary.converged = is_converged(d.summary.status);
   d.summary.seconds = d.seconds();
   return d.summary;
 }

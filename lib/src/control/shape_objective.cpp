@@ -5,6 +5,7 @@
 #include <deque>
 #include <optional>
 
+#include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/adjoint.hpp"
 #include "softhd/fe/cloud.hpp"
@@ -13,19 +14,20 @@
 
 namespace softhd {
 
-std::string to_string(Particles p) { return p == Particles::nodes ? "nodes" : "quadrature"; }
-std::string to_string(ParticleVolumes v) {
-  return v == ParticleVolumes::reference ? "reference" : "deformed";
-}
+namespace {
+constexpr EnumNames<Particles, 2> kParticles{
+    {{Particles::nodes, "nodes"}, {Particles::quadrature, "quadrature"}}};
+constexpr EnumNames<ParticleVolumes, 2> kVolumes{
+    {{ParticleVolumes::reference, "reference"}, {ParticleVolumes::deformed, "deformed"}}};
+}  // namespace
+
+std::string to_string(Particles p) { return enum_name(kParticles, p); }
+std::string to_string(ParticleVolumes v) { return enum_name(kVolumes, v); }
 Particles particles_from_string(const std::string& name) {
-  if (name == "nodes") return Particles::nodes;
-  if (name == "quadrature") return Particles::quadrature;
-  throw InvalidArgument("unknown particles '" + name + "' (expected nodes or quadrature)");
+  return enum_from_name(kParticles, name, "particles");
 }
 ParticleVolumes particle_volumes_from_string(const std::string& name) {
-  if (name == "reference") return ParticleVolumes::reference;
-  if (name == "deformed") return ParticleVolumes::deformed;
-  throw InvalidArgument("unknown volumes '" + name + "' (expected reference or deformed)");
+  return enum_from_name(kVolumes, name, "volumes");
 }
 
 namespace {
@@ -171,17 +173,26 @@ struct ShapeObjective::Impl {
   }
 };
 
+void ShapeObjectiveOptions::validate() const {
+  hausdorff.params.validate();
+  if (!(tikhonov_mass >= 0.0))
+    throw InvalidArgument("tikhonov_mass (Tikhonov weight M) must be >= 0");
+  if (!(tikhonov_gradient >= 0.0))
+    throw InvalidArgument("tikhonov_gradient (Tikhonov weight eps_m) must be >= 0");
+  if (warm_start_states < 1) throw InvalidArgument("warm_start_states must be >= 1");
+  if (coarse_correction_iterations < 0)
+    throw InvalidArgument("coarse_correction_iterations must be >= 0");
+  std::string error;
+  if (!newton.IsValid(&error)) throw InvalidArgument("newton: " + error);
+}
+
 ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::ControlSpace& control,
                                HausdorffTarget target, ShapeObjectiveOptions options) {
   if (target.cloud().dim() != assembler.mesh().dim) {
     throw InvalidArgument("the target cloud is " + std::to_string(target.cloud().dim()) +
                           "D but the body is " + std::to_string(assembler.mesh().dim) + "D");
   }
-  if (!(options.tikhonov_mass >= 0.0) || !(options.tikhonov_gradient >= 0.0))
-    throw InvalidArgument("Tikhonov weights M and eps_m must be >= 0");
-  if (options.warm_start_states < 1) throw InvalidArgument("warm_start_states must be >= 1");
-  if (options.coarse_correction_iterations < 0)
-    throw InvalidArgument("coarse_correction_iterations must be >= 0");
+  options.validate();
   if (options.newton.absolute_tolerance == 0.0) {
     // A floor under the relative residual test: the optimiser's small control changes
     // make |R(0; m)| tiny, and 1e-9 of a tiny reference lies below the residual's

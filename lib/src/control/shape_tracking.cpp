@@ -167,6 +167,7 @@ void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimize
   s->iterations = r.iterations;
   s->evaluations = r.evaluations;
   s->failed_evaluations = r.failed_evaluations;
+  s->status = r.status;
   s->termination = r.termination;
   s->converged = r.converged;
   s->replayed_evaluations = static_cast<int>(recorder.replayed());
@@ -218,18 +219,25 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
   return f;
 }
 
+void ShapeTrackingOptions::validate() const {
+  optimizer.validate();
+  if (!(self_floor_max_pairs >= 0.0)) throw InvalidArgument("self_floor_max_pairs must be >= 0");
+  if (checkpoint_every < 1) throw InvalidArgument("checkpoint_every must be >= 1");
+  if (resume && checkpoint.empty())
+    throw InvalidArgument("resume needs a checkpoint file (the checkpoint field is empty)");
+}
+
 ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorXd& lower,
                                  const Eigen::VectorXd& upper, const Eigen::VectorXd& m0_in,
                                  const std::optional<Eigen::VectorXd>& map_displacement,
                                  const ShapeTrackingOptions& options,
                                  const ShapeTrackingCallbacks& callbacks) {
+  options.validate();
   const fe::Mesh& mesh = objective.assembler().mesh();
   if (map_displacement && map_displacement->size() != mesh.num_nodes() * mesh.dim)
     throw InvalidArgument("track_shape: the known map has the wrong number of entries");
   if (m0_in.size() != lower.size() || lower.size() != upper.size())
     throw InvalidArgument("track_shape: m0, lower and upper differ in size");
-  if (options.checkpoint_every < 1)
-    throw InvalidArgument("track_shape: checkpoint_every must be >= 1");
   const Eigen::VectorXd m0 = m0_in.cwiseMax(lower).cwiseMin(upper);
   Recorder recorder(objective, options, run_fingerprint(objective, lower, upper, m0_in, options));
 
@@ -285,14 +293,20 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     it.seconds = recorder.seconds();
     it.replayed = last_replayed;
     s.history.push_back(it);
+    bool stop = false;
     try {
       // The snapshot after the callback: an iteration in the log had its outputs written.
-      if (callbacks.on_iteration) callbacks.on_iteration(it, m);
+      try {
+        if (callbacks.on_iteration) callbacks.on_iteration(it, m);
+      } catch (const StopRequest&) {
+        stop = true;  // minimise() ends the run after this iteration
+      }
       if (rec.iteration % options.checkpoint_every == 0)
         recorder.snapshot(rec.iteration, best_state);
     } catch (...) {
       error = std::current_exception();
     }
+    if (stop) throw StopRequest{};
   };
   BoundedOptimizerOptions opt = options.optimizer;
   if (opt.max_seconds > 0.0)  // a total over the resumes

@@ -2,15 +2,20 @@
 
 #include <Eigen/LU>
 
+#include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
+#include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/shape.hpp"
 
 namespace softhd::fe {
 
+namespace {
+constexpr EnumNames<ControlKind, 2> kControlKinds{
+    {{ControlKind::kVertex, "vertex"}, {ControlKind::kElement, "element"}}};
+}  // namespace
+
 ControlKind parse_control_kind(const std::string& name) {
-  if (name == "vertex") return ControlKind::kVertex;
-  if (name == "element") return ControlKind::kElement;
-  throw InvalidArgument("control space must be \"vertex\" or \"element\", got \"" + name + "\"");
+  return enum_from_name(kControlKinds, name, "control space");
 }
 
 ControlSpace::ControlSpace(const Mesh& mesh, const ReferenceGeometry& g, ControlKind kind)
@@ -115,6 +120,12 @@ double ControlSpace::regularisation(const Eigen::VectorXd& m, double Mreg, doubl
     }
   }
   return value;
+}
+
+Eigen::VectorXd control_at_nodes(const Mesh& mesh, const ControlSpace& space,
+                                 const Eigen::VectorXd& m) {
+  if (space.kind() != ControlKind::kVertex) return Eigen::VectorXd::Zero(mesh.num_nodes());
+  return control_at(mesh, ControlKind::kVertex, m, mesh.nodes);
 }
 
 }  // namespace softhd::fe

@@ -617,12 +617,25 @@ void write_ply_cloud(const std::string& path, const PointCloud& cloud, bool bina
   write_file(path, out);
 }
 
-PointCloud read_cloud(const std::string& path, int dim) {
-  check_dim(dim);
+namespace {
+bool is_ply_name(const std::string& path) {
   std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : std::string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (ext != ".ply") return read_text_cloud(path, dim);
+  return ext == ".ply";
+}
+}  // namespace
+
+void write_cloud(const std::string& path, const PointCloud& cloud) {
+  if (is_ply_name(path))
+    write_ply_cloud(path, cloud);
+  else
+    write_text_cloud(path, cloud);
+}
+
+PointCloud read_cloud(const std::string& path, int dim) {
+  check_dim(dim);
+  if (!is_ply_name(path)) return read_text_cloud(path, dim);
   PointCloud cloud = read_ply_cloud(path);
   if (dim != 0 && cloud.dim() != dim) {
     fail(path, "the file holds a " + std::to_string(cloud.dim()) +

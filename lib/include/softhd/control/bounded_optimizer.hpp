@@ -62,10 +62,30 @@ struct IterationRecord {
   double seconds = 0.0;                  ///< wall time since the start of minimise()
 };
 
+/// Why minimise() stopped.
+enum class OptimizerStatus {
+  iteration_limit,   ///< max_iterations accepted iterations
+  evaluation_limit,  ///< max_evaluations evaluations
+  time_limit,        ///< max_seconds of wall time
+  relative_change,   ///< J changed by ≤ relative_change three iterations in a row (converged)
+  target_value,      ///< J ≤ target_value (converged)
+  nlopt_converged,   ///< NLopt reports convergence (converged)
+  no_progress,       ///< no progress within the smallest move limit (converged)
+  stopped,           ///< an on_iteration observer threw StopRequest
+  start_failed,      ///< the evaluation at the starting point failed
+  nlopt_failure,     ///< NLopt stopped otherwise (round-off, a rejected problem; see termination)
+};
+
+/// "iteration_limit", "relative_change", ...: the enumerator's name.
+std::string to_string(OptimizerStatus status);
+/// True for the statuses that mean a tolerance or the target value was reached.
+bool is_converged(OptimizerStatus status);
+
 /// What minimise() did: why it stopped, the best point and the accepted iterations.
 struct BoundedOptimizerSummary {
-  std::string termination;               ///< why it stopped, one line
-  bool converged = false;                ///< stopped on a tolerance or the target value
+  OptimizerStatus status = OptimizerStatus::nlopt_failure;  ///< why it stopped
+  std::string termination;                                  ///< why it stopped, one line
+  bool converged = false;                                   ///< is_converged(status)
   double initial_value = 0.0;            ///< f at the start (NaN if that evaluation failed)
   double final_value = 0.0;              ///< f at the best point
   Eigen::VectorXd x;                     ///< the best point found
@@ -74,15 +94,23 @@ struct BoundedOptimizerSummary {
   int failed_evaluations = 0;            ///< evaluations that returned false (rejected points)
   double seconds = 0.0;                  ///< wall time of minimise()
   std::vector<IterationRecord> history;  ///< one record per accepted iteration
+
+  /// One line: status, iterations, evaluations, J from start to end, time.
+  std::string BriefReport() const;
 };
+
+/// Thrown by an `on_iteration` observer of minimise() to end the run after that iteration:
+/// minimise() then returns normally, with the termination "stopped by the caller" and
+/// converged false. A signal, not an error (not derived from std::exception).
+struct StopRequest {};
 
 /// Minimises f(x) subject to lower ≤ x ≤ upper.
 ///
 /// Internally the variables are z = x / s with s = max(|lower|, |upper|) per
 /// component (so z is O(1)), and f is divided by |f(x0)| (or 1 if it is 0).
 /// `on_iteration` (optional) is called after each accepted iteration with its record
-/// and the current best x; it may write a checkpoint. Throws InvalidArgument for
-/// inconsistent bounds or a start outside them (naming the component).
+/// and the current best x; it may write a checkpoint, and throw StopRequest to end the run. Throws
+/// InvalidArgument for inconsistent bounds or a start outside them (naming the component).
 BoundedOptimizerSummary minimise(
     const BoundedObjective& objective, const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
     const Eigen::VectorXd& upper, const BoundedOptimizerOptions& options = {},

@@ -51,6 +51,10 @@ struct ShapeObjectiveOptions {
   /// iterations (a large step); smaller steps keep the warm start and its path predictor,
   /// which is better for them (bending: 3 fine iterations instead of 5).
   int coarse_correction_iterations = 6;
+
+  /// Throws InvalidArgument naming the first invalid field (the distance's parameters and the
+  /// Newton options included).
+  void validate() const;
 };
 
 /// One evaluation of J(m).

@@ -64,6 +64,9 @@ struct ShapeTrackingOptions {
   /// The caller's part of the fingerprint (e.g. a content hash of the scene file);
   /// track_shape adds the mesh, controls, target, objective and optimiser settings.
   RunFingerprint fingerprint;
+
+  /// Throws InvalidArgument naming the first invalid field (the optimiser's included).
+  void validate() const;
 };
 
 /// The result of track_shape(): floors, final values, why it stopped, the shape error and
@@ -82,8 +85,9 @@ struct ShapeTrackingSummary {
   /// Accepted iterations, evaluations and failed evaluations, over all resumes.
   int iterations = 0, evaluations = 0, failed_evaluations = 0;
   ///@}
-  std::string termination;  ///< why the optimiser stopped, one line
-  bool converged = false;   ///< stopped on a tolerance, not on a limit
+  OptimizerStatus status = OptimizerStatus::nlopt_failure;  ///< why the optimiser stopped
+  std::string termination;                                  ///< why the optimiser stopped, one line
+  bool converged = false;  ///< stopped on a tolerance, not on a limit (is_converged(status))
   ///@{
   /// Max and RMS of |x_i − T(X_i)| over the nodes (with a known map only).
   std::optional<double> shape_error_max, shape_error_rms;
@@ -100,6 +104,9 @@ struct ShapeTrackingSummary {
   Eigen::VectorXd displacement;            ///< its state u
   std::vector<TrackingIteration> history;  ///< accepted iterations (replayed ones included)
   int replayed_evaluations = 0;            ///< served from the checkpoint
+
+  /// One line: status, iterations, evaluations, ρ̃ from start to end (and over the floor), time.
+  std::string BriefReport() const;
 };
 
 /// Max and RMS over the nodes of |x_i − T(X_i)| = |u_i − u_T,i| (node-major vectors).
@@ -110,7 +117,8 @@ std::pair<double, double> shape_error(const fe::Mesh& mesh, const Eigen::VectorX
 struct ShapeTrackingCallbacks {
   /// After the start state is solved and the floors are known (history still empty).
   std::function<void(const ShapeTrackingSummary&)> on_start;
-  /// After each accepted iteration, with the best control so far.
+  /// After each accepted iteration, with the best control so far. Throwing StopRequest
+  /// ends the run after this iteration (termination "stopped by the caller").
   std::function<void(const TrackingIteration&, const Eigen::VectorXd& m)> on_iteration;
   /// A failed state solve (the step is rejected and the run goes on).
   std::function<void(const std::string& report)> on_failure;

@@ -48,4 +48,10 @@ class ControlSpace {
   Eigen::MatrixXd weights_;          ///< E by nq
 };
 
+/// The control at every node of `mesh` (e.g. for VTU point data): vertex controls interpolated
+/// with their Q1 shape functions (Q2 mid-nodes included); zeros for element controls, which
+/// are cell data.
+Eigen::VectorXd control_at_nodes(const Mesh& mesh, const ControlSpace& space,
+                                 const Eigen::VectorXd& m);
+
 }  // namespace softhd::fe

@@ -24,6 +24,10 @@ PointCloud parse_ply_cloud(const std::string& data, const std::string& name);
 /// non-zero `dim` must agree with the file (z present <=> 3D).
 PointCloud read_cloud(const std::string& path, int dim = 0);
 
+/// Writes `cloud` with its volumes: binary PLY when the name ends in `.ply` (any case), text
+/// otherwise (write_ply_cloud, write_text_cloud). Throws FileError if it cannot write.
+void write_cloud(const std::string& path, const PointCloud& cloud);
+
 /// Reads a text cloud: one point per line, `x y [z] [V]`, fields separated by
 /// whitespace and/or single commas; `#` starts a comment (whole line or
 /// trailing); blank lines are skipped; CRLF line ends are accepted.

@@ -1,0 +1,151 @@
+"""softhd: the regularised Hausdorff distance between point clouds, and shape-tracking optimal
+control of soft bodies with it (docs/formulation.md). NumPy arrays in and out.
+
+Arrays
+------
+Points are (N, d) arrays (d = 2 or 3), volumes (N,) arrays (None: all 1). An input that is
+already a C-contiguous ``float64`` NumPy array (or anything exposing one, e.g. a contiguous
+float64 CPU tensor through ``numpy.asarray``) is passed to the library **without a copy**: the
+library reads the caller's memory in place. Any other input whose values are real numbers
+(integer or floating arrays of another precision, non-contiguous arrays, nested lists) is
+converted once with ``numpy.ascontiguousarray(x, dtype=numpy.float64)``; ``float128`` rounds to
+double. Boolean, complex, object and string data raise ``TypeError``.
+
+Errors
+------
+Every error of the library is a ``softhd.Error``: ``softhd.InvalidArgument`` (also a
+``ValueError``) for arguments outside their range, ``softhd.FileError`` (also an ``OSError``)
+for files, ``softhd.ResourceError`` and ``softhd.NumericalError``. The message is the C++ one.
+
+Threads
+-------
+Computations release the GIL. ``threads=0`` uses OpenMP's default (OMP_NUM_THREADS, else all
+cores; note that ``import torch`` may lower it for the whole process); a positive count applies
+to that call only.
+"""
+
+import os as _os
+
+import numpy as _np
+
+from . import _core
+from ._core import (DistanceResult, Error, FileError, ForwardResult, InvalidArgument, Iteration,
+                    NumericalError, OptimiseResult, ResourceError, Scene)
+
+__all__ = ["distance", "hausdorff_nearest", "Target", "read_cloud", "write_cloud", "Scene",
+           "optimise", "DistanceResult", "ForwardResult", "OptimiseResult", "Iteration", "Error",
+           "InvalidArgument", "FileError", "ResourceError", "NumericalError"]
+
+
+def _as_float64(a, name):
+    """`a` itself if it is a C-contiguous float64 ndarray, else a converted copy (module rule)."""
+    if isinstance(a, _np.ndarray) and a.dtype == _np.float64 and a.flags.c_contiguous:
+        return a
+    arr = _np.asarray(a)
+    if arr.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must hold real numbers, got dtype {arr.dtype}")
+    return _np.ascontiguousarray(arr, dtype=_np.float64)
+
+
+def _volumes(v, name):
+    return None if v is None else _as_float64(v, name)
+
+
+class Target:
+    """A target cloud Y (volumes VY) prepared for many evaluations: its k-d trees are built once.
+
+    Options are those of :func:`distance`. The target keeps its own copy of the cloud.
+    """
+
+    def __init__(self, Y, VY=None, *, alpha=4.0, beta=4.0, gamma=2.0, eps=1e-3, method="exact",
+                 tol=1e-6, threads=0):
+        self._target = _core.Target(_as_float64(Y, "Y"), _volumes(VY, "VY"), alpha=alpha,
+                                    beta=beta, gamma=gamma, eps=eps, method=method, tol=tol,
+                                    threads=threads)
+        self.method = method
+
+    @property
+    def size(self):
+        """M, the number of target points."""
+        return self._target.size
+
+    @property
+    def dim(self):
+        """d, the dimension of the target cloud."""
+        return self._target.dim
+
+    def evaluate(self, X, VX=None, *, fields=False, gradient=False, gradient_volumes=False,
+                 gradient_target=False):
+        """rho_H(X, Y) and what is asked for, as a :class:`DistanceResult`.
+
+        fields: d~ at every point (``field_moving`` (N,), ``field_target`` (M,));
+        gradient: d rho / d x_i (``gradient`` (N, d)); gradient_volumes: d rho / d V_i (N,);
+        gradient_target: d rho / d y_j (M, d). Unrequested members are None.
+        X (and VX) follow the module's array rule (no copy of C-contiguous float64).
+        """
+        return self._target.evaluate(_as_float64(X, "X"), _volumes(VX, "VX"), fields=fields,
+                                     gradient=gradient, gradient_volumes=gradient_volumes,
+                                     gradient_target=gradient_target)
+
+
+def distance(X, Y, VX=None, VY=None, *, alpha=4.0, beta=4.0, gamma=2.0, eps=1e-3,
+             method="exact", tol=1e-6, fields=False, gradient=False, gradient_volumes=False,
+             gradient_target=False, threads=0):
+    """The regularised Hausdorff distance rho_H between X (N, d) and Y (M, d).
+
+    method: "exact" (all pairs), "tree" (relative error of every kernel sum <= tol) or
+    "nearest" (the unregularised Hausdorff distance; no gradients). Returns a
+    :class:`DistanceResult` with ``rho``, ``A``, ``B`` and the requested arrays.
+    Equivalent to ``Target(Y, VY, ...).evaluate(X, VX, ...)``.
+    """
+    target = Target(Y, VY, alpha=alpha, beta=beta, gamma=gamma, eps=eps, method=method, tol=tol,
+                    threads=threads)
+    return target.evaluate(X, VX, fields=fields, gradient=gradient,
+                           gradient_volumes=gradient_volumes, gradient_target=gradient_target)
+
+
+def hausdorff_nearest(X, Y, *, fields=False, threads=0):
+    """The exact (unregularised) Hausdorff distance: ``rho`` = max(A, B), ``A`` = max_j
+    dist(y_j, X), ``B`` = max_i dist(x_i, Y) (nearest-neighbour queries)."""
+    return distance(X, Y, method="nearest", fields=fields, threads=threads)
+
+
+def read_cloud(path, dim=0):
+    """(points, volumes) of a text or PLY cloud file: a C-contiguous (N, d) float64 array and
+    an (N,) one. dim: 0 (from the file), 2 or 3. Raises FileError naming the file and line."""
+    return _core.read_cloud(_os.fspath(path), dim)
+
+
+def write_cloud(path, points, volumes=None):
+    """Writes a cloud: binary PLY if the name ends in .ply, text otherwise (both round-trip
+    bit-exactly). volumes None: all 1."""
+    _core.write_cloud(_os.fspath(path), _as_float64(points, "points"), _volumes(volumes, "volumes"))
+
+
+def optimise(scene, target=None, *, max_iter=200, max_seconds=0.0, rel_tol=1e-6, algorithm="mma",
+             move_limit=0.1, particles="nodes", volumes="reference", alpha=4.0, beta=4.0,
+             gamma=2.0, eps=1e-3, method="exact", tol=1e-6, tikhonov_mass=0.0,
+             tikhonov_grad=0.0, coarse_level="auto", callback=None, threads=0):
+    """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
+    target (``softhd optimise``; defaults as there, e.g. coarse_level "auto": two-level starts
+    on the mesh with half the cells, or "off"). Returns an :class:`OptimiseResult`.
+
+    target: None (the scene's own "target"), a cloud file path, an (M, d) array, or a tuple
+    (points, volumes). callback(record): called after every accepted iteration with an
+    :class:`Iteration` (J, rho, A, B, ..., control); **returning False ends the run** after
+    that iteration (termination "stopped by the caller"); any other return value continues;
+    an exception raised by the callback ends the run and propagates.
+    """
+    points = vols = file = None
+    if isinstance(target, (str, bytes, _os.PathLike)):
+        file = _os.fsdecode(target)
+    elif isinstance(target, tuple):
+        points, vols = _as_float64(target[0], "target"), _volumes(target[1], "target volumes")
+    elif target is not None:
+        points = _as_float64(target, "target")
+    return _core.optimise(scene, points, vols, file, max_iter=max_iter, max_seconds=max_seconds,
+                          rel_tol=rel_tol, algorithm=algorithm, move_limit=move_limit,
+                          particles=particles, volumes_kind=volumes, alpha=alpha, beta=beta,
+                          gamma=gamma, eps=eps, method=method, tol=tol,
+                          tikhonov_mass=tikhonov_mass, tikhonov_grad=tikhonov_grad,
+                          coarse_level=coarse_level, callback=callback, threads=threads)

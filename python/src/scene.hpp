@@ -1,0 +1,28 @@
+#pragma once
+// softhd._core.Scene: a scene file with its body's assembler and control space, built once.
+
+#include "common.hpp"
+#include "softhd/fe/assembly.hpp"
+#include "softhd/fe/control.hpp"
+#include "softhd/fe/scene.hpp"
+
+namespace softhd::python {
+
+/// A loaded scene, its assembler and its control space (shared by forward and optimise).
+struct PyScene {
+  explicit PyScene(fe::Scene s)
+      : scene(std::move(s)),
+        assembler(scene.make_assembler()),
+        control(assembler.mesh(), assembler.geometry(), scene.control_kind) {}
+  PyScene(const PyScene&) = delete;
+  PyScene& operator=(const PyScene&) = delete;
+
+  fe::Scene scene;
+  fe::Assembler assembler;
+  fe::ControlSpace control;
+};
+
+/// The (num_nodes, dim) array of a node-major vector (num_nodes · dim entries).
+py::array_t<double> node_rows(const Eigen::VectorXd& u, int dim);
+
+}  // namespace softhd::python

@@ -1,0 +1,154 @@
+"""softhd.distance / Target against an independent NumPy oracle of docs/formulation.md §2 and against the
+command-line tool (the same library call: equal to 1e-14)."""
+
+import numpy as np
+import pytest
+
+import softhd
+from conftest import random_cloud
+from spec_reference import hausdorff_numpy, rho_numpy
+
+
+@pytest.mark.parametrize("d", [2, 3])
+@pytest.mark.parametrize("params", [dict(), dict(alpha=8.0, beta=2.0, gamma=3.0, eps=0.05)])
+def test_value_matches_the_spec_formula(rng, d, params):
+    X, VX = random_cloud(rng, 40, d)
+    Y, VY = random_cloud(rng, 57, d, shift=0.3)
+    rho, A, B = rho_numpy(X, Y, VX, VY, **params)
+    r = softhd.distance(X, Y, VX, VY, **params)
+    assert r.rho == pytest.approx(rho, rel=1e-12)
+    assert r.A == pytest.approx(A, rel=1e-12)
+    assert r.B == pytest.approx(B, rel=1e-12)
+    assert r.gradient is None and r.field_target is None  # nothing computed unasked
+
+
+def test_tree_method_within_its_tolerance(rng):
+    X, _ = random_cloud(rng, 300)
+    Y, _ = random_cloud(rng, 250, shift=0.2)
+    exact = softhd.distance(X, Y).rho
+    tree = softhd.distance(X, Y, method="tree", tol=1e-8).rho
+    assert tree == pytest.approx(exact, rel=1e-8)
+
+
+def test_nearest_is_the_hausdorff_distance(rng):
+    X, _ = random_cloud(rng, 50)
+    Y, _ = random_cloud(rng, 30, shift=0.5)
+    H, a, b = hausdorff_numpy(X, Y)
+    for r in (softhd.hausdorff_nearest(X, Y), softhd.distance(X, Y, method="nearest")):
+        assert (r.rho, r.A, r.B) == pytest.approx((H, a, b), rel=1e-14)
+
+
+def test_gradient_matches_finite_differences(rng):
+    X, VX = random_cloud(rng, 12, 2)
+    Y, VY = random_cloud(rng, 9, 2, shift=0.4)
+    r = softhd.distance(X, Y, VX, VY, eps=0.05, gradient=True, gradient_volumes=True,
+                        gradient_target=True)
+    h = 1e-6
+
+    def fd(array, index):
+        plus, minus = array.copy(), array.copy()
+        plus[index] += h
+        minus[index] -= h
+        args = {"X": X, "Y": Y, "VX": VX, "VY": VY}
+        name = next(k for k, v in args.items() if v is array)
+        lo = rho_numpy(**{**args, name: minus}, eps=0.05)[0]
+        hi = rho_numpy(**{**args, name: plus}, eps=0.05)[0]
+        return (hi - lo) / (2 * h)
+
+    for idx in [(0, 0), (5, 1), (11, 0)]:
+        assert r.gradient[idx] == pytest.approx(fd(X, idx), rel=1e-6, abs=1e-9)
+    for idx in [(0, 1), (8, 0)]:
+        assert r.gradient_target[idx] == pytest.approx(fd(Y, idx), rel=1e-6, abs=1e-9)
+    for i in [0, 7]:
+        assert r.gradient_volumes[i] == pytest.approx(fd(VX, (i,)), rel=1e-6, abs=1e-9)
+
+
+def test_target_reused_equals_one_shot(rng):
+    Y, VY = random_cloud(rng, 80)
+    target = softhd.Target(Y, VY, alpha=6.0, eps=1e-2)
+    assert (target.size, target.dim) == (80, 3)
+    for shift in (0.0, 0.5):
+        X, VX = random_cloud(rng, 60, shift=shift)
+        a = target.evaluate(X, VX, fields=True, gradient=True)
+        b = softhd.distance(X, Y, VX, VY, alpha=6.0, eps=1e-2, fields=True, gradient=True)
+        assert a.rho == b.rho
+        np.testing.assert_array_equal(a.gradient, b.gradient)
+        np.testing.assert_array_equal(a.field_moving, b.field_moving)
+        assert a.field_target.shape == (80,) and a.field_moving.shape == (60,)
+
+
+def test_threads_do_not_change_the_value(rng):
+    X, _ = random_cloud(rng, 200)
+    Y, _ = random_cloud(rng, 150)
+    one = softhd.distance(X, Y, threads=1).rho
+    two = softhd.distance(X, Y, threads=2).rho
+    assert two == pytest.approx(one, rel=1e-14)
+
+
+def test_equals_the_command_line_tool(rng, tmp_path, cli):
+    X, VX = random_cloud(rng, 300)
+    Y, VY = random_cloud(rng, 200, shift=0.25)
+    softhd.write_cloud(tmp_path / "x.ply", X, VX)
+    softhd.write_cloud(tmp_path / "y.txt", Y, VY)
+    for method in ("exact", "tree", "nearest"):
+        j = cli("distance", tmp_path / "x.ply", tmp_path / "y.txt", "--method", method,
+                "--alpha", 6, "--eps", 0.01, "--threads", 1)
+        r = softhd.distance(X, Y, VX, VY, method=method, alpha=6, eps=0.01, threads=1)
+        assert (r.rho, r.A, r.B) == pytest.approx((j["rho"], j["A"], j["B"]), rel=1e-14)
+
+
+def test_gradient_equals_the_command_line_tool(rng, tmp_path, cli):
+    X, VX = random_cloud(rng, 100)
+    Y, VY = random_cloud(rng, 70, shift=0.25)
+    softhd.write_cloud(tmp_path / "x.ply", X, VX)
+    softhd.write_cloud(tmp_path / "y.ply", Y, VY)
+    cli("distance", tmp_path / "x.ply", tmp_path / "y.ply", "--grad", tmp_path / "g.txt",
+        "--threads", 1)
+    g = np.loadtxt(tmp_path / "g.txt")  # x y z drho/dx drho/dy drho/dz drho/dV
+    r = softhd.distance(X, Y, VX, VY, gradient=True, gradient_volumes=True, threads=1)
+    np.testing.assert_allclose(r.gradient, g[:, 3:6], rtol=1e-14, atol=0)
+    np.testing.assert_allclose(r.gradient_volumes, g[:, 6], rtol=1e-14, atol=0)
+
+
+def test_clouds_round_trip_through_files(rng, tmp_path):
+    X, VX = random_cloud(rng, 33, 2)
+    for name in ("c.ply", "c.txt"):
+        softhd.write_cloud(tmp_path / name, X, VX)
+        P, V = softhd.read_cloud(tmp_path / name, dim=2)
+        np.testing.assert_array_equal(P, X)
+        np.testing.assert_array_equal(V, VX)
+        assert P.flags.c_contiguous and P.dtype == np.float64
+    softhd.write_cloud(tmp_path / "ones.ply", X)
+    assert np.all(softhd.read_cloud(tmp_path / "ones.ply")[1] == 1.0)
+
+
+def test_the_gil_is_released_during_the_computation(rng):
+    # With a huge switch interval Python threads trade the GIL only when its holder lets it
+    # go: the main loop below (which lets go at every sleep(0)) can run while the worker is
+    # inside softhd only if softhd released the GIL; otherwise it counts a handful at most.
+    import sys
+    import threading
+    import time
+
+    X, _ = random_cloud(rng, 3000)
+    Y, _ = random_cloud(rng, 3000)
+    done = threading.Event()
+    result = []
+
+    def work():
+        result.append(softhd.distance(X, Y, gradient=True, threads=1).rho)
+        done.set()
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1000.0)
+    try:
+        t = threading.Thread(target=work)
+        t.start()
+        count = 0
+        while not done.is_set():
+            count += 1
+            time.sleep(0)
+        t.join()
+    finally:
+        sys.setswitchinterval(interval)
+    assert result and count > 100

@@ -1,0 +1,124 @@
+"""Every C++ error reaches Python as softhd.Error with the C++ message: InvalidArgument is a
+ValueError, FileError an OSError."""
+
+import json
+
+import numpy as np
+import pytest
+
+import softhd
+from conftest import SMALL_2D
+
+
+def test_hierarchy():
+    assert issubclass(softhd.InvalidArgument, softhd.Error)
+    assert issubclass(softhd.InvalidArgument, ValueError)
+    assert issubclass(softhd.FileError, softhd.Error) and issubclass(softhd.FileError, OSError)
+    assert issubclass(softhd.ResourceError, softhd.Error)
+    assert issubclass(softhd.NumericalError, softhd.Error)
+    assert softhd.Error.__module__ == "softhd"
+
+
+P = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(alpha=0.0), "alpha"),
+    (dict(beta=-1.0), "beta"),
+    (dict(gamma=float("nan")), "gamma"),
+    (dict(eps=0.0), "eps"),
+    (dict(method="fast"), "fast"),
+    (dict(tol=2.0, method="tree"), "tolerance"),
+    (dict(threads=-1), "threads"),
+    (dict(method="nearest", gradient=True), "nearest"),
+])
+def test_invalid_options(kwargs, message):
+    with pytest.raises(softhd.InvalidArgument, match=message) as e:
+        softhd.distance(P, P, **kwargs)
+    assert isinstance(e.value, ValueError)
+
+
+@pytest.mark.parametrize("X, VX, message", [
+    (np.zeros((3, 4)), None, "dimension|d "),
+    (np.zeros(3), None, "dimensions"),
+    (np.array([[0.0, np.nan, 0.0]]), None, "finite|NaN|nan"),
+    (P, np.array([1.0]), "volumes"),
+    (P, np.array([1.0, -1.0]), "volume"),
+    (np.zeros((2, 2)), None, "dimension|2D|3D"),  # 2D moving cloud, 3D target
+])
+def test_invalid_clouds(X, VX, message):
+    with pytest.raises(ValueError, match=message):
+        softhd.distance(X, P, VX)
+
+
+def test_file_errors(tmp_path):
+    with pytest.raises(softhd.FileError, match="missing.ply") as e:
+        softhd.read_cloud(tmp_path / "missing.ply")
+    assert isinstance(e.value, OSError)
+    bad = tmp_path / "bad.txt"
+    bad.write_text("0 0 0\n1 abc 0\n")
+    with pytest.raises(OSError, match="bad.txt:2"):
+        softhd.read_cloud(bad)
+    with pytest.raises(softhd.InvalidArgument, match="dim"):
+        softhd.read_cloud(bad, dim=5)
+    with pytest.raises(softhd.FileError):
+        softhd.write_cloud(tmp_path / "no" / "dir" / "c.ply", P)
+    with pytest.raises(softhd.FileError, match="missing.json"):
+        softhd.Scene.load(tmp_path / "missing.json")
+    broken = tmp_path / "broken.json"
+    broken.write_text(json.dumps({**SMALL_2D, "material": {"model": "rubber"}}))
+    with pytest.raises(softhd.FileError, match="rubber"):
+        softhd.Scene.load(broken)
+
+
+def test_resource_limit(scene_file):
+    with pytest.raises(softhd.ResourceError, match="memory"):
+        softhd.Scene.load(scene_file(SMALL_2D), max_memory_gib=1e-6)
+    with pytest.raises(ValueError, match="max_memory_gib"):
+        softhd.Scene.load(scene_file(SMALL_2D), max_memory_gib=0)
+
+
+def test_forward_errors(scene_file):
+    scene = softhd.Scene.load(scene_file(SMALL_2D))
+    with pytest.raises(ValueError, match="outside the scene's bounds"):
+        scene.forward(10.0)
+    with pytest.raises(ValueError, match="controls"):
+        scene.forward(np.zeros(scene.num_controls + 1))
+    with pytest.raises(ValueError, match="not a point of the 2D body"):
+        scene.forward(0.0, probes=[[5.0, 0.1]])
+    with pytest.raises(ValueError, match="can be halved"):  # 4x2 cells: 2x1, 1x1, then none
+        scene.forward(-1.0, coarse_levels=3)
+    with pytest.raises(ValueError, match="levels must be >= -1"):
+        scene.forward(-1.0, coarse_levels=-2)
+    with pytest.raises(ValueError, match="threads"):
+        scene.forward(0.0, threads=-2)
+
+
+def test_optimise_errors(scene_file):
+    scene = softhd.Scene.load(scene_file(SMALL_2D))
+    with pytest.raises(ValueError, match="no \"target\""):
+        softhd.optimise(scene)
+    target = np.array([[0.0, 0.0], [2.0, 0.4]])
+    with pytest.raises(ValueError, match="algorithm|nelder"):
+        softhd.optimise(scene, target, algorithm="nelder-mead")
+    with pytest.raises(ValueError, match="max_iter"):
+        softhd.optimise(scene, target, max_iter=0)
+    with pytest.raises(ValueError, match="coarse_level"):
+        softhd.optimise(scene, target, coarse_level="on")
+    with pytest.raises(ValueError, match="3D but the scene's body is 2D"):
+        softhd.optimise(scene, np.zeros((4, 3)))
+    with pytest.raises(OSError, match="nothing.ply"):
+        softhd.optimise(scene, "nothing.ply")
+
+
+@pytest.mark.parametrize("kwargs, field", [
+    (dict(tikhonov_mass=-1.0), "tikhonov_mass"),
+    (dict(tikhonov_grad=float("nan")), "tikhonov_gradient"),
+    (dict(rel_tol=-1.0), "relative_change"),
+    (dict(move_limit=-0.5), "move_limit"),
+    (dict(gamma=0.0), "gamma"),
+])
+def test_optimise_options_name_the_field(scene_file, kwargs, field):
+    scene = softhd.Scene.load(scene_file(SMALL_2D))
+    with pytest.raises(softhd.InvalidArgument, match=field):
+        softhd.optimise(scene, np.array([[0.0, 0.0], [2.0, 0.4]]), **kwargs)
