@@ -3,6 +3,9 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <functional>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "fe_test_util.hpp"
 #include "softhd/error.hpp"
@@ -245,4 +248,27 @@ TEST(Newton, FailureIsReportedNotThrown) {
   NewtonOptions bad;
   bad.max_iterations = 0;
   EXPECT_THROW(NewtonSolver(A, bad), softhd::InvalidArgument);
+}
+
+// validate() names the field that is wrong, the tangent solver's included.
+TEST(Newton, OptionsValidationNamesTheField) {
+  const std::vector<std::pair<std::function<void(NewtonOptions&)>, std::string>> cases = {
+      {[](NewtonOptions& o) { o.relative_tolerance = -1.0; }, "relative_tolerance"},
+      {[](NewtonOptions& o) { o.absolute_tolerance = std::nan(""); }, "absolute_tolerance"},
+      {[](NewtonOptions& o) { o.armijo = 0.5; }, "armijo"},
+      {[](NewtonOptions& o) { o.min_load_increment = 2.0; }, "min_load_increment"},
+      {[](NewtonOptions& o) { o.forcing = 1.0; }, "forcing"},
+      {[](NewtonOptions& o) { o.adjoint_tolerance = 0.0; }, "adjoint_tolerance"},
+      {[](NewtonOptions& o) { o.tangent.max_krylov_iterations = 0; }, "max_krylov_iterations"}};
+  for (const auto& [spoil, field] : cases) {
+    NewtonOptions o;
+    EXPECT_NO_THROW(o.validate());
+    spoil(o);
+    try {
+      o.validate();
+      ADD_FAILURE() << field << " not refused";
+    } catch (const softhd::InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+    }
+  }
 }

@@ -182,8 +182,7 @@ void ShapeObjectiveOptions::validate() const {
   if (warm_start_states < 1) throw InvalidArgument("warm_start_states must be >= 1");
   if (coarse_correction_iterations < 0)
     throw InvalidArgument("coarse_correction_iterations must be >= 0");
-  std::string error;
-  if (!newton.IsValid(&error)) throw InvalidArgument("newton: " + error);
+  newton.validate();
 }
 
 ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::ControlSpace& control,

@@ -9,8 +9,7 @@
 namespace softhd::fe {
 
 void ForwardOptions::validate() const {
-  std::string error;
-  if (!newton.IsValid(&error)) throw InvalidArgument("newton: " + error);
+  newton.validate();
   grid.validate();
 }
 

@@ -6,31 +6,24 @@
 #include <cmath>
 #include <limits>
 
+#include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 
 namespace softhd::fe {
 
 using Sparse = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
-std::string to_string(LinearSolverType type) {
-  switch (type) {
-    case LinearSolverType::kEigenLLT:
-      return "eigen-llt";
-    case LinearSolverType::kEigenLDLT:
-      return "eigen-ldlt";
-    case LinearSolverType::kCholmod:
-      return "cholmod";
-  }
-  return "unknown";
-}
+namespace {
+constexpr EnumNames<LinearSolverType, 3> kLinearSolverNames{
+    {{LinearSolverType::kEigenLLT, "eigen-llt"},
+     {LinearSolverType::kEigenLDLT, "eigen-ldlt"},
+     {LinearSolverType::kCholmod, "cholmod"}}};
+}  // namespace
+
+std::string to_string(LinearSolverType type) { return enum_name(kLinearSolverNames, type); }
 
 LinearSolverType parse_linear_solver(const std::string& name) {
-  for (LinearSolverType t :
-       {LinearSolverType::kEigenLLT, LinearSolverType::kEigenLDLT, LinearSolverType::kCholmod}) {
-    if (to_string(t) == name) return t;
-  }
-  throw InvalidArgument("linear solver must be one of eigen-llt, eigen-ldlt, cholmod; got \"" +
-                        name + "\"");
+  return enum_from_name(kLinearSolverNames, name, "linear solver");
 }
 
 double LinearSolver::factorize_shifted(const Sparse& K, bool allow_shift, int* attempts) {

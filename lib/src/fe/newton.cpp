@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "line_search.hpp"
+#include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 #include "softhd/parallel.hpp"
 
@@ -22,52 +23,45 @@ double seconds_since(Clock::time_point t0) {
 
 }  // namespace
 
-bool NewtonOptions::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& m) {
-    if (error) *error = "Newton options: " + m;
-    return false;
+void NewtonOptions::validate() const {
+  auto check = [](bool ok, const std::string& m) {
+    if (!ok) throw InvalidArgument("Newton options: " + m);
   };
-  if (max_iterations < 1) return fail("max_iterations must be >= 1");
-  if (!(relative_tolerance >= 0.0) || !(absolute_tolerance >= 0.0))
-    return fail("tolerances must be >= 0");
-  if (relative_tolerance == 0.0 && absolute_tolerance == 0.0)
-    return fail("relative_tolerance and absolute_tolerance cannot both be 0");
-  if (!(armijo > 0.0 && armijo < 0.5)) return fail("armijo must be in (0, 0.5)");
-  if (!(backtrack > 0.0 && backtrack < 1.0)) return fail("backtrack must be in (0, 1)");
-  if (max_line_search_steps < 1) return fail("max_line_search_steps must be >= 1");
-  if (!(initial_load_increment > 0.0 && initial_load_increment <= 1.0))
-    return fail("initial_load_increment must be in (0, 1]");
-  if (!(min_load_increment > 0.0 && min_load_increment <= initial_load_increment))
-    return fail("min_load_increment must be in (0, initial_load_increment]");
-  if (max_load_steps < 1) return fail("max_load_steps must be >= 1");
-  if (max_total_iterations < 1) return fail("max_total_iterations must be >= 1");
-  if (!(forcing > 0.0 && forcing < 1.0)) return fail("forcing must be in (0, 1)");
-  if (!(displacement_tolerance >= 0.0)) return fail("displacement_tolerance must be >= 0");
-  if (!(intermediate_tolerance > 0.0 && intermediate_tolerance < 1.0))
-    return fail("intermediate_tolerance must be in (0, 1)");
-  if (!(adjoint_tolerance > 0.0 && adjoint_tolerance < 1.0))
-    return fail("adjoint_tolerance must be in (0, 1)");
+  check(max_iterations >= 1, "max_iterations must be >= 1");
+  check(relative_tolerance >= 0.0, "relative_tolerance must be >= 0");
+  check(absolute_tolerance >= 0.0, "absolute_tolerance must be >= 0");
+  check(relative_tolerance > 0.0 || absolute_tolerance > 0.0,
+        "relative_tolerance and absolute_tolerance cannot both be 0");
+  check(armijo > 0.0 && armijo < 0.5, "armijo must be in (0, 0.5)");
+  check(backtrack > 0.0 && backtrack < 1.0, "backtrack must be in (0, 1)");
+  check(max_line_search_steps >= 1, "max_line_search_steps must be >= 1");
+  check(initial_load_increment > 0.0 && initial_load_increment <= 1.0,
+        "initial_load_increment must be in (0, 1]");
+  check(min_load_increment > 0.0 && min_load_increment <= initial_load_increment,
+        "min_load_increment must be in (0, initial_load_increment]");
+  check(max_load_steps >= 1, "max_load_steps must be >= 1");
+  check(max_total_iterations >= 1, "max_total_iterations must be >= 1");
+  check(forcing > 0.0 && forcing < 1.0, "forcing must be in (0, 1)");
+  check(displacement_tolerance >= 0.0, "displacement_tolerance must be >= 0");
+  check(intermediate_tolerance > 0.0 && intermediate_tolerance < 1.0,
+        "intermediate_tolerance must be in (0, 1)");
+  check(adjoint_tolerance > 0.0 && adjoint_tolerance < 1.0, "adjoint_tolerance must be in (0, 1)");
   try {
     tangent.validate();  // one set of checks for the tangent solver's options
   } catch (const InvalidArgument& e) {
-    return fail(e.what());
+    check(false, e.what());
   }
-  return true;
 }
 
-std::string to_string(NewtonStatus status) {
-  switch (status) {
-    case NewtonStatus::kConverged:
-      return "converged";
-    case NewtonStatus::kLoadIncrementTooSmall:
-      return "load increment too small";
-    case NewtonStatus::kTooManyLoadSteps:
-      return "too many load steps";
-    case NewtonStatus::kTooManyIterations:
-      return "too many Newton iterations";
-  }
-  return "unknown";
-}
+namespace {
+constexpr EnumNames<NewtonStatus, 4> kNewtonStatusNames{
+    {{NewtonStatus::kConverged, "converged"},
+     {NewtonStatus::kLoadIncrementTooSmall, "load increment too small"},
+     {NewtonStatus::kTooManyLoadSteps, "too many load steps"},
+     {NewtonStatus::kTooManyIterations, "too many Newton iterations"}}};
+}  // namespace
+
+std::string to_string(NewtonStatus status) { return enum_name(kNewtonStatusNames, status); }
 
 std::string NewtonSummary::BriefReport() const {
   char buf[320];
@@ -104,8 +98,7 @@ State rest_state(const Assembler& a) {
 namespace {
 
 NewtonOptions validated(NewtonOptions options) {
-  std::string error;
-  if (!options.IsValid(&error)) throw InvalidArgument(error);
+  options.validate();
   return options;
 }
 

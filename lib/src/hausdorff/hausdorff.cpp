@@ -12,6 +12,7 @@
 #include "nearest_index.hpp"
 #include "pair_backend.hpp"
 #include "scaled_means.hpp"
+#include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 
 namespace softhd {
@@ -57,23 +58,15 @@ void check_coordinates(const PointCloud& cloud, const char* which) {
 }
 }  // namespace
 
-std::string to_string(Method method) {
-  switch (method) {
-    case Method::exact:
-      return "exact";
-    case Method::tree:
-      return "tree";
-    case Method::nearest:
-      return "nearest";
-  }
-  return "unknown";
-}
+namespace {
+constexpr EnumNames<Method, 3> kMethodNames{
+    {{Method::exact, "exact"}, {Method::tree, "tree"}, {Method::nearest, "nearest"}}};
+}  // namespace
+
+std::string to_string(Method method) { return enum_name(kMethodNames, method); }
 
 Method method_from_string(const std::string& name) {
-  if (name == "exact") return Method::exact;
-  if (name == "tree") return Method::tree;
-  if (name == "nearest") return Method::nearest;
-  throw InvalidArgument("unknown method '" + name + "' (expected exact, tree or nearest)");
+  return enum_from_name(kMethodNames, name, "method");
 }
 
 struct HausdorffTarget::Impl {

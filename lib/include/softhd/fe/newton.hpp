@@ -79,8 +79,9 @@ struct NewtonOptions {
   /// Print one line per iteration to stderr.
   bool verbose = false;
 
-  /// True if the options are consistent; otherwise false with a message in *error.
-  bool IsValid(std::string* error) const;
+  /// Throws InvalidArgument "Newton options: <field> must be ..." naming the first
+  /// inconsistent field (the tangent solver's options included).
+  void validate() const;
 };
 
 /// How a Newton solve ended.
