@@ -122,7 +122,7 @@ TEST(ShapeObjective, FailedStateSolveIsReportedNotThrown) {
 // fewer fine Newton iterations.
 TEST(ShapeObjective, TwoLevelStartsReachTheSameStateWithFewerFineIterations) {
   fe::Scene scene = fe::load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/bending.json");
-  scene.cells << 10, 1, 2;  // coarse level 5 x 1 x 1
+  scene.cells << 6, 1, 2;  // coarse level 3 x 1 x 1
   const fe::Assembler A = scene.make_assembler();
   const fe::Assembler coarse = fe::coarsened(scene).make_assembler();
   const fe::ControlSpace space(A.mesh(), A.geometry(), scene.control_kind);
@@ -132,7 +132,7 @@ TEST(ShapeObjective, TwoLevelStartsReachTheSameStateWithFewerFineIterations) {
   ShapeObjectiveOptions o;
   o.newton.relative_tolerance = 1e-12;
   o.newton.displacement_tolerance = 1e-11;  // both paths end on the same state, soft modes too
-  o.coarse_correction_iterations = 0;  // always take the coarse-corrected start
+  o.coarse_correction_iterations = 0;       // always take the coarse-corrected start
   ShapeObjective plain(A, space, HausdorffTarget(Y), o);
   ShapeObjective two_level(A, space, HausdorffTarget(Y), o);
   two_level.use_coarse_level(coarse);
