@@ -10,7 +10,34 @@
 #include "commands.hpp"
 #include "softhd/error.hpp"
 
+#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
+#include <petscsys.h>
+#endif
+
 namespace {
+
+#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
+// PETSc, and with it MPI, for the whole run: initialised once here, never by the library
+// (fe/petsc_state.hpp). PETSc sees only the program name (softhd's own options are not
+// PETSc's); its options come from the environment variable PETSC_OPTIONS.
+class PetscSession {
+ public:
+  explicit PetscSession(char* program) {
+    static char* args[] = {program, nullptr};
+    int argc = 1;
+    char** argv = args;
+    ok_ = PetscInitialize(&argc, &argv, nullptr, nullptr) == 0;
+  }
+  ~PetscSession() {
+    if (ok_) PetscFinalize();
+  }
+  PetscSession(const PetscSession&) = delete;
+  PetscSession& operator=(const PetscSession&) = delete;
+
+ private:
+  bool ok_ = false;
+};
+#endif
 
 const char* kUsage = R"(usage: softhd COMMAND [options]
 
@@ -30,6 +57,9 @@ int main(int argc, char** argv) {
     std::cout << kUsage;
     return all.empty() ? 2 : 0;
   }
+#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
+  const PetscSession petsc(argv[0]);
+#endif
   const std::string command = all[0];
   const std::vector<std::string> rest(all.begin() + 1, all.end());
   try {

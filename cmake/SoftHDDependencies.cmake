@@ -56,6 +56,13 @@ if(SOFTHD_BUILD_PYTHON)
   softhd_require(pybind11_FOUND pybind11-dev "pybind11")
 endif()
 
+# SOFTHD_WITH_MPI: MPI (Debian libopenmpi-dev) and, for the PETSc state backend, PETSc
+# (cmake/SoftHDPetsc.cmake). The default build needs neither.
+if(SOFTHD_WITH_MPI)
+  find_package(MPI REQUIRED COMPONENTS CXX)
+  include(SoftHDPetsc)
+endif()
+
 if(SOFTHD_BUILD_TESTS)
   find_package(GTest CONFIG QUIET)
   softhd_require(GTest_FOUND libgtest-dev "GoogleTest")
