@@ -11,6 +11,7 @@
 #include <petscsys.h>
 
 #include <cstdlib>
+#include <initializer_list>
 #include <string>
 
 #include "softhd/fe/adjoint.hpp"
@@ -38,46 +39,51 @@ double relative_difference(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return (a - b).lpNorm<Eigen::Infinity>() / b.lpNorm<Eigen::Infinity>();
 }
 
-void expect_forward_equal(const std::string& name, double slope, StateBackend backend) {
+// The scene's forward solve by the serial CHOLMOD Newton (solve_forward, as `softhd
+// forward`), then by each PETSc backend from the same grid-sequenced start.
+void expect_forward_equal(const std::string& name, double slope,
+                          std::initializer_list<StateBackend> backends) {
   const Scene s = scene(name);
   const Eigen::VectorXd m = through_thickness(s, slope);
   const Assembler assembler = s.make_assembler();
   const ControlSpace control(assembler.mesh(), assembler.geometry(), s.control_kind);
   const ForwardResult serial = solve_forward(s, assembler, control, m);
   ASSERT_TRUE(serial.summary.converged()) << serial.summary.BriefReport();
-  PetscStateOptions options;
-  options.newton = ForwardOptions().newton;
-  options.backend = backend;
-  options.newton.verbose = std::getenv("SOFTHD_TEST_VERBOSE") != nullptr;
-  PetscStateSolver petsc(s, options);
-  petsc.grid_sequenced_start(s, m, GridSequencingOptions());
-  const NewtonSummary summary = petsc.solve(m);
-  ASSERT_TRUE(summary.converged()) << summary.FullReport();
-  const Eigen::VectorXd u = petsc.displacement();
-  const double diff = relative_difference(u, serial.state.u);
-  std::printf("[rank %d/%d] %s %s: max|u| %.6e, max|du|/max|u| %.3e, %d Newton its, %d solves\n",
-              petsc.layout().rank, petsc.layout().size, name.c_str(), to_string(backend).c_str(),
-              serial.state.u.lpNorm<Eigen::Infinity>(), diff, summary.newton_iterations,
-              summary.factorizations);
-  EXPECT_LE(diff, 1e-9);
-  EXPECT_NEAR(petsc.energy(), serial.energy, 1e-9 * std::abs(serial.energy));
-  EXPECT_NEAR(petsc.deformed_volume(), serial.volume, 1e-9 * serial.volume);
+  for (StateBackend backend : backends) {
+    PetscStateOptions options;
+    options.newton = ForwardOptions().newton;
+    options.newton.verbose = std::getenv("SOFTHD_TEST_VERBOSE") != nullptr;
+    options.backend = backend;
+    PetscStateSolver petsc(s, options);
+    petsc.grid_sequenced_start(s, m, GridSequencingOptions());
+    const NewtonSummary summary = petsc.solve(m);
+    ASSERT_TRUE(summary.converged()) << summary.FullReport();
+    const Eigen::VectorXd u = petsc.displacement();
+    const double diff = relative_difference(u, serial.state.u);
+    std::printf("[rank %d/%d] %s %s: max|u| %.6e, max|du|/max|u| %.3e, %d Newton its, %d solves, "
+                "%d CG its\n",
+                petsc.layout().rank, petsc.layout().size, name.c_str(), to_string(backend).c_str(),
+                serial.state.u.lpNorm<Eigen::Infinity>(), diff, summary.newton_iterations,
+                summary.factorizations, summary.krylov_iterations);
+    EXPECT_LE(diff, 1e-9) << to_string(backend);
+    EXPECT_NEAR(petsc.energy(), serial.energy, 1e-9 * std::abs(serial.energy));
+    EXPECT_NEAR(petsc.deformed_volume(), serial.volume, 1e-9 * serial.volume);
+  }
 }
 
 TEST(PetscState, BendingForwardMumpsEqualsCholmod) {
-  expect_forward_equal("bending", -2e4, StateBackend::kPetscMumps);
+  expect_forward_equal("bending", -2e4, {StateBackend::kPetscMumps});
 }
 
-TEST(PetscState, BendingForwardGamgEqualsCholmod) {
-  expect_forward_equal("bending", -2e4, StateBackend::kPetscGamg);
+// CG + GAMG on the thin plate needs about 100 CG iterations per decade of residual (the
+// elements' aspect ratio, 0.2 x 0.4 x 0.05, defeats the aggregation): minutes on 2 cores,
+// above the suite's budget. Run it with --gtest_also_run_disabled_tests.
+TEST(PetscState, DISABLED_BendingForwardGamgEqualsCholmod) {
+  expect_forward_equal("bending", -2e4, {StateBackend::kPetscGamg});
 }
 
-TEST(PetscState, TorsionForwardMumpsEqualsCholmod) {
-  expect_forward_equal("torsion", -1e5, StateBackend::kPetscMumps);
-}
-
-TEST(PetscState, TorsionForwardGamgEqualsCholmod) {
-  expect_forward_equal("torsion", -1e5, StateBackend::kPetscGamg);
+TEST(PetscState, TorsionForwardEqualsCholmod) {
+  expect_forward_equal("torsion", -1e5, {StateBackend::kPetscMumps, StateBackend::kPetscGamg});
 }
 
 }  // namespace

@@ -334,6 +334,9 @@ bool DistributedSystem::attempt(Vec b, Vec x, double rtol, LinearSolveReport* re
   SOFTHD_PETSC(KSPGetIterationNumber(ksp_, &its));
   report->krylov += static_cast<int>(its);
   SOFTHD_PETSC(KSPGetConvergedReason(ksp_, &reason));
+  // Negative curvature says K (or the preconditioner) is not positive definite: shift.
+  // Running out of iterations is a failure a shift would not cure.
+  if (reason == KSP_DIVERGED_ITS) report->stalled = true;
   return reason > 0;
 }
 
@@ -354,7 +357,7 @@ LinearSolveReport DistributedSystem::solve(const Eigen::VectorXd& b, double rtol
   SOFTHD_PETSC(VecDestroy(&diagonal));
   double shift = last_shift_ > 0.0 ? 0.01 * last_shift_ : 0.0, applied = 0.0;
   if (shift < 1e-8 * dmax || !allow_shift) shift = 0.0;
-  for (int k = 0; k <= (allow_shift ? 20 : 0) && !report.ok; ++k) {
+  for (int k = 0; k <= (allow_shift ? 20 : 0) && !report.ok && !report.stalled; ++k) {
     if (k > 0) shift = shift > 0.0 ? 10.0 * shift : 1e-8 * dmax;
     if (shift != applied) SOFTHD_PETSC(MatShift(K_, shift - applied));
     applied = shift;

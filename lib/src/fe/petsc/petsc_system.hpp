@@ -27,6 +27,7 @@ struct LinearSolveReport {
   double shift = 0.0;      ///< μ of K + μ I (0 if none)
   int attempts = 0;        ///< factorisations (MUMPS) or preconditioner setups (GAMG)
   int krylov = 0;          ///< CG iterations over all attempts (0 for MUMPS)
+  bool stalled = false;    ///< CG ran out of iterations (no shift is tried then)
   double seconds = 0.0;    ///< wall time
 };
 
@@ -42,6 +43,8 @@ class DistributedSystem {
   const FreeNumbering& numbering() const { return numbering_; }
   Eigen::Index owned() const { return static_cast<Eigen::Index>(numbering_.owned_local.size()); }
   int block_size() const { return block_size_; }
+  /// True for the iterative backend (CG + GAMG).
+  bool iterative() const { return backend_ == StateBackend::kPetscGamg; }
 
   /// Π, R (owned rows) and/or the tangent (kept in the matrix) at the owned displacement
   /// u and the slab's control m_qp; null outputs are skipped. Returns false (on every rank)
