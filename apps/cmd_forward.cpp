@@ -422,10 +422,10 @@ int forward_petsc(const Args& args) {
 }
 #else
 int forward_petsc(const Args&) {
-  throw softhd::InvalidArgument("the PETSc state backends need softhd built with SOFTHD_WITH_MPI=ON");
+  throw softhd::InvalidArgument(
+      "the PETSc state backends need softhd built with SOFTHD_WITH_MPI=ON");
 }
 #endif
-
 
 }  // namespace
 

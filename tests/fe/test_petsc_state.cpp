@@ -60,11 +60,12 @@ void expect_forward_equal(const std::string& name, double slope,
     ASSERT_TRUE(summary.converged()) << summary.FullReport();
     const Eigen::VectorXd u = petsc.displacement();
     const double diff = relative_difference(u, serial.state.u);
-    std::printf("[rank %d/%d] %s %s: max|u| %.6e, max|du|/max|u| %.3e, %d Newton its, %d solves, "
-                "%d CG its\n",
-                petsc.layout().rank, petsc.layout().size, name.c_str(), to_string(backend).c_str(),
-                serial.state.u.lpNorm<Eigen::Infinity>(), diff, summary.newton_iterations,
-                summary.factorizations, summary.krylov_iterations);
+    std::printf(
+        "[rank %d/%d] %s %s: max|u| %.6e, max|du|/max|u| %.3e, %d Newton its, %d solves, "
+        "%d CG its\n",
+        petsc.layout().rank, petsc.layout().size, name.c_str(), to_string(backend).c_str(),
+        serial.state.u.lpNorm<Eigen::Infinity>(), diff, summary.newton_iterations,
+        summary.factorizations, summary.krylov_iterations);
     EXPECT_LE(diff, 1e-9) << to_string(backend);
     EXPECT_NEAR(petsc.energy(), serial.energy, 1e-9 * std::abs(serial.energy));
     EXPECT_NEAR(petsc.deformed_volume(), serial.volume, 1e-9 * serial.volume);

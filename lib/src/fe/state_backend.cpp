@@ -5,10 +5,9 @@
 namespace softhd::fe {
 
 namespace {
-constexpr EnumNames<StateBackend, 3> kStateBackendNames{
-    {{StateBackend::kCholmod, "cholmod"},
-     {StateBackend::kPetscMumps, "petsc-mumps"},
-     {StateBackend::kPetscGamg, "petsc-gamg"}}};
+constexpr EnumNames<StateBackend, 3> kStateBackendNames{{{StateBackend::kCholmod, "cholmod"},
+                                                         {StateBackend::kPetscMumps, "petsc-mumps"},
+                                                         {StateBackend::kPetscGamg, "petsc-gamg"}}};
 }  // namespace
 
 std::string to_string(StateBackend backend) { return enum_name(kStateBackendNames, backend); }

@@ -55,12 +55,12 @@ struct PetscStateOptions {
 
 /// Sizes of the distributed problem as seen by one rank.
 struct PetscStateLayout {
-  int rank = 0, size = 1;        ///< this rank, and the number of ranks
-  int slab_axis = 0;             ///< the axis the slabs cut
+  int rank = 0, size = 1;           ///< this rank, and the number of ranks
+  int slab_axis = 0;                ///< the axis the slabs cut
   Eigen::Index local_elements = 0;  ///< elements of this rank's slab
-  Eigen::Index owned_rows = 0;   ///< free dofs owned by this rank
-  Eigen::Index global_rows = 0;  ///< free dofs of the whole mesh
-  int block_size = 1;            ///< block size of the matrix
+  Eigen::Index owned_rows = 0;      ///< free dofs owned by this rank
+  Eigen::Index global_rows = 0;     ///< free dofs of the whole mesh
+  int block_size = 1;               ///< block size of the matrix
 };
 
 /// The state equation m ↦ u(m) of one scene on PETSc, warm-started from the last solve, with

@@ -28,9 +28,8 @@ NewtonOptions validated(NewtonOptions options) {
 DistributedNewton::DistributedNewton(DistributedSystem& system, const NewtonOptions& options)
     : system_(system), options_(validated(options)) {}
 
-bool DistributedNewton::assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m,
-                                 double* energy, Eigen::VectorXd* residual, bool tangent,
-                                 NewtonSummary* summary) {
+bool DistributedNewton::assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m, double* energy,
+                                 Eigen::VectorXd* residual, bool tangent, NewtonSummary* summary) {
   const auto t0 = Clock::now();
   if (tangent) path_tangent_ = false;
   const bool ok = system_.evaluate(u, m, energy, residual, tangent);
@@ -68,7 +67,9 @@ bool DistributedNewton::solve_load_step(const Eigen::MatrixXd& m, int load_step,
   double R_ref = system_.norm(R0);
   EnergyLineSearch line_search(
       options_,
-      [&](const Eigen::VectorXd& v, double* e) { return assemble(v, m, e, nullptr, false, summary); },
+      [&](const Eigen::VectorXd& v, double* e) {
+        return assemble(v, m, e, nullptr, false, summary);
+      },
       [&](const Eigen::VectorXd& v) {
         Eigen::VectorXd Rv;
         assemble(v, m, nullptr, &Rv, false, summary);
@@ -109,10 +110,10 @@ bool DistributedNewton::solve_load_step(const Eigen::MatrixXd& m, int load_step,
     // asks every direction for 1e-3 of the final tolerance: cheap for PCG with a Cholesky
     // preconditioner, about 1000 CG iterations with GAMG): η = min(forcing, |R|/R_ref)
     // still converges quadratically, and the convergence test is unchanged.
-    const double eta = std::max(
-        1e-14, system_.iterative()
-                   ? std::min(options_.forcing, rnorm / R_ref)
-                   : std::min({options_.forcing, rnorm / R_ref, 1e-3 * tol / rnorm}));
+    const double eta =
+        std::max(1e-14, system_.iterative()
+                            ? std::min(options_.forcing, rnorm / R_ref)
+                            : std::min({options_.forcing, rnorm / R_ref, 1e-3 * tol / rnorm}));
     Eigen::VectorXd du;
     const bool direction_ok = direction(R, eta, &du, &rec, summary);
     if (residual_ok && (!direction_ok || rec.shift != 0.0)) {

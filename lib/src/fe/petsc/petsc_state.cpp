@@ -96,8 +96,7 @@ bool solve_coarse(const Scene& scene, const Mesh& fine, const Eigen::VectorXd& m
   if (levels > 0) {
     Mesh coarse_mesh;
     State coarse;
-    if (!solve_coarse(coarsened(scene), fine, m, levels - 1, newton, report, &coarse_mesh,
-                      &coarse))
+    if (!solve_coarse(coarsened(scene), fine, m, levels - 1, newton, report, &coarse_mesh, &coarse))
       return false;
     state->u = prolongate(coarse_mesh, coarse.u, assembler.mesh());
   }

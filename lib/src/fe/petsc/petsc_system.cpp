@@ -45,8 +45,8 @@ SlabPartition checked_partition(const Scene& scene) {
 DistributedSystem::DistributedSystem(const Scene& scene, StateBackend backend,
                                      int max_krylov_iterations)
     : slab_(checked_partition(scene)),
-      assembler_(std::make_unique<Assembler>(slab_.mesh, scene.material, scene.fibers,
-                                             slab_.constraints)),
+      assembler_(
+          std::make_unique<Assembler>(slab_.mesh, scene.material, scene.fibers, slab_.constraints)),
       numbering_(number_free_dofs(scene, slab_, assembler_->dofs())),
       backend_(backend),
       max_krylov_iterations_(max_krylov_iterations),
@@ -340,8 +340,8 @@ bool DistributedSystem::attempt(Vec b, Vec x, double rtol, LinearSolveReport* re
   return reason > 0;
 }
 
-LinearSolveReport DistributedSystem::solve(const Eigen::VectorXd& b, double rtol,
-                                           bool allow_shift, Eigen::VectorXd* x) {
+LinearSolveReport DistributedSystem::solve(const Eigen::VectorXd& b, double rtol, bool allow_shift,
+                                           Eigen::VectorXd* x) {
   const auto t0 = std::chrono::steady_clock::now();
   LinearSolveReport report;
   PetscScalar* a = nullptr;

@@ -24,11 +24,11 @@ void check(PetscErrorCode code, const char* call);
 /// What one linear solve did.
 struct LinearSolveReport {
   bool ok = false;
-  double shift = 0.0;      ///< μ of K + μ I (0 if none)
-  int attempts = 0;        ///< factorisations (MUMPS) or preconditioner setups (GAMG)
-  int krylov = 0;          ///< CG iterations over all attempts (0 for MUMPS)
-  bool stalled = false;    ///< CG ran out of iterations (no shift is tried then)
-  double seconds = 0.0;    ///< wall time
+  double shift = 0.0;    ///< μ of K + μ I (0 if none)
+  int attempts = 0;      ///< factorisations (MUMPS) or preconditioner setups (GAMG)
+  int krylov = 0;        ///< CG iterations over all attempts (0 for MUMPS)
+  bool stalled = false;  ///< CG ran out of iterations (no shift is tried then)
+  double seconds = 0.0;  ///< wall time
 };
 
 class DistributedSystem {

@@ -51,8 +51,8 @@ SlabPartition make_slab_partition(const Scene& scene, int rank, int size) {
   const int a = s.axis, nc = scene.cells[a];
   if (nc < size) {
     throw InvalidArgument("PETSc state: the mesh has " + std::to_string(nc) +
-                          " cells along its longest axis, fewer than the " +
-                          std::to_string(size) + " ranks");
+                          " cells along its longest axis, fewer than the " + std::to_string(size) +
+                          " ranks");
   }
   s.c0 = static_cast<int>(static_cast<std::int64_t>(nc) * rank / size);
   s.c1 = static_cast<int>(static_cast<std::int64_t>(nc) * (rank + 1) / size);

@@ -24,13 +24,13 @@ namespace softhd::fe::petsc_detail {
 /// One rank's slab.
 struct SlabPartition {
   int rank = 0, size = 1;
-  int axis = 0;       ///< slab axis: the one with the most cells (the lowest on ties)
-  int c0 = 0, c1 = 0; ///< this rank's cells [c0, c1) along the axis
-  Mesh mesh;          ///< the slab's mesh, with the global mesh's node coordinates
+  int axis = 0;        ///< slab axis: the one with the most cells (the lowest on ties)
+  int c0 = 0, c1 = 0;  ///< this rank's cells [c0, c1) along the axis
+  Mesh mesh;           ///< the slab's mesh, with the global mesh's node coordinates
   std::vector<DirichletConstraint> constraints;  ///< the scene's, restricted to the slab
-  std::vector<int> global_node;     ///< global node id of each slab node
-  std::vector<int> global_element;  ///< global element id of each slab element
-  std::vector<int> global_vertex;   ///< global vertex id of each slab vertex
+  std::vector<int> global_node;                  ///< global node id of each slab node
+  std::vector<int> global_element;               ///< global element id of each slab element
+  std::vector<int> global_vertex;                ///< global vertex id of each slab vertex
   Eigen::Index num_global_nodes = 0, num_global_elements = 0, num_global_vertices = 0;
 };
 
@@ -40,11 +40,11 @@ SlabPartition make_slab_partition(const Scene& scene, int rank, int size);
 
 /// The global free-dof numbering as seen by one rank.
 struct FreeNumbering {
-  std::int64_t num_global = 0;                ///< free dofs of the whole mesh
+  std::int64_t num_global = 0;                  ///< free dofs of the whole mesh
   std::int64_t owned_begin = 0, owned_end = 0;  ///< this rank's rows [begin, end)
-  std::vector<std::int64_t> local_to_global;  ///< per slab free index: global row
-  std::vector<int> owned_local;               ///< slab free index of each owned row, in order
-  std::vector<std::int64_t> owned_global_dof; ///< global dof (node dim + c) of each owned row
+  std::vector<std::int64_t> local_to_global;    ///< per slab free index: global row
+  std::vector<int> owned_local;                 ///< slab free index of each owned row, in order
+  std::vector<std::int64_t> owned_global_dof;   ///< global dof (node dim + c) of each owned row
   bool whole_nodes = true;  ///< every node has all or none of its components free
 };
 
