@@ -97,6 +97,8 @@ struct Pass {
   bool point_prune = false;       // pruning regime: leaf pairs also pruned point by point
   std::vector<double> point_low;  // 4 per outer point (tree order, point_prune only)
   std::vector<double> kappa;      // per outer node: max c_o (scale of its locals)
+  std::vector<double> cmin;       // per outer node: min c_o
+  std::vector<int> cut;           // source nodes of the lower bounds (cut_nodes)
   std::vector<char> has_local, has_proxy;
   std::vector<double> log_weight, log_share;  // 4 per source node (prepare_sources)
   std::vector<Box> obox, sbox;                // interpolation boxes (eligible nodes)
@@ -242,26 +244,43 @@ PairSums lower_sums(const Pass& p, const double* o, double c_o, const std::vecto
   return low;
 }
 
-/// Lower bounds of every outer point's sums (lower_sums with the source leaf found by
-/// descending towards the point), their minima per outer node, and the locals' scales.
-void prepare_outer(Pass& p, const PassOuter& in, int threads) {
+/// The outer data every task shares: scales in tree order and room for the per-node
+/// bounds (outer_bounds fills them for the tasks a process plans).
+void prepare_outer(Pass& p, const PassOuter& in) {
   const KdTree& ot = *p.ot;
-  const std::vector<KdNode>& nodes = ot.nodes();
-  const size_t nn = nodes.size();
+  const size_t nn = ot.nodes().size();
   p.oc = ot.permute(Eigen::Map<const Eigen::VectorXd>(in.scale, ot.size()));
   p.log_low.assign(4 * nn, kInf);
   if (p.point_prune) p.point_low.assign(4 * static_cast<size_t>(ot.size()), kInf);
   p.kappa.assign(nn, 0.0);
-  std::vector<double> cmin(nn, kInf);
-  std::vector<int> cut;
-  cut_nodes(*p.st, 0, 0, cut);
+  p.cmin.assign(nn, kInf);
+  p.has_local.assign(nn, 0);
+  p.obox.resize(nn);
+  cut_nodes(*p.st, 0, 0, p.cut);
+}
+
+int subtree_end(const KdTree& tree, int id);
+
+/// Lower bounds of the sums of every outer point in the subtrees of `roots` (lower_sums
+/// with the source leaf found by descending towards the point), their minima per outer
+/// node, and the locals' scales, for those subtrees' nodes: the planning of a task reads
+/// nothing else, so a process bounds only the tasks it plans.
+void outer_bounds(Pass& p, const std::vector<int>& roots, int threads) {
+  const KdTree& ot = *p.ot;
+  const std::vector<KdNode>& nodes = ot.nodes();
+  std::vector<int> leaves;
+  for (const int root : roots) {
+    const int end = subtree_end(ot, root);
+    for (int id = root; id < end; ++id)
+      if (nodes[static_cast<size_t>(id)].right < 0) leaves.push_back(id);
+  }
   const Eigen::MatrixXd& X = ot.points();
   const unsigned flags = p.flags | kMagnitude;
   const double w_min = p.outer_kinds() ? p.w.minCoeff() : 0.0;
 #pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
-  for (size_t id = 0; id < nn; ++id) {
+  for (size_t l = 0; l < leaves.size(); ++l) {
+    const size_t id = static_cast<size_t>(leaves[l]);
     const KdNode& T = nodes[id];
-    if (T.right >= 0) continue;
     for (Eigen::Index q = T.begin; q < T.end; ++q) {
       double o[3] = {0.0, 0.0, 0.0};
       for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
@@ -269,7 +288,7 @@ void prepare_outer(Pass& p, const PassOuter& in, int threads) {
       const int leaf_id = leaf_near(*p.st, o, p.d, near_cut);
       const PairSources leaf = p.slice(p.st->nodes()[static_cast<size_t>(leaf_id)]);
       const PairSums exact = pair_sums(o, p.oc[q], leaf, *p.power, p.eps, flags);
-      PairSums s = lower_sums(p, o, p.oc[q], cut, near_cut, exact);
+      PairSums s = lower_sums(p, o, p.oc[q], p.cut, near_cut, exact);
       // The nearest source (r = r_min, so p = 1) alone gives S ≥ w_min, and, when
       // r_min > 0, Gm ≥ w_min/c_o: the bound that matters at large α.
       s.S = std::max(s.S, w_min);
@@ -279,27 +298,27 @@ void prepare_outer(Pass& p, const PassOuter& in, int threads) {
       for (int k = 0; k < 4; ++k) p.log_low[4 * id + k] = std::min(p.log_low[4 * id + k], v[k]);
       if (p.point_prune) std::copy(v, v + 4, &p.point_low[4 * static_cast<size_t>(q)]);
       p.kappa[id] = std::max(p.kappa[id], p.oc[q]);
-      cmin[id] = std::min(cmin[id], p.oc[q]);
+      p.cmin[id] = std::min(p.cmin[id], p.oc[q]);
     }
   }
-  for (size_t id = nn; id-- > 0;) {  // children follow their parents
-    const KdNode& T = nodes[id];
-    if (T.right < 0) continue;
-    const size_t l = id + 1, r = static_cast<size_t>(T.right);
-    for (int k = 0; k < 4; ++k)
-      p.log_low[4 * id + k] = std::min(p.log_low[4 * l + k], p.log_low[4 * r + k]);
-    p.kappa[id] = std::max(p.kappa[l], p.kappa[r]);
-    cmin[id] = std::min(cmin[l], cmin[r]);
-  }
   const bool interp = p.alpha <= p.cfg.max_interp_alpha;
-  p.has_local.assign(nn, 0);
-  p.obox.resize(nn);
-  for (size_t id = 0; id < nn; ++id) {
-    // Locals carry (κ_T t)^α; the factor (c_o/κ_T)^α must not underflow.
-    const bool scales_ok = p.alpha * (std::log(p.kappa[id]) - std::log(cmin[id])) <= 300.0;
-    if (!interp || size_of(nodes[id]) <= p.P || !scales_ok) continue;
-    p.has_local[id] = 1;
-    p.obox[id] = interpolation_box(nodes[id].lo, nodes[id].hi, p.d);
+  for (const int root : roots) {
+    for (size_t id = static_cast<size_t>(subtree_end(ot, root));
+         id-- > static_cast<size_t>(root);) {
+      const KdNode& T = nodes[id];  // children follow their parents
+      if (T.right >= 0) {
+        const size_t l = id + 1, r = static_cast<size_t>(T.right);
+        for (int k = 0; k < 4; ++k)
+          p.log_low[4 * id + k] = std::min(p.log_low[4 * l + k], p.log_low[4 * r + k]);
+        p.kappa[id] = std::max(p.kappa[l], p.kappa[r]);
+        p.cmin[id] = std::min(p.cmin[l], p.cmin[r]);
+      }
+      // Locals carry (κ_T t)^α; the factor (c_o/κ_T)^α must not underflow.
+      const bool scales_ok = p.alpha * (std::log(p.kappa[id]) - std::log(p.cmin[id])) <= 300.0;
+      if (!interp || size_of(nodes[id]) <= p.P || !scales_ok) continue;
+      p.has_local[id] = 1;
+      p.obox[id] = interpolation_box(nodes[id].lo, nodes[id].hi, p.d);
+    }
   }
 }
 
@@ -805,7 +824,7 @@ void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const P
   p.power = set.power;
   p.point_prune = p.alpha > cfg.max_interp_alpha;
   prepare_sources(p, src);
-  prepare_outer(p, outer, set.threads);
+  prepare_outer(p, outer);
 }
 
 /// Plans the tasks of `mine`: first every kSampleStride-th task, whose planned work, scaled
@@ -849,12 +868,17 @@ bool plan_tasks(const Pass& p, const std::vector<int>& roots, UnitRange mine, do
 /// Distributed passes: the tasks each process executes, split by their planned work
 /// (summed over the processes; each planned its run of the tasks split by points). Tasks
 /// that move are planned again by their new process (the plan of a task depends on the
-/// task alone, so it is the same); the lists of tasks that left are dropped.
-UnitRange rebalance(const Pass& p, const std::vector<int>& roots, UnitRange planned,
+/// task alone, so it is the same) after bounding their outer points; the lists of tasks
+/// that left are dropped.
+UnitRange rebalance(Pass& p, const std::vector<int>& roots, UnitRange planned,
                     const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
                     std::vector<double>& work, std::int64_t& visits) {
   set.share->sum(work.data(), work.size());
   const UnitRange mine = share_of(set, work);
+  std::vector<int> moved;
+  for (size_t r = mine.first; r < mine.last; ++r)
+    if (r < planned.first || r >= planned.last) moved.push_back(roots[r]);
+  outer_bounds(p, moved, set.threads);
   for (size_t r = 0; r < roots.size(); ++r) {
     const bool run = r >= mine.first && r < mine.last;
     const bool had = r >= planned.first && r < planned.last;
@@ -943,6 +967,8 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   for (size_t r = 0; r < roots.size(); ++r)
     points[r] = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
   UnitRange mine = share_of(set, points);
+  outer_bounds(p, std::vector<int>(roots.begin() + mine.first, roots.begin() + mine.last),
+               set.threads);
   if (!plan_tasks(p, roots, mine, limit, set, lists, work, visits))
     return fall_back(src, outer, set, visits, since(start));
   if (set.share != nullptr) mine = rebalance(p, roots, mine, set, lists, work, visits);
