@@ -808,18 +808,19 @@ void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const P
   prepare_outer(p, outer, set.threads);
 }
 
-/// Plans every task: first every kSampleStride-th task, whose planned work, scaled by the
-/// share of outer points it covers, predicts the whole plan (a fall-back then costs about
-/// 1/kSampleStride of the planning), then the others. Returns false (fall back to all
-/// pairs) when the predicted or the planned work exceeds `limit`.
-bool plan_tasks(const Pass& p, const std::vector<int>& roots, double limit, int threads,
-                std::vector<std::vector<Interaction>>& lists, std::int64_t& visits) {
-  std::vector<double> work(roots.size(), 0.0);
+/// Plans the tasks of `mine`: first every kSampleStride-th task, whose planned work, scaled
+/// by the share of outer points it covers, predicts the whole plan (a fall-back then costs
+/// about 1/kSampleStride of the planning), then the others. Returns false (fall back to all
+/// pairs) when the predicted or the planned work exceeds `limit`. With a share, the
+/// prediction and the verdict are summed over the processes (each plans its own tasks).
+bool plan_tasks(const Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
+                const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
+                std::vector<double>& work, std::int64_t& visits) {
   std::atomic<double> spent{0.0};
   std::atomic<bool> stopped{false};
   for (int phase = 0; phase < 2 && !stopped; ++phase) {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : visits)
-    for (size_t r = 0; r < roots.size(); ++r) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits)
+    for (size_t r = mine.first; r < mine.last; ++r) {
       if ((r % kSampleStride == 0) != (phase == 0) || stopped.load()) continue;
       PlanState st;
       st.spent = &spent;
@@ -829,16 +830,67 @@ bool plan_tasks(const Pass& p, const std::vector<int>& roots, double limit, int 
       work[r] = st.total;
       lists[r] = std::move(st.out);
     }
-    if (phase == 0 && !stopped) {
-      double sampled = 0.0, covered = 0.0;
-      for (size_t r = 0; r < roots.size(); r += kSampleStride) {
-        sampled += work[r];
-        covered += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
+    double totals[3] = {stopped ? 1.0 : 0.0, 0.0, 0.0};  // stopped, sampled, covered
+    if (phase == 0)
+      for (size_t r = mine.first; r < mine.last; ++r) {
+        if (r % kSampleStride != 0) continue;
+        totals[1] += work[r];
+        totals[2] += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
       }
-      if (sampled * static_cast<double>(p.ot->size()) / covered > limit) stopped = true;
-    }
+    if (set.share != nullptr) set.share->sum(totals, 3);
+    stopped = totals[0] > 0.0;
+    if (phase == 0 && !stopped && totals[2] > 0.0 &&
+        totals[1] * static_cast<double>(p.ot->size()) / totals[2] > limit)
+      stopped = true;
   }
   return !stopped;
+}
+
+/// Distributed passes: the tasks each process executes, split by their planned work
+/// (summed over the processes; each planned its run of the tasks split by points). Tasks
+/// that move are planned again by their new process (the plan of a task depends on the
+/// task alone, so it is the same); the lists of tasks that left are dropped.
+UnitRange rebalance(const Pass& p, const std::vector<int>& roots, UnitRange planned,
+                    const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
+                    std::vector<double>& work, std::int64_t& visits) {
+  set.share->sum(work.data(), work.size());
+  const UnitRange mine = share_of(set, work);
+  for (size_t r = 0; r < roots.size(); ++r) {
+    const bool run = r >= mine.first && r < mine.last;
+    const bool had = r >= planned.first && r < planned.last;
+    if (!run) std::vector<Interaction>().swap(lists[r]);
+    if (!run || had) continue;
+    PlanState st;
+    std::atomic<double> spent{0.0};
+    st.spent = &spent;
+    plan(p, roots[r], 0, st);
+    visits += st.visits;
+    lists[r] = std::move(st.out);
+  }
+  return mine;
+}
+
+/// The boxes with grids of the interactions in `lists` (and their descendants with grids,
+/// reached by M2M and L2L).
+void mark_grids(const Pass& p, const std::vector<std::vector<Interaction>>& lists,
+                std::vector<char>& smark, std::vector<char>& omark) {
+  smark.assign(p.st->nodes().size(), 0);
+  omark.assign(p.ot->nodes().size(), 0);
+  for (const auto& list : lists)
+    for (const Interaction& it : list) {
+      if (it.op == kM2P || it.op == kM2L) mark_subtree(*p.st, p.has_proxy, it.s, smark);
+      if (it.op == kP2L || it.op == kM2L) mark_subtree(*p.ot, p.has_local, it.t, omark);
+    }
+}
+
+/// The union over the processes of every process's marks (for the work counts, which
+/// then equal the serial pass's).
+std::vector<char> union_marks(const WorkShare& share, const std::vector<char>& mark) {
+  std::vector<double> m(mark.begin(), mark.end());
+  share.sum(m.data(), m.size());
+  std::vector<char> out(mark.size());
+  for (size_t i = 0; i < m.size(); ++i) out[i] = m[i] > 0.0 ? 1 : 0;
+  return out;
 }
 
 class DualTreeBackend final : public PairSumBackend {
@@ -883,30 +935,42 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   std::vector<int> roots;
   task_roots(*p.ot, 0, std::max<Eigen::Index>(1024, p.ot->size() / 64), roots);
   std::vector<std::vector<Interaction>> lists(roots.size());
+  std::vector<double> work(roots.size(), 0.0);
   std::int64_t visits = 0;
   const double limit = cfg_.cost_model ? kFallBack * all_pairs : kInf;
-  if (!plan_tasks(p, roots, limit, set.threads, lists, visits))
+  // This process's tasks (all of them without a share): planned by points, run by work.
+  std::vector<double> points(roots.size());
+  for (size_t r = 0; r < roots.size(); ++r)
+    points[r] = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
+  UnitRange mine = share_of(set, points);
+  if (!plan_tasks(p, roots, mine, limit, set, lists, work, visits))
     return fall_back(src, outer, set, visits, since(start));
+  if (set.share != nullptr) mine = rebalance(p, roots, mine, set, lists, work, visits);
 
-  // The boxes with grids: those the interactions use and their descendants with grids
-  // (reached by M2M and L2L).
-  std::vector<char> smark(p.st->nodes().size(), 0), omark(p.ot->nodes().size(), 0);
-  for (const auto& list : lists)
-    for (const Interaction& it : list) {
-      if (it.op == kM2P || it.op == kM2L) mark_subtree(*p.st, p.has_proxy, it.s, smark);
-      if (it.op == kP2L || it.op == kM2L) mark_subtree(*p.ot, p.has_local, it.t, omark);
-    }
+  std::vector<char> smark, omark;
+  mark_grids(p, lists, smark, omark);
   PassStats stats;
   DualTreeOps ops;
-  count_work(p, lists, smark, omark, stats, ops);
+  if (set.share != nullptr) {
+    // Counts of this process's interactions (summed over the processes by run_pass), with
+    // the grid work of the union of the marks counted once, on the first process.
+    std::vector<char> s_all = union_marks(*set.share, smark),
+                      o_all = union_marks(*set.share, omark);
+    count_work(p, lists, s_all, o_all, stats, ops);
+    if (set.share->rank() != 0) stats.far_basis = 0;
+  } else {
+    count_work(p, lists, smark, omark, stats, ops);
+  }
   stats.node_pairs = visits;
   stats.plan_seconds = since(start);
   if (ops_ != nullptr) *ops_ = ops;
   // Cost model (docs/tree_tolerance.md §8): weights per unit of work measured against
   // the all-pairs kernel; fall back unless the plan is clearly cheaper.
-  const double planned = kCostNear * static_cast<double>(stats.near_pairs) +
-                         kCostFar * static_cast<double>(stats.far_kernel) +
-                         kCostBasis * static_cast<double>(stats.far_basis);
+  std::int64_t counts[3] = {stats.near_pairs, stats.far_kernel, stats.far_basis};
+  if (set.share != nullptr) set.share->sum(counts, 3);  // the serial pass's counts
+  const double planned = kCostNear * static_cast<double>(counts[0]) +
+                         kCostFar * static_cast<double>(counts[1]) +
+                         kCostBasis * static_cast<double>(counts[2]);
   if (cfg_.cost_model && planned > kFallBack * all_pairs)
     return fall_back(src, outer, set, visits, stats.plan_seconds);
 
@@ -916,7 +980,7 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   std::vector<Acc> acc(static_cast<size_t>(p.ot->size()));
   std::int64_t skipped = 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : skipped)
-  for (size_t r = 0; r < roots.size(); ++r)
+  for (size_t r = mine.first; r < mine.last; ++r)
     skipped += execute(p, roots[r], lists[r], sslot, sprox, acc);
   stats.near_pairs -= skipped;
   if (ops_ != nullptr) ops_->point_pruned = skipped;
