@@ -39,8 +39,8 @@ class WorkShare {
 
 /// Units [first, last) of one process.
 struct UnitRange {
-  std::size_t first = 0;
-  std::size_t last = 0;
+  std::size_t first = 0;  ///< the first unit of the run
+  std::size_t last = 0;   ///< one past the last unit of the run
 };
 
 /// The contiguous split of units 0..n−1 with costs `cost` (≥ 0, identical on every process)
