@@ -39,7 +39,7 @@ class WorkShare {
 
 /// Units [first, last) of one process.
 struct UnitRange {
-  std::size_t first = 0;  ///< first unit of the run
+  std::size_t first = 0;  ///< the first unit of the run
   std::size_t last = 0;   ///< one past the last unit of the run
 };
 

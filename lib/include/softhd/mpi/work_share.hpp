@@ -25,7 +25,7 @@ std::shared_ptr<const WorkShare> work_share(MPI_Comm comm);
 /// it. A program started without mpiexec runs as one process (MPI singleton).
 class Session {
  public:
-  /// MPI_Init_thread(argc, argv) unless MPI is initialised already.
+  /// MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, ...) unless MPI is initialised.
   Session(int* argc, char*** argv);
   /// MPI_Finalize if this session initialised MPI.
   ~Session();
