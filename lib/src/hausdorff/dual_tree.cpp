@@ -917,6 +917,29 @@ std::vector<char> union_marks(const WorkShare& share, const std::vector<char>& m
   return out;
 }
 
+/// Counts of this process's interactions. With a share, the grid work of the union of
+/// every process's marks is counted once, on the first process: summed over the
+/// processes (run_pass), the counts are the serial pass's.
+void count_planned(const Pass& p, const std::vector<std::vector<Interaction>>& lists,
+                   const std::vector<char>& smark, const std::vector<char>& omark,
+                   const PassSettings& set, PassStats& stats, DualTreeOps& ops) {
+  if (set.share == nullptr) {
+    count_work(p, lists, smark, omark, stats, ops);
+    return;
+  }
+  count_work(p, lists, union_marks(*set.share, smark), union_marks(*set.share, omark), stats, ops);
+  if (set.share->rank() != 0) stats.far_basis = 0;
+}
+
+/// The planned work of the whole pass (kernel evaluations weighted per operation, summed
+/// over the processes of a share), for the cost model.
+double planned_work(const PassStats& stats, const PassSettings& set) {
+  std::int64_t counts[3] = {stats.near_pairs, stats.far_kernel, stats.far_basis};
+  if (set.share != nullptr) set.share->sum(counts, 3);
+  return kCostNear * static_cast<double>(counts[0]) + kCostFar * static_cast<double>(counts[1]) +
+         kCostBasis * static_cast<double>(counts[2]);
+}
+
 class DualTreeBackend final : public PairSumBackend {
  public:
   DualTreeBackend(const DualTreeConfig& cfg, DualTreeOps* ops) : cfg_(cfg), ops_(ops) {}
@@ -977,26 +1000,13 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   mark_grids(p, lists, smark, omark);
   PassStats stats;
   DualTreeOps ops;
-  if (set.share != nullptr) {
-    // Counts of this process's interactions (summed over the processes by run_pass), with
-    // the grid work of the union of the marks counted once, on the first process.
-    std::vector<char> s_all = union_marks(*set.share, smark),
-                      o_all = union_marks(*set.share, omark);
-    count_work(p, lists, s_all, o_all, stats, ops);
-    if (set.share->rank() != 0) stats.far_basis = 0;
-  } else {
-    count_work(p, lists, smark, omark, stats, ops);
-  }
+  count_planned(p, lists, smark, omark, set, stats, ops);
   stats.node_pairs = visits;
   stats.plan_seconds = since(start);
   if (ops_ != nullptr) *ops_ = ops;
   // Cost model (docs/tree_tolerance.md §8): weights per unit of work measured against
   // the all-pairs kernel; fall back unless the plan is clearly cheaper.
-  std::int64_t counts[3] = {stats.near_pairs, stats.far_kernel, stats.far_basis};
-  if (set.share != nullptr) set.share->sum(counts, 3);  // the serial pass's counts
-  const double planned = kCostNear * static_cast<double>(counts[0]) +
-                         kCostFar * static_cast<double>(counts[1]) +
-                         kCostBasis * static_cast<double>(counts[2]);
+  const double planned = planned_work(stats, set);
   if (cfg_.cost_model && planned > kFallBack * all_pairs)
     return fall_back(src, outer, set, visits, stats.plan_seconds);
 
