@@ -4,11 +4,16 @@
 #include <exception>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
 #include "softhd/error.hpp"
+#include "softhd/work_share.hpp"
+#if SOFTHD_WITH_MPI
+#include "softhd/mpi/work_share.hpp"
+#endif
 
 #if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
 #include <petscsys.h>
@@ -49,37 +54,55 @@ commands:
 Run 'softhd COMMAND --help' for the options of a command.
 )";
 
+/// A stream that drops what it is given (the error lines of ranks other than 0).
+std::ostream& quiet() {
+  static std::ostream sink(nullptr);
+  return sink;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+#if SOFTHD_WITH_MPI
+  // Under mpiexec the ranks share the pair sums (softhd distance); started alone, one rank.
+  const softhd::mpi::Session mpi(&argc, &argv);
+#endif
+  // Every rank reads the same inputs and meets the same errors: rank 0 reports them.
+  std::ostream& err = softhd::world_rank() == 0 ? std::cerr : quiet();
   const std::vector<std::string> all(argv + 1, argv + argc);
   if (all.empty() || all[0] == "--help" || all[0] == "-h" || all[0] == "help") {
     std::cout << kUsage;
     return all.empty() ? 2 : 0;
   }
-#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
-  const PetscSession petsc(argv[0]);
-#endif
   const std::string command = all[0];
+#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
+  // Only a forward solve on a PETSc backend starts PETSc (which starts MPI if the session
+  // above did not): every other run pays no PETSc or MPI start-up.
+  bool wants_petsc = false;
+  for (size_t k = 1; k + 1 < all.size(); ++k)
+    if (all[k] == "--state-backend" && all[k + 1].rfind("petsc", 0) == 0) wants_petsc = true;
+  std::unique_ptr<PetscSession> petsc;
+  if (command == "forward" && wants_petsc) petsc = std::make_unique<PetscSession>(argv[0]);
+#endif
   const std::vector<std::string> rest(all.begin() + 1, all.end());
   try {
     if (command == "distance") return softhd::cli::run_distance(rest);
     if (command == "forward") return run_forward(argc - 1, argv + 1);
     if (command == "optimise" || command == "optimize") return softhd::cli::run_optimise(rest);
-    std::cerr << "softhd: unknown command '" << command << "' (see softhd --help)\n";
+    err << "softhd: unknown command '" << command << "' (see softhd --help)\n";
     return 2;
   } catch (const softhd::Error& e) {
-    std::cerr << "softhd " << command << ": error: " << e.what() << '\n';
+    err << "softhd " << command << ": error: " << e.what() << '\n';
     return 2;
   } catch (const std::filesystem::filesystem_error& e) {
     // The environment, not softhd: a path that cannot be read, created or listed.
-    std::cerr << "softhd " << command << ": error: " << e.what() << '\n';
+    err << "softhd " << command << ": error: " << e.what() << '\n';
     return 2;
   } catch (const std::bad_alloc&) {
-    std::cerr << "softhd " << command << ": error: out of memory\n";
+    err << "softhd " << command << ": error: out of memory\n";
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "softhd " << command << ": internal error: " << e.what() << '\n';
+    err << "softhd " << command << ": internal error: " << e.what() << '\n';
     return 1;
   }
 }

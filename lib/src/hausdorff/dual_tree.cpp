@@ -97,6 +97,8 @@ struct Pass {
   bool point_prune = false;       // pruning regime: leaf pairs also pruned point by point
   std::vector<double> point_low;  // 4 per outer point (tree order, point_prune only)
   std::vector<double> kappa;      // per outer node: max c_o (scale of its locals)
+  std::vector<double> cmin;       // per outer node: min c_o
+  std::vector<int> cut;           // source nodes of the lower bounds (cut_nodes)
   std::vector<char> has_local, has_proxy;
   std::vector<double> log_weight, log_share;  // 4 per source node (prepare_sources)
   std::vector<Box> obox, sbox;                // interpolation boxes (eligible nodes)
@@ -242,26 +244,43 @@ PairSums lower_sums(const Pass& p, const double* o, double c_o, const std::vecto
   return low;
 }
 
-/// Lower bounds of every outer point's sums (lower_sums with the source leaf found by
-/// descending towards the point), their minima per outer node, and the locals' scales.
-void prepare_outer(Pass& p, const PassOuter& in, int threads) {
+/// The outer data every task shares: scales in tree order and room for the per-node
+/// bounds (outer_bounds fills them for the tasks a process plans).
+void prepare_outer(Pass& p, const PassOuter& in) {
   const KdTree& ot = *p.ot;
-  const std::vector<KdNode>& nodes = ot.nodes();
-  const size_t nn = nodes.size();
+  const size_t nn = ot.nodes().size();
   p.oc = ot.permute(Eigen::Map<const Eigen::VectorXd>(in.scale, ot.size()));
   p.log_low.assign(4 * nn, kInf);
   if (p.point_prune) p.point_low.assign(4 * static_cast<size_t>(ot.size()), kInf);
   p.kappa.assign(nn, 0.0);
-  std::vector<double> cmin(nn, kInf);
-  std::vector<int> cut;
-  cut_nodes(*p.st, 0, 0, cut);
+  p.cmin.assign(nn, kInf);
+  p.has_local.assign(nn, 0);
+  p.obox.resize(nn);
+  cut_nodes(*p.st, 0, 0, p.cut);
+}
+
+int subtree_end(const KdTree& tree, int id);
+
+/// Lower bounds of the sums of every outer point in the subtrees of `roots` (lower_sums
+/// with the source leaf found by descending towards the point), their minima per outer
+/// node, and the locals' scales, for those subtrees' nodes: the planning of a task reads
+/// nothing else, so a process bounds only the tasks it plans.
+void outer_bounds(Pass& p, const std::vector<int>& roots, int threads) {
+  const KdTree& ot = *p.ot;
+  const std::vector<KdNode>& nodes = ot.nodes();
+  std::vector<int> leaves;
+  for (const int root : roots) {
+    const int end = subtree_end(ot, root);
+    for (int id = root; id < end; ++id)
+      if (nodes[static_cast<size_t>(id)].right < 0) leaves.push_back(id);
+  }
   const Eigen::MatrixXd& X = ot.points();
   const unsigned flags = p.flags | kMagnitude;
   const double w_min = p.outer_kinds() ? p.w.minCoeff() : 0.0;
 #pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
-  for (size_t id = 0; id < nn; ++id) {
+  for (size_t l = 0; l < leaves.size(); ++l) {
+    const size_t id = static_cast<size_t>(leaves[l]);
     const KdNode& T = nodes[id];
-    if (T.right >= 0) continue;
     for (Eigen::Index q = T.begin; q < T.end; ++q) {
       double o[3] = {0.0, 0.0, 0.0};
       for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
@@ -269,7 +288,7 @@ void prepare_outer(Pass& p, const PassOuter& in, int threads) {
       const int leaf_id = leaf_near(*p.st, o, p.d, near_cut);
       const PairSources leaf = p.slice(p.st->nodes()[static_cast<size_t>(leaf_id)]);
       const PairSums exact = pair_sums(o, p.oc[q], leaf, *p.power, p.eps, flags);
-      PairSums s = lower_sums(p, o, p.oc[q], cut, near_cut, exact);
+      PairSums s = lower_sums(p, o, p.oc[q], p.cut, near_cut, exact);
       // The nearest source (r = r_min, so p = 1) alone gives S ≥ w_min, and, when
       // r_min > 0, Gm ≥ w_min/c_o: the bound that matters at large α.
       s.S = std::max(s.S, w_min);
@@ -279,27 +298,27 @@ void prepare_outer(Pass& p, const PassOuter& in, int threads) {
       for (int k = 0; k < 4; ++k) p.log_low[4 * id + k] = std::min(p.log_low[4 * id + k], v[k]);
       if (p.point_prune) std::copy(v, v + 4, &p.point_low[4 * static_cast<size_t>(q)]);
       p.kappa[id] = std::max(p.kappa[id], p.oc[q]);
-      cmin[id] = std::min(cmin[id], p.oc[q]);
+      p.cmin[id] = std::min(p.cmin[id], p.oc[q]);
     }
   }
-  for (size_t id = nn; id-- > 0;) {  // children follow their parents
-    const KdNode& T = nodes[id];
-    if (T.right < 0) continue;
-    const size_t l = id + 1, r = static_cast<size_t>(T.right);
-    for (int k = 0; k < 4; ++k)
-      p.log_low[4 * id + k] = std::min(p.log_low[4 * l + k], p.log_low[4 * r + k]);
-    p.kappa[id] = std::max(p.kappa[l], p.kappa[r]);
-    cmin[id] = std::min(cmin[l], cmin[r]);
-  }
   const bool interp = p.alpha <= p.cfg.max_interp_alpha;
-  p.has_local.assign(nn, 0);
-  p.obox.resize(nn);
-  for (size_t id = 0; id < nn; ++id) {
-    // Locals carry (κ_T t)^α; the factor (c_o/κ_T)^α must not underflow.
-    const bool scales_ok = p.alpha * (std::log(p.kappa[id]) - std::log(cmin[id])) <= 300.0;
-    if (!interp || size_of(nodes[id]) <= p.P || !scales_ok) continue;
-    p.has_local[id] = 1;
-    p.obox[id] = interpolation_box(nodes[id].lo, nodes[id].hi, p.d);
+  for (const int root : roots) {
+    for (size_t id = static_cast<size_t>(subtree_end(ot, root));
+         id-- > static_cast<size_t>(root);) {
+      const KdNode& T = nodes[id];  // children follow their parents
+      if (T.right >= 0) {
+        const size_t l = id + 1, r = static_cast<size_t>(T.right);
+        for (int k = 0; k < 4; ++k)
+          p.log_low[4 * id + k] = std::min(p.log_low[4 * l + k], p.log_low[4 * r + k]);
+        p.kappa[id] = std::max(p.kappa[l], p.kappa[r]);
+        p.cmin[id] = std::min(p.cmin[l], p.cmin[r]);
+      }
+      // Locals carry (κ_T t)^α; the factor (c_o/κ_T)^α must not underflow.
+      const bool scales_ok = p.alpha * (std::log(p.kappa[id]) - std::log(p.cmin[id])) <= 300.0;
+      if (!interp || size_of(nodes[id]) <= p.P || !scales_ok) continue;
+      p.has_local[id] = 1;
+      p.obox[id] = interpolation_box(nodes[id].lo, nodes[id].hi, p.d);
+    }
   }
 }
 
@@ -805,21 +824,22 @@ void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const P
   p.power = set.power;
   p.point_prune = p.alpha > cfg.max_interp_alpha;
   prepare_sources(p, src);
-  prepare_outer(p, outer, set.threads);
+  prepare_outer(p, outer);
 }
 
-/// Plans every task: first every kSampleStride-th task, whose planned work, scaled by the
-/// share of outer points it covers, predicts the whole plan (a fall-back then costs about
-/// 1/kSampleStride of the planning), then the others. Returns false (fall back to all
-/// pairs) when the predicted or the planned work exceeds `limit`.
-bool plan_tasks(const Pass& p, const std::vector<int>& roots, double limit, int threads,
-                std::vector<std::vector<Interaction>>& lists, std::int64_t& visits) {
-  std::vector<double> work(roots.size(), 0.0);
+/// Plans the tasks of `mine`: first every kSampleStride-th task, whose planned work, scaled
+/// by the share of outer points it covers, predicts the whole plan (a fall-back then costs
+/// about 1/kSampleStride of the planning), then the others. Returns false (fall back to all
+/// pairs) when the predicted or the planned work exceeds `limit`. With a share, the
+/// prediction and the verdict are summed over the processes (each plans its own tasks).
+bool plan_tasks(const Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
+                const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
+                std::vector<double>& work, std::int64_t& visits) {
   std::atomic<double> spent{0.0};
   std::atomic<bool> stopped{false};
   for (int phase = 0; phase < 2 && !stopped; ++phase) {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : visits)
-    for (size_t r = 0; r < roots.size(); ++r) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits)
+    for (size_t r = mine.first; r < mine.last; ++r) {
       if ((r % kSampleStride == 0) != (phase == 0) || stopped.load()) continue;
       PlanState st;
       st.spent = &spent;
@@ -829,16 +849,95 @@ bool plan_tasks(const Pass& p, const std::vector<int>& roots, double limit, int 
       work[r] = st.total;
       lists[r] = std::move(st.out);
     }
-    if (phase == 0 && !stopped) {
-      double sampled = 0.0, covered = 0.0;
-      for (size_t r = 0; r < roots.size(); r += kSampleStride) {
-        sampled += work[r];
-        covered += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
+    double totals[3] = {stopped ? 1.0 : 0.0, 0.0, 0.0};  // stopped, sampled, covered
+    if (phase == 0)
+      for (size_t r = mine.first; r < mine.last; ++r) {
+        if (r % kSampleStride != 0) continue;
+        totals[1] += work[r];
+        totals[2] += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
       }
-      if (sampled * static_cast<double>(p.ot->size()) / covered > limit) stopped = true;
-    }
+    if (set.share != nullptr) set.share->sum(totals, 3);
+    stopped = totals[0] > 0.0;
+    if (phase == 0 && !stopped && totals[2] > 0.0 &&
+        totals[1] * static_cast<double>(p.ot->size()) / totals[2] > limit)
+      stopped = true;
   }
   return !stopped;
+}
+
+/// Distributed passes: the tasks each process executes, split by their planned work
+/// (summed over the processes; each planned its run of the tasks split by points). Tasks
+/// that move are planned again by their new process (the plan of a task depends on the
+/// task alone, so it is the same) after bounding their outer points; the lists of tasks
+/// that left are dropped.
+UnitRange rebalance(Pass& p, const std::vector<int>& roots, UnitRange planned,
+                    const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
+                    std::vector<double>& work, std::int64_t& visits) {
+  set.share->sum(work.data(), work.size());
+  const UnitRange mine = share_of(set, work);
+  std::vector<int> moved;
+  for (size_t r = mine.first; r < mine.last; ++r)
+    if (r < planned.first || r >= planned.last) moved.push_back(roots[r]);
+  outer_bounds(p, moved, set.threads);
+  for (size_t r = 0; r < roots.size(); ++r) {
+    const bool run = r >= mine.first && r < mine.last;
+    const bool had = r >= planned.first && r < planned.last;
+    if (!run) std::vector<Interaction>().swap(lists[r]);
+    if (!run || had) continue;
+    PlanState st;
+    std::atomic<double> spent{0.0};
+    st.spent = &spent;
+    plan(p, roots[r], 0, st);
+    visits += st.visits;
+    lists[r] = std::move(st.out);
+  }
+  return mine;
+}
+
+/// The boxes with grids of the interactions in `lists` (and their descendants with grids,
+/// reached by M2M and L2L).
+void mark_grids(const Pass& p, const std::vector<std::vector<Interaction>>& lists,
+                std::vector<char>& smark, std::vector<char>& omark) {
+  smark.assign(p.st->nodes().size(), 0);
+  omark.assign(p.ot->nodes().size(), 0);
+  for (const auto& list : lists)
+    for (const Interaction& it : list) {
+      if (it.op == kM2P || it.op == kM2L) mark_subtree(*p.st, p.has_proxy, it.s, smark);
+      if (it.op == kP2L || it.op == kM2L) mark_subtree(*p.ot, p.has_local, it.t, omark);
+    }
+}
+
+/// The union over the processes of every process's marks (for the work counts, which
+/// then equal the serial pass's).
+std::vector<char> union_marks(const WorkShare& share, const std::vector<char>& mark) {
+  std::vector<double> m(mark.begin(), mark.end());
+  share.sum(m.data(), m.size());
+  std::vector<char> out(mark.size());
+  for (size_t i = 0; i < m.size(); ++i) out[i] = m[i] > 0.0 ? 1 : 0;
+  return out;
+}
+
+/// Counts of this process's interactions. With a share, the grid work of the union of
+/// every process's marks is counted once, on the first process: summed over the
+/// processes (run_pass), the counts are the serial pass's.
+void count_planned(const Pass& p, const std::vector<std::vector<Interaction>>& lists,
+                   const std::vector<char>& smark, const std::vector<char>& omark,
+                   const PassSettings& set, PassStats& stats, DualTreeOps& ops) {
+  if (set.share == nullptr) {
+    count_work(p, lists, smark, omark, stats, ops);
+    return;
+  }
+  count_work(p, lists, union_marks(*set.share, smark), union_marks(*set.share, omark), stats, ops);
+  if (set.share->rank() != 0) stats.far_basis = 0;
+}
+
+/// The planned work of the whole pass (kernel evaluations weighted per operation, summed
+/// over the processes of a share), for the cost model.
+double planned_work(const PassStats& stats, const PassSettings& set) {
+  std::int64_t counts[3] = {stats.near_pairs, stats.far_kernel, stats.far_basis};
+  if (set.share != nullptr) set.share->sum(counts, 3);
+  return kCostNear * static_cast<double>(counts[0]) + kCostFar * static_cast<double>(counts[1]) +
+         kCostBasis * static_cast<double>(counts[2]);
 }
 
 class DualTreeBackend final : public PairSumBackend {
@@ -883,30 +982,31 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   std::vector<int> roots;
   task_roots(*p.ot, 0, std::max<Eigen::Index>(1024, p.ot->size() / 64), roots);
   std::vector<std::vector<Interaction>> lists(roots.size());
+  std::vector<double> work(roots.size(), 0.0);
   std::int64_t visits = 0;
   const double limit = cfg_.cost_model ? kFallBack * all_pairs : kInf;
-  if (!plan_tasks(p, roots, limit, set.threads, lists, visits))
+  // This process's tasks (all of them without a share): planned by points, run by work.
+  std::vector<double> points(roots.size());
+  for (size_t r = 0; r < roots.size(); ++r)
+    points[r] = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
+  UnitRange mine = share_of(set, points);
+  outer_bounds(p, std::vector<int>(roots.begin() + mine.first, roots.begin() + mine.last),
+               set.threads);
+  if (!plan_tasks(p, roots, mine, limit, set, lists, work, visits))
     return fall_back(src, outer, set, visits, since(start));
+  if (set.share != nullptr) mine = rebalance(p, roots, mine, set, lists, work, visits);
 
-  // The boxes with grids: those the interactions use and their descendants with grids
-  // (reached by M2M and L2L).
-  std::vector<char> smark(p.st->nodes().size(), 0), omark(p.ot->nodes().size(), 0);
-  for (const auto& list : lists)
-    for (const Interaction& it : list) {
-      if (it.op == kM2P || it.op == kM2L) mark_subtree(*p.st, p.has_proxy, it.s, smark);
-      if (it.op == kP2L || it.op == kM2L) mark_subtree(*p.ot, p.has_local, it.t, omark);
-    }
+  std::vector<char> smark, omark;
+  mark_grids(p, lists, smark, omark);
   PassStats stats;
   DualTreeOps ops;
-  count_work(p, lists, smark, omark, stats, ops);
+  count_planned(p, lists, smark, omark, set, stats, ops);
   stats.node_pairs = visits;
   stats.plan_seconds = since(start);
   if (ops_ != nullptr) *ops_ = ops;
   // Cost model (docs/tree_tolerance.md §8): weights per unit of work measured against
   // the all-pairs kernel; fall back unless the plan is clearly cheaper.
-  const double planned = kCostNear * static_cast<double>(stats.near_pairs) +
-                         kCostFar * static_cast<double>(stats.far_kernel) +
-                         kCostBasis * static_cast<double>(stats.far_basis);
+  const double planned = planned_work(stats, set);
   if (cfg_.cost_model && planned > kFallBack * all_pairs)
     return fall_back(src, outer, set, visits, stats.plan_seconds);
 
@@ -916,7 +1016,7 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   std::vector<Acc> acc(static_cast<size_t>(p.ot->size()));
   std::int64_t skipped = 0;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : skipped)
-  for (size_t r = 0; r < roots.size(); ++r)
+  for (size_t r = mine.first; r < mine.last; ++r)
     skipped += execute(p, roots[r], lists[r], sslot, sprox, acc);
   stats.near_pairs -= skipped;
   if (ops_ != nullptr) ops_->point_pruned = skipped;
