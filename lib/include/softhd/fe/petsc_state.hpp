@@ -55,7 +55,8 @@ struct PetscStateOptions {
 
 /// Sizes of the distributed problem as seen by one rank.
 struct PetscStateLayout {
-  int rank = 0, size = 1;           ///< this rank, and the number of ranks
+  int rank = 0;                     ///< this rank
+  int size = 1;                     ///< the number of ranks
   int slab_axis = 0;                ///< the axis the slabs cut
   Eigen::Index local_elements = 0;  ///< elements of this rank's slab
   Eigen::Index owned_rows = 0;      ///< free dofs owned by this rank
