@@ -1,6 +1,6 @@
 #!/bin/sh
 # Peak memory of one forward solve of the bending scene refined r times along every axis
-# (cells 50r x 5r x 2r, Q2), per state backend: the numbers of docs/scaling_state.md.
+# (cells 50r x 5r x 2r, Q2), per state backend: the numbers of docs/scaling.md §4-§8.
 #   scripts/measure_state_memory.sh BUILD_DIR "R..." "BACKEND[:RANKS]..."
 # e.g. scripts/measure_state_memory.sh build-mpi "1 2" "cholmod petsc-gamg:1 petsc-gamg:2"
 # Prints one row per run: backend ranks r cells dofs peak_rss_MiB(max over ranks) seconds

@@ -1,7 +1,7 @@
 #pragma once
 /// \file petsc_state.hpp
 /// The state equation on PETSc, distributed over the ranks of PETSC_COMM_WORLD (built only
-/// with SOFTHD_WITH_MPI=ON; docs/scaling_state.md).
+/// with SOFTHD_WITH_MPI=ON; docs/scaling.md §4-§8).
 ///
 /// Partition: the box mesh is cut into slabs of cells along its axis with the most cells,
 /// one per rank; each rank builds only its slab (mesh, quadrature data, element maps) and
