@@ -1,4 +1,4 @@
-# The PETSc state backend (SOFTHD_WITH_MPI=ON; lib/src/fe/petsc/, docs/scaling_state.md):
+# The PETSc state backend (SOFTHD_WITH_MPI=ON; lib/src/fe/petsc/, docs/scaling.md §4-§8):
 # Debian's petsc-dev (PETSc 3.18 with MUMPS, hypre and GAMG), found through its pkg-config
 # module "PETSc". softhd_use_petsc(target) gives a target PETSc's headers and libraries
 # (privately: softhd's public headers do not include PETSc).
