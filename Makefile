@@ -2,15 +2,19 @@
 # missing Debian packages and builds first.
 BUILD_DIR ?= build
 JOBS ?= $(shell nproc)
+# Extra CMake arguments, e.g. CMAKE_EXTRA=-DSOFTHD_WITH_MPI=ON (what CI builds); deps then
+# installs the MPI packages too (scripts/install-deps.sh --mpi).
+CMAKE_EXTRA ?=
+DEPS_FLAGS ?= $(if $(findstring SOFTHD_WITH_MPI=ON,$(CMAKE_EXTRA)),--mpi,)
 
 .PHONY: deps build test demo bench bench-quick fuzz docs clean format
 
 deps:
-	@scripts/install-deps.sh
+	@scripts/install-deps.sh $(DEPS_FLAGS)
 
 build: deps
 	@mkdir -p $(BUILD_DIR)
-	@cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release > $(BUILD_DIR)/configure.log 2>&1 || (cat $(BUILD_DIR)/configure.log; exit 1)
+	@cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release $(CMAKE_EXTRA) > $(BUILD_DIR)/configure.log 2>&1 || (cat $(BUILD_DIR)/configure.log; exit 1)
 	@cmake --build $(BUILD_DIR) -j $(JOBS)
 
 test: build
@@ -19,7 +23,7 @@ test: build
 # The demo needs only the library and the softhd tool, not the tests and benchmarks.
 demo: deps
 	@mkdir -p $(BUILD_DIR)
-	@cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release > $(BUILD_DIR)/configure.log 2>&1 || (cat $(BUILD_DIR)/configure.log; exit 1)
+	@cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release $(CMAKE_EXTRA) > $(BUILD_DIR)/configure.log 2>&1 || (cat $(BUILD_DIR)/configure.log; exit 1)
 	@cmake --build $(BUILD_DIR) -j $(JOBS) --target softhd_cli
 	@scripts/demo.sh $(BUILD_DIR)
 

@@ -9,6 +9,10 @@
 
 #include "commands.hpp"
 #include "softhd/error.hpp"
+#include "softhd/work_share.hpp"
+#if SOFTHD_WITH_MPI
+#include "softhd/mpi/work_share.hpp"
+#endif
 
 namespace {
 
@@ -22,9 +26,21 @@ commands:
 Run 'softhd COMMAND --help' for the options of a command.
 )";
 
+/// A stream that drops what it is given (the error lines of ranks other than 0).
+std::ostream& quiet() {
+  static std::ostream sink(nullptr);
+  return sink;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+#if SOFTHD_WITH_MPI
+  // Under mpiexec the ranks share the pair sums (softhd distance); started alone, one rank.
+  const softhd::mpi::Session mpi(&argc, &argv);
+#endif
+  // Every rank reads the same inputs and meets the same errors: rank 0 reports them.
+  std::ostream& err = softhd::world_rank() == 0 ? std::cerr : quiet();
   const std::vector<std::string> all(argv + 1, argv + argc);
   if (all.empty() || all[0] == "--help" || all[0] == "-h" || all[0] == "help") {
     std::cout << kUsage;
@@ -36,20 +52,20 @@ int main(int argc, char** argv) {
     if (command == "distance") return softhd::cli::run_distance(rest);
     if (command == "forward") return run_forward(argc - 1, argv + 1);
     if (command == "optimise" || command == "optimize") return softhd::cli::run_optimise(rest);
-    std::cerr << "softhd: unknown command '" << command << "' (see softhd --help)\n";
+    err << "softhd: unknown command '" << command << "' (see softhd --help)\n";
     return 2;
   } catch (const softhd::Error& e) {
-    std::cerr << "softhd " << command << ": error: " << e.what() << '\n';
+    err << "softhd " << command << ": error: " << e.what() << '\n';
     return 2;
   } catch (const std::filesystem::filesystem_error& e) {
     // The environment, not softhd: a path that cannot be read, created or listed.
-    std::cerr << "softhd " << command << ": error: " << e.what() << '\n';
+    err << "softhd " << command << ": error: " << e.what() << '\n';
     return 2;
   } catch (const std::bad_alloc&) {
-    std::cerr << "softhd " << command << ": error: out of memory\n";
+    err << "softhd " << command << ": error: out of memory\n";
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "softhd " << command << ": internal error: " << e.what() << '\n';
+    err << "softhd " << command << ": internal error: " << e.what() << '\n';
     return 1;
   }
 }

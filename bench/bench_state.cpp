@@ -25,6 +25,7 @@
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
+#include "softhd/parallel.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -58,6 +59,10 @@ Eigen::VectorXd linear_bend(const ControlSpace& c, const Mesh& mesh) {
 }
 
 int solvers(double scale) {
+  // The BLAS as NewtonSolver runs it: one OpenBLAS thread. With OpenBLAS's default of
+  // one thread per core, a factorisation under load took 1.2-5.2 s instead of 0.26-0.31 s
+  // (its threads busy-wait for the cores the other processes hold).
+  softhd::limit_blas_threads();
   Scene s = scene_file("bending");
   s.cells = (s.cells.cast<double>() * scale).cast<int>();
   const Assembler A = s.make_assembler();

@@ -33,6 +33,13 @@ if(NOT TARGET NLopt::nlopt_cxx)
 endif()
 softhd_require(NLopt_FOUND libnlopt-cxx-dev "NLopt with its C++ API")
 
+# MPI (SOFTHD_WITH_MPI only): Debian's Open MPI (libopenmpi-dev, openmpi-bin).
+if(SOFTHD_WITH_MPI)
+  find_package(MPI COMPONENTS CXX)
+  softhd_require(MPI_FOUND libopenmpi-dev "MPI (SOFTHD_WITH_MPI=ON; or run scripts/install-deps.sh --mpi)")
+  find_package(MPI REQUIRED COMPONENTS CXX)
+endif()
+
 # The Python module (python/): built when pybind11 and the Python headers are found, unless
 # SOFTHD_BUILD_PYTHON is set OFF. Debian: pybind11-dev, python3-dev (and python3-numpy).
 find_package(Python3 COMPONENTS Interpreter Development.Module QUIET)

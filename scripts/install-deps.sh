@@ -2,7 +2,8 @@
 # Installs the Debian packages softhd needs to build, test, run the demo, draw its
 # plots, build and test the Python module (pybind11, pytest, PyTorch for softhd.torch) and
 # build the API reference (doxygen), and only those that are missing.
-# Safe to run again.
+# Safe to run again. --mpi adds Open MPI and PETSc (the SOFTHD_WITH_MPI build:
+# libopenmpi-dev, openmpi-bin, petsc-dev).
 set -euo pipefail
 
 packages=(
@@ -14,6 +15,12 @@ packages=(
   clang libclang-rt-14-dev libomp-14-dev
   doxygen
 )
+if [ "${1:-}" = "--mpi" ]; then
+  packages+=(libopenmpi-dev openmpi-bin petsc-dev)
+elif [ $# -gt 0 ]; then
+  echo "usage: scripts/install-deps.sh [--mpi]" >&2
+  exit 2
+fi
 
 missing=()
 for p in "${packages[@]}"; do

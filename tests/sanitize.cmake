@@ -21,9 +21,11 @@ if(rc)
   message(FATAL_ERROR "the sanitizer build failed")
 endif()
 # The install test builds a consumer against the install tree: a packaging check, not a
-# sanitizer one (it runs in the main suite).
+# sanitizer one (it runs in the main suite). The two plate refinement tests run the
+# assembly and Newton code of the other FE tests on 10-40 times their meshes: under ASan
+# they took 157 s of the 528 s of this run's tests (they run in the main suite).
 execute_process(COMMAND ${CMAKE_CTEST_COMMAND} --test-dir ${WORK_DIR} -j 2 --output-on-failure
-  -E "^install_and_consume$"
+  -E "^(install_and_consume|Plate\\.HardCaseIsReachedFromFlat|Plate\\.TipDisplacementConvergesUnderQ2Refinement)$"
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(rc)
   message(FATAL_ERROR "tests failed under ASan+UBSan:\n${out}\n${err}")

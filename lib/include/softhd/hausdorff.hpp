@@ -17,6 +17,7 @@
 #include <string>
 
 #include "softhd/point_cloud.hpp"
+#include "softhd/work_share.hpp"
 
 namespace softhd {
 
@@ -69,6 +70,10 @@ struct HausdorffOptions {
   /// model predicts that is cheaper than the tree (small clouds, tight τ; see
   /// docs/tree_tolerance.md §8). false forces the tree (tests, measurements).
   bool tree_fallback = true;
+  /// The processes that share each evaluation's pair sums and nearest-distance queries
+  /// (softhd/work_share.hpp; MPI builds: softhd::mpi::work_share(comm)). Every process
+  /// gets the whole result, equal to the serial one. Null (default): this process does all.
+  std::shared_ptr<const WorkShare> share;
 };
 
 /// What to compute beyond ρ̃, A and B. Nothing is computed that is not asked for.

@@ -151,9 +151,32 @@ PassSums gather(const Pass& p, const std::vector<Acc>& acc) {
   return out;
 }
 
-/// The far field and the near field of a planned pass; returns the direct pairs skipped
-/// by pruning point by point.
-std::int64_t run_plan(const Pass& p, const std::vector<int>& roots,
+/// The union over the processes of every process's marks (for the work counts, which
+/// then equal the serial pass's).
+std::vector<char> union_marks(const WorkShare& share, const std::vector<char>& mark) {
+  std::vector<double> m(mark.begin(), mark.end());
+  share.sum(m.data(), m.size());
+  std::vector<char> out(mark.size());
+  for (size_t i = 0; i < m.size(); ++i) out[i] = m[i] > 0.0 ? 1 : 0;
+  return out;
+}
+
+/// The counts of the planned work (with a share: of this process's interactions, with the
+/// grid work of the union of the marks counted once, on the first process).
+void count_planned(const Pass& p, const std::vector<std::vector<Interaction>>& lists,
+                   const std::vector<char>& smark, const std::vector<char>& omark,
+                   const PassSettings& set, PassStats& stats, DualTreeOps& ops) {
+  if (set.share == nullptr) {
+    count_work(p, lists, smark, omark, stats, ops);
+    return;
+  }
+  count_work(p, lists, union_marks(*set.share, smark), union_marks(*set.share, omark), stats, ops);
+  if (set.share->rank() != 0) stats.far_basis = 0;
+}
+
+/// The far field and the near field of a planned pass (the tasks of `mine`); returns the
+/// direct pairs skipped by pruning point by point.
+std::int64_t run_plan(const Pass& p, const std::vector<int>& roots, UnitRange mine,
                       const std::vector<std::vector<Interaction>>& lists,
                       const std::vector<char>& smark, const std::vector<char>& sderive, int threads,
                       std::vector<Acc>& acc) {
@@ -162,10 +185,11 @@ std::int64_t run_plan(const Pass& p, const std::vector<int>& roots,
   // The largest tasks first (planned work), so that the last ones to finish are small.
   // Each task writes only its own outer points: the order does not change the result.
   std::vector<double> work(roots.size(), 0.0);
-  for (size_t r = 0; r < roots.size(); ++r)
+  std::vector<size_t> order;
+  for (size_t r = mine.first; r < mine.last; ++r) {
     for (const Interaction& it : lists[r]) work[r] += interaction_cost(p, it);
-  std::vector<size_t> order(roots.size());
-  for (size_t r = 0; r < order.size(); ++r) order[r] = r;
+    order.push_back(r);
+  }
   std::stable_sort(order.begin(), order.end(),
                    [&work](size_t a, size_t b) { return work[a] > work[b]; });
   std::int64_t skipped = 0;
@@ -204,10 +228,17 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   std::vector<int> roots;
   task_roots(*p.ot, 0, std::max<Eigen::Index>(1024, p.ot->size() / 64), roots);
   std::vector<std::vector<Interaction>> lists(roots.size());
+  std::vector<double> work(roots.size(), 0.0);
   std::int64_t visits = 0;
   const double limit = cfg_.cost_model ? kFallBack * all_pairs : kInf;
-  if (!plan_tasks(p, roots, limit, set.threads, lists, visits))
+  // This process's tasks (all of them without a share): planned by points, run by work.
+  std::vector<double> points(roots.size());
+  for (size_t r = 0; r < roots.size(); ++r)
+    points[r] = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
+  UnitRange mine = share_of(set, points);
+  if (!plan_tasks(p, roots, mine, limit, set, lists, work, visits))
     return fall_back(src, outer, set, visits, since(start));
+  if (set.share != nullptr) mine = rebalance(p, roots, mine, set, lists, work, visits);
   // The grids: those the interactions use and their descendants (M2M and L2L).
   const size_t grids = static_cast<size_t>(p.n + 1);
   std::vector<char> smark(p.st->nodes().size() * grids, 0), omark(p.ot->nodes().size() * grids, 0);
@@ -215,18 +246,20 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   mark_grids(p, lists, smark, sderive, omark);
   PassStats stats;
   DualTreeOps ops;
-  count_work(p, lists, smark, omark, stats, ops);
+  count_planned(p, lists, smark, omark, set, stats, ops);
   stats.node_pairs = visits;
   stats.plan_seconds = since(start);
   // Cost model (docs/tree_tolerance.md §8): fall back unless the plan is clearly cheaper.
-  const double planned = kCostNear * static_cast<double>(stats.near_pairs) +
-                         kCostFar * static_cast<double>(stats.far_kernel) +
-                         kCostBasis * static_cast<double>(stats.far_basis);
+  std::int64_t counts[3] = {stats.near_pairs, stats.far_kernel, stats.far_basis};
+  if (set.share != nullptr) set.share->sum(counts, 3);  // the serial pass's counts
+  const double planned = kCostNear * static_cast<double>(counts[0]) +
+                         kCostFar * static_cast<double>(counts[1]) +
+                         kCostBasis * static_cast<double>(counts[2]);
   if (ops_ != nullptr) *ops_ = ops;
   if (cfg_.cost_model && planned > kFallBack * all_pairs)
     return fall_back(src, outer, set, visits, stats.plan_seconds);
   std::vector<Acc> acc(static_cast<size_t>(p.ot->size()));
-  const std::int64_t skipped = run_plan(p, roots, lists, smark, sderive, set.threads, acc);
+  const std::int64_t skipped = run_plan(p, roots, mine, lists, smark, sderive, set.threads, acc);
   stats.near_pairs -= skipped;
   if (ops_ != nullptr) ops_->point_pruned = skipped;
   PassSums out = gather(p, acc);

@@ -132,9 +132,18 @@ void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const P
              const PassSettings& set);
 /// Outer subtrees processed as independent tasks (nodes of at most `limit` points).
 void task_roots(const KdTree& ot, int id, Eigen::Index limit, std::vector<int>& out);
-/// Plans every task; false when the plan costs more than `limit` (fall back to all pairs).
-bool plan_tasks(const Pass& p, const std::vector<int>& roots, double limit, int threads,
-                std::vector<std::vector<Interaction>>& lists, std::int64_t& visits);
+/// Plans the tasks of `mine` (their planned work in `work`); false when the plan costs
+/// more than `limit` (fall back to all pairs). With a share, the prediction and the
+/// verdict are summed over the processes (each plans its own tasks).
+bool plan_tasks(const Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
+                const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
+                std::vector<double>& work, std::int64_t& visits);
+/// Distributed passes: the tasks this process executes, split by planned work (summed
+/// over the processes); tasks that move are planned again by their new process (a task's
+/// plan depends on the task alone), the lists of tasks that left are dropped.
+UnitRange rebalance(const Pass& p, const std::vector<int>& roots, UnitRange planned,
+                    const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
+                    std::vector<double>& work, std::int64_t& visits);
 /// Whether source node s may be dropped for the outer point o (tree position q) alone.
 bool prunable_for_point(const Pass& p, const double* o, Eigen::Index q, int s);
 /// Planned work of one interaction in pair units (kCost weights).

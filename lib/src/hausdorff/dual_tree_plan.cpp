@@ -487,9 +487,10 @@ void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const P
 /// planned work, scaled by the share of outer points it covers, predicts the whole plan
 /// (a fall-back then costs about 1/stride of the planning), then the others. Returns
 /// false (fall back to all pairs) when the predicted or the planned work exceeds `limit`.
-bool plan_tasks(const Pass& p, const std::vector<int>& roots, double limit, int threads,
-                std::vector<std::vector<Interaction>>& lists, std::int64_t& visits) {
-  std::vector<double> work(roots.size(), 0.0);
+bool plan_tasks(const Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
+                const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
+                std::vector<double>& work, std::int64_t& visits) {
+  const int threads = set.threads;
   // Every stride-th task is sampled: about one per thread (planned in parallel).
   const size_t stride =
       std::clamp<size_t>(roots.size() / static_cast<size_t>(threads), 1, kSampleStride);
@@ -503,7 +504,7 @@ bool plan_tasks(const Pass& p, const std::vector<int>& roots, double limit, int 
   std::atomic<bool> stopped{false};
   for (int phase = 0; phase < 2 && !stopped; ++phase) {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : visits)
-    for (size_t r = 0; r < roots.size(); ++r) {
+    for (size_t r = mine.first; r < mine.last; ++r) {
       if ((r % stride == 0) != (phase == 0) || stopped.load()) continue;
       PlanState st;
       st.spent = &spent;
@@ -513,16 +514,40 @@ bool plan_tasks(const Pass& p, const std::vector<int>& roots, double limit, int 
       work[r] = st.total;
       lists[r] = std::move(st.out);
     }
-    if (phase == 0 && !stopped) {
-      double sampled = 0.0, covered = 0.0;
-      for (size_t r = 0; r < roots.size(); r += stride) {
-        sampled += work[r];
-        covered += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
+    double totals[3] = {stopped ? 1.0 : 0.0, 0.0, 0.0};  // stopped, sampled, covered
+    if (phase == 0)
+      for (size_t r = mine.first; r < mine.last; ++r) {
+        if (r % stride != 0) continue;
+        totals[1] += work[r];
+        totals[2] += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
       }
-      if (sampled * static_cast<double>(p.ot->size()) / covered > limit) stopped = true;
-    }
+    if (set.share != nullptr) set.share->sum(totals, 3);
+    stopped = totals[0] > 0.0;
+    if (phase == 0 && !stopped && totals[2] > 0.0 &&
+        totals[1] * static_cast<double>(p.ot->size()) / totals[2] > limit)
+      stopped = true;
   }
   return !stopped;
+}
+
+UnitRange rebalance(const Pass& p, const std::vector<int>& roots, UnitRange planned,
+                    const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
+                    std::vector<double>& work, std::int64_t& visits) {
+  set.share->sum(work.data(), work.size());
+  const UnitRange mine = share_of(set, work);
+  for (size_t r = 0; r < roots.size(); ++r) {
+    const bool run = r >= mine.first && r < mine.last;
+    const bool had = r >= planned.first && r < planned.last;
+    if (!run) std::vector<Interaction>().swap(lists[r]);
+    if (!run || had) continue;
+    PlanState st;
+    std::atomic<double> spent{0.0};
+    st.spent = &spent;
+    plan(p, roots[r], 0, st);
+    visits += st.visits;
+    lists[r] = std::move(st.out);
+  }
+  return mine;
 }
 
 }  // namespace softhd::detail::dual

@@ -137,9 +137,10 @@ HausdorffResult HausdorffTarget::evaluate(const PointCloud& moving,
 HausdorffResult HausdorffTarget::Impl::evaluate_nearest(const PointCloud& X,
                                                         const HausdorffRequest& req) const {
   const int threads = detail::resolve_threads(options.threads);
+  const WorkShare* share = options.share.get();
   const detail::NearestIndex moving_tree(X.points());
-  Eigen::VectorXd dist_target = moving_tree.distances(cloud.points(), threads);
-  Eigen::VectorXd dist_moving = tree.distances(X.points(), threads);
+  Eigen::VectorXd dist_target = moving_tree.distances(cloud.points(), threads, share);
+  Eigen::VectorXd dist_moving = tree.distances(X.points(), threads, share);
   HausdorffResult r;
   r.A = dist_target.maxCoeff();
   r.B = dist_moving.maxCoeff();
@@ -193,13 +194,15 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   set.eps = eps;
   set.tau = options.tolerance;
   set.threads = detail::resolve_threads(options.threads);
+  set.share = options.share.get();
   const Eigen::VectorXd v = X.volumes() / X.total_volume();  // V_i/|X|
   const Eigen::VectorXd& w = weights;                        // W_j/|Y|
 
   // Scales c = r_min + ε of every point, from the k-d trees.
   const detail::NearestIndex moving_tree(X.points());
-  const Eigen::VectorXd scale_y = moving_tree.distances(Y.points(), set.threads).array() + eps;
-  const Eigen::VectorXd scale_x = tree.distances(X.points(), set.threads).array() + eps;
+  const Eigen::VectorXd scale_y =
+      moving_tree.distances(Y.points(), set.threads, set.share).array() + eps;
+  const Eigen::VectorXd scale_x = tree.distances(X.points(), set.threads, set.share).array() + eps;
   std::unique_ptr<detail::KdTree> x_kd;
   if (backend->uses_trees()) x_kd = std::make_unique<detail::KdTree>(X.points(), detail::kLeafSize);
   // Every exact S is ≤ 1 (each term ≤ its weight, the weights sum to 1), so clipping an
@@ -212,7 +215,7 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   detail::PassSources src_x{&X.points(), x_kd.get(), v.data(), nullptr, nullptr};
   detail::PassOuter out_y{&Y.points(), kd.get(), scale_y.data(), kOuterSum, nullptr};
   if (req.gradient_target) out_y.flags |= kOuterGrad;
-  detail::PassSums p1 = backend->sums(src_x, out_y, set);
+  detail::PassSums p1 = detail::run_pass(*backend, src_x, out_y, set);
   account(r, p1);
   if (clip) p1.S = p1.S.cwiseMin(1.0);
   const Eigen::VectorXd dt_y = fields_of(scale_y, p1.S, alpha, eps);  // d̃_X(y_j)
@@ -241,7 +244,7 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
     src_y.scale = scale_y.data();
   }
   if (req.differentiate.size() != 0) out_x.mask = &req.differentiate;
-  detail::PassSums p2 = backend->sums(src_y, out_x, set);
+  detail::PassSums p2 = detail::run_pass(*backend, src_y, out_x, set);
   account(r, p2);
   if (clip) p2.S = p2.S.cwiseMin(1.0);
   const Eigen::VectorXd dt_x = fields_of(scale_x, p2.S, alpha, eps);  // d̃_Y(x_i)
@@ -293,7 +296,7 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
     src_x.coef = f_x.data();
     src_x.scale = scale_x.data();
     out_y.flags = kInner;
-    const detail::PassSums p3 = backend->sums(src_x, out_y, set);
+    const detail::PassSums p3 = detail::run_pass(*backend, src_x, out_y, set);
     account(r, p3);
     r.gradient_target.resize(M, d);
     for (Eigen::Index j = 0; j < M; ++j)

@@ -50,13 +50,21 @@ int resolve_threads(int threads) {
 #endif
 }
 
-Eigen::VectorXd NearestIndex::distances(const Eigen::MatrixXd& queries, int threads) const {
+Eigen::VectorXd NearestIndex::distances(const Eigen::MatrixXd& queries, int threads,
+                                        const WorkShare* share) const {
   const Eigen::Index n = queries.rows();
   const int d = static_cast<int>(queries.cols());
-  Eigen::VectorXd out(n);
+  Eigen::VectorXd out = Eigen::VectorXd::Zero(n);
   const int nthreads = resolve_threads(threads);
-#pragma omp parallel for schedule(static) num_threads(nthreads) if (n > 256)
-  for (Eigen::Index q = 0; q < n; ++q) {
+  // One query costs about the same as any other: the share splits them by count.
+  UnitRange mine{0, static_cast<size_t>(n)};
+  if (share != nullptr)
+    mine = split_by_cost(std::vector<double>(static_cast<size_t>(n), 1.0), share->size(),
+                         share->rank());
+  const Eigen::Index first = static_cast<Eigen::Index>(mine.first);
+  const Eigen::Index last = static_cast<Eigen::Index>(mine.last);
+#pragma omp parallel for schedule(static) num_threads(nthreads) if (last - first > 256)
+  for (Eigen::Index q = first; q < last; ++q) {
     double point[3];
     for (int k = 0; k < d; ++k) point[k] = queries(q, k);
     size_t index = 0;
@@ -64,6 +72,7 @@ Eigen::VectorXd NearestIndex::distances(const Eigen::MatrixXd& queries, int thre
     tree_->index.knnSearch(point, 1, &index, &dist2);
     out[q] = std::sqrt(dist2);
   }
+  if (share != nullptr) share->sum(out.data(), static_cast<size_t>(n));
   return out;
 }
 

@@ -4,6 +4,8 @@
 #include <Eigen/Core>
 #include <memory>
 
+#include "softhd/work_share.hpp"
+
 namespace softhd::detail {
 
 /// A k-d tree over the rows of an N by d matrix, built once. The matrix must outlive
@@ -16,8 +18,11 @@ class NearestIndex {
   NearestIndex& operator=(NearestIndex&&) noexcept;
 
   /// For each row q of `queries` (K by d): min_i |q − x_i| (Euclidean).
-  /// OpenMP over the queries; `threads` = 0 uses OpenMP's default.
-  Eigen::VectorXd distances(const Eigen::MatrixXd& queries, int threads) const;
+  /// OpenMP over the queries; `threads` = 0 uses OpenMP's default. With a share, each
+  /// process answers its run of the queries and the distances are summed over the group
+  /// (collective; exact, the other processes contribute zeros).
+  Eigen::VectorXd distances(const Eigen::MatrixXd& queries, int threads,
+                            const WorkShare* share = nullptr) const;
 
  private:
   struct Tree;

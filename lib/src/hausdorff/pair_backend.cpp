@@ -30,10 +30,54 @@ void store_sums(PassSums& out, Eigen::Index i, const PairSums& s, unsigned flags
   }
 }
 
+PassSums run_pass(const PairSumBackend& backend, const PassSources& src, const PassOuter& outer,
+                  const PassSettings& set) {
+  PassSums out = backend.sums(src, outer, set);
+  if (set.share == nullptr || set.share->size() == 1) return out;
+  const WorkShare& share = *set.share;
+  for (Eigen::VectorXd* v : {&out.S, &out.H})
+    if (v->size() > 0) share.sum(v->data(), static_cast<std::size_t>(v->size()));
+  for (Eigen::MatrixXd* m : {&out.G, &out.G2})
+    if (m->size() > 0) share.sum(m->data(), static_cast<std::size_t>(m->size()));
+  std::int64_t counts[5] = {out.kernel_evaluations, out.stats.near_pairs, out.stats.far_kernel,
+                            out.stats.far_basis, out.stats.node_pairs};
+  share.sum(counts, 5);
+  out.kernel_evaluations = counts[0];
+  out.stats.near_pairs = counts[1];
+  out.stats.far_kernel = counts[2];
+  out.stats.far_basis = counts[3];
+  out.stats.node_pairs = counts[4];
+  return out;
+}
+
+UnitRange share_of(const PassSettings& set, const std::vector<double>& cost) {
+  if (set.share == nullptr) return {0, cost.size()};
+  return split_by_cost(cost, set.share->size(), set.share->rank());
+}
+
 namespace {
 
 unsigned flags_of(const PassOuter& outer, Eigen::Index i) {
   return outer.mask != nullptr && !(*outer.mask)[i] ? unsigned{kOuterSum} : outer.flags;
+}
+
+/// Relative cost of one outer point's sums over all sources, by the sums it needs: a
+/// model (S alone 1, with G 1.2, all four 1.6), which only weighs points the mask leaves
+/// with S alone against the others; unmasked, every point costs the same.
+double point_cost(unsigned flags) {
+  double c = 1.0;
+  if (flags & kOuterGrad) c += 0.2;
+  if (flags & kInner) c += 0.4;
+  return c;
+}
+
+/// The modelled cost of every outer point (caller's order).
+std::vector<double> point_costs(const PassOuter& outer) {
+  const Eigen::Index n = outer.points->rows();
+  std::vector<double> cost(static_cast<size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i)
+    cost[static_cast<size_t>(i)] = point_cost(flags_of(outer, i));
+  return cost;
 }
 
 /// All pairs. OpenMP over the outer points; each result depends on its own point only,
@@ -55,15 +99,19 @@ class ExactBackend final : public PairSumBackend {
     ps.coef = src.coef;
     ps.scale = src.scale;
     PassSums out = allocate_sums(n, d, outer.flags);
-    const bool parallel = static_cast<double>(n) * static_cast<double>(ps.size) > 2.0e4;
+    const UnitRange mine = set.share != nullptr ? share_of(set, point_costs(outer))
+                                                : UnitRange{0, static_cast<size_t>(n)};
+    const Eigen::Index first = static_cast<Eigen::Index>(mine.first);
+    const Eigen::Index last = static_cast<Eigen::Index>(mine.last);
+    const bool parallel = static_cast<double>(last - first) * static_cast<double>(ps.size) > 2.0e4;
 #pragma omp parallel for schedule(dynamic, 16) num_threads(set.threads) if (parallel)
-    for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index i = first; i < last; ++i) {
       double o[3] = {0.0, 0.0, 0.0};
       for (int k = 0; k < d; ++k) o[k] = P(i, k);
       const unsigned f = flags_of(outer, i);
       store_sums(out, i, pair_sums(o, outer.scale[i], ps, *set.power, set.eps, f), f, d);
     }
-    out.kernel_evaluations = static_cast<std::int64_t>(n) * ps.size;
+    out.kernel_evaluations = static_cast<std::int64_t>(last - first) * ps.size;
     out.stats.near_pairs = out.kernel_evaluations;
     out.stats.run_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -108,9 +156,13 @@ class SingleTreeBackend final : public PairSumBackend {
     const Eigen::MatrixXd& P = *outer.points;
     PassSums out = allocate_sums(n, d, outer.flags);
     std::int64_t evaluations = 0;
+    // Split by count along the tree order (neighbouring points together).
+    const UnitRange mine = share_of(set, std::vector<double>(static_cast<size_t>(n), 1.0));
+    const Eigen::Index first = static_cast<Eigen::Index>(mine.first);
+    const Eigen::Index last = static_cast<Eigen::Index>(mine.last);
 #pragma omp parallel for schedule(dynamic, 16) num_threads(set.threads) if (n > 64) \
     reduction(+ : evaluations)
-    for (Eigen::Index q = 0; q < n; ++q) {
+    for (Eigen::Index q = first; q < last; ++q) {
       const Eigen::Index i = visit[static_cast<size_t>(q)];
       double o[3] = {0.0, 0.0, 0.0};
       for (int k = 0; k < d; ++k) o[k] = P(i, k);

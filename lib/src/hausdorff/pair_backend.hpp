@@ -10,9 +10,11 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "kd_tree.hpp"
 #include "pair_kernel.hpp"
+#include "softhd/work_share.hpp"
 
 namespace softhd::detail {
 
@@ -61,6 +63,10 @@ struct PassSettings {
   double eps = 1e-3;
   double tau = 1e-6;  ///< relative tolerance (tree backends)
   int threads = 1;
+  /// Processes sharing the pass (softhd/work_share.hpp); nullptr: this one does all.
+  /// With a share, a backend computes the rows of its share of the outer points only (the
+  /// others stay zero) and its stats count its own work; run_pass completes the sums.
+  const WorkShare* share = nullptr;
 };
 
 class PairSumBackend {
@@ -79,6 +85,14 @@ constexpr int kLeafSize = 32;
 std::unique_ptr<PairSumBackend> make_exact_backend();
 std::unique_ptr<PairSumBackend> make_single_tree_backend();
 std::unique_ptr<PairSumBackend> make_dual_tree_backend();
+
+/// One pass: backend.sums(), then, with a share, every row and count summed over the
+/// processes (exact: each row is computed by one process and is zero on the others).
+PassSums run_pass(const PairSumBackend& backend, const PassSources& src, const PassOuter& outer,
+                  const PassSettings& set);
+
+/// This process's run of `n` units with costs `cost` (all of them without a share).
+UnitRange share_of(const PassSettings& set, const std::vector<double>& cost);
 
 /// Allocates the members of PassSums the flags ask for (n rows, d columns).
 PassSums allocate_sums(Eigen::Index n, int d, unsigned flags);

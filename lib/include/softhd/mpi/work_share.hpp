@@ -1,0 +1,39 @@
+#pragma once
+/// \file mpi/work_share.hpp
+/// MPI for the pair sums (SOFTHD_WITH_MPI builds only): a WorkShare over a communicator,
+/// and the MPI session of a program.
+///
+///     softhd::mpi::Session mpi(&argc, &argv);          // MPI_Init, MPI_Finalize
+///     softhd::HausdorffOptions options;
+///     options.share = softhd::mpi::work_share(MPI_COMM_WORLD);
+///     // every rank: the same clouds, the same calls; every rank gets the whole result
+
+#include <mpi.h>
+
+#include <memory>
+
+#include "softhd/work_share.hpp"
+
+namespace softhd::mpi {
+
+/// The processes of `comm` (duplicated: the share's messages never mix with the caller's).
+/// Throws InvalidArgument if MPI is not initialised or comm is MPI_COMM_NULL.
+std::shared_ptr<const WorkShare> work_share(MPI_Comm comm);
+
+/// Initialises MPI (MPI_THREAD_FUNNELED: OpenMP threads inside a rank, MPI calls from the
+/// main thread) unless it already is, and finalises it on destruction if it initialised
+/// it. A program started without mpiexec runs as one process (MPI singleton).
+class Session {
+ public:
+  /// MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, ...) unless MPI is initialised.
+  Session(int* argc, char*** argv);
+  /// MPI_Finalize if this session initialised MPI.
+  ~Session();
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+ private:
+  bool owner_ = false;
+};
+
+}  // namespace softhd::mpi
