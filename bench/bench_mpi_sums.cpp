@@ -8,7 +8,16 @@
 // thread per rank; R repeats of each, medians, and their ratio (the speed-up). Also printed:
 // the share of the one-rank time spent in the pair sums, the bytes each rank sends into the
 // reductions per evaluation (counted by the share), and the largest relative difference
-// between the two results (rho and the gradient). Every number is measured.
+// between the two results (rho and the gradient), the share of the one-rank time in the
+// pair sums ("pairs") and the share of passes method tree summed exactly ("exact"). Every
+// number is measured.
+//
+// On a machine shared with other work the wall-clock ratio depends on how much of the
+// cores the others leave. The CPU-time ratio is the speed-up on otherwise idle cores: rank
+// 0's CPU seconds alone against the largest rank's CPU seconds outside the reductions plus
+// the wall time of the same reductions when every rank arrives at once (measured after a
+// barrier): a rank descheduled by other work makes the others wait, spinning, in the
+// reductions, which is not the cost of the method. Both are printed, with the load average.
 
 #include <mpi.h>
 
@@ -16,6 +25,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -31,7 +41,10 @@ namespace {
 
 using namespace softhd;
 
-/// Forwards to the MPI share and counts the bytes this rank puts into the reductions.
+double cpu_seconds();
+
+/// Forwards to the MPI share and counts the bytes this rank puts into the reductions and
+/// the CPU seconds it spends in them (waiting for the other ranks included).
 class CountingShare final : public WorkShare {
  public:
   explicit CountingShare(std::shared_ptr<const WorkShare> inner) : inner_(std::move(inner)) {}
@@ -39,27 +52,36 @@ class CountingShare final : public WorkShare {
   int rank() const override { return inner_->rank(); }
   void sum(double* data, std::size_t n) const override {
     bytes += 8.0 * static_cast<double>(n);
+    const double start = cpu_seconds();
     inner_->sum(data, n);
+    reduce_cpu += cpu_seconds() - start;
   }
   void sum(std::int64_t* data, std::size_t n) const override {
     bytes += 8.0 * static_cast<double>(n);
+    const double start = cpu_seconds();
     inner_->sum(data, n);
+    reduce_cpu += cpu_seconds() - start;
   }
-  mutable double bytes = 0.0;
+  mutable double bytes = 0.0, reduce_cpu = 0.0;
 
  private:
   std::shared_ptr<const WorkShare> inner_;
 };
 
-/// Points in [0, 1]^3 with volumes in [0.5, 1.5]; the target is shifted by `shift` so the
-/// clouds overlap but differ.
-PointCloud cube(Eigen::Index n, unsigned seed, double shift) {
+/// Points on a sphere of radius `radius` centred at (shift, 0, 0), volumes in [0.5, 1.5]: a
+/// surface, as a scan is (on a cube of uniform points method tree sums every pass exactly,
+/// docs/bench_hausdorff.md).
+PointCloud shell(Eigen::Index n, unsigned seed, double radius, double shift) {
   std::mt19937_64 gen(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> g(0.0, 1.0);
   Eigen::MatrixXd p(n, 3);
   Eigen::VectorXd v(n);
   for (Eigen::Index i = 0; i < n; ++i) {
-    for (int k = 0; k < 3; ++k) p(i, k) = u(gen) + (k == 0 ? shift : 0.0);
+    Eigen::Vector3d x(g(gen), g(gen), g(gen));
+    x *= radius / x.norm();
+    x[0] += shift;
+    p.row(i) = x.transpose();
     v[i] = 0.5 + u(gen);
   }
   return PointCloud(p, v);
@@ -76,6 +98,20 @@ void wait_asleep() {
   }
 }
 
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+/// Peak resident memory of this process, MB (VmHWM), or −1.
+double peak_mb() {
+  std::ifstream in("/proc/self/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  return -1.0;
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
@@ -83,8 +119,22 @@ double median(std::vector<double> v) {
 
 struct Row {
   std::string method;
-  double t1 = 0, tk = 0, pair_share = 0, bytes = 0, diff = 0;
+  double t1 = 0, tk = 0, c1 = 0, ck = 0, comm = 0, exact_passes = 0, pair_share = 0, bytes = 0,
+         diff = 0;
 };
+
+/// Wall seconds of summing `bytes` of doubles over the ranks when all arrive together (after
+/// a barrier): the reductions' cost without waiting. Median of 5.
+double reduction_seconds(const WorkShare& share, double bytes) {
+  std::vector<double> buffer(static_cast<size_t>(bytes / 8.0), 1.0), t;
+  for (int rep = 0; rep < 5; ++rep) {
+    MPI_Barrier(MPI_COMM_WORLD);
+    const auto start = std::chrono::steady_clock::now();
+    share.sum(buffer.data(), buffer.size());
+    t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  return median(t);
+}
 
 double max_relative(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
   if (b.size() == 0) return 0.0;
@@ -105,31 +155,44 @@ Row run_case(Method method, const PointCloud& X, const PointCloud& Y, double tau
   auto counting = std::make_shared<CountingShare>(mpi::work_share(MPI_COMM_WORLD));
   opt.share = counting;
   const HausdorffTarget shared(Y, opt);
-  std::vector<double> t1, tk, pair;
+  std::vector<double> t1, tk, c1, ck, pair;
   HausdorffResult r1, rk;
   for (int rep = 0; rep < repeats; ++rep) {
     MPI_Barrier(MPI_COMM_WORLD);
     if (rank == 0) {
       const auto start = std::chrono::steady_clock::now();
+      const double cpu = cpu_seconds();
       r1 = alone.evaluate(X, req);
+      c1.push_back(cpu_seconds() - cpu);
       t1.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
       pair.push_back(r1.work.run_seconds);
     }
     wait_asleep();
-    counting->bytes = 0.0;
+    counting->bytes = counting->reduce_cpu = 0.0;
     MPI_Barrier(MPI_COMM_WORLD);
     const auto start = std::chrono::steady_clock::now();
+    double cpu = cpu_seconds();
     rk = shared.evaluate(X, req);
-    MPI_Barrier(MPI_COMM_WORLD);  // the slowest rank's time
+    // Each rank's own work: CPU seconds outside the reductions; the largest over the ranks.
+    double work = cpu_seconds() - cpu - counting->reduce_cpu;
+    MPI_Allreduce(MPI_IN_PLACE, &work, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
+    ck.push_back(work);
     tk.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
   Row row;
   row.method = to_string(method);
+  const double bytes = counting->bytes;
+  const double comm = reduction_seconds(*counting, bytes);  // collective
   if (rank != 0) return row;
   row.t1 = median(t1);
   row.tk = median(tk);
+  row.c1 = median(c1);
+  row.comm = comm;
+  row.ck = median(ck) + row.comm;
   row.pair_share = method == Method::nearest ? 0.0 : median(pair) / row.t1;
-  row.bytes = counting->bytes;
+  row.bytes = bytes;
+  row.exact_passes =
+      r1.work.passes > 0 ? static_cast<double>(r1.work.exact_passes) / r1.work.passes : 0.0;
   row.diff = std::fabs(rk.rho - r1.rho) / r1.rho;
   if (req.gradient_points)
     row.diff = std::max(row.diff, max_relative(rk.gradient_points, r1.gradient_points));
@@ -186,29 +249,44 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_mpi_sums: run under mpiexec -n 2 (or more)\n");
     return 2;
   }
-  const PointCloud X = cube(n, 1, 0.0), Y = cube(m, 2, 0.2);
+  const PointCloud X = shell(n, 1, 1.0, 0.0), Y = shell(m, 2, 1.1, 0.1);
   std::vector<Row> rows;
   for (const std::string& name : split(methods))
     rows.push_back(run_case(method_from_string(name), X, Y, tau, grad, repeats));
+  double peak = peak_mb();
+  MPI_Allreduce(MPI_IN_PLACE, &peak, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
   if (rank != 0) return 0;
   std::printf(
-      "N = %ld moving, M = %ld target points (cube), %s, tau %g (tree), %d repeats, medians\n", n,
+      "peak resident memory of a rank: %.0f MB (both clouds, the target twice: alone "
+      "and shared)\n",
+      peak);
+  std::printf(
+      "N = %ld moving, M = %ld target points (shells), %s, tau %g (tree), %d repeats, medians\n", n,
       m, grad ? "value + gradient" : "value", tau, repeats);
-  std::printf("%-8s %10s %10s %8s %10s %12s %10s\n", "method", "1 rank s", "ranks", "speed-up",
-              "pair share", "MB per rank", "rel diff");
+  double load[3] = {0, 0, 0};
+  if (FILE* f = std::fopen("/proc/loadavg", "r")) {
+    if (std::fscanf(f, "%lf %lf %lf", &load[0], &load[1], &load[2]) != 3) load[0] = -1;
+    std::fclose(f);
+  }
+  std::printf("load average at the end %.2f (1 min) on %u cores\n", load[0],
+              std::thread::hardware_concurrency());
+  std::printf("%-8s %9s %9s %8s %9s %9s %8s %6s %6s %9s %8s\n", "method", "wall 1", "wall K",
+              "wall x", "cpu 1", "cpu K max", "cpu x", "pairs", "exact", "MB/rank", "rel diff");
   std::ofstream out;
   if (!csv.empty()) {
     out.open(csv);
-    out << "method,n,m,grad,tau,ranks,seconds_1,seconds_k,speedup,pair_share,bytes_per_rank,rel_"
-           "diff\n";
+    out << "method,n,m,grad,tau,ranks,seconds_1,seconds_k,speedup,cpu_1,cpu_k,cpu_speedup,"
+           "pair_share,exact_passes,bytes_per_rank,rel_diff,load1,peak_mb\n";
   }
   for (const Row& r : rows) {
-    std::printf("%-8s %10.4f %7d: %6.4f %6.2fx %9.0f%% %12.2f %10.1e\n", r.method.c_str(), r.t1,
-                size, r.tk, r.t1 / r.tk, 100.0 * r.pair_share, r.bytes / 1e6, r.diff);
+    std::printf("%-8s %9.4f %9.4f %7.2fx %9.4f %9.4f %7.2fx %5.0f%% %5.0f%% %9.2f %8.1e\n",
+                r.method.c_str(), r.t1, r.tk, r.t1 / r.tk, r.c1, r.ck, r.c1 / r.ck,
+                100.0 * r.pair_share, 100.0 * r.exact_passes, r.bytes / 1e6, r.diff);
     if (out)
       out << r.method << ',' << n << ',' << m << ',' << grad << ',' << tau << ',' << size << ','
-          << r.t1 << ',' << r.tk << ',' << r.t1 / r.tk << ',' << r.pair_share << ',' << r.bytes
-          << ',' << r.diff << '\n';
+          << r.t1 << ',' << r.tk << ',' << r.t1 / r.tk << ',' << r.c1 << ',' << r.ck << ','
+          << r.c1 / r.ck << ',' << r.pair_share << ',' << r.exact_passes << ',' << r.bytes << ','
+          << r.diff << ',' << load[0] << ',' << peak << '\n';
   }
   return 0;
 }

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdlib>
 
 #include "softhd/error.hpp"
 #include "softhd/mpi/work_share.hpp"
@@ -62,8 +63,14 @@ std::shared_ptr<const WorkShare> work_share(MPI_Comm comm) {
   return std::make_shared<MpiShare>(comm);
 }
 
+bool launched_by_mpiexec() {
+  for (const char* var : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"})
+    if (std::getenv(var) != nullptr) return true;
+  return false;
+}
+
 Session::Session(int* argc, char*** argv) {
-  if (initialised()) return;
+  if (initialised() || !launched_by_mpiexec()) return;
   int provided = 0;
   MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
   owner_ = true;

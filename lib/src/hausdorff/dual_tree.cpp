@@ -21,13 +21,6 @@ int degree_for(double tau) {
 namespace dual {
 namespace {
 
-/// The end of node id's subtree in preorder (its nodes are [id, end)).
-int subtree_end(const KdTree& tree, int id) {
-  while (tree.nodes()[static_cast<size_t>(id)].right >= 0)
-    id = tree.nodes()[static_cast<size_t>(id)].right;
-  return id + 1;
-}
-
 /// A direct or M2P interaction: the sources (points or proxies) summed at every outer
 /// point of T. Returns the number of direct pairs skipped by pruning point by point.
 std::int64_t to_points(const Pass& p, const Interaction& it, const PairSources& src,
@@ -236,6 +229,10 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   for (size_t r = 0; r < roots.size(); ++r)
     points[r] = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
   UnitRange mine = share_of(set, points);
+  outer_bounds(p,
+               std::vector<int>(roots.begin() + static_cast<std::ptrdiff_t>(mine.first),
+                                roots.begin() + static_cast<std::ptrdiff_t>(mine.last)),
+               set.threads);
   if (!plan_tasks(p, roots, mine, limit, set, lists, work, visits))
     return fall_back(src, outer, set, visits, since(start));
   if (set.share != nullptr) mine = rebalance(p, roots, mine, set, lists, work, visits);

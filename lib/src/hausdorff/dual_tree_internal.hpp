@@ -90,6 +90,8 @@ struct Pass {
   std::vector<double> point_low;  // 4 per outer point (tree order, point_prune only)
   std::vector<double> kappa;      // per outer node: max c_o (scale of its locals)
   std::vector<char> local_ok;     // per outer node: locals allowed (scales do not underflow)
+  std::vector<double> cmin;       // per outer node: min c_o
+  std::vector<int> cut;           // source nodes of the lower bounds (cut_nodes)
   std::vector<double> log_weight, log_share;  // 4 per source node (prepare_sources)
   std::vector<Box> obox, sbox;                // interpolation boxes (interp only)
   int nf = 0;                                 // fields of an outer box's locals (P values each):
@@ -130,6 +132,12 @@ struct Pass {
 /// The pass's settings, source data and outer lower bounds.
 void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const PassOuter& outer,
              const PassSettings& set);
+/// Lower bounds of the sums of every outer point in the subtrees of `roots`, their minima
+/// per outer node, and the locals' scales, for those subtrees' nodes: the planning of a
+/// task reads nothing else, so a process bounds only the tasks it plans.
+void outer_bounds(Pass& p, const std::vector<int>& roots, int threads);
+/// The end of node id's subtree in preorder (its nodes are [id, end)).
+int subtree_end(const KdTree& tree, int id);
 /// Outer subtrees processed as independent tasks (nodes of at most `limit` points).
 void task_roots(const KdTree& ot, int id, Eigen::Index limit, std::vector<int>& out);
 /// Plans the tasks of `mine` (their planned work in `work`); false when the plan costs
@@ -141,7 +149,7 @@ bool plan_tasks(const Pass& p, const std::vector<int>& roots, UnitRange mine, do
 /// Distributed passes: the tasks this process executes, split by planned work (summed
 /// over the processes); tasks that move are planned again by their new process (a task's
 /// plan depends on the task alone), the lists of tasks that left are dropped.
-UnitRange rebalance(const Pass& p, const std::vector<int>& roots, UnitRange planned,
+UnitRange rebalance(Pass& p, const std::vector<int>& roots, UnitRange planned,
                     const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
                     std::vector<double>& work, std::int64_t& visits);
 /// Whether source node s may be dropped for the outer point o (tree position q) alone.

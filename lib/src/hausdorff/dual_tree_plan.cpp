@@ -148,64 +148,87 @@ PairSums lower_sums(const Pass& p, const double* o, double c_o, const std::vecto
   return low;
 }
 
-/// Lower bounds of every outer point's sums (lower_sums with the source leaf found by
-/// descending towards the point), their minima per outer node, and the locals' scales.
-void prepare_outer(Pass& p, const PassOuter& in, int threads) {
+/// The outer data every task shares: scales in tree order and room for the per-node
+/// bounds (outer_bounds fills them for the tasks a process plans).
+void prepare_outer(Pass& p, const PassOuter& in) {
   const KdTree& ot = *p.ot;
-  const std::vector<KdNode>& nodes = ot.nodes();
-  const size_t nn = nodes.size();
+  const size_t nn = ot.nodes().size();
   p.oc = ot.permute(Eigen::Map<const Eigen::VectorXd>(in.scale, ot.size()));
   p.log_low.assign(4 * nn, kInf);
   if (p.point_prune) p.point_low.assign(4 * static_cast<size_t>(ot.size()), kInf);
   p.kappa.assign(nn, 0.0);
-  std::vector<double> cmin(nn, kInf);
-  std::vector<int> cut;
-  cut_nodes(*p.st, 0, 0, cut);
-  const Eigen::MatrixXd& X = ot.points();
-  const unsigned flags = p.flags | kMagnitude;
-  const double w_min = p.outer_kinds() ? p.w.minCoeff() : 0.0;
-#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
-  for (size_t id = 0; id < nn; ++id) {
-    const KdNode& T = nodes[id];
-    if (T.right >= 0) continue;
-    for (Eigen::Index q = T.begin; q < T.end; ++q) {
-      double o[3] = {0.0, 0.0, 0.0};
-      for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
-      int near_cut = 0;
-      const int leaf_id = leaf_near(*p.st, o, p.d, near_cut);
-      const PairSources leaf = p.slice(p.st->nodes()[static_cast<size_t>(leaf_id)]);
-      const PairSums exact = pair_sums(o, p.oc[q], leaf, *p.power, p.eps, flags);
-      PairSums s = lower_sums(p, o, p.oc[q], cut, near_cut, exact);
-      // The nearest source (r = r_min, so p = 1) alone gives S ≥ w_min, and, when
-      // r_min > 0, Gm ≥ w_min/c_o: the bound that matters at large α.
-      s.S = std::max(s.S, w_min);
-      if (p.oc[q] > p.eps) s.Gm = std::max(s.Gm, w_min / p.oc[q]);
-      const double lc = p.alpha * std::log(p.oc[q]);
-      const double v[4] = {std::log(s.S) - lc, std::log(s.Gm) - lc, std::log(s.H), std::log(s.G2m)};
-      for (int k = 0; k < 4; ++k) p.log_low[4 * id + k] = std::min(p.log_low[4 * id + k], v[k]);
-      if (p.point_prune) std::copy(v, v + 4, &p.point_low[4 * static_cast<size_t>(q)]);
-      p.kappa[id] = std::max(p.kappa[id], p.oc[q]);
-      cmin[id] = std::min(cmin[id], p.oc[q]);
-    }
-  }
-  for (size_t id = nn; id-- > 0;) {  // children follow their parents
-    const KdNode& T = nodes[id];
-    if (T.right < 0) continue;
-    const size_t l = id + 1, r = static_cast<size_t>(T.right);
-    for (int k = 0; k < 4; ++k)
-      p.log_low[4 * id + k] = std::min(p.log_low[4 * l + k], p.log_low[4 * r + k]);
-    p.kappa[id] = std::max(p.kappa[l], p.kappa[r]);
-    cmin[id] = std::min(cmin[l], cmin[r]);
-  }
+  p.cmin.assign(nn, kInf);
   p.local_ok.assign(nn, 0);
-  if (!p.interp) return;
-  p.obox.resize(nn);
-  for (size_t id = 0; id < nn; ++id) {
-    // Locals carry (κ_T t)^α; the factor (c_o/κ_T)^α must not underflow.
-    p.local_ok[id] = p.alpha * (std::log(p.kappa[id]) - std::log(cmin[id])) <= 300.0;
-    p.obox[id] = interpolation_box(nodes[id].lo, nodes[id].hi, p.d);
+  if (p.interp) p.obox.resize(nn);
+  cut_nodes(*p.st, 0, 0, p.cut);
+}
+
+/// The lower bounds of the outer points of `leaf` (lower_sums with the source leaf found
+/// by descending towards each point), their minima, and the leaf's scales.
+void leaf_bounds(Pass& p, size_t id, double w_min) {
+  const KdNode& T = p.ot->nodes()[id];
+  const Eigen::MatrixXd& X = p.ot->points();
+  const unsigned flags = p.flags | kMagnitude;
+  for (Eigen::Index q = T.begin; q < T.end; ++q) {
+    double o[3] = {0.0, 0.0, 0.0};
+    for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
+    int near_cut = 0;
+    const int leaf_id = leaf_near(*p.st, o, p.d, near_cut);
+    const PairSources leaf = p.slice(p.st->nodes()[static_cast<size_t>(leaf_id)]);
+    const PairSums exact = pair_sums(o, p.oc[q], leaf, *p.power, p.eps, flags);
+    PairSums s = lower_sums(p, o, p.oc[q], p.cut, near_cut, exact);
+    // The nearest source (r = r_min, so p = 1) alone gives S ≥ w_min, and, when
+    // r_min > 0, Gm ≥ w_min/c_o: the bound that matters at large α.
+    s.S = std::max(s.S, w_min);
+    if (p.oc[q] > p.eps) s.Gm = std::max(s.Gm, w_min / p.oc[q]);
+    const double lc = p.alpha * std::log(p.oc[q]);
+    const double v[4] = {std::log(s.S) - lc, std::log(s.Gm) - lc, std::log(s.H), std::log(s.G2m)};
+    for (int k = 0; k < 4; ++k) p.log_low[4 * id + k] = std::min(p.log_low[4 * id + k], v[k]);
+    if (p.point_prune) std::copy(v, v + 4, &p.point_low[4 * static_cast<size_t>(q)]);
+    p.kappa[id] = std::max(p.kappa[id], p.oc[q]);
+    p.cmin[id] = std::min(p.cmin[id], p.oc[q]);
   }
 }
+
+}  // namespace
+
+int subtree_end(const KdTree& tree, int id) {
+  while (tree.nodes()[static_cast<size_t>(id)].right >= 0)
+    id = tree.nodes()[static_cast<size_t>(id)].right;
+  return id + 1;
+}
+
+void outer_bounds(Pass& p, const std::vector<int>& roots, int threads) {
+  const KdTree& ot = *p.ot;
+  const std::vector<KdNode>& nodes = ot.nodes();
+  std::vector<int> leaves;
+  for (const int root : roots) {
+    const int end = subtree_end(ot, root);
+    for (int id = root; id < end; ++id)
+      if (nodes[static_cast<size_t>(id)].right < 0) leaves.push_back(id);
+  }
+  const double w_min = p.outer_kinds() ? p.w.minCoeff() : 0.0;
+#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
+  for (size_t l = 0; l < leaves.size(); ++l) leaf_bounds(p, static_cast<size_t>(leaves[l]), w_min);
+  for (const int root : roots)
+    for (size_t id = static_cast<size_t>(subtree_end(ot, root));
+         id-- > static_cast<size_t>(root);) {
+      const KdNode& T = nodes[id];  // children follow their parents
+      if (T.right >= 0) {
+        const size_t l = id + 1, r = static_cast<size_t>(T.right);
+        for (int k = 0; k < 4; ++k)
+          p.log_low[4 * id + k] = std::min(p.log_low[4 * l + k], p.log_low[4 * r + k]);
+        p.kappa[id] = std::max(p.kappa[l], p.kappa[r]);
+        p.cmin[id] = std::min(p.cmin[l], p.cmin[r]);
+      }
+      if (!p.interp) continue;
+      // Locals carry (κ_T t)^α; the factor (c_o/κ_T)^α must not underflow.
+      p.local_ok[id] = p.alpha * (std::log(p.kappa[id]) - std::log(p.cmin[id])) <= 300.0;
+      p.obox[id] = interpolation_box(nodes[id].lo, nodes[id].hi, p.d);
+    }
+}
+
+namespace {
 
 /// The budgets of pair (t, s) per kind: log of the source node's weight in the unscaled
 /// bounds (lw) and log of the error allowed (lb), the larger of
@@ -480,7 +503,7 @@ void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const P
   p.log_tau_own = own ? std::log(0.5 * set.tau) : -kInf;
   p.power = set.power;
   prepare_sources(p, src);
-  prepare_outer(p, outer, set.threads);
+  prepare_outer(p, outer);
 }
 
 /// Plans every task: first a sample (every stride-th task, stride ≤ kSampleStride), whose
@@ -530,11 +553,15 @@ bool plan_tasks(const Pass& p, const std::vector<int>& roots, UnitRange mine, do
   return !stopped;
 }
 
-UnitRange rebalance(const Pass& p, const std::vector<int>& roots, UnitRange planned,
+UnitRange rebalance(Pass& p, const std::vector<int>& roots, UnitRange planned,
                     const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
                     std::vector<double>& work, std::int64_t& visits) {
   set.share->sum(work.data(), work.size());
   const UnitRange mine = share_of(set, work);
+  std::vector<int> moved;  // tasks new to this process: their outer points bounded first
+  for (size_t r = mine.first; r < mine.last; ++r)
+    if (r < planned.first || r >= planned.last) moved.push_back(roots[r]);
+  outer_bounds(p, moved, set.threads);
   for (size_t r = 0; r < roots.size(); ++r) {
     const bool run = r >= mine.first && r < mine.last;
     const bool had = r >= planned.first && r < planned.last;

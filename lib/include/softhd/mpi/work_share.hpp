@@ -21,11 +21,14 @@ namespace softhd::mpi {
 std::shared_ptr<const WorkShare> work_share(MPI_Comm comm);
 
 /// Initialises MPI (MPI_THREAD_FUNNELED: OpenMP threads inside a rank, MPI calls from the
-/// main thread) unless it already is, and finalises it on destruction if it initialised
-/// it. A program started without mpiexec runs as one process (MPI singleton).
+/// main thread) when the program was started by mpiexec (its environment names the job:
+/// OMPI_COMM_WORLD_SIZE, PMI_SIZE or PMIX_RANK) and MPI is not initialised yet, and
+/// finalises it on destruction if it initialised it. Started without mpiexec, the program
+/// runs as one process without MPI (world_share() is null), at no start-up cost.
 class Session {
  public:
-  /// MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, ...) unless MPI is initialised.
+  /// MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, ...) under mpiexec, unless MPI is
+  /// initialised.
   Session(int* argc, char*** argv);
   /// MPI_Finalize if this session initialised MPI.
   ~Session();
