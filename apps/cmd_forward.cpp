@@ -18,6 +18,12 @@
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
+#include "softhd/fe/state_backend.hpp"
+#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
+#include <mpi.h>
+
+#include "softhd/fe/petsc_state.hpp"
+#endif
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/parallel.hpp"
 
@@ -30,7 +36,7 @@ constexpr const char* kUsage =
     "                      [--out DIR] [--write-cloud FILE] [--json] [--linear-solver NAME]\n"
     "                      [--coarse-levels K] [--step-tol T] [--load-increment F]\n"
     "                      [--intermediate-tol T] [--factorize-every-step]\n"
-    "                      [--threads N] [--verbose]\n"
+    "                      [--threads N] [--verbose] [--state-backend NAME]\n"
     "       softhd forward SCENE --write-control-nodes FILE [--control-uniform V]\n"
     "\n"
     "Solves the equilibrium of the scene's body for the active tension m and writes\n"
@@ -59,11 +65,21 @@ constexpr const char* kUsage =
     "  --factorize-every-step classical Newton: factorise every tangent instead of\n"
     "                         reusing a factorisation as a PCG preconditioner\n"
     "  --threads N            threads of the assembly (default 0: OMP_NUM_THREADS or all cores)\n"
-    "  --max-memory GIB       refuse meshes whose estimated memory exceeds this (default 8)\n"
+    "  --max-memory GIB       refuse meshes whose estimated memory exceeds this (default 8;\n"
+    "                         with a PETSc backend, per rank)\n"
+    "  --state-backend NAME   cholmod (serial Newton, default), petsc-mumps (distributed Newton,\n"
+    "                         MUMPS LDL^T) or petsc-gamg (distributed Newton, CG + GAMG); the\n"
+    "                         PETSc ones need a build with SOFTHD_WITH_MPI=ON and run on the\n"
+    "                         ranks of mpiexec (or serially; coarse levels are solved serially\n"
+    "                         on every rank) and take no --write-cloud, --linear-solver or\n"
+    "                         --factorize-every-step. PETSc options (e.g.\n"
+    "                         -softhd_state_ksp_monitor) go in the environment variable\n"
+    "                         PETSC_OPTIONS\n"
     "  --write-control-nodes FILE  write the control nodes with their current values and stop\n";
 
 struct Args {
   std::string scene, control_file, out_dir = "out", write_nodes, linear_solver, write_cloud;
+  StateBackend backend = StateBackend::kCholmod;
   bool has_uniform = false, json = false, verbose = false;
   int coarse_levels = -1;  // automatic
   int threads = 0;
@@ -118,6 +134,11 @@ bool parse(int argc, char** argv, Args* a) {
       a->json = true;
     } else if (s == "--verbose") {
       a->verbose = true;
+    } else if (s == "--state-backend") {
+      a->backend = parse_state_backend(value());
+      if (a->backend != StateBackend::kCholmod && !petsc_backend_available())
+        throw softhd::InvalidArgument("--state-backend " + to_string(a->backend) +
+                                      " needs softhd built with -DSOFTHD_WITH_MPI=ON");
     } else if (s == "--linear-solver") {
       a->linear_solver = value();
     } else if (s == "--step-tol") {
@@ -177,7 +198,10 @@ Eigen::VectorXd control_values(const Scene& scene, const ControlSpace& control, 
   return m;
 }
 
+int forward_petsc(const Args& args);
+
 int forward(const Args& args) {
+  if (args.backend != StateBackend::kCholmod) return forward_petsc(args);
   const auto t0 = std::chrono::steady_clock::now();
   const Scene scene = load_scene(args.scene, args.memory_limit);
   const Assembler assembler = scene.make_assembler();
@@ -276,6 +300,132 @@ int forward(const Args& args) {
   }
   return 0;
 }
+
+#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
+/// Reference positions of the controls (vertices or element centres) from the mesh alone.
+Eigen::MatrixXd control_positions(const Mesh& mesh, ControlKind kind) {
+  if (kind == ControlKind::kVertex) {
+    Eigen::MatrixXd p(mesh.num_vertices(), mesh.dim);
+    for (Eigen::Index v = 0; v < p.rows(); ++v) p.row(v) = mesh.nodes.row(mesh.vertex_nodes[v]);
+    return p;
+  }
+  Eigen::MatrixXd p = Eigen::MatrixXd::Zero(mesh.num_elements(), mesh.dim);
+  const Eigen::Index nv = mesh.element_vertices.cols();
+  for (Eigen::Index e = 0; e < p.rows(); ++e)
+    for (Eigen::Index a = 0; a < nv; ++a)
+      p.row(e) += mesh.nodes.row(mesh.vertex_nodes[mesh.element_vertices(e, a)]) / nv;
+  return p;
+}
+
+// softhd forward with a PETSc backend: every rank reads the scene and builds its slab; rank 0
+// writes the VTU and prints the report.
+int forward_petsc(const Args& args) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!args.write_cloud.empty() || !args.linear_solver.empty() || args.factorize_every_step)
+    throw softhd::InvalidArgument(
+        "--write-cloud, --linear-solver and --factorize-every-step need --state-backend cholmod");
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  const Scene scene = load_scene(args.scene, args.memory_limit * size);
+  const Mesh mesh = scene.make_mesh();
+  const Eigen::MatrixXd positions = control_positions(mesh, scene.control_kind);
+  Eigen::VectorXd m = Eigen::VectorXd::Constant(
+      positions.rows(), args.has_uniform ? args.uniform : scene.control_initial);
+  if (!args.control_file.empty()) m = read_control_file(args.control_file, positions);
+  if (!args.write_nodes.empty()) {
+    if (rank == 0) write_control_file(args.write_nodes, positions, m);
+    return 0;
+  }
+  for (Eigen::Index k = 0; k < m.size(); ++k)
+    if (!(m[k] >= scene.control_lower && m[k] <= scene.control_upper))
+      throw softhd::InvalidArgument("control value " + std::to_string(m[k]) + " at control " +
+                                    std::to_string(k) + " is outside the scene's bounds");
+  for (const Eigen::VectorXd& X : args.probes) {
+    Eigen::VectorXd xi;
+    if (X.size() != scene.dim() || locate(mesh, X, &xi) < 0)
+      throw softhd::InvalidArgument("a probe is not a point of the body");
+  }
+  softhd::set_threads(args.threads);
+  PetscStateOptions options;
+  options.backend = args.backend;
+  options.newton.verbose = args.verbose;
+  options.newton.displacement_tolerance = args.step_tol;
+  options.newton.initial_load_increment = args.load_increment;
+  options.newton.min_load_increment =
+      std::min(options.newton.min_load_increment, args.load_increment);
+  options.newton.intermediate_tolerance = args.intermediate_tol;
+  PetscStateSolver solver(scene, options);
+  GridSequencingOptions grid_options;
+  grid_options.levels = args.coarse_levels;
+  const GridSequencingReport grid = solver.grid_sequenced_start(scene, m, grid_options);
+  if (rank == 0) std::cerr << grid.BriefReport();
+  const NewtonSummary summary = solver.solve(m);
+  double seconds_solve = summary.seconds_total;
+  for (const GridLevelReport& level : grid.levels) seconds_solve += level.newton.seconds_total;
+  const Eigen::VectorXd u = solver.displacement();
+  const Eigen::MatrixXd J = solver.jacobians(), m_qp = solver.control_at_quadrature();
+  const double energy = solver.energy(), volume = solver.deformed_volume();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (rank != 0) return summary.converged() ? 0 : 1;
+  std::filesystem::create_directories(args.out_dir);
+  const std::string vtu = (std::filesystem::path(args.out_dir) / "forward.vtu").string();
+  write_vtu(vtu, mesh, u, m_qp, J);
+  if (args.json) {
+    nlohmann::json j;
+    j["scene"] = scene.name;
+    j["state_backend"] = to_string(args.backend);
+    j["ranks"] = size;
+    j["status"] = to_string(summary.status);
+    j["converged"] = summary.converged();
+    j["load_reached"] = summary.final_load;
+    nlohmann::json probes = nlohmann::json::array();
+    for (const Eigen::VectorXd& X : args.probes) {
+      const Eigen::VectorXd v = probe_displacement(mesh, u, X);
+      probes.push_back({{"X", std::vector<double>(X.data(), X.data() + X.size())},
+                        {"u", std::vector<double>(v.data(), v.data() + v.size())}});
+    }
+    j["probes"] = probes;
+    j["energy"] = energy;
+    j["volume"] = volume;
+    j["min_J"] = J.minCoeff();
+    j["newton_iterations"] = summary.newton_iterations;
+    j["factorizations"] = summary.factorizations;
+    j["krylov_iterations"] = summary.krylov_iterations;
+    j["load_steps"] = summary.load_steps;
+    j["dofs"] = solver.layout().global_rows;
+    nlohmann::json levels = nlohmann::json::array();
+    for (const GridLevelReport& level : grid.levels) {
+      levels.push_back(
+          {{"cells", std::vector<int>(level.cells.data(), level.cells.data() + level.cells.size())},
+           {"newton_iterations", level.newton.newton_iterations},
+           {"factorizations", level.newton.factorizations},
+           {"seconds", level.newton.seconds_total}});
+    }
+    j["coarse_levels"] = levels;
+    j["seconds_solve"] = seconds_solve;
+    j["seconds"] = seconds;
+    j["vtu"] = vtu;
+    std::cout << j.dump(2) << "\n";
+  } else {
+    std::cout << summary.BriefReport() << "\nwrote " << vtu << "\n";
+    for (const Eigen::VectorXd& X : args.probes)
+      std::cout << "u(" << X.transpose() << ") = " << probe_displacement(mesh, u, X).transpose()
+                << "\n";
+  }
+  if (!summary.converged()) {
+    std::cerr << "softhd forward: the state solve did not converge\n" << summary.FullReport();
+    return 1;
+  }
+  return 0;
+}
+#else
+int forward_petsc(const Args&) {
+  throw softhd::InvalidArgument(
+      "the PETSc state backends need softhd built with SOFTHD_WITH_MPI=ON");
+}
+#endif
 
 }  // namespace
 

@@ -4,6 +4,7 @@
 #include <exception>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,7 +15,34 @@
 #include "softhd/mpi/work_share.hpp"
 #endif
 
+#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
+#include <petscsys.h>
+#endif
+
 namespace {
+
+#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
+// PETSc, and with it MPI, for the whole run: initialised once here, never by the library
+// (fe/petsc_state.hpp). PETSc sees only the program name (softhd's own options are not
+// PETSc's); its options come from the environment variable PETSC_OPTIONS.
+class PetscSession {
+ public:
+  explicit PetscSession(char* program) {
+    static char* args[] = {program, nullptr};
+    int argc = 1;
+    char** argv = args;
+    ok_ = PetscInitialize(&argc, &argv, nullptr, nullptr) == 0;
+  }
+  ~PetscSession() {
+    if (ok_) PetscFinalize();
+  }
+  PetscSession(const PetscSession&) = delete;
+  PetscSession& operator=(const PetscSession&) = delete;
+
+ private:
+  bool ok_ = false;
+};
+#endif
 
 const char* kUsage = R"(usage: softhd COMMAND [options]
 
@@ -47,6 +75,15 @@ int main(int argc, char** argv) {
     return all.empty() ? 2 : 0;
   }
   const std::string command = all[0];
+#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
+  // Only a forward solve on a PETSc backend starts PETSc (which starts MPI if the session
+  // above did not): every other run pays no PETSc or MPI start-up.
+  bool wants_petsc = false;
+  for (size_t k = 1; k + 1 < all.size(); ++k)
+    if (all[k] == "--state-backend" && all[k + 1].rfind("petsc", 0) == 0) wants_petsc = true;
+  std::unique_ptr<PetscSession> petsc;
+  if (command == "forward" && wants_petsc) petsc = std::make_unique<PetscSession>(argv[0]);
+#endif
   const std::vector<std::string> rest(all.begin() + 1, all.end());
   try {
     if (command == "distance") return softhd::cli::run_distance(rest);

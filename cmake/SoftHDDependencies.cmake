@@ -63,6 +63,11 @@ if(SOFTHD_BUILD_PYTHON)
   softhd_require(pybind11_FOUND pybind11-dev "pybind11")
 endif()
 
+# SOFTHD_WITH_MPI: for the PETSc state backend, PETSc (cmake/SoftHDPetsc.cmake).
+if(SOFTHD_WITH_MPI)
+  include(SoftHDPetsc)
+endif()
+
 if(SOFTHD_BUILD_TESTS)
   find_package(GTest CONFIG QUIET)
   softhd_require(GTest_FOUND libgtest-dev "GoogleTest")

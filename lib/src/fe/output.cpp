@@ -15,7 +15,11 @@ namespace softhd::fe {
 
 Eigen::VectorXd probe_displacement(const Assembler& assembler, const Eigen::VectorXd& u,
                                    const Eigen::VectorXd& X) {
-  const Mesh& mesh = assembler.mesh();
+  return probe_displacement(assembler.mesh(), u, X);
+}
+
+Eigen::VectorXd probe_displacement(const Mesh& mesh, const Eigen::VectorXd& u,
+                                   const Eigen::VectorXd& X) {
   Eigen::VectorXd xi;
   const int e = locate(mesh, X, &xi);
   if (e < 0) {

@@ -14,6 +14,9 @@ namespace softhd::fe {
 /// Throws InvalidArgument if X is outside the body.
 Eigen::VectorXd probe_displacement(const Assembler& assembler, const Eigen::VectorXd& u,
                                    const Eigen::VectorXd& X);
+/// The same on a mesh alone (u: num_nodes · dim entries).
+Eigen::VectorXd probe_displacement(const Mesh& mesh, const Eigen::VectorXd& u,
+                                   const Eigen::VectorXd& X);
 
 /// Writes an ASCII VTU (VTK unstructured grid) of the deformed mesh: points at X + u,
 /// point data "displacement", cell data "m" and "J" (element means, E by nq inputs). Q2

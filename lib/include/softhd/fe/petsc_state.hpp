@@ -1,0 +1,121 @@
+#pragma once
+/// \file petsc_state.hpp
+/// The state equation on PETSc, distributed over the ranks of PETSC_COMM_WORLD (built only
+/// with SOFTHD_WITH_MPI=ON; docs/scaling_state.md).
+///
+/// Partition: the box mesh is cut into slabs of cells along its axis with the most cells,
+/// one per rank; each rank builds only its slab (mesh, quadrature data, element maps) and
+/// assembles its elements into a distributed MATAIJ matrix (block size dim when every
+/// node is free or wholly fixed), rows numbered plane by plane along the slab axis so that
+/// each rank owns one contiguous range.
+///
+/// Newton: the serial method of fe/newton.hpp (docs/formulation.md §3.6) on distributed
+/// vectors: the same energy line search (the same EnergyLineSearch code, on each rank's
+/// owned entries, with the energy summed over ranks), the same load stepping, path
+/// predictor, forcing terms and convergence test (|R|₂ <= rtol R_ref + atol, and the step
+/// test |Δu|_∞ <= displacement_tolerance |u|_∞). Linear solves by PETSc KSP:
+///  - petsc-mumps: KSPPREONLY + PCCHOLESKY with MUMPS (symmetric LDLᵀ with pivoting); the
+///    inertia of the factor says whether K is positive definite;
+///  - petsc-gamg: CG on the true residual, preconditioned by GAMG with the rigid-body
+///    near-null space; K is taken as not positive definite when CG reports negative
+///    curvature (KSP_DIVERGED_INDEFINITE_MAT/PC) or does not converge.
+/// A tangent that is not positive definite is shifted, K + μ I, with the shift sequence of
+/// LinearSolver::factorize_shifted (no Newton–CG truncation, no reuse of a factorisation as
+/// a preconditioner: each direction is a fresh solve). The adjoint solves with the tangent
+/// at the converged state through the same KSP.
+///
+/// Contract: PETSc (and with it MPI) must be initialised by the program (PetscInitialize)
+/// before a PetscStateSolver is made and finalised after the last one is destroyed; the
+/// library never calls MPI_Init or PetscInitialize. Every member function is collective:
+/// all ranks call it with the same arguments. PETSc options prefixed -softhd_state_ (e.g.
+/// -softhd_state_ksp_monitor) reach the KSP.
+
+#include <Eigen/Core>
+#include <memory>
+
+#include "softhd/fe/grid_sequencing.hpp"
+#include "softhd/fe/newton.hpp"
+#include "softhd/fe/scene.hpp"
+#include "softhd/fe/state_backend.hpp"
+
+namespace softhd::fe {
+
+/// Settings of PetscStateSolver; defaults per field.
+struct PetscStateOptions {
+  /// Newton settings (tangent.* are not used: the KSP below replaces the tangent solver).
+  NewtonOptions newton;
+  /// kPetscMumps or kPetscGamg.
+  StateBackend backend = StateBackend::kPetscMumps;
+  /// CG iterations allowed per solve (petsc-gamg) before K is treated as indefinite.
+  int max_krylov_iterations = 2000;
+
+  /// Throws InvalidArgument naming the first invalid field.
+  void validate() const;
+};
+
+/// Sizes of the distributed problem as seen by one rank.
+struct PetscStateLayout {
+  int rank = 0, size = 1;           ///< this rank, and the number of ranks
+  int slab_axis = 0;                ///< the axis the slabs cut
+  Eigen::Index local_elements = 0;  ///< elements of this rank's slab
+  Eigen::Index owned_rows = 0;      ///< free dofs owned by this rank
+  Eigen::Index global_rows = 0;     ///< free dofs of the whole mesh
+  int block_size = 1;               ///< block size of the matrix
+};
+
+/// The state equation m ↦ u(m) of one scene on PETSc, warm-started from the last solve, with
+/// the adjoint gradient. Collective on PETSC_COMM_WORLD.
+class PetscStateSolver {
+ public:
+  /// Throws InvalidArgument for invalid options, a backend other than the PETSc ones, a mesh
+  /// with fewer cells along its longest axis than ranks, or if PETSc is not initialised.
+  explicit PetscStateSolver(const Scene& scene, PetscStateOptions options = {});
+  ~PetscStateSolver();
+  PetscStateSolver(const PetscStateSolver&) = delete;
+  PetscStateSolver& operator=(const PetscStateSolver&) = delete;
+
+  /// Equilibrium for the control m (the scene's control space, all values on every rank),
+  /// from the last converged state (rest at first). On failure the state stays at the last
+  /// converged load step and the summary says why. Same summary fields as the serial
+  /// Newton (factorizations: MUMPS factorisations or GAMG setups; krylov_iterations: CG).
+  NewtonSummary solve(const Eigen::VectorXd& m);
+  /// True if the last solve converged.
+  bool converged() const;
+  /// Grid sequencing as in solve_forward (fe/grid_sequencing.hpp): the coarser levels of
+  /// `scene` (the one given at construction) are solved by the serial Newton on every rank
+  /// (they are small), and their equilibrium, prolongated onto this rank's nodes, becomes
+  /// the start of the next solve, with the control m at full load. With no level asked for,
+  /// or if a coarse solve fails (reported), the start is the rest state.
+  GridSequencingReport grid_sequenced_start(const Scene& scene, const Eigen::VectorXd& m,
+                                            const GridSequencingOptions& options);
+
+  /// The displacement of the whole mesh (num_nodes · dim, global dof order, fixed entries
+  /// zero), on every rank.
+  Eigen::VectorXd displacement() const;
+  /// The state part of dJ/dm (control-space size, on every rank) for g = ∂J/∂u given on
+  /// every rank (num_nodes · dim): K λ = g with the converged tangent, then ∫ M_k (F a₀)·(∇λ
+  /// a₀) dX. Throws InvalidArgument if the last solve did not converge, NumericalError if
+  /// the solve fails.
+  Eigen::VectorXd gradient(const Eigen::VectorXd& g);
+
+  ///@{
+  /// Π(u; m), ∫ J dX and min J at the current state, over the whole mesh.
+  double energy() const;
+  double deformed_volume() const;
+  double min_jacobian() const;
+  ///@}
+  /// The current control at the quadrature points, or det F there: E by nq over the whole
+  /// mesh in global element order, on every rank.
+  Eigen::MatrixXd control_at_quadrature() const;
+  /// See control_at_quadrature.
+  Eigen::MatrixXd jacobians() const;
+
+  /// Sizes of the partition.
+  PetscStateLayout layout() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace softhd::fe

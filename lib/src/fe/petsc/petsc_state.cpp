@@ -1,0 +1,215 @@
+#include "softhd/fe/petsc_state.hpp"
+
+#include <mpi.h>
+
+#include "petsc_newton.hpp"
+#include "petsc_system.hpp"
+#include "softhd/error.hpp"
+#include "softhd/fe/adjoint.hpp"
+#include "softhd/fe/control.hpp"
+
+namespace softhd::fe {
+
+using petsc_detail::DistributedNewton;
+using petsc_detail::DistributedSystem;
+
+void PetscStateOptions::validate() const {
+  newton.validate();
+  if (backend != StateBackend::kPetscMumps && backend != StateBackend::kPetscGamg)
+    throw InvalidArgument("PETSc state options: backend must be petsc-mumps or petsc-gamg");
+  if (max_krylov_iterations < 1)
+    throw InvalidArgument("PETSc state options: max_krylov_iterations must be >= 1");
+}
+
+namespace {
+
+PetscStateOptions validated(PetscStateOptions options) {
+  options.validate();
+  return options;
+}
+
+}  // namespace
+
+struct PetscStateSolver::Impl {
+  Impl(const Scene& scene, const PetscStateOptions& options)
+      : options(validated(options)),
+        system(scene, options.backend, options.max_krylov_iterations),
+        control(system.assembler().mesh(), system.assembler().geometry(), scene.control_kind),
+        global_controls(scene.control_kind == ControlKind::kVertex
+                            ? system.slab().num_global_vertices
+                            : system.slab().num_global_elements),
+        newton(system, options.newton),
+        u(Eigen::VectorXd::Zero(system.owned())),
+        m_qp(Eigen::MatrixXd::Zero(system.assembler().mesh().num_elements(),
+                                   system.assembler().geometry().points_per_element())) {}
+
+  /// The slab's ids of the global controls (vertices or elements).
+  const std::vector<int>& control_ids() const {
+    return control.kind() == ControlKind::kVertex ? system.slab().global_vertex
+                                                  : system.slab().global_element;
+  }
+  /// Sums per-slab E by nq values into the whole mesh's (global element order).
+  Eigen::MatrixXd gather_elements(const Eigen::MatrixXd& local) const {
+    Eigen::MatrixXd all = Eigen::MatrixXd::Zero(system.slab().num_global_elements, local.cols());
+    for (Eigen::Index e = 0; e < local.rows(); ++e)
+      all.row(system.slab().global_element[e]) = local.row(e);
+    MPI_Allreduce(MPI_IN_PLACE, all.data(), static_cast<int>(all.size()), MPI_DOUBLE, MPI_SUM,
+                  PETSC_COMM_WORLD);
+    return all;
+  }
+
+  PetscStateOptions options;
+  DistributedSystem system;
+  ControlSpace control;  ///< the slab's
+  Eigen::Index global_controls;
+  DistributedNewton newton;
+  Eigen::VectorXd u;     ///< owned rows
+  Eigen::MatrixXd m_qp;  ///< the slab's control at its quadrature points
+};
+
+PetscStateSolver::PetscStateSolver(const Scene& scene, PetscStateOptions options)
+    : impl_(std::make_unique<Impl>(scene, options)) {}
+
+PetscStateSolver::~PetscStateSolver() = default;
+
+NewtonSummary PetscStateSolver::solve(const Eigen::VectorXd& m) {
+  Impl& s = *impl_;
+  if (m.size() != s.global_controls)
+    throw InvalidArgument("PETSc state: the control has " + std::to_string(m.size()) +
+                          " values, the scene " + std::to_string(s.global_controls));
+  const std::vector<int>& ids = s.control_ids();
+  Eigen::VectorXd local(s.control.size());
+  for (Eigen::Index k = 0; k < local.size(); ++k) local[k] = m[ids[k]];
+  return s.newton.solve(s.control.to_quadrature(local), &s.u, &s.m_qp);
+}
+
+namespace {
+
+// The equilibrium of `scene` (after `levels` coarser ones) under the field m of the fine mesh,
+// by the serial Newton: grid_sequencing.cpp's recursion.
+bool solve_coarse(const Scene& scene, const Mesh& fine, const Eigen::VectorXd& m, int levels,
+                  const NewtonOptions& newton, GridSequencingReport* report, Mesh* mesh,
+                  State* state) {
+  const Assembler assembler = scene.make_assembler();
+  const Eigen::MatrixXd m_qp = control_on_quadrature(assembler, fine, scene.control_kind, m);
+  *state = rest_state(assembler);
+  if (levels > 0) {
+    Mesh coarse_mesh;
+    State coarse;
+    if (!solve_coarse(coarsened(scene), fine, m, levels - 1, newton, report, &coarse_mesh, &coarse))
+      return false;
+    state->u = prolongate(coarse_mesh, coarse.u, assembler.mesh());
+  }
+  NewtonSolver solver(assembler, newton);
+  const NewtonSummary summary = solver.solve(m_qp, state);
+  report->levels.push_back({scene.cells, summary});
+  *mesh = assembler.mesh();
+  return summary.converged();
+}
+
+}  // namespace
+
+GridSequencingReport PetscStateSolver::grid_sequenced_start(const Scene& scene,
+                                                            const Eigen::VectorXd& m,
+                                                            const GridSequencingOptions& options) {
+  Impl& s = *impl_;
+  options.validate();
+  GridSequencingReport report;
+  const int levels = grid_levels(scene, options);
+  if (m.size() != s.global_controls)
+    throw InvalidArgument("grid sequencing: m must have one value per control");
+  s.u.setZero();
+  s.m_qp.setZero();
+  if (levels == 0) return report;
+  Mesh coarse_mesh;
+  State coarse;
+  if (!solve_coarse(coarsened(scene), scene.make_mesh(), m, levels - 1, s.options.newton, &report,
+                    &coarse_mesh, &coarse)) {
+    report.fell_back_to_rest = true;
+    return report;
+  }
+  const Eigen::VectorXd u = prolongate(coarse_mesh, coarse.u, s.system.assembler().mesh());
+  const DofMap& dofs = s.system.assembler().dofs();
+  const std::vector<int>& owned = s.system.numbering().owned_local;
+  for (Eigen::Index i = 0; i < s.u.size(); ++i) s.u[i] = u[dofs.free_dofs[owned[i]]];
+  const std::vector<int>& ids = s.control_ids();
+  Eigen::VectorXd local(s.control.size());
+  for (Eigen::Index k = 0; k < local.size(); ++k) local[k] = m[ids[k]];
+  s.m_qp = s.control.to_quadrature(local);  // the fine solve starts at full load
+  return report;
+}
+
+bool PetscStateSolver::converged() const { return impl_->newton.converged(); }
+
+Eigen::VectorXd PetscStateSolver::displacement() const {
+  const Impl& s = *impl_;
+  const int dim = s.system.slab().mesh.dim;
+  Eigen::VectorXd all = Eigen::VectorXd::Zero(s.system.slab().num_global_nodes * dim);
+  const std::vector<std::int64_t>& dofs = s.system.numbering().owned_global_dof;
+  for (size_t i = 0; i < dofs.size(); ++i) all[dofs[i]] = s.u[static_cast<Eigen::Index>(i)];
+  MPI_Allreduce(MPI_IN_PLACE, all.data(), static_cast<int>(all.size()), MPI_DOUBLE, MPI_SUM,
+                PETSC_COMM_WORLD);
+  return all;
+}
+
+Eigen::VectorXd PetscStateSolver::gradient(const Eigen::VectorXd& g) {
+  Impl& s = *impl_;
+  const Eigen::Index num_dofs = s.system.slab().num_global_nodes * s.system.slab().mesh.dim;
+  if (g.size() != num_dofs)
+    throw InvalidArgument("PETSc state: g must have " + std::to_string(num_dofs) + " entries");
+  if (!s.newton.converged())
+    throw InvalidArgument("PETSc state: gradient() needs a converged solve");
+  const std::vector<std::int64_t>& dofs = s.system.numbering().owned_global_dof;
+  Eigen::VectorXd b(s.system.owned());
+  for (Eigen::Index i = 0; i < b.size(); ++i) b[i] = g[dofs[i]];
+  const Eigen::VectorXd lambda = s.newton.solve_converged_tangent(b);
+  const Eigen::VectorXd local = control_gradient(
+      s.system.assembler(), s.control, s.system.slab_vector(s.u), s.system.slab_vector(lambda));
+  Eigen::VectorXd all = Eigen::VectorXd::Zero(s.global_controls);
+  const std::vector<int>& ids = s.control_ids();
+  for (Eigen::Index k = 0; k < local.size(); ++k) all[ids[k]] += local[k];
+  MPI_Allreduce(MPI_IN_PLACE, all.data(), static_cast<int>(all.size()), MPI_DOUBLE, MPI_SUM,
+                PETSC_COMM_WORLD);
+  return all;
+}
+
+double PetscStateSolver::energy() const {
+  const Impl& s = *impl_;
+  double e = 0.0;
+  s.system.assembler().evaluate(s.system.slab_vector(s.u), s.m_qp, &e, nullptr, nullptr);
+  return s.system.sum(e);
+}
+
+double PetscStateSolver::deformed_volume() const {
+  const Impl& s = *impl_;
+  return s.system.sum(s.system.assembler().deformed_volume(s.system.slab_vector(s.u)));
+}
+
+double PetscStateSolver::min_jacobian() const {
+  const Impl& s = *impl_;
+  return s.system.min(s.system.assembler().min_jacobian(s.system.slab_vector(s.u)));
+}
+
+Eigen::MatrixXd PetscStateSolver::control_at_quadrature() const {
+  return impl_->gather_elements(impl_->m_qp);
+}
+
+Eigen::MatrixXd PetscStateSolver::jacobians() const {
+  const Impl& s = *impl_;
+  return s.gather_elements(s.system.assembler().jacobians(s.system.slab_vector(s.u)));
+}
+
+PetscStateLayout PetscStateSolver::layout() const {
+  const DistributedSystem& sys = impl_->system;
+  PetscStateLayout l;
+  l.rank = sys.slab().rank;
+  l.size = sys.slab().size;
+  l.slab_axis = sys.slab().axis;
+  l.local_elements = sys.assembler().mesh().num_elements();
+  l.owned_rows = sys.owned();
+  l.global_rows = sys.numbering().num_global;
+  l.block_size = sys.block_size();
+  return l;
+}
+
+}  // namespace softhd::fe

@@ -1,0 +1,94 @@
+#pragma once
+// The distributed discrete system of the PETSc state backend (internal): one rank's slab
+// assembler, the global free-dof numbering, the distributed tangent (MATAIJ), and the KSP
+// that solves with it. Vectors cross this interface as Eigen vectors of the rank's owned
+// rows (in global row order); reductions over ranks are done here.
+
+#include <petscksp.h>
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "slab_partition.hpp"
+#include "softhd/fe/assembly.hpp"
+#include "softhd/fe/scene.hpp"
+#include "softhd/fe/state_backend.hpp"
+
+namespace softhd::fe::petsc_detail {
+
+/// Throws NumericalError naming the call if a PETSc call failed.
+void check(PetscErrorCode code, const char* call);
+#define SOFTHD_PETSC(call) ::softhd::fe::petsc_detail::check((call), #call)
+
+/// What one linear solve did.
+struct LinearSolveReport {
+  bool ok = false;
+  double shift = 0.0;    ///< μ of K + μ I (0 if none)
+  int attempts = 0;      ///< factorisations (MUMPS) or preconditioner setups (GAMG)
+  int krylov = 0;        ///< CG iterations over all attempts (0 for MUMPS)
+  bool stalled = false;  ///< CG ran out of iterations (no shift is tried then)
+  double seconds = 0.0;  ///< wall time
+};
+
+class DistributedSystem {
+ public:
+  DistributedSystem(const Scene& scene, StateBackend backend, int max_krylov_iterations);
+  ~DistributedSystem();
+  DistributedSystem(const DistributedSystem&) = delete;
+  DistributedSystem& operator=(const DistributedSystem&) = delete;
+
+  const SlabPartition& slab() const { return slab_; }
+  const Assembler& assembler() const { return *assembler_; }
+  const FreeNumbering& numbering() const { return numbering_; }
+  Eigen::Index owned() const { return static_cast<Eigen::Index>(numbering_.owned_local.size()); }
+  int block_size() const { return block_size_; }
+  /// True for the iterative backend (CG + GAMG).
+  bool iterative() const { return backend_ == StateBackend::kPetscGamg; }
+
+  /// Π, R (owned rows) and/or the tangent (kept in the matrix) at the owned displacement
+  /// u and the slab's control m_qp; null outputs are skipped. Returns false (on every rank)
+  /// if det F <= 0 at a quadrature point of any rank; *energy is then +inf.
+  bool evaluate(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp, double* energy,
+                Eigen::VectorXd* residual, bool tangent);
+  /// x with ‖K x − b‖ <= rtol ‖b‖ (GAMG; MUMPS solves directly), K the last assembled
+  /// tangent, shifted to K + μ I if it is not positive definite and allow_shift is set
+  /// (μ as in LinearSolver::factorize_shifted; K itself is left unshifted afterwards).
+  LinearSolveReport solve(const Eigen::VectorXd& b, double rtol, bool allow_shift,
+                          Eigen::VectorXd* x);
+
+  /// The slab's full displacement (slab num_dofs, fixed entries zero) of owned values u.
+  Eigen::VectorXd slab_vector(const Eigen::VectorXd& u) const;
+  ///@{
+  /// Reductions over ranks.
+  double dot(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const;
+  double norm(const Eigen::VectorXd& a) const { return std::sqrt(dot(a, a)); }
+  double max_abs(const Eigen::VectorXd& a) const;
+  double sum(double local) const;
+  double min(double local) const;
+  ///@}
+
+ private:
+  void create_matrix();
+  void create_solver();
+  /// One attempt at K x = b (K possibly shifted); true if it succeeded.
+  bool attempt(Vec b, Vec x, double rtol, LinearSolveReport* report);
+
+  SlabPartition slab_;
+  std::unique_ptr<Assembler> assembler_;
+  FreeNumbering numbering_;
+  StateBackend backend_;
+  int max_krylov_iterations_;
+  int block_size_ = 1;
+  std::vector<PetscInt> local_rows_;  // global row of each slab free dof
+  SparseMatrix slab_tangent_;         // the slab's tangent (lower triangle, slab free dofs)
+  Mat K_ = nullptr;
+  Vec global_ = nullptr, global2_ = nullptr, local_ = nullptr;
+  VecScatter to_local_ = nullptr;
+  KSP ksp_ = nullptr;
+  double last_shift_ = 0.0;
+  bool matrix_assembled_ = false;
+  bool mumps_configured_ = false;
+};
+
+}  // namespace softhd::fe::petsc_detail
