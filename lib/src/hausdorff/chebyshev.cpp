@@ -82,6 +82,31 @@ void tensor_apply(const Translation& t, bool transpose, int n, int d, const doub
   for (int q = 0; q < total; ++q) out[q] += f * src[q];
 }
 
+void tensor_rect(const double* A, int rows, int cols, int d, const double* in, double* out) {
+  constexpr int kMax = kMaxChebyshev * kMaxChebyshev * kMaxChebyshev;
+  double buf[2][kMax];
+  int dims[3] = {cols, cols, cols};
+  const double* src = in;
+  for (int k = d - 1, which = 0; k >= 0; --k, which ^= 1) {
+    int outer = 1, inner = 1;
+    for (int a = 0; a < k; ++a) outer *= dims[a];
+    for (int a = k + 1; a < d; ++a) inner *= dims[a];
+    double* dst = buf[which];
+    for (int o = 0; o < outer; ++o)
+      for (int i = 0; i < rows; ++i)
+        for (int r = 0; r < inner; ++r) {
+          double sum = 0.0;
+          for (int j = 0; j < cols; ++j) sum += A[i * cols + j] * src[(o * cols + j) * inner + r];
+          dst[(o * rows + i) * inner + r] = sum;
+        }
+    dims[k] = rows;
+    src = dst;
+  }
+  int total = 1;
+  for (int k = 0; k < d; ++k) total *= rows;
+  for (int q = 0; q < total; ++q) out[q] += src[q];
+}
+
 namespace {
 
 /// Squared distance between box T and box S, with half-width `widen` replacing the
@@ -120,18 +145,14 @@ double ellipse_min(double A, double B, double lo, double hi) {
   return best;
 }
 
-/// log of the 1D bound e_j (value and gradient kernels) for one interpolated axis,
-/// minimised over a grid of ellipses. With the other coordinates real, Re s is at least
-/// the squared gap of the boxes across the other axes plus ellipse_min along this one.
-LogBounds axis_log_bound(const Box& T, const Box& S, int d, bool which_t, int axis, int n,
-                         double alpha, double eps) {
-  const double inf = std::numeric_limits<double>::infinity();
-  LogBounds best{inf, inf};
+AxisTerms axis_terms(const Box& T, const Box& S, int d, bool which_t, int axis, double alpha,
+                     double eps) {
+  AxisTerms out;
   const Box& mine = which_t ? T : S;
   const Box& other = which_t ? S : T;
   const double a = mine.a[axis];
   const double D0 = std::sqrt(box_gap2(T, S, d, which_t, axis, a));
-  if (!(D0 > 0.0)) return best;
+  if (!(D0 > 0.0)) return out;
   double across = 0.0;  // squared gap of the (real) boxes across the other axes
   for (int k = 0; k < d; ++k) {
     const double gap = std::max(0.0, std::fabs(T.c[k] - S.c[k]) - T.a[k] - S.a[k]);
@@ -143,20 +164,33 @@ LogBounds axis_log_bound(const Box& T, const Box& S, int d, bool which_t, int ax
   // side of the other box plus `across`: ρ < ρ_top.
   const double far2 = std::max(lo * lo, hi * hi) + across;
   const double rho_top = std::sqrt(2.0 * far2) / a + 1.0;
-  static constexpr double kGrid[] = {0.02, 0.05, 0.09, 0.14, 0.2,  0.27, 0.34, 0.41,
-                                     0.48, 0.55, 0.62, 0.69, 0.76, 0.83, 0.9,  0.96};
+  static constexpr double kGrid[AxisTerms::kGrid] = {
+      0.02, 0.05, 0.09, 0.14, 0.2, 0.27, 0.34, 0.41, 0.48, 0.55, 0.62, 0.69, 0.76, 0.83, 0.9, 0.96};
   for (double f : kGrid) {
     const double rho = 1.0 + (rho_top - 1.0) * f;
     const double A = 0.5 * a * (rho + 1.0 / rho), B = 0.5 * a * (rho - 1.0 / rho);
     const double re2 = across + ellipse_min(A, B, lo, hi);  // ≤ Re s
     if (!(re2 > 0.0)) continue;
     const double delta = std::sqrt(re2);
-    const double common = std::log(4.0) - (n - 1) * std::log(rho) - std::log(rho - 1.0);
-    const double value = common - alpha * std::log(delta + eps);
+    const double ld = std::log(delta + eps);
+    const double value = std::log(4.0) - std::log(rho - 1.0) - alpha * ld;
     // ‖o − x‖² = Re s + 2 (Im d)² ≤ Re s + 2 B², |r|² = |s| ≥ Re s.
-    const double grad = value - std::log(delta + eps) + 0.5 * std::log(1.0 + 2.0 * B * B / re2);
-    best.value = std::min(best.value, value);
-    best.grad = std::min(best.grad, grad);
+    out.log_rho[out.count] = std::log(rho);
+    out.base_v[out.count] = value;
+    out.base_g[out.count] = value - ld + 0.5 * std::log1p(2.0 * B * B / re2);
+    ++out.count;
+  }
+  return out;
+}
+
+/// log e_j at n points per axis: the best ellipse of the grid.
+LogBounds axis_log_bound(const AxisTerms& t, int n) {
+  const double inf = std::numeric_limits<double>::infinity();
+  LogBounds best{inf, inf};
+  for (int f = 0; f < t.count; ++f) {
+    const double drop = (n - 1) * t.log_rho[f];
+    best.value = std::min(best.value, t.base_v[f] - drop);
+    best.grad = std::min(best.grad, t.base_g[f] - drop);
   }
   return best;
 }
@@ -174,24 +208,48 @@ double combine(double* le, int m, double log_lambda) {
 
 }  // namespace
 
-LogBounds interpolation_log_bound(const Box& T, bool interp_t, const Box& S, bool interp_s, int d,
-                                  int n, double alpha, double eps) {
-  double lv[6], lg[6];
+PairBounds::PairBounds(const Box& T, const Box& S, int d, double alpha, double eps)
+    : T_(T), S_(S), d_(d), alpha_(alpha), eps_(eps) {}
+
+void PairBounds::bounds(bool interp_t, bool interp_s, int n_min, int n_max, LogBounds* out) {
+  const AxisTerms* terms[6];
   int m = 0;
   for (int side = 0; side < 2; ++side) {
     const bool which_t = side == 0;
     if (which_t ? !interp_t : !interp_s) continue;
-    for (int k = 0; k < d; ++k) {
-      const LogBounds e = axis_log_bound(T, S, d, which_t, k, n, alpha, eps);
-      lv[m] = e.value;
-      lg[m] = e.grad;
-      ++m;
+    for (int k = 0; k < d_; ++k) {
+      const int i = side * 3 + k;
+      if (!done_[i]) terms_[i] = axis_terms(T_, S_, d_, which_t, k, alpha_, eps_), done_[i] = true;
+      terms[m++] = &terms_[i];
     }
   }
   const double inf = std::numeric_limits<double>::infinity();
-  if (m == 0) return {-inf, -inf};
-  const double log_lambda = std::log(lebesgue_bound(n));
-  return {combine(lv, m, log_lambda), combine(lg, m, log_lambda)};
+  for (int n = std::max(n_min, 2); n <= n_max; ++n) {
+    if (m == 0) {
+      out[n] = {-inf, -inf};
+      continue;
+    }
+    double lv[6], lg[6];
+    for (int j = 0; j < m; ++j) {
+      const LogBounds e = axis_log_bound(*terms[j], n);
+      lv[j] = e.value;
+      lg[j] = e.grad;
+    }
+    const double log_lambda = std::log(lebesgue_bound(n));
+    out[n] = {combine(lv, m, log_lambda), combine(lg, m, log_lambda)};
+  }
+}
+
+void interpolation_log_bounds(const Box& T, bool interp_t, const Box& S, bool interp_s, int d,
+                              int n_max, double alpha, double eps, LogBounds* out) {
+  PairBounds(T, S, d, alpha, eps).bounds(interp_t, interp_s, 2, n_max, out);
+}
+
+LogBounds interpolation_log_bound(const Box& T, bool interp_t, const Box& S, bool interp_s, int d,
+                                  int n, double alpha, double eps) {
+  LogBounds all[kMaxChebyshev + 1];
+  interpolation_log_bounds(T, interp_t, S, interp_s, d, n, alpha, eps, all);
+  return all[n];
 }
 
 }  // namespace softhd::detail

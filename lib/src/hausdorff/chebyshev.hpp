@@ -62,6 +62,13 @@ void make_translation(const ChebyshevRule& rule, const Box& outer, const Box& in
 void tensor_apply(const Translation& t, bool transpose, int n, int d, const double* in, double f,
                   double* out);
 
+/// out += A^(⊗d) in for a rows × cols matrix A (row-major) applied along every axis, one
+/// axis at a time: in has cols^d values, out rows^d (the last axis fastest). With
+/// A[j][q] = ℓ^(m)_q(ξ^(n)_j) (rows n, cols m) it carries a degree-m grid's values to the
+/// degree-n grid of the same box; with its transpose it carries degree-n proxy weights to
+/// degree m. Both are exact up to rounding (tree_tolerance.md §7).
+void tensor_rect(const double* A, int rows, int cols, int d, const double* in, double* out);
+
 /// Natural logarithms of bounds, per unit source weight, on the interpolation error of
 /// u and of the gradient kernel (above), for o in box T and x in box S, when the d
 /// coordinates of o (interp_t) and/or of x (interp_s) are interpolated at n points per
@@ -72,5 +79,34 @@ struct LogBounds {
 };
 LogBounds interpolation_log_bound(const Box& T, bool interp_t, const Box& S, bool interp_s, int d,
                                   int n, double alpha, double eps);
+/// The same bounds for every n in [2, n_max] at once, in out[2..n_max] (the ellipses and
+/// the kernel's bounds on them do not depend on n; only ρ^(1−n) and Λ_n do).
+void interpolation_log_bounds(const Box& T, bool interp_t, const Box& S, bool interp_s, int d,
+                              int n_max, double alpha, double eps, LogBounds* out);
+
+/// The degree-free parts of the 1D bound e_j of one interpolated axis, on a grid of
+/// ellipses: for ellipse f, log e_j = base_v[f] − (n − 1) log ρ_f (value kernel) and
+/// base_g[f] − (n − 1) log ρ_f (gradient kernel).
+struct AxisTerms {
+  static constexpr int kGrid = 16;
+  int count = 0;
+  double log_rho[kGrid], base_v[kGrid], base_g[kGrid];
+};
+
+/// interpolation_log_bounds for one box pair and several operations (which sides are
+/// interpolated), computing each axis's ellipse terms once.
+class PairBounds {
+ public:
+  PairBounds(const Box& T, const Box& S, int d, double alpha, double eps);
+  /// out[n] for n in [n_min, n_max].
+  void bounds(bool interp_t, bool interp_s, int n_min, int n_max, LogBounds* out);
+
+ private:
+  Box T_, S_;
+  int d_;
+  double alpha_, eps_;
+  AxisTerms terms_[6];  // T's axes, then S's
+  bool done_[6] = {false, false, false, false, false, false};
+};
 
 }  // namespace softhd::detail

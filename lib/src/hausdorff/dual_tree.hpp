@@ -9,14 +9,15 @@
 //     M2P    S's interpolation points (weights Σ w L_p(x)) to each o ∈ T  cost |T| P
 //     P2L    S's points to T's interpolation points (locals)             cost P |S|
 //     M2L    S's interpolation points to T's                             cost P²
-// (P = n^d points per box); otherwise the larger node is split, and leaf pairs (or
-// small pairs) are summed directly (P2P) with the vectorised kernel. Above
+// (P = m^d points per box, m = 2 … n points per axis chosen per node pair: the least m
+// whose remainder bound fits the pair's budget); otherwise the larger node is split, and
+// leaf pairs (or small pairs) are summed directly (P2P) with the vectorised kernel. Above
 // max_interp_alpha (pruning only), a leaf pair's source box is also pruned point by
 // point, with each outer point's own lower bound and distance to the box. Proxy weights
 // are computed upwards (M2M from children's grids, anterpolation from the points of
 // children without grids) and locals pushed downwards (L2L to children's grids, L2P to
-// the points of the others): both translations are exact for tensor polynomials of
-// degree n − 1, so they add no error term.
+// the points of the others), one chain of grids per degree m: both translations are
+// exact for tensor polynomials of degree m − 1, so they add no error term.
 //
 // Budget. Before the traversal, a lower bound L(o) of every sum is computed from one
 // source leaf near o (all terms ≥ 0). Pair (T, S) may use an approximation with error
@@ -36,21 +37,24 @@
 namespace softhd::detail {
 
 struct DualTreeConfig {
-  int degree = 0;                  ///< points per axis n; 0: from τ (degree_for)
+  int degree = 0;                  ///< most points per axis n; 0: from τ (degree_for)
+  int min_degree = 0;              ///< least points per axis a node pair may use; 0: n (one degree)
+  bool own_budget = false;         ///< budget also from each pair's own least contribution
   double min_pairs = 4.0e6;        ///< passes with fewer N·M pairs are summed exactly
   bool cost_model = true;          ///< false: never fall back to exact (tests)
   double max_interp_alpha = 16.0;  ///< above: pruning only (the far field is negligible)
   int small_pairs = 4096;  ///< α ≤ max_interp_alpha: pairs with |T||S| ≤ this are summed directly
 };
 
-/// n from τ: 4 at τ = 1e-2, 6 at 1e-4, 8 at 1e-6, at most 12.
+/// The largest n from τ: 4 at τ = 1e-2, 6 at 1e-4, 8 at 1e-6, at most 12.
 int degree_for(double tau);
 
 /// Counts of each operation of the last pass (tests check that each one was used).
 struct DualTreeOps {
   std::int64_t p2p = 0, m2p = 0, p2l = 0, m2l = 0, prune = 0;
-  std::int64_t point_pruned = 0;  ///< direct pairs skipped by pruning point by point
-  std::int64_t m2m = 0, l2l = 0;  ///< translations between a box's grid and a child's
+  std::int64_t point_pruned = 0;     ///< direct pairs skipped by pruning point by point
+  std::int64_t m2m = 0, l2l = 0;     ///< translations between a box's grid and a child's
+  std::int64_t far_degree[17] = {};  ///< far-field node pairs per points per axis m
 };
 
 std::unique_ptr<PairSumBackend> make_dual_tree_backend(const DualTreeConfig& config,

@@ -1,0 +1,580 @@
+// Planning of the dual-tree backend (dual_tree_internal.hpp): the lower bounds of every
+// sum that set the budget, and the dual traversal choosing per node pair an operation
+// and a degree (docs/tree_tolerance.md §7).
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+
+#include "dual_tree_internal.hpp"
+
+namespace softhd::detail::dual {
+
+namespace {
+
+double node_gap(const KdNode& a, const KdNode& b, int d) {
+  double g2 = 0.0;
+  for (int k = 0; k < d; ++k) {
+    const double gap = std::max({a.lo[k] - b.hi[k], b.lo[k] - a.hi[k], 0.0});
+    g2 += gap * gap;
+  }
+  return std::sqrt(g2);
+}
+
+double node_radius2(const KdNode& a, int d) {
+  double r2 = 0.0;
+  for (int k = 0; k < d; ++k) r2 += (a.hi[k] - a.lo[k]) * (a.hi[k] - a.lo[k]);
+  return r2;
+}
+
+/// Source data in tree order, node moments, and the totals of the budget shares.
+void prepare_sources(Pass& p, const PassSources& in) {
+  const KdTree& st = *p.st;
+  p.src.dim = p.d;
+  p.src.size = st.size();
+  for (int k = 0; k < p.d; ++k) p.src.coord[k] = st.points().col(k).data();
+  const Eigen::Index m = st.size();
+  if (p.outer_kinds()) {
+    p.w = st.permute(Eigen::Map<const Eigen::VectorXd>(in.weight, m));
+    p.mw = node_moments(st, p.w.data(), nullptr, *p.power);
+    p.src.weight = p.w.data();
+    p.log_total[kS] = p.log_total[kG] = std::log(p.mw[0].mass);
+  }
+  if (p.want[kH]) {
+    p.h = st.permute(Eigen::Map<const Eigen::VectorXd>(in.coef, m));
+    p.c = st.permute(Eigen::Map<const Eigen::VectorXd>(in.scale, m));
+    p.mh = node_moments(st, p.h.data(), p.c.data(), *p.power);
+    p.src.coef = p.h.data();
+    p.src.scale = p.c.data();
+    p.log_total[kH] = p.log_total[kG2] = std::log(p.mh[0].mass);
+  }
+  const std::vector<KdNode>& nodes = st.nodes();
+  // Per node and kind: log of the weight in the unscaled bounds (−∞: no such sum or no
+  // mass) and log of the budget share mass/total.
+  p.log_weight.assign(4 * nodes.size(), -kInf);
+  p.log_share.assign(4 * nodes.size(), -kInf);
+  for (size_t i = 0; i < nodes.size(); ++i)
+    for (int k = 0; k < 4; ++k) {
+      if (!p.want[k]) continue;
+      const NodeMoments& m = k < 2 ? p.mw[i] : p.mh[i];
+      if (!(m.mass > 0.0)) continue;
+      p.log_weight[4 * i + k] = std::log(m.weight) + (k < 2 ? 0.0 : p.alpha * std::log(m.scale));
+      p.log_share[4 * i + k] = std::log(m.mass) - p.log_total[k];
+    }
+  if (!p.interp) return;
+  p.sbox.resize(nodes.size());
+  for (size_t i = 0; i < nodes.size(); ++i)
+    p.sbox[i] = interpolation_box(nodes[i].lo, nodes[i].hi, p.d);
+}
+
+constexpr int kCutDepth = 5;  // the lower bounds' coarse partition: source nodes at this depth
+
+/// Greedy descent to a source leaf near q (any leaf gives a valid lower bound); `cut`
+/// receives its ancestor at depth kCutDepth (or the leaf, if shallower).
+int leaf_near(const KdTree& st, const double* q, int d, int& cut) {
+  const std::vector<KdNode>& nodes = st.nodes();
+  int id = 0, depth = 0;
+  cut = 0;
+  while (nodes[static_cast<size_t>(id)].right >= 0) {
+    if (depth == kCutDepth) cut = id;
+    const int l = id + 1, r = nodes[static_cast<size_t>(id)].right;
+    double dl = 0.0, dr = 0.0;
+    for (int k = 0; k < d; ++k) {
+      const KdNode& a = nodes[static_cast<size_t>(l)];
+      const KdNode& b = nodes[static_cast<size_t>(r)];
+      const double ga = std::max({a.lo[k] - q[k], q[k] - a.hi[k], 0.0});
+      const double gb = std::max({b.lo[k] - q[k], q[k] - b.hi[k], 0.0});
+      dl += ga * ga;
+      dr += gb * gb;
+    }
+    id = dl <= dr ? l : r;
+    ++depth;
+  }
+  if (depth <= kCutDepth) cut = id;
+  return id;
+}
+
+/// The source nodes at depth kCutDepth, and the leaves above it: a partition.
+void cut_nodes(const KdTree& st, int id, int depth, std::vector<int>& out) {
+  const KdNode& n = st.nodes()[static_cast<size_t>(id)];
+  if (depth == kCutDepth || n.right < 0) {
+    out.push_back(id);
+    return;
+  }
+  cut_nodes(st, id + 1, depth + 1, out);
+  cut_nodes(st, n.right, depth + 1, out);
+}
+
+/// Lower bounds (scaled, as pair_sums returns them) of the four sums at o: over the
+/// partition `cut`, each node contributes W k(R_max) (every term is ≥ its value at the
+/// farthest corner; the vector sums only from boxes not containing o, whose terms all
+/// have r > 0), except the node `near_cut` holding `leaf`, which contributes the larger
+/// of that and the exact sum over `leaf`.
+PairSums lower_sums(const Pass& p, const double* o, double c_o, const std::vector<int>& cut,
+                    int near_cut, const PairSums& leaf) {
+  PairSums low;
+  const std::vector<KdNode>& nodes = p.st->nodes();
+  for (int id : cut) {
+    const KdNode& n = nodes[static_cast<size_t>(id)];
+    double near2 = 0.0, far2 = 0.0;
+    for (int k = 0; k < p.d; ++k) {
+      const double gap = std::max({n.lo[k] - o[k], o[k] - n.hi[k], 0.0});
+      const double span = std::max(std::fabs(o[k] - n.lo[k]), std::fabs(o[k] - n.hi[k]));
+      near2 += gap * gap;
+      far2 += span * span;
+    }
+    const double t = 1.0 / (std::sqrt(far2) + p.eps), inside = near2 > 0.0 ? 1.0 : 0.0;
+    PairSums b;
+    if (p.outer_kinds()) {
+      b.S = p.mw[static_cast<size_t>(id)].weight * p.power->scalar(c_o * t);
+      b.Gm = inside * b.S * t;
+    }
+    if (p.want[kH]) {
+      const NodeMoments& m = p.mh[static_cast<size_t>(id)];
+      b.H = m.weight * p.power->scalar(m.scale * t);
+      b.G2m = inside * b.H * t;
+    }
+    if (id == near_cut) {
+      b.S = std::max(b.S, leaf.S);
+      b.Gm = std::max(b.Gm, leaf.Gm);
+      b.H = std::max(b.H, leaf.H);
+      b.G2m = std::max(b.G2m, leaf.G2m);
+    }
+    low.S += b.S;
+    low.Gm += b.Gm;
+    low.H += b.H;
+    low.G2m += b.G2m;
+  }
+  return low;
+}
+
+/// The outer data every task shares: scales in tree order and room for the per-node
+/// bounds (outer_bounds fills them for the tasks a process plans).
+void prepare_outer(Pass& p, const PassOuter& in) {
+  const KdTree& ot = *p.ot;
+  const size_t nn = ot.nodes().size();
+  p.oc = ot.permute(Eigen::Map<const Eigen::VectorXd>(in.scale, ot.size()));
+  p.log_low.assign(4 * nn, kInf);
+  if (p.point_prune) p.point_low.assign(4 * static_cast<size_t>(ot.size()), kInf);
+  p.kappa.assign(nn, 0.0);
+  p.cmin.assign(nn, kInf);
+  p.local_ok.assign(nn, 0);
+  if (p.interp) p.obox.resize(nn);
+  cut_nodes(*p.st, 0, 0, p.cut);
+}
+
+/// The lower bounds of the outer points of `leaf` (lower_sums with the source leaf found
+/// by descending towards each point), their minima, and the leaf's scales.
+void leaf_bounds(Pass& p, size_t id, double w_min) {
+  const KdNode& T = p.ot->nodes()[id];
+  const Eigen::MatrixXd& X = p.ot->points();
+  const unsigned flags = p.flags | kMagnitude;
+  for (Eigen::Index q = T.begin; q < T.end; ++q) {
+    double o[3] = {0.0, 0.0, 0.0};
+    for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
+    int near_cut = 0;
+    const int leaf_id = leaf_near(*p.st, o, p.d, near_cut);
+    const PairSources leaf = p.slice(p.st->nodes()[static_cast<size_t>(leaf_id)]);
+    const PairSums exact = pair_sums(o, p.oc[q], leaf, *p.power, p.eps, flags);
+    PairSums s = lower_sums(p, o, p.oc[q], p.cut, near_cut, exact);
+    // The nearest source (r = r_min, so p = 1) alone gives S ≥ w_min, and, when
+    // r_min > 0, Gm ≥ w_min/c_o: the bound that matters at large α.
+    s.S = std::max(s.S, w_min);
+    if (p.oc[q] > p.eps) s.Gm = std::max(s.Gm, w_min / p.oc[q]);
+    const double lc = p.alpha * std::log(p.oc[q]);
+    const double v[4] = {std::log(s.S) - lc, std::log(s.Gm) - lc, std::log(s.H), std::log(s.G2m)};
+    for (int k = 0; k < 4; ++k) p.log_low[4 * id + k] = std::min(p.log_low[4 * id + k], v[k]);
+    if (p.point_prune) std::copy(v, v + 4, &p.point_low[4 * static_cast<size_t>(q)]);
+    p.kappa[id] = std::max(p.kappa[id], p.oc[q]);
+    p.cmin[id] = std::min(p.cmin[id], p.oc[q]);
+  }
+}
+
+}  // namespace
+
+int subtree_end(const KdTree& tree, int id) {
+  while (tree.nodes()[static_cast<size_t>(id)].right >= 0)
+    id = tree.nodes()[static_cast<size_t>(id)].right;
+  return id + 1;
+}
+
+void outer_bounds(Pass& p, const std::vector<int>& roots, int threads) {
+  const KdTree& ot = *p.ot;
+  const std::vector<KdNode>& nodes = ot.nodes();
+  std::vector<int> leaves;
+  for (const int root : roots) {
+    const int end = subtree_end(ot, root);
+    for (int id = root; id < end; ++id)
+      if (nodes[static_cast<size_t>(id)].right < 0) leaves.push_back(id);
+  }
+  const double w_min = p.outer_kinds() ? p.w.minCoeff() : 0.0;
+#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
+  for (size_t l = 0; l < leaves.size(); ++l) leaf_bounds(p, static_cast<size_t>(leaves[l]), w_min);
+  for (const int root : roots)
+    for (size_t id = static_cast<size_t>(subtree_end(ot, root));
+         id-- > static_cast<size_t>(root);) {
+      const KdNode& T = nodes[id];  // children follow their parents
+      if (T.right >= 0) {
+        const size_t l = id + 1, r = static_cast<size_t>(T.right);
+        for (int k = 0; k < 4; ++k)
+          p.log_low[4 * id + k] = std::min(p.log_low[4 * l + k], p.log_low[4 * r + k]);
+        p.kappa[id] = std::max(p.kappa[l], p.kappa[r]);
+        p.cmin[id] = std::min(p.cmin[l], p.cmin[r]);
+      }
+      if (!p.interp) continue;
+      // Locals carry (κ_T t)^α; the factor (c_o/κ_T)^α must not underflow.
+      p.local_ok[id] = p.alpha * (std::log(p.kappa[id]) - std::log(p.cmin[id])) <= 300.0;
+      p.obox[id] = interpolation_box(nodes[id].lo, nodes[id].hi, p.d);
+    }
+}
+
+namespace {
+
+/// The budgets of pair (t, s) per kind: log of the source node's weight in the unscaled
+/// bounds (lw) and log of the error allowed (lb), the larger of
+///     τ_share · min_{o∈T} L(o) · mass(S)/mass(all)   and   τ_own · W_S u(R_max),
+/// u(R_max) the kernel (value or gradient) at the largest distance between the boxes, so
+/// that W_S u(R_max) is at most S's contribution to the sum of every o ∈ T. Over the
+/// disjoint source nodes approximated for one outer point the first terms add up to at
+/// most τ_share L(o) ≤ τ_share S(o), the second to at most τ_own S(o); τ_share + τ_own = τ.
+struct Budget {
+  double lw[4], lb[4];
+  bool want[4];
+  /// Whether errors of at most exp(lv) (value kernel) and exp(lg) (gradient kernel) per
+  /// unit weight fit every requested sum's budget.
+  bool fits(double lv, double lg) const {
+    for (int k = 0; k < 4; ++k)
+      if (want[k] && !(lw[k] + ((k == kS || k == kH) ? lv : lg) <= lb[k])) return false;
+    return true;
+  }
+};
+
+/// The largest distance between the boxes of two nodes.
+double node_far(const KdNode& a, const KdNode& b, int d) {
+  double r2 = 0.0;
+  for (int k = 0; k < d; ++k) {
+    const double span = std::max(a.hi[k] - b.lo[k], b.hi[k] - a.lo[k]);
+    r2 += span * span;
+  }
+  return std::sqrt(r2);
+}
+
+Budget budget(const Pass& p, int t, int s) {
+  Budget b;
+  const double lr = std::log(
+      node_far(p.ot->nodes()[static_cast<size_t>(t)], p.st->nodes()[static_cast<size_t>(s)], p.d) +
+      p.eps);
+  for (int k = 0; k < 4; ++k) {
+    b.want[k] = p.want[k];
+    b.lw[k] = p.log_weight[4 * static_cast<size_t>(s) + k];
+    if (b.lw[k] == -kInf) {
+      b.lb[k] = kInf;
+      continue;
+    }
+    const double share = p.log_tau_share + p.log_low[4 * static_cast<size_t>(t) + k] +
+                         p.log_share[4 * static_cast<size_t>(s) + k];
+    const double lu = -(k == kS || k == kH ? p.alpha : p.alpha + 1.0) * lr;
+    // max(a, b) ≤ a + b: half of the budget at worst, without exp/log per pair.
+    b.lb[k] = std::max(share, p.log_tau_own + b.lw[k] + lu);
+  }
+  return b;
+}
+
+/// Work of operation op at degree m for a pair of nT outer and nS source points, in
+/// kernel evaluations.
+double far_cost(const Pass& p, Op op, int m, double nT, double nS) {
+  const double P = p.points(m);
+  if (op == kM2L) return P * P;
+  if (op == kM2P) return nT * P;
+  return P * nS;  // kP2L
+}
+
+/// The smallest degree in [2, p.n] at which operation op's remainder bound fits the
+/// budget, or 0. A cheap necessary condition first: every bound of the operation is at
+/// least the one-axis bound of its widest interpolated axis (half-width a), with
+/// |u| ≥ (gap + ε)^(−α) and the largest ellipse the bound searches, ρ ≤ √2 R/a + 1, R the
+/// largest distance between the two boxes (chebyshev.cpp). The bounds use both
+/// interpolation boxes (each contains its node's box), so `pb` serves every operation.
+int least_degree(const Pass& p, const Budget& b, Op op, const Box& bt, const Box& bs,
+                 PairBounds& pb, double l) {
+  const bool it = op != kM2P, is = op != kP2L;
+  double a_max = 0.0, far2 = 0.0;
+  for (int k = 0; k < p.d; ++k) {
+    if (it) a_max = std::max(a_max, bt.a[k]);
+    if (is) a_max = std::max(a_max, bs.a[k]);
+    const double span = std::fabs(bt.c[k] - bs.c[k]) + bt.a[k] + bs.a[k];
+    far2 += span * span;
+  }
+  const double rho = std::sqrt(2.0 * far2) / a_max + 1.0;
+  const double least =
+      std::log(4.0) - p.alpha * l - (p.n - 1) * std::log(rho) - std::log(rho - 1.0);
+  if (!b.fits(least, least - l)) return 0;
+  LogBounds e[kMaxChebyshev + 1];
+  pb.bounds(it, is, p.m_lo, p.n, e);
+  for (int m = p.m_lo; m <= p.n; ++m)
+    if (b.fits(e[m].value, e[m].grad)) return m;
+  return 0;
+}
+
+/// An admissible approximation of pair (t, s) and its degree, or kNone: the operations are
+/// tried in the order of their cost at the largest degree n, and the first that fits is
+/// used at its least admissible degree (bounding every operation at every pair costs more
+/// planning time than the cheaper choices save).
+Choice choose(const Pass& p, int t, int s, double gap) {
+  const Budget b = budget(p, t, s);
+  const double l = std::log(gap + p.eps);
+  if (b.fits(-p.alpha * l, -(p.alpha + 1.0) * l)) return {kPrune, 0};
+  if (!p.interp) return {};
+  const double nT = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(t)]));
+  const double nS = static_cast<double>(size_of(p.st->nodes()[static_cast<size_t>(s)]));
+  struct Option {
+    double cost;
+    Op op;
+  } options[3];
+  int count = 0;
+  for (const Op op : {kM2L, kM2P, kP2L}) {
+    const bool m_ok = op == kP2L || p.has_proxy(s, p.m_lo);
+    const bool l_ok = op == kM2P || p.has_local(t, p.m_lo);
+    if (m_ok && l_ok) options[count++] = {far_cost(p, op, p.n, nT, nS), op};
+  }
+  for (int i = 1; i < count; ++i)  // insertion sort by cost at degree n (count ≤ 3)
+    for (int j = i; j > 0 && options[j].cost < options[j - 1].cost; --j)
+      std::swap(options[j], options[j - 1]);
+  const Box& bt = p.obox[static_cast<size_t>(t)];
+  const Box& bs = p.sbox[static_cast<size_t>(s)];
+  PairBounds pb(bt, bs, p.d, p.alpha, p.eps);
+  Choice best;
+  double best_cost = nT * nS;  // direct
+  for (int i = 0; i < count; ++i) {
+    const Op op = options[i].op;
+    // Skipped when even its lowest degree would not be cheaper than the best so far.
+    if (!(far_cost(p, op, p.m_lo, nT, nS) < best_cost)) continue;
+    const int m = least_degree(p, b, op, bt, bs, pb, l);
+    if (m == 0) continue;
+    const double cost = far_cost(p, op, m, nT, nS);
+    // The grids must have fewer points than their boxes (else the op is not cheaper).
+    const bool grids_ok = (op == kP2L || p.has_proxy(s, m)) && (op == kM2P || p.has_local(t, m));
+    if (grids_ok && cost < best_cost) best_cost = cost, best = {op, m};
+    if (best.op != kNone) break;  // the cheapest at degree n that fits, at its least degree
+  }
+  return best;
+}
+
+/// One task's planning state. `spent` is shared by the tasks: the planned near and far
+/// work so far (in pair units, kCost weights). It is a lower bound of the plan's total,
+/// so once it exceeds `limit` the pass will be summed exactly whatever the order of the
+/// tasks, and planning stops.
+struct PlanState {
+  std::vector<Interaction> out;
+  std::int64_t visits = 0;
+  double pending = 0.0;  // work not yet added to `spent`
+  double total = 0.0;    // all work planned by this task
+  std::atomic<double>* spent = nullptr;
+  double limit = kInf;
+  bool stop() {
+    if (pending < 1e6) return false;
+    double now = spent->load(std::memory_order_relaxed);
+    while (!spent->compare_exchange_weak(now, now + pending, std::memory_order_relaxed)) {
+    }
+    pending = 0.0;
+    return now > limit;
+  }
+  void add(const Pass& p, const Interaction& it) {
+    out.push_back(it);
+    const double w = interaction_cost(p, it);
+    pending += w;
+    total += w;
+  }
+};
+
+/// Depth-first dual traversal from (t, s): appends the interactions to `st.out`. Returns
+/// false when planning was stopped (the plan costs more than the limit).
+bool plan(const Pass& p, int t, int s, PlanState& st) {
+  ++st.visits;
+  const KdNode& T = p.ot->nodes()[static_cast<size_t>(t)];
+  const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
+  const bool outer_mass = p.outer_kinds() && p.mw[static_cast<size_t>(s)].mass > 0.0;
+  const bool inner_mass = p.want[kH] && p.mh[static_cast<size_t>(s)].mass > 0.0;
+  if (!outer_mass && !inner_mass) return true;  // every term is zero
+  const double gap = node_gap(T, S, p.d);
+  if (gap > 0.0) {
+    const Choice c = choose(p, t, s, gap);
+    if (c.op != kNone) {
+      st.add(p, {t, s, c.op, static_cast<std::uint8_t>(c.deg)});
+      return !st.stop();
+    }
+  }
+  const bool tl = T.right < 0, sl = S.right < 0;
+  // Small pairs at low α are summed at once (their children would not be pruned either);
+  // at large α leaf pairs are worth pruning one by one.
+  const std::int64_t small = p.interp ? p.cfg.small_pairs : 0;
+  if ((tl && sl) || size_of(T) * size_of(S) <= small) {
+    st.add(p, {t, s, kP2P, 0});
+    return !st.stop();
+  }
+  if (sl || (!tl && node_radius2(T, p.d) >= node_radius2(S, p.d)))
+    return plan(p, t + 1, s, st) && plan(p, T.right, s, st);
+  return plan(p, t, s + 1, st) && plan(p, t, S.right, st);
+}
+
+constexpr size_t kSampleStride = 64;  // planning tasks sampled to predict the plan's work
+
+}  // namespace
+
+double interaction_cost(const Pass& p, const Interaction& it) {
+  const double nT = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(it.t)]));
+  const double nS = static_cast<double>(size_of(p.st->nodes()[static_cast<size_t>(it.s)]));
+  if (it.op == kP2P) return kCostNear * nT * nS;
+  if (it.op == kPrune) return 0.0;
+  return kCostFar * far_cost(p, it.op, it.deg, nT, nS);
+}
+
+/// Whether source node s may be dropped for the outer point o (tree position q) alone:
+/// the prune test of choose() with o's own lower bounds and its own distance to the box.
+/// The boxes dropped for o are still disjoint, so the budget argument is unchanged.
+bool prunable_for_point(const Pass& p, const double* o, Eigen::Index q, int s) {
+  const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
+  double g2 = 0.0;
+  for (int k = 0; k < p.d; ++k) {
+    const double gap = std::max({S.lo[k] - o[k], o[k] - S.hi[k], 0.0});
+    g2 += gap * gap;
+  }
+  const double l = std::log(std::sqrt(g2) + p.eps);
+  for (int k = 0; k < 4; ++k) {
+    if (!p.want[k]) continue;
+    const double lw = p.log_weight[4 * static_cast<size_t>(s) + k];
+    if (lw == -kInf) continue;
+    const double lb = p.log_tau_share + p.point_low[4 * static_cast<size_t>(q) + k] +
+                      p.log_share[4 * static_cast<size_t>(s) + k];
+    if (!(lw - ((k == kS || k == kH) ? p.alpha : p.alpha + 1.0) * l <= lb)) return false;
+  }
+  return true;
+}
+
+/// Outer subtrees processed as independent tasks (they partition the outer points):
+/// nodes of at most `limit` points. The partition depends on the tree only, so that the
+/// plan, hence every bit of the result, does not depend on the thread count.
+void task_roots(const KdTree& ot, int id, Eigen::Index limit, std::vector<int>& out) {
+  const KdNode& n = ot.nodes()[static_cast<size_t>(id)];
+  if (size_of(n) <= limit || n.right < 0) {
+    out.push_back(id);
+    return;
+  }
+  task_roots(ot, id + 1, limit, out);
+  task_roots(ot, n.right, limit, out);
+}
+
+/// The pass's settings, source data and outer lower bounds.
+void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const PassOuter& outer,
+             const PassSettings& set) {
+  p.ot = outer.tree;
+  p.st = src.tree;
+  p.cfg = cfg;
+  p.d = p.ot->dim();
+  p.n = cfg.degree > 0 ? cfg.degree : degree_for(set.tau);
+  p.m_lo = cfg.min_degree > 0 ? std::min(cfg.min_degree, p.n) : p.n;
+  p.rules.clear();
+  for (int m = 0; m <= p.n; ++m) p.rules.emplace_back(std::max(m, 2));
+  p.raise.assign(static_cast<size_t>(p.n + 1), {});
+  for (int m = 2; m < p.n; ++m) {
+    std::vector<double>& R = p.raise[static_cast<size_t>(m)];
+    R.resize(static_cast<size_t>(p.n * m));
+    for (int j = 0; j < p.n; ++j)
+      p.rules[static_cast<size_t>(m)].basis(p.rules[static_cast<size_t>(p.n)].xi[j],
+                                            &R[static_cast<size_t>(j * m)]);
+  }
+  p.flags = outer.flags;
+  p.want[kS] = (p.flags & kOuterSum) != 0;
+  p.want[kG] = (p.flags & kOuterGrad) != 0;
+  p.want[kH] = p.want[kG2] = (p.flags & kInner) != 0;
+  for (int k = 0; k < 4; ++k)
+    if (p.want[k]) {
+      p.field[k] = p.nf;
+      p.nf += (k == kG || k == kG2) ? p.d : 1;
+    }
+  p.alpha = set.power->alpha();
+  p.eps = set.eps;
+  p.interp = p.alpha <= cfg.max_interp_alpha;
+  p.point_prune = !p.interp;
+  // Far field: half of τ for the shares, half for the pairs' own contributions. Pruning
+  // only (large α): the own term could never pay for a dropped node.
+  const bool own = p.interp && cfg.own_budget;
+  p.log_tau_share = std::log(own ? 0.5 * set.tau : set.tau);
+  p.log_tau_own = own ? std::log(0.5 * set.tau) : -kInf;
+  p.power = set.power;
+  prepare_sources(p, src);
+  prepare_outer(p, outer);
+}
+
+/// Plans every task: first a sample (every stride-th task, stride ≤ kSampleStride), whose
+/// planned work, scaled by the share of outer points it covers, predicts the whole plan
+/// (a fall-back then costs about 1/stride of the planning), then the others. Returns
+/// false (fall back to all pairs) when the predicted or the planned work exceeds `limit`.
+bool plan_tasks(const Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
+                const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
+                std::vector<double>& work, std::int64_t& visits) {
+  const int threads = set.threads;
+  // Every stride-th task is sampled: about one per thread (planned in parallel).
+  const size_t stride =
+      std::clamp<size_t>(roots.size() / static_cast<size_t>(threads), 1, kSampleStride);
+  // The sample's share of the outer points: while it is planned, its work may not exceed
+  // that share of the limit (else the prediction exceeds the limit: stop at once).
+  double sample_share = 0.0;
+  for (size_t r = 0; r < roots.size(); r += stride)
+    sample_share += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
+  sample_share /= static_cast<double>(p.ot->size());
+  std::atomic<double> spent{0.0};
+  std::atomic<bool> stopped{false};
+  for (int phase = 0; phase < 2 && !stopped; ++phase) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : visits)
+    for (size_t r = mine.first; r < mine.last; ++r) {
+      if ((r % stride == 0) != (phase == 0) || stopped.load()) continue;
+      PlanState st;
+      st.spent = &spent;
+      st.limit = phase == 0 ? limit * sample_share : limit;
+      if (!plan(p, roots[r], 0, st)) stopped = true;
+      visits += st.visits;
+      work[r] = st.total;
+      lists[r] = std::move(st.out);
+    }
+    double totals[3] = {stopped ? 1.0 : 0.0, 0.0, 0.0};  // stopped, sampled, covered
+    if (phase == 0)
+      for (size_t r = mine.first; r < mine.last; ++r) {
+        if (r % stride != 0) continue;
+        totals[1] += work[r];
+        totals[2] += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
+      }
+    if (set.share != nullptr) set.share->sum(totals, 3);
+    stopped = totals[0] > 0.0;
+    if (phase == 0 && !stopped && totals[2] > 0.0 &&
+        totals[1] * static_cast<double>(p.ot->size()) / totals[2] > limit)
+      stopped = true;
+  }
+  return !stopped;
+}
+
+UnitRange rebalance(Pass& p, const std::vector<int>& roots, UnitRange planned,
+                    const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
+                    std::vector<double>& work, std::int64_t& visits) {
+  set.share->sum(work.data(), work.size());
+  const UnitRange mine = share_of(set, work);
+  std::vector<int> moved;  // tasks new to this process: their outer points bounded first
+  for (size_t r = mine.first; r < mine.last; ++r)
+    if (r < planned.first || r >= planned.last) moved.push_back(roots[r]);
+  outer_bounds(p, moved, set.threads);
+  for (size_t r = 0; r < roots.size(); ++r) {
+    const bool run = r >= mine.first && r < mine.last;
+    const bool had = r >= planned.first && r < planned.last;
+    if (!run) std::vector<Interaction>().swap(lists[r]);
+    if (!run || had) continue;
+    PlanState st;
+    std::atomic<double> spent{0.0};
+    st.spent = &spent;
+    plan(p, roots[r], 0, st);
+    visits += st.visits;
+    lists[r] = std::move(st.out);
+  }
+  return mine;
+}
+
+}  // namespace softhd::detail::dual
