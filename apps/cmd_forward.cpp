@@ -200,6 +200,19 @@ Eigen::VectorXd control_values(const Scene& scene, const ControlSpace& control, 
 
 int forward_petsc(const Args& args);
 
+// The JSON record of each coarse level of a grid-sequenced start.
+nlohmann::json coarse_levels_json(const GridSequencingReport& grid) {
+  nlohmann::json levels = nlohmann::json::array();
+  for (const GridLevelReport& level : grid.levels) {
+    levels.push_back(
+        {{"cells", std::vector<int>(level.cells.data(), level.cells.data() + level.cells.size())},
+         {"newton_iterations", level.newton.newton_iterations},
+         {"factorizations", level.newton.factorizations},
+         {"seconds", level.newton.seconds_total}});
+  }
+  return levels;
+}
+
 int forward(const Args& args) {
   if (args.backend != StateBackend::kCholmod) return forward_petsc(args);
   const auto t0 = std::chrono::steady_clock::now();
@@ -270,15 +283,7 @@ int forward(const Args& args) {
     j["load_steps"] = summary.load_steps;
     j["dofs"] = assembler.dofs().num_free;
     // Solve time: the coarse levels' Newton solves and the fine one (no file I/O).
-    nlohmann::json levels = nlohmann::json::array();
-    for (const GridLevelReport& level : fr.grid.levels) {
-      levels.push_back(
-          {{"cells", std::vector<int>(level.cells.data(), level.cells.data() + level.cells.size())},
-           {"newton_iterations", level.newton.newton_iterations},
-           {"factorizations", level.newton.factorizations},
-           {"seconds", level.newton.seconds_total}});
-    }
-    j["coarse_levels"] = levels;
+    j["coarse_levels"] = coarse_levels_json(fr.grid);
     j["seconds_solve"] = fr.seconds_solve;
     j["seconds"] = seconds;
     j["vtu"] = vtu;
@@ -395,15 +400,7 @@ int forward_petsc(const Args& args) {
     j["krylov_iterations"] = summary.krylov_iterations;
     j["load_steps"] = summary.load_steps;
     j["dofs"] = solver.layout().global_rows;
-    nlohmann::json levels = nlohmann::json::array();
-    for (const GridLevelReport& level : grid.levels) {
-      levels.push_back(
-          {{"cells", std::vector<int>(level.cells.data(), level.cells.data() + level.cells.size())},
-           {"newton_iterations", level.newton.newton_iterations},
-           {"factorizations", level.newton.factorizations},
-           {"seconds", level.newton.seconds_total}});
-    }
-    j["coarse_levels"] = levels;
+    j["coarse_levels"] = coarse_levels_json(grid);
     j["seconds_solve"] = seconds_solve;
     j["seconds"] = seconds;
     j["vtu"] = vtu;

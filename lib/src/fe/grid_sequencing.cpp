@@ -118,20 +118,17 @@ Eigen::VectorXd prolongate(const Mesh& coarse, const Eigen::VectorXd& u_coarse, 
   return u;
 }
 
-namespace {
-
-// The converged state on `scene` (levels − 1 coarser levels first) under the fine field.
-bool solve_level(const Scene& scene, const Mesh& fine, ControlKind kind, const Eigen::VectorXd& m,
-                 int levels, const NewtonOptions& newton, GridSequencingReport* report, Mesh* mesh,
-                 State* state) {
+bool solve_grid_level(const Scene& scene, const Mesh& fine, ControlKind kind,
+                      const Eigen::VectorXd& m, int levels, const NewtonOptions& newton,
+                      GridSequencingReport* report, Mesh* mesh, State* state) {
   const Assembler assembler = scene.make_assembler();
   const Eigen::MatrixXd m_qp = control_on_quadrature(assembler, fine, kind, m);
   *state = rest_state(assembler);
   if (levels > 0) {
     Mesh coarse_mesh;
     State coarse;
-    if (!solve_level(coarsened(scene), fine, kind, m, levels - 1, newton, report, &coarse_mesh,
-                     &coarse))
+    if (!solve_grid_level(coarsened(scene), fine, kind, m, levels - 1, newton, report, &coarse_mesh,
+                          &coarse))
       return false;
     state->u = prolongate(coarse_mesh, coarse.u, assembler.mesh());
   }
@@ -141,8 +138,6 @@ bool solve_level(const Scene& scene, const Mesh& fine, ControlKind kind, const E
   *mesh = assembler.mesh();
   return summary.converged();
 }
-
-}  // namespace
 
 State grid_sequenced_start(const Scene& scene, const Assembler& fine, const Eigen::VectorXd& m,
                            const NewtonOptions& newton, const GridSequencingOptions& options,
@@ -159,8 +154,8 @@ State grid_sequenced_start(const Scene& scene, const Assembler& fine, const Eige
   if (levels == 0) return rest_state(fine);
   Mesh coarse_mesh;
   State coarse;
-  if (!solve_level(coarsened(scene), fine.mesh(), scene.control_kind, m, levels - 1, newton, report,
-                   &coarse_mesh, &coarse)) {
+  if (!solve_grid_level(coarsened(scene), fine.mesh(), scene.control_kind, m, levels - 1, newton,
+                        report, &coarse_mesh, &coarse)) {
     report->fell_back_to_rest = true;
     return rest_state(fine);
   }

@@ -68,6 +68,14 @@ Eigen::MatrixXd control_on_quadrature(const Assembler& assembler, const Mesh& me
 /// element containing each fine node). Throws InvalidArgument if a node is outside.
 Eigen::VectorXd prolongate(const Mesh& coarse, const Eigen::VectorXd& u_coarse, const Mesh& fine);
 
+/// The equilibrium on `scene`'s mesh (*mesh, *state) under the control values m of `kind`
+/// given on `control_mesh`, after `levels` coarser levels solved first (each level starts
+/// from the one below prolongated). Appends each level's Newton summary to report->levels;
+/// returns false if a solve does not converge.
+bool solve_grid_level(const Scene& scene, const Mesh& control_mesh, ControlKind kind,
+                      const Eigen::VectorXd& m, int levels, const NewtonOptions& newton,
+                      GridSequencingReport* report, Mesh* mesh, State* state);
+
 /// The start state for the fine solve of `scene` (its assembler `fine`) under the control
 /// values m of `kind` on the fine mesh: the rest state if no level is asked for, else the
 /// equilibrium of the coarser levels prolongated onto the fine nodes, with m_qp at full

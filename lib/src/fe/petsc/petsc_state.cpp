@@ -83,32 +83,6 @@ NewtonSummary PetscStateSolver::solve(const Eigen::VectorXd& m) {
   return s.newton.solve(s.control.to_quadrature(local), &s.u, &s.m_qp);
 }
 
-namespace {
-
-// The equilibrium of `scene` (after `levels` coarser ones) under the field m of the fine mesh,
-// by the serial Newton: grid_sequencing.cpp's recursion.
-bool solve_coarse(const Scene& scene, const Mesh& fine, const Eigen::VectorXd& m, int levels,
-                  const NewtonOptions& newton, GridSequencingReport* report, Mesh* mesh,
-                  State* state) {
-  const Assembler assembler = scene.make_assembler();
-  const Eigen::MatrixXd m_qp = control_on_quadrature(assembler, fine, scene.control_kind, m);
-  *state = rest_state(assembler);
-  if (levels > 0) {
-    Mesh coarse_mesh;
-    State coarse;
-    if (!solve_coarse(coarsened(scene), fine, m, levels - 1, newton, report, &coarse_mesh, &coarse))
-      return false;
-    state->u = prolongate(coarse_mesh, coarse.u, assembler.mesh());
-  }
-  NewtonSolver solver(assembler, newton);
-  const NewtonSummary summary = solver.solve(m_qp, state);
-  report->levels.push_back({scene.cells, summary});
-  *mesh = assembler.mesh();
-  return summary.converged();
-}
-
-}  // namespace
-
 GridSequencingReport PetscStateSolver::grid_sequenced_start(const Scene& scene,
                                                             const Eigen::VectorXd& m,
                                                             const GridSequencingOptions& options) {
@@ -123,8 +97,8 @@ GridSequencingReport PetscStateSolver::grid_sequenced_start(const Scene& scene,
   if (levels == 0) return report;
   Mesh coarse_mesh;
   State coarse;
-  if (!solve_coarse(coarsened(scene), scene.make_mesh(), m, levels - 1, s.options.newton, &report,
-                    &coarse_mesh, &coarse)) {
+  if (!solve_grid_level(coarsened(scene), scene.make_mesh(), scene.control_kind, m, levels - 1,
+                        s.options.newton, &report, &coarse_mesh, &coarse)) {
     report.fell_back_to_rest = true;
     return report;
   }
