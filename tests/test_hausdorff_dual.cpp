@@ -388,10 +388,12 @@ TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
   for (double tau : {1e-2, 1e-4, 1e-7}) {
     detail::DualTreeConfig cfg;
     cfg.degree = tau > 1e-3 ? 3 : 4;
-    // Below τ = 1e-3 the options: a degree per node pair (2 … n) and the budget from each
-    // pair's own least contribution (dual_tree.hpp); at 1e-2 the defaults.
+    // Below τ = 1e-3 a degree per node pair (2 … n); at 1e-7 also the budget from each
+    // pair's own least contribution (dual_tree.hpp) beside the ledger of the defaults. The
+    // audit sums every point's error bounds again, from the interaction lists alone.
     cfg.min_degree = tau < 1e-3 ? 2 : 0;
-    cfg.own_budget = tau < 1e-3;
+    cfg.own_budget = tau < 1e-5;
+    cfg.audit = true;
     cfg.cost_model = false;
     cfg.small_pairs = 16;
     detail::DualTreeOps ops;
@@ -414,6 +416,12 @@ TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
       ASSERT_LE(std::sqrt(dG), bound * r.Gm) << "G, tau " << tau << " point " << j;
       ASSERT_LE(std::sqrt(dG2), bound * r.G2m) << "G2, tau " << tau << " point " << j;
     }
+    // The planned error bounds of every point (beyond the own terms) fit τ_share times
+    // its lower bound.
+    EXPECT_LE(ops.budget_used, 1.0 + 1e-12) << "tau " << tau;
+    ::testing::Test::RecordProperty(
+        "budget_used_" + std::to_string(static_cast<int>(-std::log10(tau))),
+        std::to_string(ops.budget_used));
     total.p2p += ops.p2p, total.m2p += ops.m2p, total.p2l += ops.p2l, total.m2l += ops.m2l;
     total.prune += ops.prune;
     total.point_pruned += ops.point_pruned;

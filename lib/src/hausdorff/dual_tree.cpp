@@ -252,6 +252,7 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   const double planned = kCostNear * static_cast<double>(counts[0]) +
                          kCostFar * static_cast<double>(counts[1]) +
                          kCostBasis * static_cast<double>(counts[2]);
+  if (cfg_.audit) ops.budget_used = audit_budget(p, roots, mine, lists);
   if (ops_ != nullptr) *ops_ = ops;
   if (cfg_.cost_model && planned > kFallBack * all_pairs)
     return fall_back(src, outer, set, visits, stats.plan_seconds);

@@ -24,7 +24,9 @@
 // bound e only if e ≤ τ · min_{o∈T} L(o) · mass(S)/mass(all), for every requested sum
 // (in the unscaled form, k = c_o^α (r + ε)^(−α), so the bound is uniform over T). The
 // far nodes of one outer point are disjoint, so their shares sum to ≤ 1 and every sum
-// is within τ of exact.
+// is within τ of exact. With `recycle` (default, α ≤ max_interp_alpha) a ledger per outer
+// box hands what a pair left of its share to the pairs planned after it (the farther
+// source child first); docs/tree_tolerance.md §7.
 //
 // Cost model: the planned work (kernel evaluations weighted per operation) is compared
 // with N·M; if the plan is not clearly cheaper, the pass is summed exactly.
@@ -37,9 +39,15 @@
 namespace softhd::detail {
 
 struct DualTreeConfig {
-  int degree = 0;                  ///< most points per axis n; 0: from τ (degree_for)
-  int min_degree = 0;              ///< least points per axis a node pair may use; 0: n (one degree)
-  bool own_budget = false;         ///< budget also from each pair's own least contribution
+  int degree = 0;           ///< most points per axis n; 0: from τ (degree_for)
+  int min_degree = 0;       ///< least points per axis a node pair may use; 0: n (one degree)
+  bool own_budget = false;  ///< budget also from each pair's own least contribution
+  /// Far-field regime: the budget a node pair leaves unused passes to the pairs planned
+  /// after it for the same outer points (a ledger per outer box)
+  bool recycle = true;
+  /// Tests: after planning, every outer point's error bounds are summed again from the
+  /// interaction lists (DualTreeOps::budget_used); costly
+  bool audit = false;
   double min_pairs = 4.0e6;        ///< passes with fewer N·M pairs are summed exactly
   bool cost_model = true;          ///< false: never fall back to exact (tests)
   double max_interp_alpha = 16.0;  ///< above: pruning only (the far field is negligible)
@@ -55,6 +63,10 @@ struct DualTreeOps {
   std::int64_t point_pruned = 0;     ///< direct pairs skipped by pruning point by point
   std::int64_t m2m = 0, l2l = 0;     ///< translations between a box's grid and a child's
   std::int64_t far_degree[17] = {};  ///< far-field node pairs per points per axis m
+  /// With DualTreeConfig::audit: the largest, over outer points and requested sums, of
+  /// (sum of the error bounds of the interactions covering the point) / (τ · its lower
+  /// bound); the guarantee needs ≤ 1
+  double budget_used = 0.0;
 };
 
 std::unique_ptr<PairSumBackend> make_dual_tree_backend(const DualTreeConfig& config,

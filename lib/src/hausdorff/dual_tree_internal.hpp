@@ -39,10 +39,12 @@ struct Interaction {
   std::uint8_t deg;
 };
 
-/// A choice of choose(): the operation and its degree.
+/// A choice of choose(): the operation, its degree, and the logarithms of its error
+/// bounds per unit source weight (value kernel, gradient kernel).
 struct Choice {
   Op op = kNone;
   int deg = 0;
+  double lv = -kInf, lg = -kInf;
 };
 
 /// Sums accumulated for one outer point.
@@ -81,17 +83,19 @@ struct Pass {
   // The budget of a node pair (dual_tree_plan.cpp): log τ_share for the shares of the
   // outer lower bound, log τ_own for the pair's own least contribution (−∞: not used).
   double log_tau_share = 0.0, log_tau_own = -kInf;
+  bool recycle = false;  // the share term from a ledger per outer box (dual_tree_plan.cpp)
   const KernelPower* power = nullptr;
   Eigen::VectorXd w, h, c, oc;  // source weights, coefficients, scales; outer scales
   std::vector<NodeMoments> mw, mh;
   PairSources src;
   std::vector<double> log_low;    // 4 per outer node: log min_{o∈T} of the unscaled lower bound
   bool point_prune = false;       // pruning regime: leaf pairs also pruned point by point
-  std::vector<double> point_low;  // 4 per outer point (tree order, point_prune only)
+  std::vector<double> point_low;  // 4 per outer point (tree order, point_prune or audit only)
   std::vector<double> kappa;      // per outer node: max c_o (scale of its locals)
   std::vector<char> local_ok;     // per outer node: locals allowed (scales do not underflow)
   std::vector<double> cmin;       // per outer node: min c_o
   std::vector<int> cut;           // source nodes of the lower bounds (cut_nodes)
+  int cut_depth = 5;              // their depth in the source tree
   std::vector<double> log_weight, log_share;  // 4 per source node (prepare_sources)
   std::vector<Box> obox, sbox;                // interpolation boxes (interp only)
   int nf = 0;                                 // fields of an outer box's locals (P values each):
@@ -154,8 +158,16 @@ UnitRange rebalance(Pass& p, const std::vector<int>& roots, UnitRange planned,
                     std::vector<double>& work, std::int64_t& visits);
 /// Whether source node s may be dropped for the outer point o (tree position q) alone.
 bool prunable_for_point(const Pass& p, const double* o, Eigen::Index q, int s);
+/// The own term of the budget of pair (t, s) for sum k: τ_own W_S u(R_max), at most τ_own
+/// times S's contribution to the sum of every point of T (0 without own_budget).
+double own_term(const Pass& p, int t, int s, int k);
 /// Planned work of one interaction in pair units (kCost weights).
 double interaction_cost(const Pass& p, const Interaction& it);
+/// The budget audit (DualTreeConfig::audit): per outer point of the tasks of `mine`, the
+/// error bounds of every interaction covering it, recomputed and summed, over τ times its
+/// lower bound; the largest over points and requested sums.
+double audit_budget(const Pass& p, const std::vector<int>& roots, UnitRange mine,
+                    const std::vector<std::vector<Interaction>>& lists);
 
 // ---- far field (dual_tree_farfield.cpp) ----
 

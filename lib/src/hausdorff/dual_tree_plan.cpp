@@ -67,16 +67,24 @@ void prepare_sources(Pass& p, const PassSources& in) {
     p.sbox[i] = interpolation_box(nodes[i].lo, nodes[i].hi, p.d);
 }
 
-constexpr int kCutDepth = 5;  // the lower bounds' coarse partition: source nodes at this depth
+/// Depth of the lower bounds' coarse partition (source nodes at this depth): 5, plus
+/// log2 of the sources per outer point when there are more sources than outer points
+/// (at most 11). It costs 2^depth kernel evaluations per outer point, at most 32 per
+/// source point, and tightens the bounds where the outer points are few.
+int cut_depth(Eigen::Index outer, Eigen::Index sources) {
+  const double ratio =
+      static_cast<double>(sources) / static_cast<double>(std::max<Eigen::Index>(outer, 1));
+  return std::clamp(5 + static_cast<int>(std::floor(std::log2(std::max(ratio, 1.0)))), 5, 11);
+}
 
 /// Greedy descent to a source leaf near q (any leaf gives a valid lower bound); `cut`
-/// receives its ancestor at depth kCutDepth (or the leaf, if shallower).
-int leaf_near(const KdTree& st, const double* q, int d, int& cut) {
+/// receives its ancestor at depth `cut_at` (or the leaf, if shallower).
+int leaf_near(const KdTree& st, const double* q, int d, int cut_at, int& cut) {
   const std::vector<KdNode>& nodes = st.nodes();
   int id = 0, depth = 0;
   cut = 0;
   while (nodes[static_cast<size_t>(id)].right >= 0) {
-    if (depth == kCutDepth) cut = id;
+    if (depth == cut_at) cut = id;
     const int l = id + 1, r = nodes[static_cast<size_t>(id)].right;
     double dl = 0.0, dr = 0.0;
     for (int k = 0; k < d; ++k) {
@@ -90,19 +98,19 @@ int leaf_near(const KdTree& st, const double* q, int d, int& cut) {
     id = dl <= dr ? l : r;
     ++depth;
   }
-  if (depth <= kCutDepth) cut = id;
+  if (depth <= cut_at) cut = id;
   return id;
 }
 
-/// The source nodes at depth kCutDepth, and the leaves above it: a partition.
-void cut_nodes(const KdTree& st, int id, int depth, std::vector<int>& out) {
+/// The source nodes at depth `cut_at`, and the leaves above it: a partition.
+void cut_nodes(const KdTree& st, int id, int depth, int cut_at, std::vector<int>& out) {
   const KdNode& n = st.nodes()[static_cast<size_t>(id)];
-  if (depth == kCutDepth || n.right < 0) {
+  if (depth == cut_at || n.right < 0) {
     out.push_back(id);
     return;
   }
-  cut_nodes(st, id + 1, depth + 1, out);
-  cut_nodes(st, n.right, depth + 1, out);
+  cut_nodes(st, id + 1, depth + 1, cut_at, out);
+  cut_nodes(st, n.right, depth + 1, cut_at, out);
 }
 
 /// Lower bounds (scaled, as pair_sums returns them) of the four sums at o: over the
@@ -155,12 +163,13 @@ void prepare_outer(Pass& p, const PassOuter& in) {
   const size_t nn = ot.nodes().size();
   p.oc = ot.permute(Eigen::Map<const Eigen::VectorXd>(in.scale, ot.size()));
   p.log_low.assign(4 * nn, kInf);
-  if (p.point_prune) p.point_low.assign(4 * static_cast<size_t>(ot.size()), kInf);
+  if (p.point_prune || p.cfg.audit) p.point_low.assign(4 * static_cast<size_t>(ot.size()), kInf);
   p.kappa.assign(nn, 0.0);
   p.cmin.assign(nn, kInf);
   p.local_ok.assign(nn, 0);
   if (p.interp) p.obox.resize(nn);
-  cut_nodes(*p.st, 0, 0, p.cut);
+  p.cut_depth = cut_depth(ot.size(), p.st->size());
+  cut_nodes(*p.st, 0, 0, p.cut_depth, p.cut);
 }
 
 /// The lower bounds of the outer points of `leaf` (lower_sums with the source leaf found
@@ -173,7 +182,7 @@ void leaf_bounds(Pass& p, size_t id, double w_min) {
     double o[3] = {0.0, 0.0, 0.0};
     for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
     int near_cut = 0;
-    const int leaf_id = leaf_near(*p.st, o, p.d, near_cut);
+    const int leaf_id = leaf_near(*p.st, o, p.d, p.cut_depth, near_cut);
     const PairSources leaf = p.slice(p.st->nodes()[static_cast<size_t>(leaf_id)]);
     const PairSums exact = pair_sums(o, p.oc[q], leaf, *p.power, p.eps, flags);
     PairSums s = lower_sums(p, o, p.oc[q], p.cut, near_cut, exact);
@@ -184,7 +193,7 @@ void leaf_bounds(Pass& p, size_t id, double w_min) {
     const double lc = p.alpha * std::log(p.oc[q]);
     const double v[4] = {std::log(s.S) - lc, std::log(s.Gm) - lc, std::log(s.H), std::log(s.G2m)};
     for (int k = 0; k < 4; ++k) p.log_low[4 * id + k] = std::min(p.log_low[4 * id + k], v[k]);
-    if (p.point_prune) std::copy(v, v + 4, &p.point_low[4 * static_cast<size_t>(q)]);
+    if (!p.point_low.empty()) std::copy(v, v + 4, &p.point_low[4 * static_cast<size_t>(q)]);
     p.kappa[id] = std::max(p.kappa[id], p.oc[q]);
     p.cmin[id] = std::min(p.cmin[id], p.oc[q]);
   }
@@ -230,9 +239,24 @@ void outer_bounds(Pass& p, const std::vector<int>& roots, int threads) {
 
 namespace {
 
+/// The budget ledger of an outer box T during its traversal (DualTreeConfig::recycle), per
+/// kind: `done`, the mass share of the source boxes already planned for every point of T,
+/// and `spent`, an upper bound, over the points o of T, of Σ e/(τ λ) over the error bounds
+/// e charged to o so far, each relative to λ = min L over the box T' ∋ o it was charged
+/// at (λ ≤ L(o)). Pair (T, S) may use an error e when spent + e/(τ λ_T) ≤ done + share(S),
+/// λ_T = min_{o∈T} L(o); then spent ≤ done at every step, and at the end (done ≤ 1, the
+/// boxes planned for o are disjoint) every point carries errors ≤ τ L(o). A box's
+/// children start from its ledger; after both, it keeps the larger `spent`. Every pair
+/// may use at least its share (spent ≤ done), as without the ledger.
+struct Ledger {
+  double done[4] = {0.0, 0.0, 0.0, 0.0};
+  double spent[4] = {0.0, 0.0, 0.0, 0.0};
+};
+
 /// The budgets of pair (t, s) per kind: log of the source node's weight in the unscaled
 /// bounds (lw) and log of the error allowed (lb), the larger of
 ///     τ_share · min_{o∈T} L(o) · mass(S)/mass(all)   and   τ_own · W_S u(R_max),
+/// or, with a ledger, τ (λ_T (done + mass(S)/mass(all)) − spent) (above);
 /// u(R_max) the kernel (value or gradient) at the largest distance between the boxes, so
 /// that W_S u(R_max) is at most S's contribution to the sum of every o ∈ T. Over the
 /// disjoint source nodes approximated for one outer point the first terms add up to at
@@ -259,7 +283,20 @@ double node_far(const KdNode& a, const KdNode& b, int d) {
   return std::sqrt(r2);
 }
 
-Budget budget(const Pass& p, int t, int s) {
+}  // namespace
+
+double own_term(const Pass& p, int t, int s, int k) {
+  if (p.log_tau_own == -kInf) return 0.0;
+  const double lr = std::log(
+      node_far(p.ot->nodes()[static_cast<size_t>(t)], p.st->nodes()[static_cast<size_t>(s)], p.d) +
+      p.eps);
+  const double lu = -(k == kS || k == kH ? p.alpha : p.alpha + 1.0) * lr;
+  return std::exp(p.log_tau_own + p.log_weight[4 * static_cast<size_t>(s) + k] + lu);
+}
+
+namespace {
+
+Budget budget(const Pass& p, int t, int s, const Ledger* ledger) {
   Budget b;
   const double lr = std::log(
       node_far(p.ot->nodes()[static_cast<size_t>(t)], p.st->nodes()[static_cast<size_t>(s)], p.d) +
@@ -271,11 +308,20 @@ Budget budget(const Pass& p, int t, int s) {
       b.lb[k] = kInf;
       continue;
     }
-    const double share = p.log_tau_share + p.log_low[4 * static_cast<size_t>(t) + k] +
-                         p.log_share[4 * static_cast<size_t>(s) + k];
+    const double low = p.log_low[4 * static_cast<size_t>(t) + k];
+    const double ls = p.log_share[4 * static_cast<size_t>(s) + k];
+    double share = p.log_tau_share + low + ls;
+    if (ledger != nullptr) {
+      const double avail = ledger->done[k] + std::exp(ls) - ledger->spent[k];
+      share = avail > 0.0 ? p.log_tau_share + low + std::log(avail) : -kInf;
+    }
     const double lu = -(k == kS || k == kH ? p.alpha : p.alpha + 1.0) * lr;
-    // max(a, b) ≤ a + b: half of the budget at worst, without exp/log per pair.
-    b.lb[k] = std::max(share, p.log_tau_own + b.lw[k] + lu);
+    const double own = p.log_tau_own + b.lw[k] + lu;
+    // Without a ledger, max(a, b) ≤ a + b: half of the budget at worst, without exp/log
+    // per pair; with one, the sum (book() charges the ledger only beyond the own term).
+    b.lb[k] = ledger == nullptr || own == -kInf || share == -kInf
+                  ? std::max(share, own)
+                  : std::max(share, own) + std::log1p(std::exp(-std::fabs(share - own)));
   }
   return b;
 }
@@ -296,7 +342,7 @@ double far_cost(const Pass& p, Op op, int m, double nT, double nS) {
 /// largest distance between the two boxes (chebyshev.cpp). The bounds use both
 /// interpolation boxes (each contains its node's box), so `pb` serves every operation.
 int least_degree(const Pass& p, const Budget& b, Op op, const Box& bt, const Box& bs,
-                 PairBounds& pb, double l) {
+                 PairBounds& pb, double l, LogBounds& at) {
   const bool it = op != kM2P, is = op != kP2L;
   double a_max = 0.0, far2 = 0.0;
   for (int k = 0; k < p.d; ++k) {
@@ -312,7 +358,10 @@ int least_degree(const Pass& p, const Budget& b, Op op, const Box& bt, const Box
   LogBounds e[kMaxChebyshev + 1];
   pb.bounds(it, is, p.m_lo, p.n, e);
   for (int m = p.m_lo; m <= p.n; ++m)
-    if (b.fits(e[m].value, e[m].grad)) return m;
+    if (b.fits(e[m].value, e[m].grad)) {
+      at = e[m];
+      return m;
+    }
   return 0;
 }
 
@@ -320,10 +369,11 @@ int least_degree(const Pass& p, const Budget& b, Op op, const Box& bt, const Box
 /// tried in the order of their cost at the largest degree n, and the first that fits is
 /// used at its least admissible degree (bounding every operation at every pair costs more
 /// planning time than the cheaper choices save).
-Choice choose(const Pass& p, int t, int s, double gap) {
-  const Budget b = budget(p, t, s);
+Choice choose(const Pass& p, int t, int s, double gap, const Ledger* ledger) {
+  const Budget b = budget(p, t, s, ledger);
   const double l = std::log(gap + p.eps);
-  if (b.fits(-p.alpha * l, -(p.alpha + 1.0) * l)) return {kPrune, 0};
+  if (b.fits(-p.alpha * l, -(p.alpha + 1.0) * l))
+    return {kPrune, 0, -p.alpha * l, -(p.alpha + 1.0) * l};
   if (!p.interp) return {};
   const double nT = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(t)]));
   const double nS = static_cast<double>(size_of(p.st->nodes()[static_cast<size_t>(s)]));
@@ -349,12 +399,13 @@ Choice choose(const Pass& p, int t, int s, double gap) {
     const Op op = options[i].op;
     // Skipped when even its lowest degree would not be cheaper than the best so far.
     if (!(far_cost(p, op, p.m_lo, nT, nS) < best_cost)) continue;
-    const int m = least_degree(p, b, op, bt, bs, pb, l);
+    LogBounds e{kInf, kInf};
+    const int m = least_degree(p, b, op, bt, bs, pb, l, e);
     if (m == 0) continue;
     const double cost = far_cost(p, op, m, nT, nS);
     // The grids must have fewer points than their boxes (else the op is not cheaper).
     const bool grids_ok = (op == kP2L || p.has_proxy(s, m)) && (op == kM2P || p.has_local(t, m));
-    if (grids_ok && cost < best_cost) best_cost = cost, best = {op, m};
+    if (grids_ok && cost < best_cost) best_cost = cost, best = {op, m, e.value, e.grad};
     if (best.op != kNone) break;  // the cheapest at degree n that fits, at its least degree
   }
   return best;
@@ -387,9 +438,26 @@ struct PlanState {
   }
 };
 
-/// Depth-first dual traversal from (t, s): appends the interactions to `st.out`. Returns
-/// false when planning was stopped (the plan costs more than the limit).
-bool plan(const Pass& p, int t, int s, PlanState& st) {
+/// Books pair (t, s) in the ledger: its mass shares are done, and the error bounds of
+/// choice c (none for a direct sum) are charged, beyond the pair's own term.
+void book(const Pass& p, int t, int s, const Choice* c, Ledger& ledger) {
+  for (int k = 0; k < 4; ++k) {
+    const double lw = p.log_weight[4 * static_cast<size_t>(s) + k];
+    if (!p.want[k] || lw == -kInf) continue;
+    ledger.done[k] += std::exp(p.log_share[4 * static_cast<size_t>(s) + k]);
+    if (c == nullptr) continue;
+    const double e = std::exp(lw + ((k == kS || k == kH) ? c->lv : c->lg));
+    const double over = e - own_term(p, t, s, k);
+    if (over > 0.0)
+      ledger.spent[k] +=
+          over * std::exp(-p.log_tau_share - p.log_low[4 * static_cast<size_t>(t) + k]);
+  }
+}
+
+/// Depth-first dual traversal from (t, s): appends the interactions to `st.out`, books
+/// them in T's ledger (recycling only). Returns false when planning was stopped (the plan
+/// costs more than the limit).
+bool plan(const Pass& p, int t, int s, PlanState& st, Ledger& ledger) {
   ++st.visits;
   const KdNode& T = p.ot->nodes()[static_cast<size_t>(t)];
   const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
@@ -398,9 +466,10 @@ bool plan(const Pass& p, int t, int s, PlanState& st) {
   if (!outer_mass && !inner_mass) return true;  // every term is zero
   const double gap = node_gap(T, S, p.d);
   if (gap > 0.0) {
-    const Choice c = choose(p, t, s, gap);
+    const Choice c = choose(p, t, s, gap, p.recycle ? &ledger : nullptr);
     if (c.op != kNone) {
       st.add(p, {t, s, c.op, static_cast<std::uint8_t>(c.deg)});
+      if (p.recycle) book(p, t, s, &c, ledger);
       return !st.stop();
     }
   }
@@ -410,11 +479,24 @@ bool plan(const Pass& p, int t, int s, PlanState& st) {
   const std::int64_t small = p.interp ? p.cfg.small_pairs : 0;
   if ((tl && sl) || size_of(T) * size_of(S) <= small) {
     st.add(p, {t, s, kP2P, 0});
+    if (p.recycle) book(p, t, s, nullptr, ledger);
     return !st.stop();
   }
-  if (sl || (!tl && node_radius2(T, p.d) >= node_radius2(S, p.d)))
-    return plan(p, t + 1, s, st) && plan(p, T.right, s, st);
-  return plan(p, t, s + 1, st) && plan(p, t, S.right, st);
+  if (sl || (!tl && node_radius2(T, p.d) >= node_radius2(S, p.d))) {
+    if (!p.recycle) return plan(p, t + 1, s, st, ledger) && plan(p, T.right, s, st, ledger);
+    Ledger a = ledger, b = ledger;  // each child from T's ledger; then the larger spent
+    if (!plan(p, t + 1, s, st, a) || !plan(p, T.right, s, st, b)) return false;
+    for (int k = 0; k < 4; ++k)
+      ledger.done[k] = a.done[k], ledger.spent[k] = std::max(a.spent[k], b.spent[k]);
+    return true;
+  }
+  int first = s + 1, second = S.right;
+  // Recycling: the farther child first, so that the nearer one (which needs the larger
+  // budget) receives what the farther one left.
+  if (p.recycle && node_gap(T, p.st->nodes()[static_cast<size_t>(first)], p.d) <
+                       node_gap(T, p.st->nodes()[static_cast<size_t>(second)], p.d))
+    std::swap(first, second);
+  return plan(p, t, first, st, ledger) && plan(p, t, second, st, ledger);
 }
 
 constexpr size_t kSampleStride = 64;  // planning tasks sampled to predict the plan's work
@@ -501,6 +583,7 @@ void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const P
   const bool own = p.interp && cfg.own_budget;
   p.log_tau_share = std::log(own ? 0.5 * set.tau : set.tau);
   p.log_tau_own = own ? std::log(0.5 * set.tau) : -kInf;
+  p.recycle = p.interp && cfg.recycle;
   p.power = set.power;
   prepare_sources(p, src);
   prepare_outer(p, outer);
@@ -532,7 +615,8 @@ bool plan_tasks(const Pass& p, const std::vector<int>& roots, UnitRange mine, do
       PlanState st;
       st.spent = &spent;
       st.limit = phase == 0 ? limit * sample_share : limit;
-      if (!plan(p, roots[r], 0, st)) stopped = true;
+      Ledger ledger;
+      if (!plan(p, roots[r], 0, st, ledger)) stopped = true;
       visits += st.visits;
       work[r] = st.total;
       lists[r] = std::move(st.out);
@@ -570,7 +654,8 @@ UnitRange rebalance(Pass& p, const std::vector<int>& roots, UnitRange planned,
     PlanState st;
     std::atomic<double> spent{0.0};
     st.spent = &spent;
-    plan(p, roots[r], 0, st);
+    Ledger ledger;
+    plan(p, roots[r], 0, st, ledger);
     visits += st.visits;
     lists[r] = std::move(st.out);
   }
