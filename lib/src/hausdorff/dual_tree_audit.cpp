@@ -34,14 +34,18 @@ LogBounds interaction_bound(const Pass& p, const Interaction& it) {
 }
 
 /// Adds the errors of interaction (t, s) (error bound per unit weight e) beyond its own
-/// term to a point's four sums (the own terms add up to at most τ_own times the sum).
-void charge(const Pass& p, int t, int s, const LogBounds& e, double* sums) {
+/// term to the four sums of outer point q, over τ_share L(q) (in logarithms up to the last
+/// step, so that large α cannot overflow; the own terms, used only for α ≤ 16, add up to
+/// at most τ_own times the sum).
+void charge(const Pass& p, int t, int s, const LogBounds& e, Eigen::Index q, double* used) {
   for (int k = 0; k < 4; ++k) {
     const double lw = p.log_weight[4 * static_cast<size_t>(s) + k];
     if (!p.want[k] || lw == -kInf) continue;
-    const double over = std::exp(lw + ((k == kS || k == kH) ? e.value : e.grad)) -
-                        (t < 0 ? 0.0 : own_term(p, t, s, k));
-    sums[k] += std::max(over, 0.0);
+    const double norm = p.log_tau_share + p.point_low[4 * static_cast<size_t>(q) + k];
+    const double own = t < 0 ? 0.0 : own_term(p, t, s, k);
+    const double le = lw + ((k == kS || k == kH) ? e.value : e.grad) - norm;
+    const double over = own > 0.0 ? std::exp(le) - own * std::exp(-norm) : std::exp(le);
+    used[k] += std::max(over, 0.0);
   }
 }
 
@@ -58,7 +62,8 @@ void charge_points(const Pass& p, const Interaction& it, std::vector<double>& sp
     }
     if (!prunable_for_point(p, o, q, it.s)) continue;
     const double l = std::log(std::sqrt(g2) + p.eps);
-    charge(p, -1, it.s, {-p.alpha * l, -(p.alpha + 1.0) * l}, &spent[4 * static_cast<size_t>(q)]);
+    charge(p, -1, it.s, {-p.alpha * l, -(p.alpha + 1.0) * l}, q,
+           &spent[4 * static_cast<size_t>(q)]);
   }
 }
 
@@ -66,6 +71,7 @@ void charge_points(const Pass& p, const Interaction& it, std::vector<double>& sp
 
 double audit_budget(const Pass& p, const std::vector<int>& roots, UnitRange mine,
                     const std::vector<std::vector<Interaction>>& lists) {
+  // Per outer point and sum: Σ (error bound − own term)⁺ / (τ_share L(o)).
   std::vector<double> spent(4 * static_cast<size_t>(p.ot->size()), 0.0);
   double worst = 0.0;
   for (size_t r = mine.first; r < mine.last; ++r) {
@@ -77,15 +83,14 @@ double audit_budget(const Pass& p, const std::vector<int>& roots, UnitRange mine
       const LogBounds e = interaction_bound(p, it);
       const KdNode& T = p.ot->nodes()[static_cast<size_t>(it.t)];
       for (Eigen::Index q = T.begin; q < T.end; ++q)
-        charge(p, it.t, it.s, e, &spent[4 * static_cast<size_t>(q)]);
+        charge(p, it.t, it.s, e, q, &spent[4 * static_cast<size_t>(q)]);
     }
     const KdNode& R = p.ot->nodes()[static_cast<size_t>(roots[r])];
     for (Eigen::Index q = R.begin; q < R.end; ++q)
       for (int k = 0; k < 4; ++k) {
         if (!p.want[k]) continue;
-        const size_t i = 4 * static_cast<size_t>(q) + static_cast<size_t>(k);
-        const double used = spent[i] / std::exp(p.log_tau_share + p.point_low[i]);
-        worst = std::max(worst, used);
+        const double used = spent[4 * static_cast<size_t>(q) + static_cast<size_t>(k)];
+        if (!(used <= worst)) worst = used;  // NaN propagates (and fails the test)
       }
   }
   return worst;
