@@ -256,7 +256,7 @@ struct Ledger {
 /// The budgets of pair (t, s) per kind: log of the source node's weight in the unscaled
 /// bounds (lw) and log of the error allowed (lb), the larger of
 ///     τ_share · min_{o∈T} L(o) · mass(S)/mass(all)   and   τ_own · W_S u(R_max),
-/// or, with a ledger, τ (λ_T (done + mass(S)/mass(all)) − spent) (above);
+/// or, with a ledger, τ_share λ_T (done + mass(S)/mass(all) − spent) (above);
 /// u(R_max) the kernel (value or gradient) at the largest distance between the boxes, so
 /// that W_S u(R_max) is at most S's contribution to the sum of every o ∈ T. Over the
 /// disjoint source nodes approximated for one outer point the first terms add up to at
