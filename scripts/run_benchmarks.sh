@@ -43,7 +43,7 @@ meta() {  # name command...
   {
     echo "command: $*"
     echo "date: $(date -u +%Y-%m-%dT%H:%M:%SZ)"
-    echo "commit: $(git -C "$here" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$here" diff --quiet 2>/dev/null || echo ' (with uncommitted changes)')"
+    echo "commit: $(git -C "$here" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$here" diff --quiet -- . ':!docs/bench' ':!docs/benchmarks.md' 2>/dev/null || echo ' (with uncommitted changes)')"
     echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
     echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)"
   } >"$out/$name.meta"
