@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <string>
 
 #include "fe_test_util.hpp"
 #include "softhd/error.hpp"
@@ -112,6 +113,100 @@ TEST(Assembly, SameResultForOneAndTwoThreads) {
   EXPECT_EQ(P1, P2);
   EXPECT_EQ((R1 - R2).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_EQ((K1 - K2).cwiseAbs().sum(), 0.0);
+}
+
+namespace {
+
+// Sums the element tangents it receives into a dense free-by-free matrix, in the order
+// received, and checks that the passes come in element order without gaps.
+class DenseSink final : public ElementMatrixSink {
+ public:
+  explicit DenseSink(const Assembler& A)
+      : A_(A), K_(Eigen::MatrixXd::Zero(A.dofs().num_free, A.dofs().num_free)) {}
+  void add(Eigen::Index first, Eigen::Index count, const double* Ke) override {
+    EXPECT_EQ(first, next_);
+    next_ = first + count;
+    ++passes_;
+    const int dim = A_.mesh().dim, nd = A_.mesh().nodes_per_element() * dim;
+    for (Eigen::Index i = 0; i < count; ++i)
+      for (int r = 0; r < nd; ++r)
+        for (int c = 0; c < nd; ++c) {
+          const int fr =
+              A_.dofs().free_index[A_.mesh().elements(first + i, r / dim) * dim + r % dim];
+          const int fc =
+              A_.dofs().free_index[A_.mesh().elements(first + i, c / dim) * dim + c % dim];
+          if (fr >= 0 && fc >= 0) K_(fr, fc) += Ke[(i * nd + r) * nd + c];
+        }
+  }
+  const Eigen::MatrixXd& matrix() const { return K_; }
+  Eigen::Index elements_seen() const { return next_; }
+  int passes() const { return passes_; }
+
+ private:
+  const Assembler& A_;
+  Eigen::MatrixXd K_;
+  Eigen::Index next_ = 0;
+  int passes_ = 0;
+};
+
+}  // namespace
+
+// The element tangents handed to a sink, summed in element order, are the assembled
+// tangent bit for bit (lower triangle; the upper one mirrors it exactly).
+TEST(Assembly, ElementSinkSumsToTheAssembledTangent) {
+  const Assembler A(fe_test::box(3, 2, {2.0, 1.0, 0.5}, {10, 4, 4}), fe_test::mooney_rivlin(),
+                    Eigen::Vector3d(1, 0.5, 0.2), {{"x0", {}}});  // 160 Q2: two passes
+  const Eigen::MatrixXd m =
+      Eigen::MatrixXd::Constant(A.mesh().num_elements(), A.geometry().points_per_element(), -0.3);
+  const Eigen::VectorXd u = 0.25 * admissible_u(A, 5);  // small enough for the thin elements
+  double P1, P2;
+  Eigen::VectorXd R1, R2;
+  SparseMatrix K = A.tangent_pattern();
+  ASSERT_TRUE(A.evaluate(u, m, &P1, &R1, &K));
+  DenseSink sink(A);
+  ASSERT_TRUE(A.evaluate_elements(u, m, &P2, &R2, &sink));
+  EXPECT_EQ(sink.elements_seen(), 160);
+  EXPECT_EQ(sink.passes(), 2);
+  EXPECT_EQ(P1, P2);
+  EXPECT_EQ((R1 - R2).cwiseAbs().maxCoeff(), 0.0);
+  const Eigen::MatrixXd D = sink.matrix();
+  EXPECT_EQ((D - D.transpose()).cwiseAbs().maxCoeff(), 0.0);
+  const Eigen::MatrixXd KA = Eigen::MatrixXd(K);  // lower triangle
+  EXPECT_EQ((KA - Eigen::MatrixXd(D.triangularView<Eigen::Lower>())).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_GT(KA.cwiseAbs().maxCoeff(), 0.0);
+}
+
+// A lean assembler (no pattern, dN/dX recomputed per point) evaluates the same energy,
+// residual, tangent and point quantities as the full one, to rounding (its 3 by 3 inverse
+// is by cofactors, the stored gradients' by LU), in 2D and 3D, Q1 and Q2.
+TEST(Assembly, LeanAssemblerEqualsFullToRounding) {
+  for (const Discretisation& s : setups()) {
+    const Assembler A = make(s);
+    const Assembler B(A.mesh(), fe_test::mooney_rivlin(), A.fiber(), {{"x0", {}}},
+                      AssemblerStorage::kLean);
+    EXPECT_TRUE(A.geometry().stores_gradients());
+    EXPECT_FALSE(B.geometry().stores_gradients());
+    EXPECT_THROW(B.tangent_pattern(), softhd::InvalidArgument);
+    const Eigen::MatrixXd m =
+        Eigen::MatrixXd::Constant(A.mesh().num_elements(), A.geometry().points_per_element(), -0.3);
+    const Eigen::VectorXd u = admissible_u(A, 6), lambda = admissible_u(A, 7);
+    SparseMatrix KB;
+    EXPECT_THROW(B.evaluate(u, m, nullptr, nullptr, &KB), softhd::InvalidArgument);
+    double PA, PB;
+    Eigen::VectorXd RA, RB;
+    DenseSink sa(A), sb(B);
+    ASSERT_TRUE(A.evaluate_elements(u, m, &PA, &RA, &sa));
+    ASSERT_TRUE(B.evaluate_elements(u, m, &PB, &RB, &sb));
+    const std::string where = std::to_string(s.dim) + "D Q" + std::to_string(s.order);
+    EXPECT_NEAR(PA, PB, 1e-13 * std::abs(PA)) << where;
+    EXPECT_LE((RA - RB).cwiseAbs().maxCoeff(), 1e-12 * RA.cwiseAbs().maxCoeff()) << where;
+    const double kmax = sa.matrix().cwiseAbs().maxCoeff();
+    EXPECT_LE((sa.matrix() - sb.matrix()).cwiseAbs().maxCoeff(), 1e-12 * kmax) << where;
+    EXPECT_GT(kmax, 0.0);
+    EXPECT_LE((A.jacobians(u) - B.jacobians(u)).cwiseAbs().maxCoeff(), 1e-13) << where;
+    const Eigen::MatrixXd fa = A.fiber_sensitivity(u, lambda), fb = B.fiber_sensitivity(u, lambda);
+    EXPECT_LE((fa - fb).cwiseAbs().maxCoeff(), 1e-12 * fa.cwiseAbs().maxCoeff()) << where;
+  }
 }
 
 TEST(Assembly, InvertedElementIsReportedNotEvaluated) {

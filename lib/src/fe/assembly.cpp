@@ -31,8 +31,12 @@ constexpr Eigen::Index kChunk = 128;
 }  // namespace
 
 Assembler::Assembler(Mesh mesh, std::shared_ptr<const Material> material, const Eigen::Vector3d& a0,
-                     const std::vector<DirichletConstraint>& constraints)
-    : mesh_(std::move(mesh)), geometry_(mesh_), material_(std::move(material)) {
+                     const std::vector<DirichletConstraint>& constraints, AssemblerStorage storage)
+    : mesh_(std::move(mesh)),
+      storage_(storage),
+      geometry_(mesh_, storage == AssemblerStorage::kFull ? GradientStorage::kStored
+                                                          : GradientStorage::kOnDemand),
+      material_(std::move(material)) {
   if (!material_) throw InvalidArgument("assembler: no material given");
   const double n = a0.norm();
   if (!(n > 0.0) || !std::isfinite(n))
@@ -42,6 +46,7 @@ Assembler::Assembler(Mesh mesh, std::shared_ptr<const Material> material, const 
     throw InvalidArgument("assembler: in 2D the fiber direction must lie in the plane (a0[2] = 0)");
   }
   dofs_ = make_dof_map(mesh_, constraints);
+  if (storage_ == AssemblerStorage::kLean) return;
   // Sparsity pattern of the lower triangle on the free dofs, then element maps into it.
   const int dim = mesh_.dim, nen = mesh_.nodes_per_element(), nd = nen * dim;
   const Eigen::Index E = mesh_.num_elements();
@@ -77,18 +82,27 @@ Assembler::Assembler(Mesh mesh, std::shared_ptr<const Material> material, const 
   }
 }
 
-SparseMatrix Assembler::tangent_pattern() const { return pattern_; }
+SparseMatrix Assembler::tangent_pattern() const {
+  if (storage_ != AssemblerStorage::kFull)
+    throw InvalidArgument("assembler: built without a tangent pattern (AssemblerStorage::kLean)");
+  return pattern_;
+}
 
 Eigen::Matrix3d Assembler::deformation_gradient(const Eigen::VectorXd& u, Eigen::Index e,
                                                 int q) const {
   // F = I + Σ_a u_a ⊗ ∇N_a (F33 = 1 in 2D: plane strain)
   const int dim = mesh_.dim;
-  const auto G = geometry_.gradients(e, q);
+  double buffer[3 * ReferenceGeometry::kMaxNodes];
+  const double* G = buffer;  // G[a dim + J] = dN_a/dX_J
+  if (geometry_.stores_gradients())
+    G = geometry_.gradients(e, q).data();
+  else
+    geometry_.point_gradients(mesh_, e, q, buffer);
   Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
   for (int a = 0; a < mesh_.nodes_per_element(); ++a) {
     const Eigen::Index n = mesh_.elements(e, a);
     for (int i = 0; i < dim; ++i)
-      for (int J = 0; J < dim; ++J) F(i, J) += u[n * dim + i] * G(J, a);
+      for (int J = 0; J < dim; ++J) F(i, J) += u[n * dim + i] * G[a * dim + J];
   }
   return F;
 }
@@ -98,9 +112,10 @@ struct Assembler::ElementWork {
   Eigen::MatrixXd Ue;        // dim by nen: the element's displacements
   Eigen::MatrixXd Gs, H;     // (dim nq) by nen: stacked ∇N_q and C^{ik}_q ∇N_q
   Eigen::MatrixXd Kb;        // nen by nen: one component block of K_e
+  Eigen::MatrixXd Gq;        // dim by nen: ∇N_q when the geometry does not store it
   std::vector<Matrix9d> wC;  // w_q C_q per quadrature point
   ElementWork(int dim, int nen, int nq)
-      : Ue(dim, nen), Gs(dim * nq, nen), H(dim * nq, nen), Kb(nen, nen), wC(nq) {}
+      : Ue(dim, nen), Gs(dim * nq, nen), H(dim * nq, nen), Kb(nen, nen), Gq(dim, nen), wC(nq) {}
 };
 
 bool Assembler::element_kernel(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp,
@@ -113,8 +128,12 @@ bool Assembler::element_kernel(const Eigen::VectorXd& u, const Eigen::MatrixXd& 
   Eigen::Map<Eigen::MatrixXd> r(residual, dim, residual ? nen : 0);  // r(i, a) = r_e[a dim + i]
   if (residual) r.setZero();
   double We = 0.0;
+  const bool stored = geometry_.stores_gradients();
   for (int q = 0; q < nq; ++q) {
-    const auto G = geometry_.gradients(e, q);  // dim by nen: ∇N_a at X_q
+    if (!stored) geometry_.point_gradients(mesh_, e, q, w.Gq.data());
+    // dim by nen: ∇N_a at X_q
+    const Eigen::Ref<const Eigen::MatrixXd> G =
+        stored ? geometry_.gradients(e, q) : Eigen::Ref<const Eigen::MatrixXd>(w.Gq);
     // F = I + Σ_a u_a ⊗ ∇N_a (F33 = 1 in 2D: plane strain)
     Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
     F.topLeftCorner(dim, dim).noalias() += w.Ue * G.transpose();
@@ -153,21 +172,18 @@ bool Assembler::element_kernel(const Eigen::VectorXd& u, const Eigen::MatrixXd& 
   return true;
 }
 
-bool Assembler::evaluate(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp, double* energy,
-                         Eigen::VectorXd* residual, SparseMatrix* tangent) const {
+template <class AddPass>
+bool Assembler::evaluate_passes(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp,
+                                double* energy, Eigen::VectorXd* residual, bool want_K,
+                                AddPass&& add_pass) const {
   const int dim = mesh_.dim, nen = mesh_.nodes_per_element(), nd = nen * dim;
   const int nq = geometry_.points_per_element();
   const Eigen::Index E = mesh_.num_elements();
   if (u.size() != dofs_.num_dofs) throw InvalidArgument("assembler: u has the wrong size");
   if (m_qp.rows() != E || m_qp.cols() != nq)
     throw InvalidArgument("assembler: m_qp must be E by nq");
-  if (tangent && tangent->nonZeros() != pattern_.nonZeros()) {
-    throw InvalidArgument("assembler: the tangent must come from tangent_pattern()");
-  }
-  const bool want_r = residual != nullptr, want_K = tangent != nullptr;
+  const bool want_r = residual != nullptr;
   if (want_r) residual->setZero(dofs_.num_free);
-  double* Kval = want_K ? tangent->valuePtr() : nullptr;
-  if (want_K) std::fill(Kval, Kval + tangent->nonZeros(), 0.0);
   std::vector<double> element_energy(E, 0.0);
   std::vector<char> element_ok(E, 1);
   const Eigen::Index chunk = std::min(kChunk, E);
@@ -183,23 +199,18 @@ bool Assembler::evaluate(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp, 
           want_K ? &kbuf[i * nd * nd] : nullptr, work[thread_id()]);
     }
     // Serial scatter in element order.
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const Eigen::Index e = start + i;
-      if (!element_ok[e]) continue;
-      if (want_r) {
+    if (want_r) {
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const Eigen::Index e = start + i;
+        if (!element_ok[e]) continue;
         for (int a = 0; a < nen; ++a)
           for (int k = 0; k < dim; ++k) {
             const int f = dofs_.free_index[mesh_.elements(e, a) * dim + k];
             if (f >= 0) (*residual)[f] += rbuf[i * nd + a * dim + k];
           }
       }
-      if (want_K) {
-        const int* map = nz_map_[e].data();
-        const double* Ke = &kbuf[i * nd * nd];
-        for (int l = 0; l < nd * nd; ++l)
-          if (map[l] >= 0) Kval[map[l]] += Ke[l];
-      }
     }
+    if (want_K) add_pass(start, n, kbuf.data(), &element_ok[start]);
   }
   const bool ok = std::all_of(element_ok.begin(), element_ok.end(), [](char c) { return c != 0; });
   if (energy) {
@@ -208,6 +219,37 @@ bool Assembler::evaluate(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp, 
     *energy = ok ? total : std::numeric_limits<double>::infinity();
   }
   return ok;
+}
+
+bool Assembler::evaluate(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp, double* energy,
+                         Eigen::VectorXd* residual, SparseMatrix* tangent) const {
+  if (tangent &&
+      (storage_ != AssemblerStorage::kFull || tangent->nonZeros() != pattern_.nonZeros()))
+    throw InvalidArgument("assembler: the tangent must come from tangent_pattern()");
+  const int nd = mesh_.nodes_per_element() * mesh_.dim;
+  double* Kval = tangent ? tangent->valuePtr() : nullptr;
+  if (tangent) std::fill(Kval, Kval + tangent->nonZeros(), 0.0);
+  return evaluate_passes(
+      u, m_qp, energy, residual, tangent != nullptr,
+      [&](Eigen::Index start, Eigen::Index n, const double* kbuf, const char* ok) {
+        for (Eigen::Index i = 0; i < n; ++i) {
+          if (!ok[i]) continue;
+          const int* map = nz_map_[start + i].data();
+          const double* Ke = &kbuf[i * nd * nd];
+          for (int l = 0; l < nd * nd; ++l)
+            if (map[l] >= 0) Kval[map[l]] += Ke[l];
+        }
+      });
+}
+
+bool Assembler::evaluate_elements(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp,
+                                  double* energy, Eigen::VectorXd* residual,
+                                  ElementMatrixSink* tangent) const {
+  return evaluate_passes(
+      u, m_qp, energy, residual, tangent != nullptr,
+      [&](Eigen::Index start, Eigen::Index n, const double* kbuf, const char* ok) {
+        if (std::all_of(ok, ok + n, [](char c) { return c != 0; })) tangent->add(start, n, kbuf);
+      });
 }
 
 Eigen::MatrixXd Assembler::jacobians(const Eigen::VectorXd& u) const {

@@ -7,36 +7,61 @@
 
 namespace softhd::fe {
 
-ReferenceGeometry::ReferenceGeometry(const Mesh& mesh) : dim_(mesh.dim) {
+ReferenceGeometry::ReferenceGeometry(const Mesh& mesh, GradientStorage storage) : dim_(mesh.dim) {
   Eigen::VectorXd wq;
   element_quadrature(dim_, mesh.order, &xi_, &wq);
   nq_ = static_cast<int>(wq.size());
   nen_ = mesh.nodes_per_element();
+  const bool store = storage == GradientStorage::kStored;
+  stored_ = store;
+  if (!store && nen_ > kMaxNodes)
+    throw InvalidArgument("reference geometry: on-demand gradients need at most " +
+                          std::to_string(kMaxNodes) + " nodes per element");
   N_.resize(nq_, nen_);
-  std::vector<Eigen::MatrixXd> dN_ref(nq_);
+  dN_ref_.resize(nq_);
   for (int q = 0; q < nq_; ++q) {
     Eigen::VectorXd N;
-    lagrange_shape(dim_, mesh.order, xi_.row(q).transpose(), &N, &dN_ref[q]);
+    lagrange_shape(dim_, mesh.order, xi_.row(q).transpose(), &N, &dN_ref_[q]);
     N_.row(q) = N.transpose();
   }
   const Eigen::Index E = mesh.num_elements();
-  dNdX_.resize(dim_, E * nq_ * nen_);
+  if (store) dNdX_.resize(dim_, E * nq_ * nen_);
   weights_.resize(E, nq_);
   Eigen::MatrixXd Xe(nen_, dim_);
   for (Eigen::Index e = 0; e < E; ++e) {
     for (int a = 0; a < nen_; ++a) Xe.row(a) = mesh.nodes.row(mesh.elements(e, a));
     for (int q = 0; q < nq_; ++q) {
       // J0 = dX/dxi = Σ_a X_a ⊗ dN_a/dxi;  dN/dX = dN/dxi J0^{-1}
-      const Eigen::MatrixXd J0 = Xe.transpose() * dN_ref[q];
+      const Eigen::MatrixXd J0 = Xe.transpose() * dN_ref_[q];
       const double det = J0.determinant();
       if (!(det > 0.0)) {
         throw InvalidArgument("mesh: element " + std::to_string(e) +
                               " is inverted or degenerate (det dX/dxi <= 0)");
       }
-      dNdX_.middleCols((e * nq_ + q) * nen_, nen_) = (dN_ref[q] * J0.inverse()).transpose();
+      if (store)
+        dNdX_.middleCols((e * nq_ + q) * nen_, nen_) = (dN_ref_[q] * J0.inverse()).transpose();
       weights_(e, q) = wq[q] * det;
     }
   }
+}
+
+void ReferenceGeometry::point_gradients(const Mesh& mesh, Eigen::Index e, int q, double* G) const {
+  // J0(i, K) = Σ_a X_a,i dN_a/dξ_K (identity beyond dim); dN_a/dX_J = Σ_K dN_a/dξ_K J0⁻¹(K, J)
+  const Eigen::MatrixXd& dN = dN_ref_[q];
+  Eigen::Matrix3d J0 = Eigen::Matrix3d::Identity();
+  for (int i = 0; i < dim_; ++i)
+    for (int K = 0; K < dim_; ++K) {
+      double s = 0.0;
+      for (int a = 0; a < nen_; ++a) s += mesh.nodes(mesh.elements(e, a), i) * dN(a, K);
+      J0(i, K) = s;
+    }
+  const Eigen::Matrix3d Jinv = J0.inverse();
+  for (int a = 0; a < nen_; ++a)
+    for (int J = 0; J < dim_; ++J) {
+      double s = 0.0;
+      for (int K = 0; K < dim_; ++K) s += dN(a, K) * Jinv(K, J);
+      G[a * dim_ + J] = s;
+    }
 }
 
 Eigen::VectorXd lumped_volumes(const Mesh& mesh, const ReferenceGeometry& g) {

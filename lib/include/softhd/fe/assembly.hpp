@@ -7,7 +7,8 @@
 /// per-element buffers (passes of a fixed number of elements) and added to the global
 /// vectors serially in element order, so the results are bitwise identical for any
 /// number of threads. The sparsity pattern of K (lower triangle,
-/// free dofs) and the element-to-nonzero maps are built once in the constructor.
+/// free dofs) and the element-to-nonzero maps are built once in the constructor, unless
+/// the assembler is lean (AssemblerStorage::kLean: element tangents go to a sink).
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
@@ -24,13 +25,38 @@ namespace softhd::fe {
 /// Column-major sparse matrix; tangents store only the lower triangle.
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
+/// What an Assembler keeps in memory.
+enum class AssemblerStorage {
+  /// The sparsity pattern and element-to-nonzero maps of a SparseMatrix tangent, and dN/dX
+  /// at every quadrature point (the serial solvers).
+  kFull,
+  /// Neither: tangents go to an ElementMatrixSink (e.g. a distributed matrix) and dN/dX is
+  /// recomputed per point (GradientStorage::kOnDemand). On Q2 hexahedra about 2.7 KB per
+  /// free dof less, for about 10 % more time per tangent.
+  kLean,
+};
+
+/// Receives element tangents from Assembler::evaluate_elements, a pass of consecutive elements at a
+/// time (one call per pass, never per element), serially and in element order.
+class ElementMatrixSink {
+ public:
+  virtual ~ElementMatrixSink() = default;
+  /// K_e of the elements first .. first + count - 1: element first + i at Ke + i nd², nd by
+  /// nd row-major with local dof a·dim + k (nd = nodes per element times dim; both
+  /// triangles, exactly symmetric). Entries of fixed dofs are included.
+  virtual void add(Eigen::Index first, Eigen::Index count, const double* Ke) = 0;
+};
+
 /// Everything that defines the discrete state problem except the control.
 class Assembler {
  public:
   /// `a0` is the fiber direction (normalised here; in 2D its third component must be 0).
-  /// Throws InvalidArgument on inconsistent input.
+  /// Throws InvalidArgument on inconsistent input. With AssemblerStorage::kLean no sparsity
+  /// pattern is built (tangent_pattern() and the SparseMatrix evaluate() throw); tangents
+  /// then go to an ElementMatrixSink through evaluate_elements().
   Assembler(Mesh mesh, std::shared_ptr<const Material> material, const Eigen::Vector3d& a0,
-            const std::vector<DirichletConstraint>& constraints);
+            const std::vector<DirichletConstraint>& constraints,
+            AssemblerStorage storage = AssemblerStorage::kFull);
 
   /// The mesh.
   const Mesh& mesh() const { return mesh_; }
@@ -53,6 +79,11 @@ class Assembler {
   /// some quadrature point.
   bool evaluate(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp, double* energy,
                 Eigen::VectorXd* residual, SparseMatrix* tangent) const;
+  /// evaluate() with the element tangents handed to `tangent` (may be null) instead of
+  /// assembled here (any AssemblerStorage); passes containing an element with det F <= 0 are
+  /// not handed over.
+  bool evaluate_elements(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp, double* energy,
+                         Eigen::VectorXd* residual, ElementMatrixSink* tangent) const;
 
   /// Smallest det F over all quadrature points.
   double min_jacobian(const Eigen::VectorXd& u) const;
@@ -69,12 +100,18 @@ class Assembler {
 
  private:
   struct ElementWork;
+  /// The pass loop of evaluate(): `add_pass(first, count, Ke, ok)` adds a pass's element
+  /// tangents (called when want_tangent; ok[i] == 0 marks an element with det F <= 0).
+  template <class AddPass>
+  bool evaluate_passes(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp, double* energy,
+                       Eigen::VectorXd* residual, bool want_tangent, AddPass&& add_pass) const;
   /// Π_e, r_e (nd) and K_e (nd by nd, row-major, local dof a·dim + i) of element e; null
   /// outputs are skipped. Returns false if det F <= 0 at one of its points.
   bool element_kernel(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp, Eigen::Index e,
                       double* energy, double* residual, double* tangent, ElementWork& work) const;
 
   Mesh mesh_;
+  AssemblerStorage storage_;
   ReferenceGeometry geometry_;
   std::shared_ptr<const Material> material_;
   Eigen::Vector3d a0_;

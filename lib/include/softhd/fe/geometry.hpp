@@ -5,16 +5,27 @@
 /// volumes V_i = ∫ N_i dX (docs/formulation.md §1.2).
 
 #include <Eigen/Core>
+#include <vector>
 
 #include "softhd/fe/mesh.hpp"
 
 namespace softhd::fe {
 
+/// Whether ReferenceGeometry keeps dN/dX at every quadrature point.
+enum class GradientStorage {
+  kStored,    ///< computed once, dim·nen·nq doubles per element (17.5 KB for a Q2 hexahedron)
+  kOnDemand,  ///< not kept: point_gradients() recomputes them from the element's nodes
+};
+
 /// Full Gauss quadrature ((p+1)^dim points per element) on the reference body.
 class ReferenceGeometry {
  public:
-  /// Throws InvalidArgument if an element is inverted (det(dX/dxi) <= 0).
-  explicit ReferenceGeometry(const Mesh& mesh);
+  /// The most nodes per element point_gradients() handles (a Q2 hexahedron).
+  static constexpr int kMaxNodes = 27;
+
+  /// Throws InvalidArgument if an element is inverted (det(dX/dxi) <= 0), or with
+  /// kOnDemand if an element has more than kMaxNodes nodes.
+  explicit ReferenceGeometry(const Mesh& mesh, GradientStorage storage = GradientStorage::kStored);
 
   /// The dimension d (2 or 3).
   int dim() const { return dim_; }
@@ -28,16 +39,25 @@ class ReferenceGeometry {
   const Eigen::MatrixXd& shape_values() const { return N_; }
   /// Reference coordinates of the quadrature points: nq by dim.
   const Eigen::MatrixXd& reference_points() const { return xi_; }
+  /// True if gradients() may be called (GradientStorage::kStored).
+  bool stores_gradients() const { return stored_; }
   /// dN_a/dX at point q of element e: column (e nq + q) nen + a of a dim-row matrix.
+  /// Only when stores_gradients().
   Eigen::Ref<const Eigen::MatrixXd> gradients(Eigen::Index e, int q) const {
     return dNdX_.middleCols((e * nq_ + q) * nen_, nen_);
   }
+  /// dN_a/dX at point q of element e of `mesh` (the mesh this was built from), computed
+  /// from its nodes into G (dim by nen, column-major: G[a dim + J] = dN_a/dX_J). Equal to
+  /// gradients(e, q) up to rounding (3 by 3 inverse by cofactors); no allocation.
+  void point_gradients(const Mesh& mesh, Eigen::Index e, int q, double* G) const;
   /// w_q det J0 at point q of element e (E by nq).
   const Eigen::MatrixXd& weights() const { return weights_; }
 
  private:
   int dim_ = 3, nen_ = 0, nq_ = 0;
+  bool stored_ = true;
   Eigen::MatrixXd N_, xi_, dNdX_, weights_;
+  std::vector<Eigen::MatrixXd> dN_ref_;  ///< per point: nen by dim, dN_a/dξ
 };
 
 /// Lumped nodal volumes V_i = ∫ N_i dX (areas in 2D); they sum to |Ω₀| and are positive

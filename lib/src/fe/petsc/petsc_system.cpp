@@ -45,13 +45,12 @@ SlabPartition checked_partition(const Scene& scene) {
 DistributedSystem::DistributedSystem(const Scene& scene, StateBackend backend,
                                      int max_krylov_iterations)
     : slab_(checked_partition(scene)),
-      assembler_(
-          std::make_unique<Assembler>(slab_.mesh, scene.material, scene.fibers, slab_.constraints)),
+      assembler_(std::make_unique<Assembler>(slab_.mesh, scene.material, scene.fibers,
+                                             slab_.constraints, AssemblerStorage::kLean)),
       numbering_(number_free_dofs(scene, slab_, assembler_->dofs())),
       backend_(backend),
       max_krylov_iterations_(max_krylov_iterations),
-      local_rows_(numbering_.local_to_global.begin(), numbering_.local_to_global.end()),
-      slab_tangent_(assembler_->tangent_pattern()) {
+      local_rows_(numbering_.local_to_global.begin(), numbering_.local_to_global.end()) {
   int whole = numbering_.whole_nodes ? 1 : 0, all_whole = 0;
   MPI_Allreduce(&whole, &all_whole, 1, MPI_INT, MPI_MIN, comm());
   block_size_ = all_whole ? scene.dim() : 1;
@@ -81,28 +80,62 @@ DistributedSystem::~DistributedSystem() {
   VecDestroy(&global_);
 }
 
+namespace {
+
+// Calls visit(i, j) once for every pair of slab free dofs (i, j) that share an element:
+// the nonzeros of the slab's tangent, both triangles. Node by node through a node-to-element
+// incidence, so it needs O(nodes + elements) memory, not a pattern.
+template <class Visit>
+void for_each_coupling(const Mesh& mesh, const DofMap& dofs, Visit&& visit) {
+  const int dim = mesh.dim, nen = mesh.nodes_per_element();
+  const Eigen::Index nn = mesh.num_nodes(), E = mesh.num_elements();
+  std::vector<Eigen::Index> first(nn + 1, 0);
+  for (Eigen::Index e = 0; e < E; ++e)
+    for (int a = 0; a < nen; ++a) ++first[mesh.elements(e, a) + 1];
+  for (Eigen::Index n = 0; n < nn; ++n) first[n + 1] += first[n];
+  std::vector<Eigen::Index> incident(first[nn]), next(first.begin(), first.end() - 1);
+  for (Eigen::Index e = 0; e < E; ++e)
+    for (int a = 0; a < nen; ++a) incident[next[mesh.elements(e, a)]++] = e;
+  std::vector<Eigen::Index> seen(nn, -1);
+  std::vector<int> columns;
+  for (Eigen::Index n = 0; n < nn; ++n) {
+    columns.clear();
+    for (Eigen::Index k = first[n]; k < first[n + 1]; ++k)
+      for (int a = 0; a < nen; ++a) {
+        const Eigen::Index m = mesh.elements(incident[k], a);
+        if (seen[m] == n) continue;
+        seen[m] = n;
+        for (int l = 0; l < dim; ++l)
+          if (dofs.free_index[m * dim + l] >= 0) columns.push_back(dofs.free_index[m * dim + l]);
+      }
+    for (int c = 0; c < dim; ++c) {
+      const int i = dofs.free_index[n * dim + c];
+      if (i >= 0)
+        for (int j : columns) visit(i, j);
+    }
+  }
+}
+
+}  // namespace
+
 void DistributedSystem::create_matrix() {
-  // Nonzeros per row from the slab's pattern (both triangles), split into the diagonal and
-  // off-diagonal blocks of the row's owner, summed over the ranks that share the row (an
-  // over-estimate on the interface planes).
+  // Nonzeros per row of the slab's tangent, split into the diagonal and off-diagonal blocks
+  // of the row's owner, summed over the ranks that share the row. A pair of dofs that both
+  // lie on an interface plane couples through the elements on either side; it is counted
+  // only by the plane's owner, so the counts are exact.
   const PetscInt* ranges = nullptr;
   SOFTHD_PETSC(VecGetOwnershipRanges(global_, &ranges));
-  const int size = comm_size();
+  const int size = comm_size(), rank = comm_rank();
   auto owner = [&](PetscInt row) {
     return static_cast<int>(std::upper_bound(ranges, ranges + size + 1, row) - ranges) - 1;
   };
   std::vector<double> d(local_rows_.size(), 0.0), o(local_rows_.size(), 0.0);
-  auto count = [&](int i, int j) {
+  for_each_coupling(assembler_->mesh(), assembler_->dofs(), [&](int i, int j) {
     const int w = owner(local_rows_[i]);
+    if (w != rank && owner(local_rows_[j]) != rank) return;
     const bool diag = local_rows_[j] >= ranges[w] && local_rows_[j] < ranges[w + 1];
     (diag ? d : o)[i] += 1.0;
-  };
-  const SparseMatrix& P = slab_tangent_;
-  for (int j = 0; j < P.outerSize(); ++j)
-    for (SparseMatrix::InnerIterator it(P, j); it; ++it) {
-      count(static_cast<int>(it.row()), j);
-      if (it.row() != j) count(j, static_cast<int>(it.row()));
-    }
+  });
   const auto n = static_cast<PetscInt>(owned());
   const auto N = static_cast<PetscInt>(numbering_.num_global);
   std::vector<PetscInt> dnz(n), onz(n);
@@ -246,13 +279,57 @@ double DistributedSystem::max_abs(const Eigen::VectorXd& a) const {
   return -min(a.size() ? -a.lpNorm<Eigen::Infinity>() : 0.0);
 }
 
+namespace {
+
+// Adds element tangents into the distributed matrix, each element's full nd by nd block
+// (fixed dofs get row and column -1, which PETSc ignores). Entries of rows owned by another
+// rank are stashed by PETSc and sent at MatAssemblyBegin.
+class MatrixSink final : public ElementMatrixSink {
+ public:
+  MatrixSink(Mat K, const Assembler& assembler, const std::vector<PetscInt>& rows)
+      : K_(K),
+        mesh_(assembler.mesh()),
+        dofs_(assembler.dofs()),
+        rows_(rows),
+        index_(static_cast<size_t>(mesh_.nodes_per_element()) * mesh_.dim) {}
+
+  void add(Eigen::Index first, Eigen::Index count, const double* Ke) override {
+    const int dim = mesh_.dim, nen = mesh_.nodes_per_element(), nd = nen * dim;
+    for (Eigen::Index i = 0; i < count; ++i) {
+      for (int a = 0; a < nen; ++a)
+        for (int k = 0; k < dim; ++k) {
+          const int f = dofs_.free_index[mesh_.elements(first + i, a) * dim + k];
+          index_[a * dim + k] = f >= 0 ? rows_[f] : -1;
+        }
+      SOFTHD_PETSC(MatSetValues(K_, nd, index_.data(), nd, index_.data(),
+                                Ke + i * nd * static_cast<Eigen::Index>(nd), ADD_VALUES));
+    }
+  }
+
+ private:
+  Mat K_;
+  const Mesh& mesh_;
+  const DofMap& dofs_;
+  const std::vector<PetscInt>& rows_;
+  std::vector<PetscInt> index_;
+};
+
+}  // namespace
+
 bool DistributedSystem::evaluate(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp,
                                  double* energy, Eigen::VectorXd* residual, bool tangent) {
   const Eigen::VectorXd ul = slab_vector(u);
   double e = 0.0;
   Eigen::VectorXd r;
-  const bool ok = assembler_->evaluate(ul, m_qp, &e, residual ? &r : nullptr,
-                                       tangent ? &slab_tangent_ : nullptr);
+  MatrixSink sink(K_, *assembler_, local_rows_);
+  if (tangent && matrix_assembled_) SOFTHD_PETSC(MatZeroEntries(K_));
+  const bool ok = assembler_->evaluate_elements(ul, m_qp, &e, residual ? &r : nullptr,
+                                                tangent ? &sink : nullptr);
+  if (tangent) {  // collective: every rank assembles, whatever its elements did
+    SOFTHD_PETSC(MatAssemblyBegin(K_, MAT_FINAL_ASSEMBLY));
+    SOFTHD_PETSC(MatAssemblyEnd(K_, MAT_FINAL_ASSEMBLY));
+    matrix_assembled_ = true;
+  }
   if (min(ok ? 1.0 : 0.0) == 0.0) {  // det F <= 0 on some rank
     if (energy) *energy = std::numeric_limits<double>::infinity();
     return false;
@@ -270,26 +347,6 @@ bool DistributedSystem::evaluate(const Eigen::VectorXd& u, const Eigen::MatrixXd
     SOFTHD_PETSC(VecGetArrayRead(global_, &g));
     *residual = Eigen::Map<const Eigen::VectorXd>(g, owned());
     SOFTHD_PETSC(VecRestoreArrayRead(global_, &g));
-  }
-  if (tangent) {
-    // The slab's lower triangle, column by column, into both triangles of K.
-    if (matrix_assembled_) SOFTHD_PETSC(MatZeroEntries(K_));
-    const SparseMatrix& P = slab_tangent_;
-    std::vector<PetscInt> rows;
-    for (int j = 0; j < P.outerSize(); ++j) {
-      const int begin = P.outerIndexPtr()[j], n = P.outerIndexPtr()[j + 1] - begin;
-      if (n == 0) continue;
-      rows.resize(n);
-      for (int k = 0; k < n; ++k) rows[k] = local_rows_[P.innerIndexPtr()[begin + k]];
-      const PetscInt col = local_rows_[j];
-      const PetscScalar* v = P.valuePtr() + begin;
-      SOFTHD_PETSC(MatSetValues(K_, n, rows.data(), 1, &col, v, ADD_VALUES));
-      const int skip = P.innerIndexPtr()[begin] == j ? 1 : 0;  // the diagonal, once
-      SOFTHD_PETSC(MatSetValues(K_, 1, &col, n - skip, rows.data() + skip, v + skip, ADD_VALUES));
-    }
-    SOFTHD_PETSC(MatAssemblyBegin(K_, MAT_FINAL_ASSEMBLY));
-    SOFTHD_PETSC(MatAssemblyEnd(K_, MAT_FINAL_ASSEMBLY));
-    matrix_assembled_ = true;
   }
   return true;
 }

@@ -1,7 +1,8 @@
 #pragma once
 // The distributed discrete system of the PETSc state backend (internal): one rank's slab
-// assembler, the global free-dof numbering, the distributed tangent (MATAIJ), and the KSP
-// that solves with it. Vectors cross this interface as Eigen vectors of the rank's owned
+// assembler (built without a serial sparsity pattern: element tangents go straight into the
+// distributed matrix), the global free-dof numbering, the distributed tangent (MATAIJ), and
+// the KSP that solves with it. Vectors cross this interface as Eigen vectors of the rank's owned
 // rows (in global row order); reductions over ranks are done here.
 
 #include <petscksp.h>
@@ -81,7 +82,6 @@ class DistributedSystem {
   int max_krylov_iterations_;
   int block_size_ = 1;
   std::vector<PetscInt> local_rows_;  // global row of each slab free dof
-  SparseMatrix slab_tangent_;         // the slab's tangent (lower triangle, slab free dofs)
   Mat K_ = nullptr;
   Vec global_ = nullptr, global2_ = nullptr, local_ = nullptr;
   VecScatter to_local_ = nullptr;
