@@ -118,6 +118,7 @@ struct Assembler::ElementWork {
       : Ue(dim, nen), Gs(dim * nq, nen), H(dim * nq, nen), Kb(nen, nen), Gq(dim, nen), wC(nq) {}
 };
 
+template <bool kStored>
 bool Assembler::element_kernel(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp,
                                Eigen::Index e, double* energy, double* residual, double* tangent,
                                ElementWork& w) const {
@@ -128,12 +129,11 @@ bool Assembler::element_kernel(const Eigen::VectorXd& u, const Eigen::MatrixXd& 
   Eigen::Map<Eigen::MatrixXd> r(residual, dim, residual ? nen : 0);  // r(i, a) = r_e[a dim + i]
   if (residual) r.setZero();
   double We = 0.0;
-  const bool stored = geometry_.stores_gradients();
   for (int q = 0; q < nq; ++q) {
-    if (!stored) geometry_.point_gradients(mesh_, e, q, w.Gq.data());
+    if constexpr (!kStored) geometry_.point_gradients(mesh_, e, q, w.Gq.data());
     // dim by nen: ∇N_a at X_q
     const Eigen::Ref<const Eigen::MatrixXd> G =
-        stored ? geometry_.gradients(e, q) : Eigen::Ref<const Eigen::MatrixXd>(w.Gq);
+        kStored ? geometry_.gradients(e, q) : Eigen::Ref<const Eigen::MatrixXd>(w.Gq);
     // F = I + Σ_a u_a ⊗ ∇N_a (F33 = 1 in 2D: plane strain)
     Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
     F.topLeftCorner(dim, dim).noalias() += w.Ue * G.transpose();
@@ -190,13 +190,18 @@ bool Assembler::evaluate_passes(const Eigen::VectorXd& u, const Eigen::MatrixXd&
   std::vector<double> rbuf(want_r ? chunk * nd : 0);
   std::vector<double> kbuf(want_K ? chunk * nd * nd : 0);
   std::vector<ElementWork> work(softhd::max_threads(), ElementWork(dim, nen, nq));
+  const bool stored = geometry_.stores_gradients();
   for (Eigen::Index start = 0; start < E; start += chunk) {
     const Eigen::Index n = std::min(chunk, E - start);
 #pragma omp parallel for schedule(static) if (n >= 8)
     for (Eigen::Index i = 0; i < n; ++i) {
-      element_ok[start + i] = element_kernel(
-          u, m_qp, start + i, &element_energy[start + i], want_r ? &rbuf[i * nd] : nullptr,
-          want_K ? &kbuf[i * nd * nd] : nullptr, work[thread_id()]);
+      double* re = want_r ? &rbuf[i * nd] : nullptr;
+      double* Ke = want_K ? &kbuf[i * nd * nd] : nullptr;
+      element_ok[start + i] =
+          stored ? element_kernel<true>(u, m_qp, start + i, &element_energy[start + i], re, Ke,
+                                        work[thread_id()])
+                 : element_kernel<false>(u, m_qp, start + i, &element_energy[start + i], re, Ke,
+                                         work[thread_id()]);
     }
     // Serial scatter in element order.
     if (want_r) {
