@@ -5,8 +5,10 @@
 # e.g. scripts/measure_state_memory.sh build-mpi "1 2" "cholmod petsc-gamg:1 petsc-gamg:2"
 # Prints one row per run: backend ranks r cells dofs peak_rss_MiB(max over ranks) seconds
 # converged ("failed" when the run stopped early, e.g. on purpose with PETSC_OPTIONS=
-# "-softhd_state_ksp_max_it 40 -softhd_state_ksp_error_if_not_converged": the peak of the
-# setup and the first solve, without waiting for CG to converge). Peak RSS is GNU time's maximum resident set size of the process (with mpiexec:
+# "-softhd_state_ksp_error_if_not_converged": it stops at the first CG solve that does not
+# converge, on the bending plate the second Newton direction (negative curvature), after two
+# assemblies and GAMG set-ups; -softhd_state_ksp_max_it has no effect, the solver sets its
+# own limit per solve). Peak RSS is GNU time's maximum resident set size of the process (with mpiexec:
 # of the largest of its children, i.e. per rank). OMP_NUM_THREADS=1 for every run.
 set -eu
 build=$1
