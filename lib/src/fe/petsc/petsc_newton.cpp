@@ -155,8 +155,18 @@ Eigen::VectorXd DistributedNewton::solve_converged_tangent(const Eigen::VectorXd
   Eigen::VectorXd x;
   const LinearSolveReport r =
       system_.solve(b, options_.adjoint_tolerance, /*allow_shift=*/false, &x);
+  adjoint_attempts_ = r.attempts;
   if (!r.ok) throw NumericalError("Newton (PETSc): the converged tangent is not positive definite");
   return x;
+}
+
+void DistributedNewton::reset() {
+  path_tangent_ = false;
+  converged_ = false;
+  adjoint_attempts_ = 0;
+  last_u_.resize(0);
+  last_m_.resize(0, 0);
+  system_.forget_shift();
 }
 
 NewtonSummary DistributedNewton::solve(const Eigen::MatrixXd& m_qp, Eigen::VectorXd* state_u,
