@@ -32,16 +32,12 @@ class DistributedNewton {
   void reset();
 
  private:
-  bool solve_load_step(const Eigen::MatrixXd& m, int load_step, double load, bool predictor,
-                       Eigen::VectorXd* u, NewtonSummary* summary);
+  /// The linear algebra of the shared Newton loop (../newton_load_step.hpp).
+  struct Algebra;
   bool direction(const Eigen::VectorXd& R, double eta, Eigen::VectorXd* du, NewtonIteration* rec,
                  NewtonSummary* summary);
   bool assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m, double* energy,
                 Eigen::VectorXd* residual, bool tangent, NewtonSummary* summary);
-  /// The step of a load step's convergence: K at the converged state (for the next
-  /// predictor and the adjoint).
-  bool converge(bool tangent_is_current, const Eigen::VectorXd& u, const Eigen::MatrixXd& m,
-                NewtonSummary* summary);
 
   DistributedSystem& system_;
   NewtonOptions options_;
