@@ -19,13 +19,10 @@
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/fe/state_backend.hpp"
-#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
-#include <mpi.h>
-
-#include "softhd/fe/petsc_state.hpp"
-#endif
+#include "softhd/fe/state_equation.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/parallel.hpp"
+#include "softhd/work_share.hpp"
 
 namespace {
 
@@ -189,16 +186,27 @@ bool parse(int argc, char** argv, Args* a) {
   return true;
 }
 
-/// The control values on `control` from the arguments (file rows matched by coordinates).
-Eigen::VectorXd control_values(const Scene& scene, const ControlSpace& control, const Mesh& mesh,
+/// The control values (one per control position) from the arguments (file rows matched by
+/// coordinates), checked against the scene's bounds.
+Eigen::VectorXd control_values(const Scene& scene, const Eigen::MatrixXd& positions,
                                const Args& args) {
   Eigen::VectorXd m = Eigen::VectorXd::Constant(
-      control.size(), args.has_uniform ? args.uniform : scene.control_initial);
-  if (!args.control_file.empty()) m = read_control_file(args.control_file, control.positions(mesh));
+      positions.rows(), args.has_uniform ? args.uniform : scene.control_initial);
+  if (!args.control_file.empty()) m = read_control_file(args.control_file, positions);
   return m;
 }
 
-int forward_petsc(const Args& args);
+void check_bounds(const Scene& scene, const Eigen::MatrixXd& positions, const Eigen::VectorXd& m) {
+  for (Eigen::Index k = 0; k < m.size(); ++k) {
+    if (!(m[k] >= scene.control_lower && m[k] <= scene.control_upper)) {
+      std::ostringstream os;
+      os << "control value " << m[k] << " at node " << k << " (" << positions.row(k)
+         << ") is outside the scene's bounds [" << scene.control_lower << ", "
+         << scene.control_upper << "]";
+      throw softhd::InvalidArgument(os.str());
+    }
+  }
+}
 
 // The JSON record of each coarse level of a grid-sequenced start.
 nlohmann::json coarse_levels_json(const GridSequencingReport& grid) {
@@ -213,30 +221,15 @@ nlohmann::json coarse_levels_json(const GridSequencingReport& grid) {
   return levels;
 }
 
-int forward(const Args& args) {
-  if (args.backend != StateBackend::kCholmod) return forward_petsc(args);
-  const auto t0 = std::chrono::steady_clock::now();
-  const Scene scene = load_scene(args.scene, args.memory_limit);
-  const Assembler assembler = scene.make_assembler();
-  const ControlSpace control(assembler.mesh(), assembler.geometry(), scene.control_kind);
-  const Eigen::MatrixXd positions = control.positions(assembler.mesh());
-  const Eigen::VectorXd m = control_values(scene, control, assembler.mesh(), args);
-  if (!args.write_nodes.empty()) {
-    write_control_file(args.write_nodes, positions, m);
-    return 0;
-  }
-  check_control_bounds(scene, control, assembler.mesh(), m);
-  for (const Eigen::VectorXd& X : args.probes) {
-    Eigen::VectorXd xi;
-    if (X.size() != scene.dim() || locate(assembler.mesh(), X, &xi) < 0) {
-      std::ostringstream os;
-      os << "probe (" << X.transpose() << ") is not a point of the " << scene.dim() << "D body";
-      throw softhd::InvalidArgument(os.str());
-    }
-  }
-  softhd::set_threads(args.threads);
-  ForwardOptions fo;
-  NewtonOptions& options = fo.newton;
+/// The state solver's settings from the arguments.
+StateSolverOptions solver_options(const Args& args) {
+  if (args.backend != StateBackend::kCholmod &&
+      (!args.linear_solver.empty() || args.factorize_every_step))
+    throw softhd::InvalidArgument(
+        "--linear-solver and --factorize-every-step need --state-backend cholmod");
+  StateSolverOptions so;
+  so.backend = args.backend;
+  NewtonOptions& options = so.newton;
   options.verbose = args.verbose;
   options.displacement_tolerance = args.step_tol;
   options.initial_load_increment = args.load_increment;
@@ -245,56 +238,117 @@ int forward(const Args& args) {
   options.tangent.reuse_factorization = !args.factorize_every_step;
   if (!args.linear_solver.empty())
     options.tangent.linear_solver = parse_linear_solver(args.linear_solver);
-  fo.grid.levels = args.coarse_levels;
-  const ForwardResult fr = solve_forward(scene, assembler, control, m, fo);
-  std::cerr << fr.grid.BriefReport();
-  const State& state = fr.state;
-  const NewtonSummary& summary = fr.summary;
-  const Eigen::MatrixXd J = assembler.jacobians(state.u);
+  return so;
+}
+
+/// What a forward solve leaves for the output (whole mesh, on every rank).
+struct Solved {
+  GridSequencingReport grid;
+  NewtonSummary summary;
+  State state;
+  Eigen::MatrixXd J;
+  double energy = 0.0, volume = 0.0, seconds_solve = 0.0;
+  Eigen::Index dofs = 0;
+};
+
+Solved solve(const Scene& scene, const Eigen::VectorXd& m, const Args& args) {
+  const std::unique_ptr<StateEquation> solver = make_state_solver(scene, solver_options(args));
+  GridSequencingOptions grid_options;
+  grid_options.levels = args.coarse_levels;
+  Solved r;
+  r.grid = solver->grid_sequenced_start(scene, m, grid_options);
+  if (softhd::world_rank() == 0) std::cerr << r.grid.BriefReport();
+  r.summary = solver->solve(m);
+  r.seconds_solve = r.summary.seconds_total;
+  for (const GridLevelReport& level : r.grid.levels) r.seconds_solve += level.newton.seconds_total;
+  r.state = solver->state();
+  r.J = solver->jacobians();
+  r.energy = solver->energy();
+  r.volume = solver->deformed_volume();
+  r.dofs = solver->free_dofs();
+  return r;
+}
+
+void print_json(const Scene& scene, const Args& args, const Mesh& mesh, const Solved& r,
+                const std::string& vtu, double seconds) {
+  const NewtonSummary& summary = r.summary;
+  nlohmann::json j;
+  j["scene"] = scene.name;
+  j["state_backend"] = to_string(args.backend);
+  j["ranks"] = softhd::world_size();
+  j["status"] = to_string(summary.status);
+  j["converged"] = summary.converged();
+  j["load_reached"] = summary.final_load;
+  nlohmann::json probes = nlohmann::json::array();
+  for (const Eigen::VectorXd& X : args.probes) {
+    const Eigen::VectorXd u = probe_displacement(mesh, r.state.u, X);
+    probes.push_back({{"X", std::vector<double>(X.data(), X.data() + X.size())},
+                      {"u", std::vector<double>(u.data(), u.data() + u.size())}});
+  }
+  j["probes"] = probes;
+  j["energy"] = r.energy;
+  j["volume"] = r.volume;
+  j["min_J"] = r.J.minCoeff();
+  j["newton_iterations"] = summary.newton_iterations;
+  j["factorizations"] = summary.factorizations;
+  j["krylov_iterations"] = summary.krylov_iterations;
+  j["load_steps"] = summary.load_steps;
+  j["dofs"] = r.dofs;
+  // Solve time: the coarse levels' Newton solves and the fine one (no file I/O).
+  j["coarse_levels"] = coarse_levels_json(r.grid);
+  j["seconds_solve"] = r.seconds_solve;
+  j["seconds"] = seconds;
+  j["vtu"] = vtu;
+  std::cout << j.dump(2) << "\n";
+}
+
+// Every rank reads the scene and solves (with a PETSc backend, its slab); rank 0 writes the
+// files and prints.
+int forward(const Args& args) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const bool writer = softhd::world_rank() == 0;
+  // The memory limit is per rank: a PETSc backend holds 1/K of the state on each.
+  const double ranks = args.backend == StateBackend::kCholmod ? 1 : softhd::world_size();
+  const Scene scene = load_scene(args.scene, args.memory_limit * ranks);
+  const Mesh mesh = scene.make_mesh();
+  const Eigen::MatrixXd positions = control_positions(mesh, scene.control_kind);
+  const Eigen::VectorXd m = control_values(scene, positions, args);
+  if (!args.write_nodes.empty()) {
+    if (writer) write_control_file(args.write_nodes, positions, m);
+    return 0;
+  }
+  check_bounds(scene, positions, m);
+  for (const Eigen::VectorXd& X : args.probes) {
+    Eigen::VectorXd xi;
+    if (X.size() != scene.dim() || locate(mesh, X, &xi) < 0) {
+      std::ostringstream os;
+      os << "probe (" << X.transpose() << ") is not a point of the " << scene.dim() << "D body";
+      throw softhd::InvalidArgument(os.str());
+    }
+  }
+  softhd::set_threads(args.threads);
+  const Solved r = solve(scene, m, args);
+  const NewtonSummary& summary = r.summary;
+  if (!writer) return summary.converged() ? 0 : 1;
   std::filesystem::create_directories(args.out_dir);
   const std::string vtu = (std::filesystem::path(args.out_dir) / "forward.vtu").string();
-  write_vtu(vtu, assembler.mesh(), state.u, state.m_qp, J);
-  if (!args.write_cloud.empty() && summary.converged()) {
-    const softhd::PointCloud cloud =
-        deformed_cloud(assembler, state.u, CloudPoints::kNodes, CloudVolumes::kDeformed);
-    softhd::write_cloud(args.write_cloud, cloud);
+  write_vtu(vtu, mesh, r.state.u, r.state.m_qp, r.J);
+  const bool cloud = !args.write_cloud.empty() && summary.converged();
+  if (cloud) {  // the deformed volumes need the whole mesh's quadrature: one assembler here
+    softhd::write_cloud(args.write_cloud,
+                        deformed_cloud(scene.make_assembler(), r.state.u, CloudPoints::kNodes,
+                                       CloudVolumes::kDeformed));
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (args.json) {
-    nlohmann::json j;
-    j["scene"] = scene.name;
-    j["status"] = to_string(summary.status);
-    j["converged"] = summary.converged();
-    j["load_reached"] = summary.final_load;
-    nlohmann::json probes = nlohmann::json::array();
-    for (const Eigen::VectorXd& X : args.probes) {
-      const Eigen::VectorXd u = probe_displacement(assembler, state.u, X);
-      probes.push_back({{"X", std::vector<double>(X.data(), X.data() + X.size())},
-                        {"u", std::vector<double>(u.data(), u.data() + u.size())}});
-    }
-    j["probes"] = probes;
-    j["energy"] = fr.energy;
-    j["volume"] = fr.volume;
-    j["min_J"] = fr.min_J;
-    j["newton_iterations"] = summary.newton_iterations;
-    j["factorizations"] = summary.factorizations;
-    j["krylov_iterations"] = summary.krylov_iterations;
-    j["load_steps"] = summary.load_steps;
-    j["dofs"] = assembler.dofs().num_free;
-    // Solve time: the coarse levels' Newton solves and the fine one (no file I/O).
-    j["coarse_levels"] = coarse_levels_json(fr.grid);
-    j["seconds_solve"] = fr.seconds_solve;
-    j["seconds"] = seconds;
-    j["vtu"] = vtu;
-    std::cout << j.dump(2) << "\n";
+    print_json(scene, args, mesh, r, vtu, seconds);
   } else {
     std::cout << summary.BriefReport() << "\nwrote " << vtu << "\n";
-    if (!args.write_cloud.empty() && summary.converged())
-      std::cout << "wrote " << args.write_cloud << "\n";
+    if (cloud) std::cout << "wrote " << args.write_cloud << "\n";
     for (const Eigen::VectorXd& X : args.probes) {
       std::cout << "u(" << X.transpose()
-                << ") = " << probe_displacement(assembler, state.u, X).transpose() << "\n";
+                << ") = " << probe_displacement(mesh, r.state.u, X).transpose() << "\n";
     }
   }
   if (!summary.converged()) {
@@ -305,124 +359,6 @@ int forward(const Args& args) {
   }
   return 0;
 }
-
-#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
-/// Reference positions of the controls (vertices or element centres) from the mesh alone.
-Eigen::MatrixXd control_positions(const Mesh& mesh, ControlKind kind) {
-  if (kind == ControlKind::kVertex) {
-    Eigen::MatrixXd p(mesh.num_vertices(), mesh.dim);
-    for (Eigen::Index v = 0; v < p.rows(); ++v) p.row(v) = mesh.nodes.row(mesh.vertex_nodes[v]);
-    return p;
-  }
-  Eigen::MatrixXd p = Eigen::MatrixXd::Zero(mesh.num_elements(), mesh.dim);
-  const Eigen::Index nv = mesh.element_vertices.cols();
-  for (Eigen::Index e = 0; e < p.rows(); ++e)
-    for (Eigen::Index a = 0; a < nv; ++a)
-      p.row(e) += mesh.nodes.row(mesh.vertex_nodes[mesh.element_vertices(e, a)]) / nv;
-  return p;
-}
-
-// softhd forward with a PETSc backend: every rank reads the scene and builds its slab; rank 0
-// writes the VTU and prints the report.
-int forward_petsc(const Args& args) {
-  const auto t0 = std::chrono::steady_clock::now();
-  if (!args.write_cloud.empty() || !args.linear_solver.empty() || args.factorize_every_step)
-    throw softhd::InvalidArgument(
-        "--write-cloud, --linear-solver and --factorize-every-step need --state-backend cholmod");
-  int rank = 0, size = 1;
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
-  const Scene scene = load_scene(args.scene, args.memory_limit * size);
-  const Mesh mesh = scene.make_mesh();
-  const Eigen::MatrixXd positions = control_positions(mesh, scene.control_kind);
-  Eigen::VectorXd m = Eigen::VectorXd::Constant(
-      positions.rows(), args.has_uniform ? args.uniform : scene.control_initial);
-  if (!args.control_file.empty()) m = read_control_file(args.control_file, positions);
-  if (!args.write_nodes.empty()) {
-    if (rank == 0) write_control_file(args.write_nodes, positions, m);
-    return 0;
-  }
-  for (Eigen::Index k = 0; k < m.size(); ++k)
-    if (!(m[k] >= scene.control_lower && m[k] <= scene.control_upper))
-      throw softhd::InvalidArgument("control value " + std::to_string(m[k]) + " at control " +
-                                    std::to_string(k) + " is outside the scene's bounds");
-  for (const Eigen::VectorXd& X : args.probes) {
-    Eigen::VectorXd xi;
-    if (X.size() != scene.dim() || locate(mesh, X, &xi) < 0)
-      throw softhd::InvalidArgument("a probe is not a point of the body");
-  }
-  softhd::set_threads(args.threads);
-  PetscStateOptions options;
-  options.backend = args.backend;
-  options.newton.verbose = args.verbose;
-  options.newton.displacement_tolerance = args.step_tol;
-  options.newton.initial_load_increment = args.load_increment;
-  options.newton.min_load_increment =
-      std::min(options.newton.min_load_increment, args.load_increment);
-  options.newton.intermediate_tolerance = args.intermediate_tol;
-  PetscStateSolver solver(scene, options);
-  GridSequencingOptions grid_options;
-  grid_options.levels = args.coarse_levels;
-  const GridSequencingReport grid = solver.grid_sequenced_start(scene, m, grid_options);
-  if (rank == 0) std::cerr << grid.BriefReport();
-  const NewtonSummary summary = solver.solve(m);
-  double seconds_solve = summary.seconds_total;
-  for (const GridLevelReport& level : grid.levels) seconds_solve += level.newton.seconds_total;
-  const Eigen::VectorXd u = solver.displacement();
-  const Eigen::MatrixXd J = solver.jacobians(), m_qp = solver.control_at_quadrature();
-  const double energy = solver.energy(), volume = solver.deformed_volume();
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (rank != 0) return summary.converged() ? 0 : 1;
-  std::filesystem::create_directories(args.out_dir);
-  const std::string vtu = (std::filesystem::path(args.out_dir) / "forward.vtu").string();
-  write_vtu(vtu, mesh, u, m_qp, J);
-  if (args.json) {
-    nlohmann::json j;
-    j["scene"] = scene.name;
-    j["state_backend"] = to_string(args.backend);
-    j["ranks"] = size;
-    j["status"] = to_string(summary.status);
-    j["converged"] = summary.converged();
-    j["load_reached"] = summary.final_load;
-    nlohmann::json probes = nlohmann::json::array();
-    for (const Eigen::VectorXd& X : args.probes) {
-      const Eigen::VectorXd v = probe_displacement(mesh, u, X);
-      probes.push_back({{"X", std::vector<double>(X.data(), X.data() + X.size())},
-                        {"u", std::vector<double>(v.data(), v.data() + v.size())}});
-    }
-    j["probes"] = probes;
-    j["energy"] = energy;
-    j["volume"] = volume;
-    j["min_J"] = J.minCoeff();
-    j["newton_iterations"] = summary.newton_iterations;
-    j["factorizations"] = summary.factorizations;
-    j["krylov_iterations"] = summary.krylov_iterations;
-    j["load_steps"] = summary.load_steps;
-    j["dofs"] = solver.layout().global_rows;
-    j["coarse_levels"] = coarse_levels_json(grid);
-    j["seconds_solve"] = seconds_solve;
-    j["seconds"] = seconds;
-    j["vtu"] = vtu;
-    std::cout << j.dump(2) << "\n";
-  } else {
-    std::cout << summary.BriefReport() << "\nwrote " << vtu << "\n";
-    for (const Eigen::VectorXd& X : args.probes)
-      std::cout << "u(" << X.transpose() << ") = " << probe_displacement(mesh, u, X).transpose()
-                << "\n";
-  }
-  if (!summary.converged()) {
-    std::cerr << "softhd forward: the state solve did not converge\n" << summary.FullReport();
-    return 1;
-  }
-  return 0;
-}
-#else
-int forward_petsc(const Args&) {
-  throw softhd::InvalidArgument(
-      "the PETSc state backends need softhd built with SOFTHD_WITH_MPI=ON");
-}
-#endif
 
 }  // namespace
 

@@ -23,9 +23,12 @@
 #include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
+#include "softhd/fe/state_backend.hpp"
+#include "softhd/fe/state_equation.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/io/vtu.hpp"
 #include "softhd/parallel.hpp"
+#include "softhd/work_share.hpp"
 
 namespace softhd::cli {
 
@@ -65,6 +68,11 @@ options:
                      that mesh has >= 32 elements)
   --threads T        OpenMP threads (default: all)
   --max-memory GIB   refuse meshes whose estimated memory exceeds this (default 8)
+  --state-backend B  cholmod | petsc-mumps | petsc-gamg: the state solver (default
+                     cholmod, the serial Newton); the PETSc ones need softhd built with
+                     -DSOFTHD_WITH_MPI=ON and distribute the state over the ranks of
+                     mpiexec (docs/scaling.md section 4); PETSc options go in the
+                     environment variable PETSC_OPTIONS
   --resume           continue the run recorded in DIR/checkpoint.bin: the same run
                      as an uninterrupted one (limits count over all resumes); a
                      checkpoint of another scene, target or options is refused
@@ -83,6 +91,12 @@ scene targets ("target" in the scene file):
 writes: history.csv, control.csv (readable by 'softhd forward --control'),
 body_NNNN.vtu, target.vtu, body.pvd, body_final.ply, target.ply, summary.json,
 checkpoint.bin, and convergence.png when python3 with matplotlib is available.
+
+MPI builds: under 'mpiexec -n K softhd optimise ...' every rank runs the optimiser
+on the same numbers: the distance's pair sums are split across the ranks (as in
+softhd distance), the state is distributed with a PETSc backend and solved by
+every rank with cholmod; rank 0 alone prints and writes files. A run resumes
+only with the same backend and number of ranks.
 )";
 
 nlohmann::json optional_json(const std::optional<double>& v) {
@@ -115,6 +129,7 @@ struct OptimiseArgs {
   ShapeTrackingOptions tracking;
   ShapeObjectiveOptions objective;
   double memory_limit = fe::kDefaultMemoryLimit;
+  fe::StateBackend backend = fe::StateBackend::kCholmod;
   long vtu_every = 10;
   bool resume = false, json = false, quiet = false;
   bool coarse_level = true;
@@ -157,6 +172,15 @@ OptimiseArgs parse_optimise(Args& args) {
   const double gib = args.number("--max-memory", a.memory_limit / (1u << 30));
   if (!(gib > 0.0 && gib <= 1e6)) throw UsageError("--max-memory: expected GiB in (0, 1e6]");
   a.memory_limit = gib * (1u << 30);
+  const std::string backend = args.value("--state-backend").value_or("cholmod");
+  try {
+    a.backend = fe::parse_state_backend(backend);
+  } catch (const InvalidArgument& e) {
+    throw UsageError(std::string("--state-backend: ") + e.what());
+  }
+  if (a.backend != fe::StateBackend::kCholmod && !fe::petsc_backend_available())
+    throw UsageError("--state-backend " + backend +
+                     " needs softhd built with -DSOFTHD_WITH_MPI=ON (this build has cholmod only)");
   a.resume = args.flag("--resume");
   a.json = args.flag("--json");
   a.quiet = args.flag("--quiet");
@@ -186,13 +210,17 @@ std::string body_name(int iteration) {
 // summary.json, rewritten as the run goes.
 class RunFiles {
  public:
-  RunFiles(fs::path dir, const ShapeObjective& objective, const fe::ControlSpace& space)
-      : dir_(std::move(dir)), objective_(objective), space_(space) {}
+  /// `writes` false: the fields are computed (collective with a shared distance) but no
+  /// file is written (ranks other than 0).
+  RunFiles(fs::path dir, const ShapeObjective& objective, const fe::ControlSpace& space,
+           bool writes)
+      : dir_(std::move(dir)), objective_(objective), space_(space), writes_(writes) {}
   const fs::path& dir() const { return dir_; }
 
   HausdorffResult write_body(int iteration, const Eigen::VectorXd& m, const Eigen::VectorXd& u) {
     const fe::Assembler& a = objective_.assembler();
     const HausdorffResult r = objective_.fields(u);
+    if (!writes_) return r;
     std::vector<VtuField> point{{"m", fe::control_at_nodes(a.mesh(), space_, m)}};
     std::vector<VtuField> cell;
     if (objective_.options().particles == Particles::nodes)
@@ -205,6 +233,7 @@ class RunFiles {
   }
   /// Lists a body VTU in body.pvd (once), e.g. one an earlier process of the run wrote.
   void list_body(int iteration) {
+    if (!writes_) return;
     if (!pvd_.empty() && pvd_.back().second == body_name(iteration)) return;
     if (!fs::exists(dir_ / body_name(iteration))) return;
     pvd_.emplace_back(iteration, body_name(iteration));
@@ -217,12 +246,14 @@ class RunFiles {
          it.seconds_state, it.seconds_distance, it.seconds_adjoint, it.seconds}));
   }
   void write_history() const {
+    if (!writes_) return;
     std::ostringstream h;
     h << kHistoryHeader << '\n';
     for (const std::string& r : rows_) h << r << '\n';
     write_file_atomically((dir_ / "history.csv").string(), h.str());
   }
   void write_summary(const nlohmann::json& sum) const {
+    if (!writes_) return;
     write_file_atomically((dir_ / "summary.json").string(), sum.dump(2) + "\n");
   }
 
@@ -230,6 +261,7 @@ class RunFiles {
   fs::path dir_;
   const ShapeObjective& objective_;
   const fe::ControlSpace& space_;
+  bool writes_;
   std::vector<std::string> rows_;
   std::vector<std::pair<double, std::string>> pvd_;
 };
@@ -293,13 +325,18 @@ fs::path output_directory(const OptimiseArgs& a, const fe::Scene& scene) {
 }  // namespace
 
 int run_optimise(const std::vector<std::string>& tokens) {
+  // Under mpiexec every rank runs all of this on the same numbers; rank 0 writes and prints.
+  const bool writer = world_rank() == 0;
   Args args(tokens);
   if (args.flag("--help")) {
-    std::cout << kUsage;
+    if (writer) std::cout << kUsage;
     return 0;
   }
   OptimiseArgs a = parse_optimise(args);
-  const ShapeObjectiveOptions& so = a.objective;
+  ShapeObjectiveOptions& so = a.objective;
+  so.hausdorff.share = world_share();  // null unless started by mpiexec with K > 1 ranks
+  const int ranks = so.hausdorff.share ? so.hausdorff.share->size() : 1;
+  if (!writer) a.quiet = true;
 
   // The problem: scene, mesh, control space, target.
   const fe::Scene scene = fe::load_scene(a.scene_file, a.memory_limit);
@@ -316,13 +353,19 @@ int run_optimise(const std::vector<std::string>& tokens) {
   const fs::path out = output_directory(a, scene);
   ShapeTrackingOptions& to = a.tracking;
   to.checkpoint = (out / "checkpoint.bin").string();
+  to.write_checkpoint = writer;
   to.resume = a.resume;
   to.fingerprint["scene"] = file_hash(a.scene_file);
+  // Another backend or partition gives other round-off: a resume must keep both (the
+  // keys are absent for the serial default, so older checkpoints stay valid).
+  if (a.backend != fe::StateBackend::kCholmod) to.fingerprint["state"] = to_string(a.backend);
+  if (ranks > 1) to.fingerprint["ranks"] = std::to_string(ranks);
   if (a.resume && !fs::exists(to.checkpoint))
     throw FileError("--resume: no checkpoint '" + to.checkpoint + "'");
   if (a.resume) read_run_log(to.checkpoint);  // a malformed one refused before any output
 
-  ShapeObjective objective(assembler, space, HausdorffTarget(target.cloud, so.hausdorff), so);
+  ShapeObjective objective(assembler, space, HausdorffTarget(target.cloud, so.hausdorff), so,
+                           fe::state_solver_factory(scene, a.backend, &assembler, &space));
   std::optional<fe::Assembler> coarse;
   if (a.coarse_level && fe::grid_levels(scene, fe::GridSequencingOptions{}) > 0) {
     coarse.emplace(fe::coarsened(scene).make_assembler());
@@ -331,7 +374,7 @@ int run_optimise(const std::vector<std::string>& tokens) {
   const Eigen::VectorXd m0 = Eigen::VectorXd::Constant(space.size(), scene.control_initial);
   const Eigen::VectorXd lower = Eigen::VectorXd::Constant(space.size(), scene.control_lower);
   const Eigen::VectorXd upper = Eigen::VectorXd::Constant(space.size(), scene.control_upper);
-  RunFiles files(out, objective, space);
+  RunFiles files(out, objective, space, writer);
   nlohmann::json sum;
   sum["scene"] = a.scene_file;
   sum["target"] = target.description;
@@ -341,6 +384,8 @@ int run_optimise(const std::vector<std::string>& tokens) {
   sum["algorithm"] = to_string(to.optimizer.algorithm);
   sum["particles"] = to_string(so.particles);
   sum["volumes"] = to_string(so.volumes);
+  sum["state_backend"] = to_string(a.backend);
+  sum["ranks"] = ranks;
   if (!a.quiet)
     std::fprintf(stderr, "softhd optimise %s: %ld nodes, %ld controls, target %ld points (%s)\n",
                  scene.name.c_str(), static_cast<long>(mesh.num_nodes()),
@@ -392,6 +437,7 @@ int run_optimise(const std::vector<std::string>& tokens) {
   const ShapeTrackingSummary s =
       track_shape(objective, lower, upper, m0, target.map_displacement, to, cb);
   const HausdorffResult fields = files.write_body(s.iterations, s.control, s.displacement);
+  if (!writer) return 0;
   write_vtu_cloud((out / "target.vtu").string(), target.cloud, {{"d_tilde", fields.field_target}});
   write_ply_cloud((out / "target.ply").string(), target.cloud);
   write_ply_cloud((out / "body_final.ply").string(), objective.particles(s.displacement));

@@ -76,13 +76,14 @@ int main(int argc, char** argv) {
   }
   const std::string command = all[0];
 #if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
-  // Only a forward solve on a PETSc backend starts PETSc (which starts MPI if the session
-  // above did not): every other run pays no PETSc or MPI start-up.
+  // Only a forward solve or an optimisation on a PETSc backend starts PETSc (which starts
+  // MPI if the session above did not): every other run pays no PETSc start-up.
   bool wants_petsc = false;
   for (size_t k = 1; k + 1 < all.size(); ++k)
     if (all[k] == "--state-backend" && all[k + 1].rfind("petsc", 0) == 0) wants_petsc = true;
   std::unique_ptr<PetscSession> petsc;
-  if (command == "forward" && wants_petsc) petsc = std::make_unique<PetscSession>(argv[0]);
+  const bool state_command = command == "forward" || command == "optimise" || command == "optimize";
+  if (state_command && wants_petsc) petsc = std::make_unique<PetscSession>(argv[0]);
 #endif
   const std::vector<std::string> rest(all.begin() + 1, all.end());
   try {

@@ -12,6 +12,8 @@
 #include <random>
 #include <sstream>
 
+#include "softhd/fe/state_backend.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -214,6 +216,9 @@ TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
   expect_refused(scene() + " --method fast", "unknown method 'fast'");
   expect_refused(scene() + " --method tree --tol 2", "tolerance");
   expect_refused(scene() + " --coarse-level on", "--coarse-level: expected auto or off");
+  expect_refused(scene() + " --state-backend petsc", "--state-backend: unknown state backend");
+  if (!softhd::fe::petsc_backend_available())  // an MPI build runs it (tests/mpi/cli_mpi.py)
+    expect_refused(scene() + " --state-backend petsc-mumps", "-DSOFTHD_WITH_MPI=ON");
   expect_refused(scene() + " --checkpoint-every 0", "--checkpoint-every");
   expect_refused(scene() + " --out " + out() + " --resume", "checkpoint.bin");
   expect_refused(scene() + " --max-iter 0", "--max-iter");

@@ -39,6 +39,7 @@ UnitRange split_by_cost(const std::vector<double>& cost, int size, int rank) {
 #if !defined(SOFTHD_WITH_MPI)
 std::shared_ptr<const WorkShare> world_share() { return nullptr; }
 int world_rank() { return 0; }
+int world_size() { return 1; }
 #endif
 
 }  // namespace softhd

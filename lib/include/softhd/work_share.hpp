@@ -57,4 +57,8 @@ std::shared_ptr<const WorkShare> world_share();
 /// programs print from rank 0.
 int world_rank();
 
+/// The number of processes in MPI_COMM_WORLD (1 without MPI or before MPI_Init; not
+/// collective).
+int world_size();
+
 }  // namespace softhd

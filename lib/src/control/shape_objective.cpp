@@ -11,6 +11,7 @@
 #include "softhd/fe/cloud.hpp"
 #include "softhd/fe/geometry.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
+#include "softhd/fe/state_solver.hpp"
 
 namespace softhd {
 
@@ -40,12 +41,13 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 struct ShapeObjective::Impl {
   Impl(const fe::Assembler& a, const fe::ControlSpace& c, HausdorffTarget t,
-       ShapeObjectiveOptions o)
+       ShapeObjectiveOptions o, const fe::StateSolverFactory& make_solver)
       : assembler(a),
         control(c),
         target(std::move(t)),
         options(std::move(o)),
-        newton(std::in_place, a, options.newton) {
+        solver(make_solver(options.newton)) {
+    if (!solver) throw InvalidArgument("ShapeObjective: the state solver factory made none");
     const fe::Mesh& mesh = a.mesh();
     dim = mesh.dim;
     // Clamped nodes (no free dof) are not differentiated.
@@ -62,7 +64,7 @@ struct ShapeObjective::Impl {
   const fe::ControlSpace& control;
   HausdorffTarget target;
   ShapeObjectiveOptions options;
-  std::optional<fe::NewtonSolver> newton;  // optional: reset_solver() makes a new one
+  std::unique_ptr<fe::StateEquation> solver;  // the fine state equation, any backend
   int dim = 3;
   Eigen::Array<bool, Eigen::Dynamic, 1> differentiate;
   std::deque<WarmStart> cache;  // most recent first
@@ -140,12 +142,18 @@ struct ShapeObjective::Impl {
     return cache[best];
   }
 
+  /// The fine solve to m from `start`; its end state (converged or not) in *state.
+  fe::NewtonSummary solve_from(const fe::State& start, const Eigen::VectorXd& m, fe::State* state) {
+    solver->set_state(start);
+    const fe::NewtonSummary s = solver->solve(m);
+    *state = solver->state();
+    return s;
+  }
+
   /// The state at m (docs/formulation.md §4.7) from the warm start nearest to m, or after
   /// a large step from the coarse-corrected start. Adds the fine iterations to `ev`.
   fe::NewtonSummary solve_state(const Eigen::VectorXd& m, fe::State* state, ShapeEvaluation* ev) {
     const WarmStart& warm = nearest(m);
-    *state = warm.state;
-    const Eigen::MatrixXd m_qp = control.to_quadrature(m);
     const auto counted = [ev](const fe::NewtonSummary& s) {
       ev->newton_iterations += s.newton_iterations;
       ev->factorizations += s.factorizations;
@@ -156,16 +164,13 @@ struct ShapeObjective::Impl {
       fe::State start;
       const bool ok = coarse_corrected(m, warm, &start, &iterations);
       if (ok && iterations >= options.coarse_correction_iterations) {
-        const fe::NewtonSummary s = counted(newton->solve(m_qp, &start));
-        if (s.converged()) {
-          *state = start;
-          return s;
-        }
+        const fe::NewtonSummary s = counted(solve_from(start, m, state));
+        if (s.converged()) return s;
       } else if (ok && iterations > 0) {
         coarse_active = false;  // small steps now: the coarse solves would only cost
       }
     }
-    const fe::NewtonSummary s = counted(newton->solve(m_qp, state));
+    const fe::NewtonSummary s = counted(solve_from(warm.state, m, state));
     // A hard fine solve: large steps again, so the coarse level is tried again.
     if (coarse && s.newton_iterations >= 2 * options.coarse_correction_iterations)
       coarse_active = true;
@@ -186,7 +191,15 @@ void ShapeObjectiveOptions::validate() const {
 }
 
 ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::ControlSpace& control,
-                               HausdorffTarget target, ShapeObjectiveOptions options) {
+                               HausdorffTarget target, ShapeObjectiveOptions options)
+    : ShapeObjective(assembler, control, std::move(target), std::move(options),
+                     [&assembler, &control](const fe::NewtonOptions& newton) {
+                       return std::make_unique<fe::StateSolver>(assembler, control, newton);
+                     }) {}
+
+ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::ControlSpace& control,
+                               HausdorffTarget target, ShapeObjectiveOptions options,
+                               const fe::StateSolverFactory& make_solver) {
   if (target.cloud().dim() != assembler.mesh().dim) {
     throw InvalidArgument("the target cloud is " + std::to_string(target.cloud().dim()) +
                           "D but the body is " + std::to_string(assembler.mesh().dim) + "D");
@@ -202,7 +215,8 @@ ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::Control
     options.newton.absolute_tolerance =
         1e-10 * assembler.material().stiffness_scale() * std::pow(volume, (d - 1.0) / d);
   }
-  impl_ = std::make_unique<Impl>(assembler, control, std::move(target), std::move(options));
+  impl_ = std::make_unique<Impl>(assembler, control, std::move(target), std::move(options),
+                                 make_solver);
 }
 ShapeObjective::~ShapeObjective() = default;
 
@@ -228,7 +242,7 @@ void ShapeObjective::use_coarse_level(const fe::Assembler& coarse) {
 const fe::Assembler* ShapeObjective::coarse_level() const { return impl_->coarse; }
 
 void ShapeObjective::reset_solver() {
-  impl_->newton.emplace(impl_->assembler, impl_->options.newton);
+  impl_->solver->reset();
   if (impl_->coarse) impl_->coarse_newton.emplace(*impl_->coarse, impl_->options.newton);
   impl_->coarse_active = true;
   impl_->coarse_cache.clear();  // like the solver's, not in a checkpoint
@@ -296,9 +310,8 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
     // Adjoint: K λ = ∂ρ̃/∂u, then dJ/dm = ∂J_reg/∂m + ∫ M_k (F a₀)·(∇λ a₀) dX.
     t0 = std::chrono::steady_clock::now();
     const Eigen::VectorXd g = d.displacement_gradient(state.u, r);
-    const Eigen::VectorXd lambda = fe::solve_adjoint(d.assembler, *d.newton, g);
-    ev.factorizations += d.newton->last_tangent_solve().factorizations;
-    ev.gradient = reg_gradient + fe::control_gradient(d.assembler, d.control, state.u, lambda);
+    ev.gradient = reg_gradient + d.solver->gradient(g);
+    ev.factorizations += d.solver->adjoint_factorizations();
     ev.seconds_adjoint = seconds_since(t0);
   }
   ev.ok = true;

@@ -49,13 +49,15 @@ class Recorder {
            const RunFingerprint& fingerprint)
       : objective_(objective), t_base_(Clock::now()) {
     if (options.checkpoint.empty()) return;
+    checkpointing_ = true;
     if (options.resume) {
       log_ = read_run_log(options.checkpoint);
       check_fingerprint(log_.fingerprint, fingerprint, options.checkpoint);
     }
     // A fresh run gets a new run id and removes an earlier run's states file.
-    writer_ = std::make_unique<RunLogWriter>(options.checkpoint, fingerprint,
-                                             options.resume ? &log_ : nullptr);
+    if (options.write_checkpoint)
+      writer_ = std::make_unique<RunLogWriter>(options.checkpoint, fingerprint,
+                                               options.resume ? &log_ : nullptr);
   }
 
   bool replaying() const { return next_ < log_.evaluations.size(); }
@@ -90,13 +92,15 @@ class Recorder {
   }
   /// After an accepted iteration: the warm-start states, unless still replaying.
   void snapshot(int iterations, const fe::State& best) {
-    if (!writer_ || next_ <= log_.evaluations.size()) return;
-    RunSnapshot s;
-    s.evaluations = static_cast<std::int64_t>(next_);
-    s.iterations = iterations;
-    s.states.assign(objective_.warm_starts().begin(), objective_.warm_starts().end());
-    s.best = best;
-    writer_->write_states(s);
+    if (!checkpointing_ || next_ <= log_.evaluations.size()) return;
+    if (writer_) {
+      RunSnapshot s;
+      s.evaluations = static_cast<std::int64_t>(next_);
+      s.iterations = iterations;
+      s.states.assign(objective_.warm_starts().begin(), objective_.warm_starts().end());
+      s.best = best;
+      writer_->write_states(s);
+    }
     // The solver's kept factorisations are not in the checkpoint: a resumed run starts
     // here with a new solver, so the uninterrupted run does too.
     objective_.reset_solver();
@@ -118,8 +122,9 @@ class Recorder {
   using Clock = std::chrono::steady_clock;
   ShapeObjective& objective_;
   RunLog log_;
-  std::unique_ptr<RunLogWriter> writer_;
-  std::size_t next_ = 0;  // evaluations served or made
+  std::unique_ptr<RunLogWriter> writer_;  // null if this process does not write
+  bool checkpointing_ = false;            // a checkpoint is read and/or written
+  std::size_t next_ = 0;                  // evaluations served or made
   double base_ = 0.0;
   Clock::time_point t_base_;
   bool restored_ = false;

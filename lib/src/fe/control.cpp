@@ -78,14 +78,14 @@ Eigen::VectorXd ControlSpace::from_quadrature(const Eigen::MatrixXd& v) const {
   return g;
 }
 
-Eigen::MatrixXd ControlSpace::positions(const Mesh& mesh) const {
-  if (kind_ == ControlKind::kVertex) {
-    Eigen::MatrixXd P(size_, mesh.dim);
-    for (Eigen::Index k = 0; k < size_; ++k) P.row(k) = mesh.nodes.row(mesh.vertex_nodes[k]);
+Eigen::MatrixXd control_positions(const Mesh& mesh, ControlKind kind) {
+  if (kind == ControlKind::kVertex) {
+    Eigen::MatrixXd P(mesh.num_vertices(), mesh.dim);
+    for (Eigen::Index k = 0; k < P.rows(); ++k) P.row(k) = mesh.nodes.row(mesh.vertex_nodes[k]);
     return P;
   }
-  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(size_, mesh.dim);
-  for (Eigen::Index e = 0; e < size_; ++e) {
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(mesh.num_elements(), mesh.dim);
+  for (Eigen::Index e = 0; e < P.rows(); ++e) {
     for (int a = 0; a < mesh.nodes_per_element(); ++a)
       P.row(e) += mesh.nodes.row(mesh.elements(e, a));
     P.row(e) /= mesh.nodes_per_element();

@@ -7,7 +7,7 @@
 #include <iostream>
 #include <sstream>
 
-#include "line_search.hpp"
+#include "newton_load_step.hpp"
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 #include "softhd/parallel.hpp"
@@ -149,109 +149,42 @@ bool NewtonSolver::direction(const SparseMatrix& K, const Eigen::VectorXd& R, do
   return true;
 }
 
-bool NewtonSolver::solve_load_step(const Eigen::MatrixXd& m, int load_step, double load,
-                                   bool predictor, Eigen::VectorXd* u, NewtonSummary* summary) {
-  const DofMap& dofs = assembler_.dofs();
-  Eigen::VectorXd R, R0;
-  double Pi = 0.0;
-  assemble(Eigen::VectorXd::Zero(dofs.num_dofs), m, nullptr, &R0, nullptr, summary);
-  double R_ref = R0.norm();
-  EnergyLineSearch line_search(
-      options_,
-      [&](const Eigen::VectorXd& v, double* e) {
-        return assemble(v, m, e, nullptr, nullptr, summary);
-      },
-      [&](const Eigen::VectorXd& v) {
-        Eigen::VectorXd Rv;
-        assemble(v, m, nullptr, &Rv, nullptr, summary);
-        return Rv.norm();
-      });
-  double last_step = 0.0;  // |Δu|_∞ of the last iteration
-  const bool final = load >= 1.0;
-  const double tolerance_factor =
-      final ? options_.relative_tolerance
-            : std::max(options_.relative_tolerance, options_.intermediate_tolerance);
-  for (int it = 0; it <= options_.max_iterations; ++it) {
-    // The predictor's first direction uses K_path_: K at u is not needed then.
-    const bool use_path = predictor && it == 0 && have_path_tangent_;
-    if (!assemble(*u, m, &Pi, &R, use_path ? nullptr : &K_, summary)) {
-      summary->message = "start state of the load step has det F <= 0";
-      return false;
-    }
-    const double rnorm = R.norm();
-    if (R_ref == 0.0) R_ref = rnorm;
-    summary->residual = rnorm;
-    summary->residual_reference = R_ref;
-    summary->energy = Pi;
-    NewtonIteration rec{load_step, load, it, rnorm, Pi, 0.0, 0.0, 0, false, false};
-    const bool small_step =
-        options_.displacement_tolerance == 0.0 || it == 0 ||
-        last_step <= options_.displacement_tolerance * u->lpNorm<Eigen::Infinity>();
-    const bool residual_ok = rnorm <= tolerance_factor * R_ref + options_.absolute_tolerance;
-    const auto converge = [&] {
-      if (use_path) assemble(*u, m, nullptr, nullptr, &K_, summary);
-      std::swap(K_path_, K_);  // the tangent at the converged state, kept
-      have_path_tangent_ = true;
-      return true;
-    };
-    if ((residual_ok && (small_step || !final)) || rnorm == 0.0) {
-      summary->iterations.push_back(rec);
-      return converge();
-    }
-    if (it == options_.max_iterations) {
-      summary->iterations.push_back(rec);
-      summary->message = "no convergence in " + std::to_string(it) + " iterations";
-      return false;
-    }
-    ++summary->newton_iterations;
-    // Forcing term η = min(forcing, |R|/R_ref, 1e-3 tol/|R|): falls like the residual
-    // (quadratic convergence), and the last direction is solved to 1e-3 of the tolerance so
-    // that the converged state is as accurate as after an exact Newton step.
-    const double tol = tolerance_factor * R_ref + options_.absolute_tolerance;
-    const double eta =
-        std::max(1e-14, std::min({options_.forcing, rnorm / R_ref, 1e-3 * tol / rnorm}));
-    Eigen::VectorXd du;
-    const SparseMatrix& K = use_path ? K_path_ : K_;
-    const bool direction_ok = direction(K, R, R_ref, eta, &du, &rec, summary);
-    if (residual_ok && (!direction_ok || rec.shift != 0.0 || rec.truncated)) {
-      // Only the step test is pending, and K is not positive definite here (an unstable
-      // equilibrium, e.g. a compressed plate before it buckles): a Newton step would leave
-      // it along a descent direction instead of confirming it. Converged at the residual.
-      --summary->newton_iterations;
-      rec.shift = 0.0;
-      summary->iterations.push_back(rec);
-      return converge();
-    }
-    if (!direction_ok) {
-      summary->iterations.push_back(rec);
-      summary->message = "tangent could not be factorised";
-      return false;
-    }
-    const Eigen::VectorXd u_before = *u;
-    rec.step = line_search.step(du, Pi, R.dot(dofs.restrict(du)), rnorm, u);
-    if (rec.step == 0.0 && !rec.factorized) {
-      // The direction came from PCG with a kept factorisation: retry with K factorised.
-      tangent_.drop_factorization();
-      *u = u_before;
-      if (direction(K, R, R_ref, eta, &du, &rec, summary))
-        rec.step = line_search.step(du, Pi, R.dot(dofs.restrict(du)), rnorm, u);
-    }
-    last_step = (*u - u_before).lpNorm<Eigen::Infinity>();
-    summary->iterations.push_back(rec);
-    if (options_.verbose) {
-      std::cerr << "newton: step " << load_step << " load " << load << " it " << it << " |R| "
-                << rnorm << " energy " << Pi << " s " << rec.step << " shift " << rec.shift
-                << " pcg " << rec.krylov << (rec.factorized ? " factorised" : "")
-                << (rec.truncated ? " truncated" : "")
-                << (line_search.tentative() ? " (tentative)" : "") << "\n";
-    }
-    if (rec.step == 0.0) {
-      summary->message = "line search failed at iteration " + std::to_string(it);
-      return false;
-    }
+// The serial linear algebra of newton_load_step (newton_load_step.hpp): whole-mesh
+// displacements, free-dof residuals, the tangents K_ (at the iterate) and K_path_ (at the
+// last converged state) and the tangent solver (PCG on a kept factorisation).
+struct NewtonSolver::Algebra {
+  NewtonSolver& s;
+  NewtonSummary* summary;
+
+  bool has_path_tangent() const { return s.have_path_tangent_; }
+  bool assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m, double* energy,
+                Eigen::VectorXd* residual, bool tangent) {
+    return s.assemble(u, m, energy, residual, tangent ? &s.K_ : nullptr, summary);
   }
-  return false;
-}
+  double norm(const Eigen::VectorXd& R) const { return R.norm(); }
+  double max_abs(const Eigen::VectorXd& u) const { return u.lpNorm<Eigen::Infinity>(); }
+  double slope(const Eigen::VectorXd& R, const Eigen::VectorXd& du) const {
+    return R.dot(s.assembler_.dofs().restrict(du));
+  }
+  bool iterative() const { return false; }
+  bool direction(bool path, const Eigen::VectorXd& R, double R_ref, double eta, Eigen::VectorXd* du,
+                 NewtonIteration* rec) {
+    return s.direction(path ? s.K_path_ : s.K_, R, R_ref, eta, du, rec, summary);
+  }
+  void drop_factorization() { s.tangent_.drop_factorization(); }
+  void converge(bool tangent_is_current, const Eigen::VectorXd& u, const Eigen::MatrixXd& m) {
+    if (!tangent_is_current) s.assemble(u, m, nullptr, nullptr, &s.K_, summary);
+    std::swap(s.K_path_, s.K_);  // the tangent at the converged state, kept
+    s.have_path_tangent_ = true;
+  }
+  bool speaks() const { return true; }
+  const char* name() const { return "newton"; }
+  bool assemble_path_tangent(const Eigen::VectorXd& u, const Eigen::MatrixXd& m) {
+    s.have_path_tangent_ = s.assemble(u, m, nullptr, nullptr, &s.K_path_, summary);
+    return s.have_path_tangent_;
+  }
+  void load_step_failed() {}  // K_path_ is still the tangent at the last converged state
+};
 
 Eigen::VectorXd NewtonSolver::solve_converged_tangent(const Eigen::VectorXd& b) {
   if (!converged_) throw InvalidArgument("Newton: no converged state to solve with");
@@ -286,50 +219,9 @@ NewtonSummary NewtonSolver::solve(const Eigen::MatrixXd& m_qp, State* state) {
   }
   converged_ = false;
   const bool has_free = assembler_.dofs().num_free > 0;
-  const Eigen::MatrixXd m0 = state->m_qp;
-  double t = 0.0, inc = options_.initial_load_increment;
-  Eigen::VectorXd u = state->u;
-  while (true) {
-    if (summary.load_steps >= options_.max_load_steps) {
-      summary.status = NewtonStatus::kTooManyLoadSteps;
-      break;
-    }
-    if (summary.newton_iterations >= options_.max_total_iterations) {
-      summary.status = NewtonStatus::kTooManyIterations;
-      break;
-    }
-    const double t_try = std::min(1.0, t + inc);
-    const Eigen::MatrixXd m = m0 + t_try * (m_qp - m0);
-    if (options_.path_predictor && !have_path_tangent_ && has_free) {
-      // Tangent at the last converged state (u, m_t) for the Euler predictor.
-      have_path_tangent_ = assemble(state->u, state->m_qp, nullptr, nullptr, &K_path_, &summary);
-    }
-    const int before = summary.newton_iterations;
-    const bool ok = solve_load_step(m, summary.load_steps, t_try,
-                                    options_.path_predictor && has_free, &u, &summary);
-    ++summary.load_steps;
-    if (ok) {
-      t = t_try;
-      state->u = u;
-      state->m_qp = m;
-      summary.message.clear();
-      if (t >= 1.0) {
-        summary.status = NewtonStatus::kConverged;
-        break;
-      }
-      if (summary.newton_iterations - before < options_.max_iterations / 2)
-        inc = std::min(1.0, 2.0 * inc);
-    } else {
-      ++summary.failed_load_steps;
-      u = state->u;  // back to the last converged state, whose tangent K_path_ still is
-      inc *= 0.5;
-      if (inc < options_.min_load_increment) {
-        summary.status = NewtonStatus::kLoadIncrementTooSmall;
-        summary.message = "at load " + std::to_string(t) + ": " + summary.message;
-        break;
-      }
-    }
-  }
+  Algebra algebra{*this, &summary};
+  const double t =
+      newton_load_stepping(algebra, options_, m_qp, has_free, &state->u, &state->m_qp, &summary);
   converged_ = summary.converged();
   if (converged_ && !have_path_tangent_ && has_free) {
     // Converged without a Newton iteration on a fresh start: K at the state for the adjoint.

@@ -1,28 +1,123 @@
 #include "softhd/fe/state_solver.hpp"
 
 #include "softhd/error.hpp"
+#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
+#include "softhd/fe/petsc_state.hpp"
+#endif
 
 namespace softhd::fe {
 
+StateEquation::~StateEquation() = default;
+
 StateSolver::StateSolver(Assembler assembler, ControlKind control, NewtonOptions options)
-    : assembler_(std::move(assembler)),
-      control_(assembler_.mesh(), assembler_.geometry(), control),
-      newton_(assembler_, options),
-      state_(rest_state(assembler_)) {}
+    : own_assembler_(std::make_unique<const Assembler>(std::move(assembler))),
+      assembler_(own_assembler_.get()),
+      own_control_(std::make_unique<const ControlSpace>(assembler_->mesh(), assembler_->geometry(),
+                                                        control)),
+      control_(own_control_.get()),
+      options_(options),
+      newton_(std::in_place, *assembler_, options),
+      state_(rest_state(*assembler_)) {}
 
 StateSolver::StateSolver(const Scene& scene, NewtonOptions options)
     : StateSolver(scene.make_assembler(), scene.control_kind, options) {}
 
+StateSolver::StateSolver(const Assembler& assembler, const ControlSpace& control,
+                         NewtonOptions options)
+    : assembler_(&assembler),
+      control_(&control),
+      options_(options),
+      newton_(std::in_place, assembler, options),
+      state_(rest_state(assembler)) {}
+
 NewtonSummary StateSolver::solve(const Eigen::VectorXd& m) {
-  const NewtonSummary summary = newton_.solve(control_.to_quadrature(m), &state_);
+  if (m.size() != control_->size())
+    throw InvalidArgument("state solver: the control has " + std::to_string(m.size()) +
+                          " values, expected " + std::to_string(control_->size()));
+  const NewtonSummary summary = newton_->solve(control_->to_quadrature(m), &state_);
   converged_ = summary.converged();
   return summary;
 }
 
+void StateSolver::set_state(const State& state) {
+  if (state.u.size() != state_.u.size() || state.m_qp.rows() != state_.m_qp.rows() ||
+      state.m_qp.cols() != state_.m_qp.cols())
+    throw InvalidArgument("state solver: set_state with a state of another problem");
+  state_ = state;
+  converged_ = false;  // the kept tangent is not this state's
+}
+
+GridSequencingReport StateSolver::grid_sequenced_start(const Scene& scene, const Eigen::VectorXd& m,
+                                                       const GridSequencingOptions& options) {
+  GridSequencingReport report;
+  state_ = fe::grid_sequenced_start(scene, *assembler_, m, options_, options, &report);
+  converged_ = false;
+  return report;
+}
+
+void StateSolver::reset() {
+  newton_.emplace(*assembler_, options_);
+  converged_ = false;
+}
+
 Eigen::VectorXd StateSolver::gradient(const Eigen::VectorXd& g) {
   if (!converged_) throw InvalidArgument("state solver: gradient() needs a converged solve");
-  const Eigen::VectorXd lambda = solve_adjoint(assembler_, newton_, g);
-  return control_gradient(assembler_, control_, state_.u, lambda);
+  const Eigen::VectorXd lambda = solve_adjoint(*assembler_, *newton_, g);
+  return control_gradient(*assembler_, *control_, state_.u, lambda);
+}
+
+int StateSolver::adjoint_factorizations() const {
+  return newton_->last_tangent_solve().factorizations;
+}
+
+double StateSolver::energy() const {
+  double e = 0.0;
+  assembler_->evaluate(state_.u, state_.m_qp, &e, nullptr, nullptr);
+  return e;
+}
+
+double StateSolver::deformed_volume() const { return assembler_->deformed_volume(state_.u); }
+
+double StateSolver::min_jacobian() const { return jacobians().minCoeff(); }
+
+Eigen::MatrixXd StateSolver::jacobians() const { return assembler_->jacobians(state_.u); }
+
+void StateSolverOptions::validate() const {
+  newton.validate();
+  if (max_krylov_iterations < 1)
+    throw InvalidArgument("state solver options: max_krylov_iterations must be >= 1");
+}
+
+std::unique_ptr<StateEquation> make_state_solver(const Scene& scene,
+                                                 const StateSolverOptions& options,
+                                                 const Assembler* assembler,
+                                                 const ControlSpace* control) {
+  options.validate();
+  if (options.backend == StateBackend::kCholmod) {
+    if (assembler && control)
+      return std::make_unique<StateSolver>(*assembler, *control, options.newton);
+    return std::make_unique<StateSolver>(scene, options.newton);
+  }
+#if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
+  PetscStateOptions petsc;
+  petsc.newton = options.newton;
+  petsc.backend = options.backend;
+  petsc.max_krylov_iterations = options.max_krylov_iterations;
+  return std::make_unique<PetscStateSolver>(scene, petsc);
+#else
+  throw InvalidArgument("state backend " + to_string(options.backend) +
+                        " needs softhd built with -DSOFTHD_WITH_MPI=ON");
+#endif
+}
+
+StateSolverFactory state_solver_factory(const Scene& scene, StateBackend backend,
+                                        const Assembler* assembler, const ControlSpace* control) {
+  return [&scene, backend, assembler, control](const NewtonOptions& newton) {
+    StateSolverOptions options;
+    options.backend = backend;
+    options.newton = newton;
+    return make_state_solver(scene, options, assembler, control);
+  };
 }
 
 }  // namespace softhd::fe

@@ -99,4 +99,11 @@ int world_rank() {
   return rank;
 }
 
+int world_size() {
+  if (!mpi::initialised()) return 1;
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  return size;
+}
+
 }  // namespace softhd

@@ -20,6 +20,7 @@
 #include "softhd/fe/assembly.hpp"
 #include "softhd/fe/control.hpp"
 #include "softhd/fe/newton.hpp"
+#include "softhd/fe/state_equation.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/point_cloud.hpp"
 
@@ -86,10 +87,19 @@ struct WarmStart {
 /// states for warm starts and the target's trees across evaluations. Not thread-safe.
 class ShapeObjective {
  public:
-  /// The assembler and control space must outlive the objective. Throws
-  /// InvalidArgument for dimensions that differ or invalid options.
+  /// The assembler and control space must outlive the objective; the state equation is
+  /// solved by the serial Newton (fe::StateSolver) on them. Throws InvalidArgument for
+  /// dimensions that differ or invalid options.
   ShapeObjective(const fe::Assembler& assembler, const fe::ControlSpace& control,
                  HausdorffTarget target, ShapeObjectiveOptions options = {});
+  /// As above, with the state solver `make_solver` makes from the Newton options (once,
+  /// with the absolute tolerance filled in; e.g. fe::state_solver_factory for a backend).
+  /// The solver must solve the body of `assembler` with the controls of `control`; the
+  /// objective uses it only through fe::StateEquation. With a PETSc solver every member
+  /// of the objective is collective over the ranks.
+  ShapeObjective(const fe::Assembler& assembler, const fe::ControlSpace& control,
+                 HausdorffTarget target, ShapeObjectiveOptions options,
+                 const fe::StateSolverFactory& make_solver);
   ~ShapeObjective();
 
   /// J(m); with `gradient`, also dJ/dm. Never throws for a failed state solve.
@@ -121,10 +131,10 @@ class ShapeObjective {
   void use_coarse_level(const fe::Assembler& coarse);
   /// The coarse body of use_coarse_level, or null.
   const fe::Assembler* coarse_level() const;
-  /// Replaces the state solver by a new one, forgetting what it keeps between solves (its
-  /// factorisations and path tangent): later evaluations then depend on earlier ones only
-  /// through the warm starts, which a checkpoint can save. Costs a factorisation at the
-  /// next solve.
+  /// Resets the state solver (fe::StateEquation::reset), forgetting what it keeps between
+  /// solves (its factorisations and path tangent): later evaluations then depend on earlier ones
+  /// only through the warm starts, which a checkpoint can save. Costs a factorisation at the next
+  /// solve.
   void reset_solver();
   /// Per-point fields d̃ of the last converged state (moving cloud, target cloud).
   HausdorffResult fields(const Eigen::VectorXd& u) const;

@@ -50,6 +50,10 @@ struct ShapeTrackingOptions {
   double self_floor_max_pairs = 1e10;
   /// Checkpoint log (run_log.hpp) written as the run goes; empty: none.
   std::string checkpoint;
+  /// False: the checkpoint is read (resume) but never written, and the run behaves
+  /// otherwise as if it were (the solver renewed at each save): the other ranks of an MPI
+  /// run, where rank 0 alone writes (default true).
+  bool write_checkpoint = true;
   /// The warm-start states are saved every this many iterations (and at the end); a
   /// resume continues from the last save, recomputing the evaluations after it. Each save
   /// renews the state solver (its kept factorisation is not saved), which costs a

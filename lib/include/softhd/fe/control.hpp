@@ -18,6 +18,10 @@ enum class ControlKind { kVertex, kElement };
 /// Parses "vertex" / "element"; throws InvalidArgument otherwise.
 ControlKind parse_control_kind(const std::string& name);
 
+/// Reference positions of the controls of `kind` on `mesh` (its vertices, or its element
+/// centres as the mean of all element nodes): controls by dim. Needs no quadrature data.
+Eigen::MatrixXd control_positions(const Mesh& mesh, ControlKind kind);
+
 /// The linear map m ↦ m(X_q) at the quadrature points, m(X_q) = Σ_k M_k(X_q) m_k.
 class ControlSpace {
  public:
@@ -33,7 +37,7 @@ class ControlSpace {
   /// The transpose map: g_k = Σ_e Σ_q M_k(X_q) v(e, q) (v is E by nq).
   Eigen::VectorXd from_quadrature(const Eigen::MatrixXd& v) const;
   /// Reference positions of the controls (vertices, or element centres): size by dim.
-  Eigen::MatrixXd positions(const Mesh& mesh) const;
+  Eigen::MatrixXd positions(const Mesh& mesh) const { return control_positions(mesh, kind_); }
   /// (M/2) ∫ m² + (ε/2) ∫ |∇m|² and its gradient w.r.t. m (docs/formulation.md §4.2); `gradient`
   /// may be null.
   double regularisation(const Eigen::VectorXd& m, double M, double eps,

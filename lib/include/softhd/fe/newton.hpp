@@ -171,8 +171,8 @@ class NewtonSolver {
  private:
   /// Newton at fixed m from *u; returns true on convergence. `predictor`: take the first
   /// direction with K_path_ (the tangent at the last converged state).
-  bool solve_load_step(const Eigen::MatrixXd& m, int load_step, double load, bool predictor,
-                       Eigen::VectorXd* u, NewtonSummary* summary);
+  /// The linear algebra of the shared Newton loop (newton_load_step.hpp).
+  struct Algebra;
   /// Newton direction du (num_dofs) from K du = −R to the relative residual eta
   /// (`reference`: the load step's R_ref).
   bool direction(const SparseMatrix& K, const Eigen::VectorXd& R, double reference, double eta,

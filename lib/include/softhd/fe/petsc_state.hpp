@@ -37,6 +37,7 @@
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/fe/state_backend.hpp"
+#include "softhd/fe/state_equation.hpp"
 
 namespace softhd::fe {
 
@@ -65,51 +66,64 @@ struct PetscStateLayout {
 };
 
 /// The state equation m ↦ u(m) of one scene on PETSc, warm-started from the last solve, with
-/// the adjoint gradient. Collective on PETSC_COMM_WORLD.
-class PetscStateSolver {
+/// the adjoint gradient (the PETSc implementation of StateEquation, usually made by
+/// make_state_solver). Collective on PETSC_COMM_WORLD.
+class PetscStateSolver final : public StateEquation {
  public:
   /// Throws InvalidArgument for invalid options, a backend other than the PETSc ones, a mesh
   /// with fewer cells along its longest axis than ranks, or if PETSc is not initialised.
   explicit PetscStateSolver(const Scene& scene, PetscStateOptions options = {});
-  ~PetscStateSolver();
-  PetscStateSolver(const PetscStateSolver&) = delete;
-  PetscStateSolver& operator=(const PetscStateSolver&) = delete;
+  ~PetscStateSolver() override;
+
+  /// kPetscMumps or kPetscGamg.
+  StateBackend backend() const override;
+  /// Free dofs of the whole mesh.
+  Eigen::Index free_dofs() const override;
 
   /// Equilibrium for the control m (the scene's control space, all values on every rank),
   /// from the last converged state (rest at first). On failure the state stays at the last
   /// converged load step and the summary says why. Same summary fields as the serial
   /// Newton (factorizations: MUMPS factorisations or GAMG setups; krylov_iterations: CG).
-  NewtonSummary solve(const Eigen::VectorXd& m);
+  NewtonSummary solve(const Eigen::VectorXd& m) override;
   /// True if the last solve converged.
-  bool converged() const;
+  bool converged() const override;
   /// Grid sequencing as in solve_forward (fe/grid_sequencing.hpp): the coarser levels of
   /// `scene` (the one given at construction) are solved by the serial Newton on every rank
   /// (they are small), and their equilibrium, prolongated onto this rank's nodes, becomes
   /// the start of the next solve, with the control m at full load. With no level asked for,
   /// or if a coarse solve fails (reported), the start is the rest state.
   GridSequencingReport grid_sequenced_start(const Scene& scene, const Eigen::VectorXd& m,
-                                            const GridSequencingOptions& options);
+                                            const GridSequencingOptions& options) override;
+  /// The current state over the whole mesh, on every rank (gathered).
+  State state() const override;
+  /// Makes the whole-mesh `state` (the same on every rank) the start of the next solve:
+  /// each rank takes its owned rows and its slab's control.
+  void set_state(const State& state) override;
+  /// Forgets the path tangent and the last shift (the matrix and KSP objects are kept).
+  void reset() override;
 
   /// The displacement of the whole mesh (num_nodes · dim, global dof order, fixed entries
   /// zero), on every rank.
-  Eigen::VectorXd displacement() const;
+  Eigen::VectorXd displacement() const override;
   /// The state part of dJ/dm (control-space size, on every rank) for g = ∂J/∂u given on
   /// every rank (num_nodes · dim): K λ = g with the converged tangent, then ∫ M_k (F a₀)·(∇λ
   /// a₀) dX. Throws InvalidArgument if the last solve did not converge, NumericalError if
   /// the solve fails.
-  Eigen::VectorXd gradient(const Eigen::VectorXd& g);
+  Eigen::VectorXd gradient(const Eigen::VectorXd& g) override;
+  /// MUMPS factorisations or GAMG set-ups of the last gradient().
+  int adjoint_factorizations() const override;
 
   ///@{
   /// Π(u; m), ∫ J dX and min J at the current state, over the whole mesh.
-  double energy() const;
-  double deformed_volume() const;
-  double min_jacobian() const;
+  double energy() const override;
+  double deformed_volume() const override;
+  double min_jacobian() const override;
   ///@}
   /// The current control at the quadrature points, or det F there: E by nq over the whole
   /// mesh in global element order, on every rank.
   Eigen::MatrixXd control_at_quadrature() const;
   /// See control_at_quadrature.
-  Eigen::MatrixXd jacobians() const;
+  Eigen::MatrixXd jacobians() const override;
 
   /// Sizes of the partition.
   PetscStateLayout layout() const;

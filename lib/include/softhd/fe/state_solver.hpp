@@ -1,50 +1,83 @@
 #pragma once
 /// \file state_solver.hpp
-/// The state equation as the optimiser sees it (docs/formulation.md §4): a control vector m in, the
-/// equilibrium displacement out, warm-started from the previous solve, and the adjoint
-/// gradient dJ/dm for any ∂J/∂u at the last converged state, solved with its tangent.
+/// The serial implementation of the state equation (fe/state_equation.hpp): the Newton of
+/// fe/newton.hpp with CHOLMOD factorisations, on the whole mesh, warm-started from the
+/// previous solve, and the adjoint gradient dJ/dm for any ∂J/∂u at the last converged
+/// state, solved with its tangent (docs/formulation.md §4).
 
 #include <Eigen/Core>
+#include <memory>
+#include <optional>
 
 #include "softhd/fe/adjoint.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/scene.hpp"
+#include "softhd/fe/state_equation.hpp"
 
 namespace softhd::fe {
 
-/// The state equation m ↦ u(m) with warm starts and the adjoint gradient, for one body.
-class StateSolver {
+/// The state equation m ↦ u(m) with warm starts and the adjoint gradient, for one body,
+/// by the serial Newton (StateBackend::kCholmod).
+class StateSolver final : public StateEquation {
  public:
-  /// A solver for `assembler`'s body with controls of kind `control`.
+  /// A solver for `assembler`'s body with controls of kind `control` (both kept).
   StateSolver(Assembler assembler, ControlKind control, NewtonOptions options = {});
   /// The scene's body, material, clamp and control space.
   explicit StateSolver(const Scene& scene, NewtonOptions options = {});
-  StateSolver(const StateSolver&) = delete;  // the Newton solver refers to the assembler
-  StateSolver& operator=(const StateSolver&) = delete;
+  /// A solver on an assembler and control space the caller keeps; both must outlive it.
+  StateSolver(const Assembler& assembler, const ControlSpace& control, NewtonOptions options);
 
   /// The body's assembler.
-  const Assembler& assembler() const { return assembler_; }
+  const Assembler& assembler() const { return *assembler_; }
   /// The control space.
-  const ControlSpace& control() const { return control_; }
+  const ControlSpace& control() const { return *control_; }
 
-  /// Equilibrium for the control m (control().size() values), starting from the last
-  /// converged state. On failure the state stays at the last converged load step (a valid
+  /// StateBackend::kCholmod.
+  StateBackend backend() const override { return StateBackend::kCholmod; }
+  /// Free dofs of the mesh.
+  Eigen::Index free_dofs() const override { return assembler_->dofs().num_free; }
+  /// Equilibrium for the control m (control().size() values), starting from the current
+  /// state. On failure the state stays at the last converged load step (a valid
   /// equilibrium for an intermediate control) and the summary says why.
-  NewtonSummary solve(const Eigen::VectorXd& m);
-
-  /// Displacement of the current state (num_dofs entries).
-  const Eigen::VectorXd& displacement() const { return state_.u; }
+  NewtonSummary solve(const Eigen::VectorXd& m) override;
   /// True if the last solve converged (gradient() is then available).
-  bool converged() const { return converged_; }
+  bool converged() const override { return converged_; }
+  /// Displacement of the current state (num_dofs entries).
+  Eigen::VectorXd displacement() const override { return state_.u; }
+  /// The current state.
+  State state() const override { return state_; }
+  /// The current state, without a copy.
+  const State& current_state() const { return state_; }
+  /// Makes `state` the start of the next solve (shapes checked).
+  void set_state(const State& state) override;
+  /// grid_sequenced_start of fe/grid_sequencing.hpp on this solver's assembler.
+  GridSequencingReport grid_sequenced_start(const Scene& scene, const Eigen::VectorXd& m,
+                                            const GridSequencingOptions& options) override;
+  /// A new Newton solver (no kept factorisation or path tangent); the state is kept.
+  void reset() override;
 
   /// State part of dJ/dm_k = ∫ M_k (F a₀)·(∇λ a₀) dX with K λ = g, g = ∂J/∂u (num_dofs).
   /// Throws InvalidArgument if the last solve did not converge.
-  Eigen::VectorXd gradient(const Eigen::VectorXd& g);
+  Eigen::VectorXd gradient(const Eigen::VectorXd& g) override;
+  /// Factorisations of the last tangent solve (the adjoint's after gradient()).
+  int adjoint_factorizations() const override;
+
+  ///@{
+  /// Π(u; m), ∫ J dX and min J at the current state.
+  double energy() const override;
+  double deformed_volume() const override;
+  double min_jacobian() const override;
+  ///@}
+  /// det F at the quadrature points of the current state.
+  Eigen::MatrixXd jacobians() const override;
 
  private:
-  Assembler assembler_;
-  ControlSpace control_;
-  NewtonSolver newton_;
+  std::unique_ptr<const Assembler> own_assembler_;  // null if the caller keeps it
+  const Assembler* assembler_;
+  std::unique_ptr<const ControlSpace> own_control_;  // null if the caller keeps it
+  const ControlSpace* control_;
+  NewtonOptions options_;
+  std::optional<NewtonSolver> newton_;  // optional: reset() makes a new one
   State state_;
   bool converged_ = false;
 };

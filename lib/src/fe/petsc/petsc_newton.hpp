@@ -24,23 +24,26 @@ class DistributedNewton {
   /// relative residual adjoint_tolerance. Throws NumericalError if K is not positive
   /// definite or the solve fails.
   Eigen::VectorXd solve_converged_tangent(const Eigen::VectorXd& b);
+  /// Factorisations (MUMPS) or preconditioner set-ups (GAMG) of the last
+  /// solve_converged_tangent.
+  int adjoint_attempts() const { return adjoint_attempts_; }
+  /// Forgets the path tangent, the last shift and the last converged state, as a new
+  /// solver on the same system.
+  void reset();
 
  private:
-  bool solve_load_step(const Eigen::MatrixXd& m, int load_step, double load, bool predictor,
-                       Eigen::VectorXd* u, NewtonSummary* summary);
+  /// The linear algebra of the shared Newton loop (../newton_load_step.hpp).
+  struct Algebra;
   bool direction(const Eigen::VectorXd& R, double eta, Eigen::VectorXd* du, NewtonIteration* rec,
                  NewtonSummary* summary);
   bool assemble(const Eigen::VectorXd& u, const Eigen::MatrixXd& m, double* energy,
                 Eigen::VectorXd* residual, bool tangent, NewtonSummary* summary);
-  /// The step of a load step's convergence: K at the converged state (for the next
-  /// predictor and the adjoint).
-  bool converge(bool tangent_is_current, const Eigen::VectorXd& u, const Eigen::MatrixXd& m,
-                NewtonSummary* summary);
 
   DistributedSystem& system_;
   NewtonOptions options_;
   bool path_tangent_ = false;  ///< the system's K is the tangent at (last_u_, last_m_)
   bool converged_ = false;
+  int adjoint_attempts_ = 0;
   Eigen::VectorXd last_u_;
   Eigen::MatrixXd last_m_;
 };

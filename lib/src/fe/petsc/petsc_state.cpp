@@ -65,6 +65,7 @@ struct PetscStateSolver::Impl {
   DistributedNewton newton;
   Eigen::VectorXd u;     ///< owned rows
   Eigen::MatrixXd m_qp;  ///< the slab's control at its quadrature points
+  bool solved = false;   ///< the state is the last solve's (not set since)
 };
 
 PetscStateSolver::PetscStateSolver(const Scene& scene, PetscStateOptions options)
@@ -80,6 +81,7 @@ NewtonSummary PetscStateSolver::solve(const Eigen::VectorXd& m) {
   const std::vector<int>& ids = s.control_ids();
   Eigen::VectorXd local(s.control.size());
   for (Eigen::Index k = 0; k < local.size(); ++k) local[k] = m[ids[k]];
+  s.solved = true;
   return s.newton.solve(s.control.to_quadrature(local), &s.u, &s.m_qp);
 }
 
@@ -94,6 +96,7 @@ GridSequencingReport PetscStateSolver::grid_sequenced_start(const Scene& scene,
     throw InvalidArgument("grid sequencing: m must have one value per control");
   s.u.setZero();
   s.m_qp.setZero();
+  s.solved = false;
   if (levels == 0) return report;
   Mesh coarse_mesh;
   State coarse;
@@ -113,7 +116,33 @@ GridSequencingReport PetscStateSolver::grid_sequenced_start(const Scene& scene,
   return report;
 }
 
-bool PetscStateSolver::converged() const { return impl_->newton.converged(); }
+bool PetscStateSolver::converged() const { return impl_->solved && impl_->newton.converged(); }
+
+StateBackend PetscStateSolver::backend() const { return impl_->options.backend; }
+
+Eigen::Index PetscStateSolver::free_dofs() const { return impl_->system.numbering().num_global; }
+
+State PetscStateSolver::state() const { return {displacement(), control_at_quadrature()}; }
+
+void PetscStateSolver::set_state(const State& state) {
+  Impl& s = *impl_;
+  const petsc_detail::SlabPartition& slab = s.system.slab();
+  if (state.u.size() != slab.num_global_nodes * slab.mesh.dim ||
+      state.m_qp.rows() != slab.num_global_elements || state.m_qp.cols() != s.m_qp.cols())
+    throw InvalidArgument("PETSc state: set_state with a state of another problem");
+  const std::vector<std::int64_t>& dofs = s.system.numbering().owned_global_dof;
+  for (Eigen::Index i = 0; i < s.u.size(); ++i) s.u[i] = state.u[dofs[i]];
+  for (Eigen::Index e = 0; e < s.m_qp.rows(); ++e)
+    s.m_qp.row(e) = state.m_qp.row(slab.global_element[e]);
+  s.solved = false;  // the kept tangent is not this state's
+}
+
+void PetscStateSolver::reset() {
+  impl_->newton.reset();
+  impl_->solved = false;
+}
+
+int PetscStateSolver::adjoint_factorizations() const { return impl_->newton.adjoint_attempts(); }
 
 Eigen::VectorXd PetscStateSolver::displacement() const {
   const Impl& s = *impl_;
@@ -131,8 +160,7 @@ Eigen::VectorXd PetscStateSolver::gradient(const Eigen::VectorXd& g) {
   const Eigen::Index num_dofs = s.system.slab().num_global_nodes * s.system.slab().mesh.dim;
   if (g.size() != num_dofs)
     throw InvalidArgument("PETSc state: g must have " + std::to_string(num_dofs) + " entries");
-  if (!s.newton.converged())
-    throw InvalidArgument("PETSc state: gradient() needs a converged solve");
+  if (!converged()) throw InvalidArgument("PETSc state: gradient() needs a converged solve");
   const std::vector<std::int64_t>& dofs = s.system.numbering().owned_global_dof;
   Eigen::VectorXd b(s.system.owned());
   for (Eigen::Index i = 0; i < b.size(); ++i) b[i] = g[dofs[i]];

@@ -68,6 +68,8 @@ class DistributedSystem {
   double sum(double local) const;
   double min(double local) const;
   ///@}
+  /// Starts the next shift search at μ = 0, as a new system would.
+  void forget_shift() { last_shift_ = 0.0; }
 
  private:
   void create_matrix();
