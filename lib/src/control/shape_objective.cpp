@@ -207,13 +207,10 @@ ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::Control
   options.validate();
   if (options.newton.absolute_tolerance == 0.0) {
     // A floor under the relative residual test: the optimiser's small control changes
-    // make |R(0; m)| tiny, and 1e-9 of a tiny reference lies below the residual's
-    // round-off. 1e-10 × stiffness × |Ω₀|^((d−1)/d) is a force far above round-off and
-    // far below any load that matters.
-    const int d = assembler.mesh().dim;
+    // make |R(0; m)| tiny, and 1e-9 of a tiny reference lies below the residual's round-off.
     const double volume = fe::lumped_volumes(assembler.mesh(), assembler.geometry()).sum();
     options.newton.absolute_tolerance =
-        1e-10 * assembler.material().stiffness_scale() * std::pow(volume, (d - 1.0) / d);
+        fe::residual_floor(assembler.material().stiffness_scale(), volume, assembler.mesh().dim);
   }
   impl_ = std::make_unique<Impl>(assembler, control, std::move(target), std::move(options),
                                  make_solver);

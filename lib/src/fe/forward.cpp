@@ -35,10 +35,13 @@ ForwardResult solve_forward(const Scene& scene, const Assembler& assembler,
                             const ForwardOptions& options) {
   options.validate();
   check_control_bounds(scene, control, assembler.mesh(), m);
-  NewtonSolver newton(assembler, options.newton);
+  NewtonOptions newton_options = options.newton;  // a zero absolute tolerance: the floor
+  if (newton_options.absolute_tolerance == 0.0)
+    newton_options.absolute_tolerance = scene.residual_floor();
+  NewtonSolver newton(assembler, newton_options);
   const Eigen::MatrixXd m_qp = control.to_quadrature(m);
   ForwardResult r;
-  r.state = grid_sequenced_start(scene, assembler, m, options.newton, options.grid, &r.grid);
+  r.state = grid_sequenced_start(scene, assembler, m, newton_options, options.grid, &r.grid);
   r.summary = newton.solve(m_qp, &r.state);
   assembler.evaluate(r.state.u, r.state.m_qp, &r.energy, nullptr, nullptr);
   r.volume = assembler.deformed_volume(r.state.u);

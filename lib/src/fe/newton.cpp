@@ -14,6 +14,11 @@
 
 namespace softhd::fe {
 
+double residual_floor(double stiffness_scale, double volume, int dim) {
+  // 1e-10 × stiffness × |Ω₀|^((d−1)/d): a force (stress × area)
+  return 1e-10 * stiffness_scale * std::pow(volume, (dim - 1.0) / dim);
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;

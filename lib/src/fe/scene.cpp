@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "softhd/error.hpp"
+#include "softhd/fe/newton.hpp"
 
 namespace softhd::fe {
 
@@ -175,6 +176,10 @@ Mesh Scene::make_mesh() const { return make_box_mesh(lower, upper, cells, order)
 
 Assembler Scene::make_assembler() const {
   return Assembler(make_mesh(), material, fibers, constraints);
+}
+
+double Scene::residual_floor() const {
+  return fe::residual_floor(material->stiffness_scale(), (upper - lower).prod(), dim());
 }
 
 }  // namespace softhd::fe

@@ -93,14 +93,15 @@ std::unique_ptr<StateEquation> make_state_solver(const Scene& scene,
                                                  const Assembler* assembler,
                                                  const ControlSpace* control) {
   options.validate();
+  NewtonOptions newton = options.newton;
+  if (newton.absolute_tolerance == 0.0) newton.absolute_tolerance = scene.residual_floor();
   if (options.backend == StateBackend::kCholmod) {
-    if (assembler && control)
-      return std::make_unique<StateSolver>(*assembler, *control, options.newton);
-    return std::make_unique<StateSolver>(scene, options.newton);
+    if (assembler && control) return std::make_unique<StateSolver>(*assembler, *control, newton);
+    return std::make_unique<StateSolver>(scene, newton);
   }
 #if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
   PetscStateOptions petsc;
-  petsc.newton = options.newton;
+  petsc.newton = newton;
   petsc.backend = options.backend;
   petsc.max_krylov_iterations = options.max_krylov_iterations;
   return std::make_unique<PetscStateSolver>(scene, petsc);

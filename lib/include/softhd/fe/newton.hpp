@@ -146,6 +146,13 @@ struct State {
 /// The reference state u = 0, m = 0 of an assembler (a valid cold start).
 State rest_state(const Assembler& assembler);
 
+/// The absolute residual tolerance used when NewtonOptions::absolute_tolerance is 0 (by
+/// make_state_solver and ShapeObjective): 1e-10 · stiffness · |Ω₀|^((d−1)/d), a force far
+/// above the residual's round-off and far below any load that matters. Without it the
+/// relative test alone fails when the load is tiny or zero (m = 0: R(0; m) is round-off,
+/// and 1e-9 of round-off cannot be reached).
+double residual_floor(double stiffness_scale, double volume, int dim);
+
 /// Newton–Raphson with line search and load stepping for R(u; m) = 0 on one assembler.
 class NewtonSolver {
  public:

@@ -56,6 +56,9 @@ struct Scene {
   Mesh make_mesh() const;
   /// The assembler of the body: mesh, material, fibers and constraints.
   Assembler make_assembler() const;
+  /// residual_floor() (fe/newton.hpp) of this body: its material's stiffness and the box's
+  /// volume. The Newton tolerance the solvers use when none is given.
+  double residual_floor() const;
 };
 
 /// Parses JSON text; `source` names it in error messages. Throws FileError, and
