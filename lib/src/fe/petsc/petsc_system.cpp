@@ -118,6 +118,18 @@ void for_each_coupling(const Mesh& mesh, const DofMap& dofs, Visit&& visit) {
 
 }  // namespace
 
+void DistributedSystem::add_to_global(const double* local) {
+  PetscInt n = 0;
+  SOFTHD_PETSC(VecGetLocalSize(local_, &n));
+  PetscScalar* a = nullptr;
+  SOFTHD_PETSC(VecGetArray(local_, &a));
+  std::copy(local, local + n, a);
+  SOFTHD_PETSC(VecRestoreArray(local_, &a));
+  SOFTHD_PETSC(VecZeroEntries(global_));
+  SOFTHD_PETSC(VecScatterBegin(to_local_, local_, global_, ADD_VALUES, SCATTER_REVERSE));
+  SOFTHD_PETSC(VecScatterEnd(to_local_, local_, global_, ADD_VALUES, SCATTER_REVERSE));
+}
+
 void DistributedSystem::create_matrix() {
   // Nonzeros per row of the slab's tangent, split into the diagonal and off-diagonal blocks
   // of the row's owner, summed over the ranks that share the row. A pair of dofs that both
@@ -140,14 +152,7 @@ void DistributedSystem::create_matrix() {
   const auto N = static_cast<PetscInt>(numbering_.num_global);
   std::vector<PetscInt> dnz(n), onz(n);
   for (int pass = 0; pass < 2; ++pass) {
-    const std::vector<double>& c = pass == 0 ? d : o;
-    PetscScalar* a = nullptr;
-    SOFTHD_PETSC(VecGetArray(local_, &a));
-    std::copy(c.begin(), c.end(), a);
-    SOFTHD_PETSC(VecRestoreArray(local_, &a));
-    SOFTHD_PETSC(VecZeroEntries(global_));
-    SOFTHD_PETSC(VecScatterBegin(to_local_, local_, global_, ADD_VALUES, SCATTER_REVERSE));
-    SOFTHD_PETSC(VecScatterEnd(to_local_, local_, global_, ADD_VALUES, SCATTER_REVERSE));
+    add_to_global(pass == 0 ? d.data() : o.data());
     const PetscScalar* g = nullptr;
     SOFTHD_PETSC(VecGetArrayRead(global_, &g));
     for (PetscInt i = 0; i < n; ++i) {
@@ -336,13 +341,7 @@ bool DistributedSystem::evaluate(const Eigen::VectorXd& u, const Eigen::MatrixXd
   }
   if (energy) *energy = sum(e);
   if (residual) {
-    PetscScalar* a = nullptr;
-    SOFTHD_PETSC(VecGetArray(local_, &a));
-    std::copy(r.data(), r.data() + r.size(), a);
-    SOFTHD_PETSC(VecRestoreArray(local_, &a));
-    SOFTHD_PETSC(VecZeroEntries(global_));
-    SOFTHD_PETSC(VecScatterBegin(to_local_, local_, global_, ADD_VALUES, SCATTER_REVERSE));
-    SOFTHD_PETSC(VecScatterEnd(to_local_, local_, global_, ADD_VALUES, SCATTER_REVERSE));
+    add_to_global(r.data());
     const PetscScalar* g = nullptr;
     SOFTHD_PETSC(VecGetArrayRead(global_, &g));
     *residual = Eigen::Map<const Eigen::VectorXd>(g, owned());

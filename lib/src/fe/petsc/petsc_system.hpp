@@ -73,6 +73,9 @@ class DistributedSystem {
 
  private:
   void create_matrix();
+  /// Sums the per-local-node values `local` (local_rows_ order) into global_ over the
+  /// ranks (reverse scatter with addition); the owned entries are then in global_.
+  void add_to_global(const double* local);
   void create_solver();
   /// One attempt at K x = b (K possibly shifted); true if it succeeded.
   bool attempt(Vec b, Vec x, double rtol, LinearSolveReport* report);
