@@ -27,7 +27,7 @@ demo: deps
 	@cmake --build $(BUILD_DIR) -j $(JOBS) --target softhd_cli
 	@scripts/demo.sh $(BUILD_DIR)
 
-# All benchmarks (about 1.5-2 hours on 2 cores): CSVs and plots in docs/bench/, the report
+# All benchmarks (within an hour on 2 cores; the run record gives each one's wall time): CSVs and plots in docs/bench/, the report
 # docs/benchmarks.md. bench-quick is the smoke variant (about a minute; CTest runs it too).
 bench: build
 	@scripts/run_benchmarks.sh $(BUILD_DIR) docs/bench docs/benchmarks.md

@@ -63,6 +63,27 @@ def meta(out, name):
     return "".join("    %s\n" % l for l in lines)
 
 
+def wall_times(out, names):
+    """The wall time and date of each benchmark's last run, from its run record."""
+    rows, total = [], 0
+    for name in names:
+        path = os.path.join(out, name + ".meta")
+        if not os.path.exists(path):
+            continue
+        rec = dict(l.split(": ", 1) for l in (x.strip() for x in open(path)) if ": " in l)
+        if "wall seconds" not in rec:
+            continue
+        sec = int(rec["wall seconds"])
+        total += sec
+        rows.append([name, rec.get("date", ""), rec.get("commit", ""), "%.1f" % (sec / 60)])
+    if not rows:
+        return ""
+    rows.append(["**total**", "", "", "**%.1f**" % (total / 60)])
+    return ("Wall time of each benchmark's last run (a full `make bench` runs them all in "
+            "sequence; its budget is an hour):\n\n"
+            + table(["benchmark", "date", "commit", "minutes"], rows) + "\n")
+
+
 def rel(path, report):
     return os.path.relpath(path, os.path.dirname(os.path.abspath(report)))
 
@@ -426,6 +447,8 @@ def main():
     if a.quick:
         parts.append("**Smoke run (`make bench-quick`)**: tiny meshes and a few iterations; "
                      "the numbers only show that every benchmark runs end to end.\n\n")
+    parts.append(wall_times(out, ["kernel", "hausdorff", "resolution", "control", "stability",
+                                  "forward_fenics", "python"]))
     sections = [("resolution", lambda r: section_resolution(r, out, a.report)),
                 ("control", lambda r: section_control(r, out, a.report)),
                 ("stability", section_stability),
