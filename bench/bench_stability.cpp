@@ -107,8 +107,8 @@ int main(int argc, char** argv) {
   tree.objective.hausdorff.method = Method::tree;
   tree.objective.hausdorff.tolerance = 1e-2;
   record(run_tracking(
-      params("huge target", tree, "[-1e5, 0]", fmt(huge) + " random points, tree tau = 1e-2"),
-      body, arc_random(scene, T, huge, 22), map, tree));
+      params("huge target", tree, "[-1e5, 0]", fmt(huge) + " random points, tree tau = 1e-2"), body,
+      arc_random(scene, T, huge, 22), map, tree));
 
   std::fprintf(stderr, "wrote %s\n", csv.c_str());
   int bad = 0;
