@@ -364,17 +364,9 @@ int forward(const Args& args) {
 
 int run_forward(int argc, char** argv) {
   Args args;
-  try {
-    if (!parse(argc, argv, &args)) {
-      std::cout << kUsage;
-      return 0;
-    }
-    return forward(args);
-  } catch (const softhd::Error& e) {
-    std::cerr << "softhd forward: " << e.what() << "\n";
-    return 2;
-  } catch (const std::filesystem::filesystem_error& e) {
-    std::cerr << "softhd forward: " << e.what() << "\n";
-    return 2;
+  if (!parse(argc, argv, &args)) {
+    if (softhd::world_rank() == 0) std::cout << kUsage;
+    return 0;
   }
+  return forward(args);  // errors: one line from main()
 }

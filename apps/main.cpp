@@ -1,11 +1,14 @@
 // softhd: command-line front end. Dispatches to the subcommands; turns every error
-// into one line on stderr and a non-zero exit code (2 for bad input).
+// into one line on stderr and a non-zero exit code (2 for bad input). Under mpiexec, an
+// error of some ranks only ends the whole job (MPI_Abort) instead of leaving it waiting.
 
 #include <exception>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "commands.hpp"
@@ -86,6 +89,8 @@ int main(int argc, char** argv) {
   if (state_command && wants_petsc) petsc = std::make_unique<PetscSession>(argv[0]);
 #endif
   const std::vector<std::string> rest(all.begin() + 1, all.end());
+  int code = 0;
+  std::string error;  // the one line of a failed command
   try {
     if (command == "distance") return softhd::cli::run_distance(rest);
     if (command == "forward") return run_forward(argc - 1, argv + 1);
@@ -93,17 +98,26 @@ int main(int argc, char** argv) {
     err << "softhd: unknown command '" << command << "' (see softhd --help)\n";
     return 2;
   } catch (const softhd::Error& e) {
-    err << "softhd " << command << ": error: " << e.what() << '\n';
-    return 2;
+    std::tie(code, error) = std::pair(2, std::string("error: ") + e.what());
   } catch (const std::filesystem::filesystem_error& e) {
     // The environment, not softhd: a path that cannot be read, created or listed.
-    err << "softhd " << command << ": error: " << e.what() << '\n';
-    return 2;
+    std::tie(code, error) = std::pair(2, std::string("error: ") + e.what());
   } catch (const std::bad_alloc&) {
-    err << "softhd " << command << ": error: out of memory\n";
-    return 1;
+    std::tie(code, error) = std::pair(1, std::string("error: out of memory"));
   } catch (const std::exception& e) {
-    err << "softhd " << command << ": internal error: " << e.what() << '\n';
-    return 1;
+    std::tie(code, error) = std::pair(1, std::string("internal error: ") + e.what());
   }
+  err << "softhd " << command << ": " << error << '\n';
+#if SOFTHD_WITH_MPI
+  // Bad input fails every rank alike, and each returns its code. An error of some ranks
+  // only (a file rank 0 cannot write, a rank out of memory) would leave the others waiting
+  // in their next collective call: the job is ended, with the failing rank's line.
+  if (!softhd::mpi::all_ranks_failed(10.0)) {
+    if (softhd::world_rank() != 0)
+      std::cerr << "softhd " << command << " (rank " << softhd::world_rank() << "): " << error
+                << '\n';
+    softhd::mpi::abort_world(code);
+  }
+#endif
+  return code;
 }

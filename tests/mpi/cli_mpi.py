@@ -5,7 +5,9 @@ printed (rank 0's); bad input gives exit status != 0 and its error line once. so
 optimise under `mpiexec -n 2 ... --state-backend petsc-mumps` against the one-process
 cholmod run: the same history (J per iteration) and final control to 1e-8 relative, one
 progress report; stopped after 2 iterations and resumed, the uninterrupted PETSc run (its
-history as written, the control to 1e-10); an unknown backend refused.
+history as written, the control to 1e-10); an unknown backend refused; an error met by
+rank 0 alone (it cannot write history.csv) ends the whole job with exit status 2 and its
+line, instead of leaving rank 1 waiting for it (the job hung before).
 
 usage: cli_mpi.py SOFTHD MPIEXEC WORKDIR"""
 import json
@@ -157,4 +159,17 @@ check(bad.returncode != 0, "unknown backend: exit status 0 under mpiexec")
 check(bad.stderr.count("--state-backend: unknown state backend 'mumps'") == 1,
       "unknown backend: error line printed %d times"
       % bad.stderr.count("--state-backend: unknown state backend"))
+# rank 0 alone fails (history.csv is a directory it cannot replace); rank 1 goes on to the
+# optimiser's first collective call. The job must end (within the 240 s of run()) with 2.
+stuck = os.path.join(work, "opt_stuck")
+shutil.rmtree(stuck, ignore_errors=True)
+os.makedirs(os.path.join(stuck, "history.csv"))
+try:
+    bad = run(petsc + ["--max-iter", "2", "--out", stuck])
+    check(bad.returncode == 2, "rank 0 failing alone: exit status %d, not 2" % bad.returncode)
+    check(bad.stderr.count("softhd optimise: error: cannot rename") == 1,
+          "rank 0 failing alone: its error line printed %d times"
+          % bad.stderr.count("softhd optimise: error"))
+except subprocess.TimeoutExpired:
+    check(False, "rank 0 failing alone: the job hung (killed after 240 s)")
 sys.exit(1 if failures else 0)

@@ -4,8 +4,11 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <chrono>
 #include <climits>
+#include <cstdio>
 #include <cstdlib>
+#include <thread>
 
 #include "softhd/error.hpp"
 #include "softhd/mpi/work_share.hpp"
@@ -69,15 +72,50 @@ bool launched_by_mpiexec() {
   return false;
 }
 
+namespace {
+// The communicator of failure reports (a duplicate of MPI_COMM_WORLD made by the Session, so
+// that a report never matches a collective call of the computation).
+MPI_Comm failure_comm = MPI_COMM_NULL;
+}  // namespace
+
 Session::Session(int* argc, char*** argv) {
-  if (initialised() || !launched_by_mpiexec()) return;
-  int provided = 0;
-  MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
-  owner_ = true;
+  if (!initialised() && launched_by_mpiexec()) {
+    int provided = 0;
+    MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
+    owner_ = true;
+  }
+  if (initialised() && failure_comm == MPI_COMM_NULL) MPI_Comm_dup(MPI_COMM_WORLD, &failure_comm);
 }
 
 Session::~Session() {
+  if (failure_comm != MPI_COMM_NULL && initialised()) MPI_Comm_free(&failure_comm);
+  failure_comm = MPI_COMM_NULL;
   if (owner_ && initialised()) MPI_Finalize();
+}
+
+bool all_ranks_failed(double seconds) {
+  if (!initialised() || failure_comm == MPI_COMM_NULL) return true;
+  int size = 1;
+  MPI_Comm_size(failure_comm, &size);
+  if (size == 1) return true;
+  // A barrier that only failing ranks enter: complete once every rank has failed.
+  MPI_Request request = MPI_REQUEST_NULL;
+  MPI_Ibarrier(failure_comm, &request);
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  int done = 0;
+  while (true) {
+    MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+    if (done || std::chrono::steady_clock::now() >= end) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return done != 0;  // else the request stays pending: the caller aborts the job
+}
+
+void abort_world(int code) {
+  std::fflush(stdout);
+  std::fflush(stderr);
+  if (initialised()) MPI_Abort(MPI_COMM_WORLD, code);
+  std::_Exit(code);
 }
 
 }  // namespace softhd::mpi

@@ -1,7 +1,7 @@
 #pragma once
 /// \file mpi/work_share.hpp
 /// MPI for the pair sums (SOFTHD_WITH_MPI builds only): a WorkShare over a communicator,
-/// and the MPI session of a program.
+/// the MPI session of a program, and how a program ends when one rank fails.
 ///
 ///     softhd::mpi::Session mpi(&argc, &argv);          // MPI_Init, MPI_Finalize
 ///     softhd::HausdorffOptions options;
@@ -38,5 +38,16 @@ class Session {
  private:
   bool owner_ = false;
 };
+
+/// After an error on this rank of a Session's MPI_COMM_WORLD: waits up to `seconds` for
+/// every rank to report an error too (bad input meets every rank alike, at about the same
+/// time). True if they all did — each may then return its exit code as usual — or if MPI
+/// is not running or has one rank. False if some rank is still computing: it waits, or
+/// will, in a collective call this rank never joins, so the caller must abort_world().
+bool all_ranks_failed(double seconds);
+
+/// Ends every rank of the job with exit code `code` (MPI_Abort), after flushing stdout and
+/// stderr; without MPI, ends this process.
+[[noreturn]] void abort_world(int code);
 
 }  // namespace softhd::mpi
