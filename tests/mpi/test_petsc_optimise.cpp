@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 #include <petscsys.h>
 
+#include <Eigen/SparseCholesky>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -26,6 +27,8 @@
 #include "softhd/control/scene_target.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/shape_tracking.hpp"
+#include "softhd/fe/adjoint.hpp"
+#include "softhd/fe/assembly.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/fe/state_equation.hpp"
@@ -125,6 +128,13 @@ std::string scratch(const std::string& name) {
   return (base / ("petsc_optimise_" + name)).string();
 }
 
+// A deterministic ∂J/∂u for J(u) = g·u, and a control direction.
+Eigen::VectorXd pattern(Eigen::Index n, double a, double scale) {
+  Eigen::VectorXd v(n);
+  for (Eigen::Index i = 0; i < n; ++i) v[i] = scale * std::sin(a * static_cast<double>(i) + 0.3);
+  return v;
+}
+
 // Three MMA iterations of the small bending scene: the PETSc run with the distance shared
 // over the ranks (and its checkpoint written by rank 0) should equal the serial run,
 // iteration by iteration, to the 1e-8. NOT MET, hence disabled (run it with
@@ -161,19 +171,13 @@ TEST(PetscOptimise, DISABLED_BendingHistoryEqualsSerial) {
   EXPECT_EQ(petsc.summary.evaluations, serial.summary.evaluations);
 }
 
-// A deterministic ∂J/∂u for J(u) = g·u, and a control direction.
-Eigen::VectorXd pattern(Eigen::Index n, double a, double scale) {
-  Eigen::VectorXd v(n);
-  for (Eigen::Index i = 0; i < n; ++i) v[i] = scale * std::sin(a * static_cast<double>(i) + 0.3);
-  return v;
-}
-
 // The adjoint gradient of J(u(m)) = g·u(m) by the PETSc backend passes a Taylor test on the
 // PETSc backend alone: the remainder J(m + h d) − J(m) − h ∇J·d falls like h² (observed
 // order 2 between h and h/2, h = 0.1, 0.05, 0.025 with |d| ~ 10 % of |m|, where h ∇J·d is
 // at least 5 times the remainder). Its difference from the serial adjoint at the same state
-// is printed, not asserted: measured 2.7e-8 and 4.8e-8 (max norm; two runs), far above the
-// 1e-9 expected of two direct solves; not explained yet (docs/scaling.md §5, §8).
+// is printed, not asserted: measured 2.7e-8 and 4.8e-8 (max norm; two runs). That is the
+// error of any direct solve at this plate's conditioning: AdjointAsAccurateAsSerialDirectSolvers
+// below measures it against a refined reference (docs/scaling.md §5).
 TEST(PetscOptimise, AdjointPassesTaylorTest) {
   const fe::Scene s = small_bending();
   const fe::Assembler a = s.make_assembler();
@@ -220,6 +224,90 @@ TEST(PetscOptimise, AdjointPassesTaylorTest) {
   EXPECT_NEAR(order2, 2.0, 0.2);
   // The linear term dominates the change (so that order 2 checks the slope itself).
   EXPECT_LT(remainder[0], 0.2 * 0.1 * std::abs(slope));
+}
+
+}  // namespace
+
+namespace {
+
+// r = b − K x with K symmetric (lower triangle stored), accumulated in long double: the
+// residual of an iterate close to K⁻¹b is a difference of nearly equal numbers.
+Eigen::VectorXd residual_extended(const fe::SparseMatrix& K, const Eigen::VectorXd& b,
+                                  const Eigen::VectorXd& x) {
+  std::vector<long double> r(b.data(), b.data() + b.size());
+  for (int j = 0; j < K.outerSize(); ++j)
+    for (fe::SparseMatrix::InnerIterator it(K, j); it; ++it) {
+      const Eigen::Index i = it.row();
+      r[i] -= static_cast<long double>(it.value()) * x[j];
+      if (i != j) r[j] -= static_cast<long double>(it.value()) * x[i];
+    }
+  Eigen::VectorXd out(b.size());
+  for (Eigen::Index i = 0; i < b.size(); ++i) out[i] = static_cast<double>(r[i]);
+  return out;
+}
+
+// The adjoint's accuracy at the Q2 plate's conditioning (κ(K) ≈ 2.5e10, docs/scaling.md §5).
+// The reference: K λ = g solved by Eigen's LDLᵀ and refined with residuals accumulated in
+// long double until they stop falling (mixed-precision iterative refinement: its forward
+// error is about one rounding of λ, independent of κ). Against it, the serial direct
+// solvers on the same K (CHOLMOD, Eigen LLᵀ, Eigen LDLᵀ) show the error any backward-stable
+// solver has here, O(κ ε); the PETSc (MUMPS) adjoint, on its own assembly of K, must be as
+// accurate: within 3 times the worst serial one. Measured (1 and 2 ranks): serial 1.2–2.4e-8,
+// PETSc 3.2e-8; CHOLMOD and Eigen LDLᵀ differ from each other by 3.5e-8 — as much as PETSc
+// differs from CHOLMOD. So that difference, and the Q2 history's 1.3e-8 (the disabled test
+// above), is conditioning, not a fault of either backend.
+TEST(PetscOptimise, AdjointAsAccurateAsSerialDirectSolvers) {
+  const fe::Scene s = small_bending();
+  const fe::Assembler a = s.make_assembler();
+  const fe::ControlSpace space(a.mesh(), a.geometry(), s.control_kind);
+  const Eigen::VectorXd m = -2e4 * space.positions(a.mesh()).col(2) / 0.1;
+  const Eigen::VectorXd g = pattern(a.dofs().num_dofs, 0.37, 1.0);
+  fe::StateSolverOptions o;
+  o.backend = StateBackend::kPetscMumps;
+  std::unique_ptr<fe::StateEquation> petsc = fe::make_state_solver(s, o, &a, &space);
+  petsc->grid_sequenced_start(s, m, fe::GridSequencingOptions{});
+  ASSERT_TRUE(petsc->solve(m).converged());
+  const Eigen::VectorXd grad_petsc = petsc->gradient(g);
+  const fe::State st = petsc->state();
+  // CHOLMOD through the serial state solver (at that state: no Newton step, a fresh factor).
+  o.backend = StateBackend::kCholmod;
+  std::unique_ptr<fe::StateEquation> serial = fe::make_state_solver(s, o, &a, &space);
+  serial->set_state(st);
+  ASSERT_EQ(serial->solve(m).newton_iterations, 0);
+  const Eigen::VectorXd grad_cholmod = serial->gradient(g);
+
+  fe::SparseMatrix K = a.tangent_pattern();
+  ASSERT_TRUE(a.evaluate(st.u, space.to_quadrature(m), nullptr, nullptr, &K));
+  const Eigen::VectorXd b = a.dofs().restrict(g);
+  const Eigen::SimplicialLDLT<fe::SparseMatrix, Eigen::Lower> ldlt(K);
+  const Eigen::SimplicialLLT<fe::SparseMatrix, Eigen::Lower> llt(K);
+  ASSERT_EQ(ldlt.info(), Eigen::Success);
+  ASSERT_EQ(llt.info(), Eigen::Success);
+  const Eigen::VectorXd x_ldlt = ldlt.solve(b), x_llt = llt.solve(b);
+  Eigen::VectorXd x = x_ldlt;
+  double last = INFINITY, now = 0.0;
+  for (int k = 0; k < 20; ++k, last = now) {
+    const Eigen::VectorXd r = residual_extended(K, b, x);
+    now = r.norm();
+    if (now >= last) break;  // at the floor of λ's rounding
+    x += ldlt.solve(r);
+  }
+  auto gradient = [&](const Eigen::VectorXd& lambda) {
+    return fe::control_gradient(a, space, st.u, a.dofs().expand(lambda));
+  };
+  const Eigen::VectorXd ref = gradient(x);
+  const double e_cholmod = relative(grad_cholmod, ref), e_llt = relative(gradient(x_llt), ref),
+               e_ldlt = relative(gradient(x_ldlt), ref), e_petsc = relative(grad_petsc, ref);
+  if (rank() == 0)
+    std::printf(
+        "adjoint gradient against the refined one, %d ranks: CHOLMOD %.3e, Eigen LLT %.3e, "
+        "Eigen LDLT %.3e, PETSc %.3e; CHOLMOD vs PETSc %.3e\n",
+        world_size(), e_cholmod, e_llt, e_ldlt, e_petsc, relative(grad_petsc, grad_cholmod));
+  const double worst_serial = std::max({e_cholmod, e_llt, e_ldlt});
+  EXPECT_LE(e_petsc, 3.0 * worst_serial);
+  // The reference is not one of the solvers it judges: it moved LDLᵀ's answer by more than
+  // the tolerance of this test's comparison (else the test would compare LDLᵀ with itself).
+  EXPECT_GT(e_ldlt, 1e-12);
 }
 
 }  // namespace
