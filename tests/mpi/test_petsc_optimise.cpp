@@ -253,9 +253,10 @@ Eigen::VectorXd residual_extended(const fe::SparseMatrix& K, const Eigen::Vector
 // solvers on the same K (CHOLMOD, Eigen LLᵀ, Eigen LDLᵀ) show the error any backward-stable
 // solver has here, O(κ ε); the PETSc (MUMPS) adjoint, on its own assembly of K, must be as
 // accurate: within 3 times the worst serial one. Measured: 1 rank, serial 1.2–2.4e-8 and
-// PETSc 3.2e-8; 2 ranks (another state), serial 0.5–2.4e-8 and PETSc 0.6e-8; CHOLMOD and Eigen LDLᵀ differ from each other by 3.5e-8 — as much as PETSc
-// differs from CHOLMOD. So that difference, and the Q2 history's 1.3e-8 (the disabled test
-// above), is conditioning, not a fault of either backend.
+// PETSc 3.2e-8; 2 ranks (another state), serial 0.5–2.4e-8 and PETSc 0.6e-8; CHOLMOD and Eigen LDLᵀ
+// differ from each other by 3.5e-8 — as much as PETSc differs from CHOLMOD. So that difference, and
+// the Q2 history's 1.3e-8 (the disabled test above), is conditioning, not a fault of either
+// backend.
 TEST(PetscOptimise, AdjointAsAccurateAsSerialDirectSolvers) {
   const fe::Scene s = small_bending();
   const fe::Assembler a = s.make_assembler();
