@@ -249,10 +249,11 @@ Eigen::VectorXd residual_extended(const fe::SparseMatrix& K, const Eigen::Vector
 // The adjoint's accuracy at the Q2 plate's conditioning (κ(K) ≈ 2.5e10, docs/scaling.md §5).
 // The reference: K λ = g solved by Eigen's LDLᵀ and refined with residuals accumulated in
 // long double until they stop falling (mixed-precision iterative refinement: its forward
-// error is about one rounding of λ, independent of κ). Against it, the serial direct
-// solvers on the same K (CHOLMOD, Eigen LLᵀ, Eigen LDLᵀ) show the error any backward-stable
-// solver has here, O(κ ε); the PETSc (MUMPS) adjoint, on its own assembly of K, must be as
-// accurate: within 3 times the worst serial one. Measured: 1 rank, serial 1.2–2.4e-8 and
+// error is bounded by about κ times long double's unit round-off, 1.4e-9 here, not κ times
+// double's; the errors below came out the same, to 3 digits, with residuals in __float128). Against
+// it, the serial direct solvers on the same K (CHOLMOD, Eigen LLᵀ, Eigen LDLᵀ) show the error any
+// backward-stable solver has here, O(κ ε); the PETSc (MUMPS) adjoint, on its own assembly of K,
+// must be as accurate: within 3 times the worst serial one. Measured: 1 rank, serial 1.2–2.4e-8 and
 // PETSc 3.2e-8; 2 ranks (another state), serial 0.5–2.4e-8 and PETSc 0.6e-8; CHOLMOD and Eigen LDLᵀ
 // differ from each other by 3.5e-8 — as much as PETSc differs from CHOLMOD. So that difference, and
 // the Q2 history's 1.3e-8 (the disabled test above), is conditioning, not a fault of either
