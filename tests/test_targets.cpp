@@ -8,7 +8,9 @@
 #include <cmath>
 
 #include "expect_error.hpp"
+#include "softhd/control/scene_target.hpp"
 #include "softhd/control/targets.hpp"
+#include "softhd/fe/scene.hpp"
 #include "softhd/samplers.hpp"
 
 namespace softhd::test {
@@ -64,6 +66,44 @@ TEST(ArcMap, MappedVolumesSumToTheIntegralOfTheJacobian) {
   const PointCloud mapped = T.apply(grid);
   EXPECT_NEAR(mapped.volumes().sum(), 2.0, 1e-13);
   EXPECT_EQ(mapped.size(), grid.size());
+}
+
+// The plate placed anywhere bends the same way: T_o(X + o) = T_0(X) + o. Before the origin
+// existed, a scene with mesh.lower = (1e6, 1e6, 1e6) got an arc about the far-away X1 = 0,
+// with negative volumes (refused), and mesh.lower = (1, 0, 0) a silently wrong target.
+TEST(ArcMap, CommutesWithTranslations) {
+  ArcMap T0, T;
+  T0.angle = T.angle = 2.5;
+  T.origin = Eigen::Vector3d(1e6, -3.0, 1e6);
+  for (const Eigen::Vector3d& X : {Eigen::Vector3d(0.0, 0.4, 0.0), Eigen::Vector3d(7.1, 1.9, 0.09),
+                                   Eigen::Vector3d(10.0, 1.0, 0.05)}) {
+    const Eigen::Vector3d expected = T0(X) + T.origin;
+    EXPECT_LT((T(X + T.origin) - expected).norm(), 1e-9);  // 8 ulps of 1e6
+    EXPECT_NEAR(T.jacobian(X + T.origin), T0.jacobian(X), 1e-9);
+  }
+}
+
+TEST(SceneTarget, ArcOfATranslatedSceneIsTheTranslatedArc) {
+  fe::Scene s = fe::parse_scene(R"({
+    "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [4, 1, 0.2], "cells": [4, 1, 1], "order": 2 },
+    "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
+    "fibers": [1, 0, 0], "clamp": ["x0"],
+    "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
+    "target": { "kind": "arc", "angle": 1.5 } })",
+                                "plate.json");
+  fe::Scene moved = s;
+  const Eigen::Vector3d o(1.0, 2.0, -0.5);
+  for (int k = 0; k < 3; ++k) {
+    moved.lower[k] += o[k];
+    moved.upper[k] += o[k];
+  }
+  const SceneTarget a = scene_target(s, s.make_mesh()), b = scene_target(moved, moved.make_mesh());
+  ASSERT_EQ(a.cloud.size(), b.cloud.size());
+  const Eigen::MatrixXd d = b.cloud.points().rowwise() - o.transpose();
+  EXPECT_LT((d - a.cloud.points()).cwiseAbs().maxCoeff(), 1e-14);
+  EXPECT_LT((b.cloud.volumes() - a.cloud.volumes()).cwiseAbs().maxCoeff(), 1e-16);
+  ASSERT_TRUE(a.map_displacement && b.map_displacement);
+  EXPECT_LT((*b.map_displacement - *a.map_displacement).cwiseAbs().maxCoeff(), 1e-14);
 }
 
 TEST(ArcMap, RejectsBadGeometry) {

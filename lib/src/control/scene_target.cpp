@@ -87,6 +87,7 @@ ArcMap arc_map(const fe::Scene& scene, double angle) {
   T.length = scene.upper[0] - scene.lower[0];
   T.thickness = scene.upper[2] - scene.lower[2];
   T.angle = angle;
+  T.origin = scene.lower.head<3>();  // the arc of the plate where the scene puts it
   T.validate();
   return T;
 }

@@ -14,17 +14,21 @@ void ArcMap::validate() const {
     throw InvalidArgument("arc target: length and thickness must be finite and > 0");
   if (!(angle > 0.0) || !(angle <= 2.0 * M_PI + 1e-12))
     throw InvalidArgument("arc target: angle must be in (0, 2 pi], got " + std::to_string(angle));
+  if (!origin.allFinite()) throw InvalidArgument("arc target: the origin must be finite");
   if (!(length / angle > 0.5 * thickness))
     throw InvalidArgument("arc target: the radius length/angle must exceed half the thickness");
 }
 
 Eigen::Vector3d ArcMap::operator()(const Eigen::Vector3d& X) const {
-  const double R = length / angle, z = X[2] - 0.5 * thickness;
-  return {(R - z) * std::sin(X[0] / R), X[1], 0.5 * thickness + R - (R - z) * std::cos(X[0] / R)};
+  // P = X − origin: T(X) = origin + ((R − z) sin(P1/R), P2, t/2 + R − (R − z) cos(P1/R)).
+  const Eigen::Vector3d P = X - origin;
+  const double R = length / angle, z = P[2] - 0.5 * thickness;
+  return origin + Eigen::Vector3d((R - z) * std::sin(P[0] / R), P[1],
+                                  0.5 * thickness + R - (R - z) * std::cos(P[0] / R));
 }
 
 double ArcMap::jacobian(const Eigen::Vector3d& X) const {
-  return 1.0 - (X[2] - 0.5 * thickness) / (length / angle);
+  return 1.0 - (X[2] - origin[2] - 0.5 * thickness) / (length / angle);  // 1 − z/R
 }
 
 PointCloud ArcMap::apply(const PointCloud& reference) const {

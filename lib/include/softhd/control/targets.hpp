@@ -12,18 +12,20 @@
 
 namespace softhd {
 
-/// The plate [0, length] × [0, width] × [0, thickness], clamped at X1 = 0, bent about
-/// the X2 axis through the total angle θ, curling towards +X3 (docs/formulation.md §5.2). With
-/// R = length/θ and z = X3 − thickness/2:
+/// The plate origin + [0, length] × [0, width] × [0, thickness], clamped at its face
+/// X1 = origin1, bent about the X2 axis through the total angle θ, curling towards +X3
+/// (docs/formulation.md §5.2). With P = X − origin, R = length/θ and z = P3 − thickness/2:
 ///
-///     T(X) = ((R − z) sin(X1/R), X2, thickness/2 + R − (R − z) cos(X1/R)),
+///     T(X) = origin + ((R − z) sin(P1/R), P2, thickness/2 + R − (R − z) cos(P1/R)),
 ///     det ∇T = 1 − z/R.
 ///
-/// T is the identity on the clamped face X1 = 0 and preserves the mid-surface's length.
+/// T is the identity on the clamped face and preserves the mid-surface's length.
 struct ArcMap {
   double length = 10.0;              ///< L, along X1 (the clamp is at X1 = 0)
   double thickness = 0.1;            ///< t, along X3
   double angle = 3.141592653589793;  ///< θ in (0, 2π]
+  /// The plate's lower corner (a scene's mesh.lower): T commutes with translations.
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
 
   /// Throws InvalidArgument for a non-positive length or thickness, θ outside
   /// (0, 2π], or R ≤ thickness/2 (the inner surface would fold).
