@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "failure.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/cloud.hpp"
@@ -364,9 +365,15 @@ int forward(const Args& args) {
 
 int run_forward(int argc, char** argv) {
   Args args;
-  if (!parse(argc, argv, &args)) {
-    if (softhd::world_rank() == 0) std::cout << kUsage;
-    return 0;
+  try {
+    if (!parse(argc, argv, &args)) {
+      if (softhd::world_rank() == 0) std::cout << kUsage;
+      return 0;
+    }
+    return forward(args);
+  } catch (const softhd::Error& e) {
+    return softhd::cli::report_failure("forward", 2, std::string("error: ") + e.what());
+  } catch (const std::filesystem::filesystem_error& e) {
+    return softhd::cli::report_failure("forward", 2, std::string("error: ") + e.what());
   }
-  return forward(args);  // errors: one line from main()
 }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "failure.hpp"
 #include "softhd/error.hpp"
 #include "softhd/work_share.hpp"
 #if SOFTHD_WITH_MPI
@@ -107,17 +108,5 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::tie(code, error) = std::pair(1, std::string("internal error: ") + e.what());
   }
-  err << "softhd " << command << ": " << error << '\n';
-#if SOFTHD_WITH_MPI
-  // Bad input fails every rank alike, and each returns its code. An error of some ranks
-  // only (a file rank 0 cannot write, a rank out of memory) would leave the others waiting
-  // in their next collective call: the job is ended, with the failing rank's line.
-  if (!softhd::mpi::all_ranks_failed(10.0)) {
-    if (softhd::world_rank() != 0)
-      std::cerr << "softhd " << command << " (rank " << softhd::world_rank() << "): " << error
-                << '\n';
-    softhd::mpi::abort_world(code);
-  }
-#endif
-  return code;
+  return softhd::cli::report_failure(command, code, error);
 }
