@@ -8,7 +8,6 @@
 // requirement.
 
 #include <gtest/gtest.h>
-#include <petscsys.h>
 
 #include <cstdlib>
 #include <initializer_list>
@@ -88,11 +87,3 @@ TEST(PetscState, TorsionForwardEqualsCholmod) {
 }
 
 }  // namespace
-
-int main(int argc, char** argv) {
-  if (PetscInitialize(&argc, &argv, nullptr, nullptr) != 0) return 1;
-  ::testing::InitGoogleTest(&argc, argv);
-  const int result = RUN_ALL_TESTS();
-  PetscFinalize();
-  return result;
-}

@@ -14,7 +14,6 @@
 // direct solvers, agrees to round-off.
 
 #include <gtest/gtest.h>
-#include <petscsys.h>
 
 #include <Eigen/SparseCholesky>
 #include <cmath>
@@ -316,11 +315,3 @@ TEST(PetscOptimise, AdjointAsAccurateAsSerialDirectSolvers) {
 }
 
 }  // namespace
-
-int main(int argc, char** argv) {
-  if (PetscInitialize(&argc, &argv, nullptr, nullptr) != 0) return 1;
-  ::testing::InitGoogleTest(&argc, argv);
-  const int result = RUN_ALL_TESTS();
-  PetscFinalize();
-  return result;
-}
