@@ -173,6 +173,36 @@ TEST(PetscOptimise, DISABLED_BendingHistoryEqualsSerial) {
   EXPECT_EQ(petsc.summary.evaluations, serial.summary.evaluations);
 }
 
+// One state of the small plate (m = −2·10⁵ X₃) solved by PETSc, and the adjoint gradient of
+// J(u) = g·u there by PETSc and by the serial solver started at exactly that state (its
+// Newton accepts it at once and factorises K there): two solvers' own states agree only to
+// their Newton tolerance (at rtol 1e-9 the gradients at their own states differed by 6.5e-9).
+struct OneState {
+  fe::Scene s = small_bending();
+  fe::Assembler a = s.make_assembler();
+  fe::ControlSpace space{a.mesh(), a.geometry(), s.control_kind};
+  Eigen::VectorXd m = -2e4 * space.positions(a.mesh()).col(2) / 0.1;
+  Eigen::VectorXd g = pattern(a.dofs().num_dofs, 0.37, 1.0);
+  std::unique_ptr<fe::StateEquation> petsc;
+  Eigen::VectorXd grad_petsc, grad_serial;
+};
+
+void solve_one_state(OneState* c) {
+  fe::StateSolverOptions o;
+  o.backend = StateBackend::kPetscMumps;
+  c->petsc = fe::make_state_solver(c->s, o, &c->a, &c->space);
+  c->petsc->grid_sequenced_start(c->s, c->m, fe::GridSequencingOptions{});
+  ASSERT_TRUE(c->petsc->solve(c->m).converged());
+  c->grad_petsc = c->petsc->gradient(c->g);
+  o.backend = StateBackend::kCholmod;
+  std::unique_ptr<fe::StateEquation> serial = fe::make_state_solver(c->s, o, &c->a, &c->space);
+  serial->set_state(c->petsc->state());
+  const fe::NewtonSummary at_petsc_state = serial->solve(c->m);
+  ASSERT_TRUE(at_petsc_state.converged());
+  ASSERT_EQ(at_petsc_state.newton_iterations, 0);
+  c->grad_serial = serial->gradient(c->g);
+}
+
 // The adjoint gradient of J(u(m)) = g·u(m) by the PETSc backend passes a Taylor test on the
 // PETSc backend alone: the remainder J(m + h d) − J(m) − h ∇J·d falls like h² (observed
 // order 2 between h and h/2, h = 0.1, 0.05, 0.025 with |d| ~ 10 % of |m|, where h ∇J·d is
@@ -181,32 +211,15 @@ TEST(PetscOptimise, DISABLED_BendingHistoryEqualsSerial) {
 // error of any direct solve at this plate's conditioning: AdjointAsAccurateAsSerialDirectSolvers
 // below measures it against a refined reference (docs/scaling.md §5).
 TEST(PetscOptimise, AdjointPassesTaylorTest) {
-  const fe::Scene s = small_bending();
-  const fe::Assembler a = s.make_assembler();
-  const fe::ControlSpace space(a.mesh(), a.geometry(), s.control_kind);
-  const Eigen::VectorXd m = -2e4 * space.positions(a.mesh()).col(2) / 0.1;
-  const Eigen::VectorXd g = pattern(a.dofs().num_dofs, 0.37, 1.0);
-  // The PETSc state, then the serial adjoint at exactly that state (its Newton accepts it
-  // at once and assembles K there): two solvers' states agree only to their Newton
-  // tolerance (at rtol 1e-9 the gradients at their own states differed by 6.5e-9).
-  std::vector<Eigen::VectorXd> gradients(2);
-  fe::StateSolverOptions o;
-  o.backend = StateBackend::kPetscMumps;
-  std::unique_ptr<fe::StateEquation> petsc = fe::make_state_solver(s, o, &a, &space);
-  petsc->grid_sequenced_start(s, m, fe::GridSequencingOptions{});
-  ASSERT_TRUE(petsc->solve(m).converged());
-  gradients[1] = petsc->gradient(g);
-  o.backend = StateBackend::kCholmod;
-  std::unique_ptr<fe::StateEquation> serial = fe::make_state_solver(s, o, &a, &space);
-  serial->set_state(petsc->state());
-  const fe::NewtonSummary at_petsc_state = serial->solve(m);
-  ASSERT_TRUE(at_petsc_state.converged());
-  EXPECT_EQ(at_petsc_state.newton_iterations, 0);
-  gradients[0] = serial->gradient(g);
-  const double diff = relative(gradients[1], gradients[0]);
+  OneState c;
+  ASSERT_NO_FATAL_FAILURE(solve_one_state(&c));
+  const Eigen::VectorXd& g = c.g;
+  const Eigen::VectorXd& m = c.m;
+  fe::StateEquation* petsc = c.petsc.get();
+  const double diff = relative(c.grad_petsc, c.grad_serial);
   // Taylor test on the PETSc solver (warm-started from m each time).
-  const Eigen::VectorXd d = pattern(space.size(), 0.91, 2e3);
-  const double J0 = g.dot(petsc->displacement()), slope = gradients[1].dot(d);
+  const Eigen::VectorXd d = pattern(c.space.size(), 0.91, 2e3);
+  const double J0 = g.dot(petsc->displacement()), slope = c.grad_petsc.dot(d);
   const fe::State at_m = petsc->state();
   std::vector<double> remainder;
   for (double h : {0.1, 0.05, 0.025}) {
@@ -261,24 +274,13 @@ Eigen::VectorXd residual_extended(const fe::SparseMatrix& K, const Eigen::Vector
 // the Q2 history's 1.3e-8 (the disabled test above), is conditioning, not a fault of either
 // backend.
 TEST(PetscOptimise, AdjointAsAccurateAsSerialDirectSolvers) {
-  const fe::Scene s = small_bending();
-  const fe::Assembler a = s.make_assembler();
-  const fe::ControlSpace space(a.mesh(), a.geometry(), s.control_kind);
-  const Eigen::VectorXd m = -2e4 * space.positions(a.mesh()).col(2) / 0.1;
-  const Eigen::VectorXd g = pattern(a.dofs().num_dofs, 0.37, 1.0);
-  fe::StateSolverOptions o;
-  o.backend = StateBackend::kPetscMumps;
-  std::unique_ptr<fe::StateEquation> petsc = fe::make_state_solver(s, o, &a, &space);
-  petsc->grid_sequenced_start(s, m, fe::GridSequencingOptions{});
-  ASSERT_TRUE(petsc->solve(m).converged());
-  const Eigen::VectorXd grad_petsc = petsc->gradient(g);
-  const fe::State st = petsc->state();
-  // CHOLMOD through the serial state solver (at that state: no Newton step, a fresh factor).
-  o.backend = StateBackend::kCholmod;
-  std::unique_ptr<fe::StateEquation> serial = fe::make_state_solver(s, o, &a, &space);
-  serial->set_state(st);
-  ASSERT_EQ(serial->solve(m).newton_iterations, 0);
-  const Eigen::VectorXd grad_cholmod = serial->gradient(g);
+  OneState c;
+  ASSERT_NO_FATAL_FAILURE(solve_one_state(&c));  // CHOLMOD: the serial solver's fresh factor
+  const fe::Assembler& a = c.a;
+  const fe::ControlSpace& space = c.space;
+  const Eigen::VectorXd &m = c.m, &g = c.g, &grad_petsc = c.grad_petsc,
+                        &grad_cholmod = c.grad_serial;
+  const fe::State st = c.petsc->state();
 
   fe::SparseMatrix K = a.tangent_pattern();
   ASSERT_TRUE(a.evaluate(st.u, space.to_quadrature(m), nullptr, nullptr, &K));
