@@ -516,5 +516,51 @@ TEST(PairBackends, AllAgreeWithTheReferenceThroughOneInterface) {
   }
 }
 
+// The cost model (docs/tree_tolerance.md §8) on the two sides of its decision, 3 000 × 3 000
+// points at α = 4 (above the 4·10⁶ pairs summed exactly without planning): uniform cubes at
+// τ = 1e-6 fall back (the sample predicts about 1.5 times the limit) and then equal the exact
+// backend bit for bit; three separated clusters are planned (measured 5.0·10⁶ kernel
+// evaluations instead of 9·10⁶) and stay within τ of the long-double reference. The verdict and the
+// sums do not depend on the thread count.
+TEST(PairBackends, CostModelFallsBackOnCubesAndPlansClusters) {
+  const double eps = 1e-3;
+  const detail::KernelPower power(4.0);
+  const auto exact = detail::make_exact_backend();
+  const auto dual = detail::make_dual_tree_backend(detail::DualTreeConfig{}, nullptr);
+  for (const Shape shape : {Shape::cube, Shape::clusters}) {
+    const double tau = shape == Shape::cube ? 1e-6 : 1e-4;
+    const PointCloud X = shaped_cloud(shape, 3000, 3, 21), Y = shaped_cloud(shape, 3000, 3, 22);
+    const Eigen::VectorXd w = X.volumes() / X.total_volume();
+    Eigen::VectorXd scale(Y.size());
+    for (Eigen::Index j = 0; j < Y.size(); ++j)
+      scale[j] = brute_nearest(X, Y.points().row(j).transpose()) + eps;
+    const detail::KdTree xt(X.points(), detail::kLeafSize), yt(Y.points(), detail::kLeafSize);
+    const detail::PassSources src{&X.points(), &xt, w.data(), nullptr, nullptr};
+    const detail::PassOuter out{&Y.points(), &yt, scale.data(),
+                                detail::kOuterSum | detail::kOuterGrad, nullptr};
+    const detail::PassSums one = dual->sums(src, out, detail::PassSettings{&power, eps, tau, 1});
+    const detail::PassSums two = dual->sums(src, out, detail::PassSettings{&power, eps, tau, 2});
+    EXPECT_EQ(one.stats.fell_back, two.stats.fell_back);
+    EXPECT_TRUE(one.S == two.S && one.G == two.G) << "thread count changed the sums";
+    if (shape == Shape::cube) {
+      EXPECT_TRUE(two.stats.fell_back);
+      const detail::PassSums ex = exact->sums(src, out, detail::PassSettings{&power, eps, tau, 2});
+      EXPECT_TRUE(two.S == ex.S && two.G == ex.G) << "a fall-back is the exact backend";
+      continue;
+    }
+    EXPECT_FALSE(two.stats.fell_back);
+    EXPECT_LT(two.kernel_evaluations, X.size() * Y.size());
+    const Eigen::VectorXd none = Eigen::VectorXd::Zero(X.size()), ones = none.array() + 1.0;
+    for (Eigen::Index j = 0; j < Y.size(); j += 7) {
+      const LongSums r =
+          reference(Y.points().row(j).transpose(), scale[j], X, w, none, ones, 4.0, eps);
+      long double dG = 0;
+      for (int k = 0; k < 3; ++k) dG += (two.G(j, k) - r.G[k]) * (two.G(j, k) - r.G[k]);
+      ASSERT_LE(std::fabs(two.S[j] - r.S), (tau + kRounding) * r.S) << "point " << j;
+      ASSERT_LE(std::sqrt(dG), (tau + kRounding) * r.Gm) << "point " << j;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace softhd::test

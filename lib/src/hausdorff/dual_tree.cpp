@@ -219,7 +219,7 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   Pass p;
   prepare(p, cfg_, src, outer, set);
   std::vector<int> roots;
-  task_roots(*p.ot, 0, std::max<Eigen::Index>(1024, p.ot->size() / 64), roots);
+  task_roots(*p.ot, 0, std::max<Eigen::Index>(kMinTaskPoints, p.ot->size() / 64), roots);
   std::vector<std::vector<Interaction>> lists(roots.size());
   std::vector<double> work(roots.size(), 0.0);
   std::int64_t visits = 0;
@@ -229,10 +229,6 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   for (size_t r = 0; r < roots.size(); ++r)
     points[r] = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
   UnitRange mine = share_of(set, points);
-  outer_bounds(p,
-               std::vector<int>(roots.begin() + static_cast<std::ptrdiff_t>(mine.first),
-                                roots.begin() + static_cast<std::ptrdiff_t>(mine.last)),
-               set.threads);
   if (!plan_tasks(p, roots, mine, limit, set, lists, work, visits))
     return fall_back(src, outer, set, visits, since(start));
   if (set.share != nullptr) mine = rebalance(p, roots, mine, set, lists, work, visits);

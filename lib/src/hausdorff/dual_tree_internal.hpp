@@ -30,6 +30,9 @@ constexpr double kCostNear = 1.3;   // direct pairs in short slices (leaf pairs)
 constexpr double kCostFar = 1.0;    // kernel evaluations at interpolation points
 constexpr double kCostBasis = 0.3;  // point-interpolation-point basis products
 constexpr double kFallBack = 0.8;   // the plan must cost < 80 % of all pairs
+// Outer subtrees planned and run as tasks: N/64 points, at least kMinTaskPoints (smaller
+// tasks make worse plans: an outer box never interacts above its task's root).
+constexpr Eigen::Index kMinTaskPoints = 1024;
 
 /// One planned node pair: outer node t, source node s, the operation and, for the far
 /// field, the points per axis of its interpolation grids.
@@ -144,10 +147,12 @@ void outer_bounds(Pass& p, const std::vector<int>& roots, int threads);
 int subtree_end(const KdTree& tree, int id);
 /// Outer subtrees processed as independent tasks (nodes of at most `limit` points).
 void task_roots(const KdTree& ot, int id, Eigen::Index limit, std::vector<int>& out);
-/// Plans the tasks of `mine` (their planned work in `work`); false when the plan costs
-/// more than `limit` (fall back to all pairs). With a share, the prediction and the
-/// verdict are summed over the processes (each plans its own tasks).
-bool plan_tasks(const Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
+/// Bounds (outer_bounds) and plans the tasks of `mine` (their planned work in `work`);
+/// false when the plan costs more than `limit` (fall back to all pairs). A sample of
+/// subtrees is bounded and planned first (and dropped) to predict the plan's work, so a
+/// fall-back costs about the sample's share of the planning. With a share, the prediction
+/// and the verdict are summed over the processes (each plans its own tasks).
+bool plan_tasks(Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
                 const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
                 std::vector<double>& work, std::int64_t& visits);
 /// Distributed passes: the tasks this process executes, split by planned work (summed

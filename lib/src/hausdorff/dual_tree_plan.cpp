@@ -499,7 +499,8 @@ bool plan(const Pass& p, int t, int s, PlanState& st, Ledger& ledger) {
   return plan(p, t, first, st, ledger) && plan(p, t, second, st, ledger);
 }
 
-constexpr size_t kSampleStride = 64;  // planning tasks sampled to predict the plan's work
+constexpr size_t kSampleStride = 64;            // planning units sampled to predict the plan's work
+constexpr Eigen::Index kMinSamplePoints = 256;  // the smallest unit of the sample
 
 }  // namespace
 
@@ -589,52 +590,95 @@ void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const P
   prepare_outer(p, outer);
 }
 
-/// Plans every task: first a sample (every stride-th task, stride ≤ kSampleStride), whose
-/// planned work, scaled by the share of outer points it covers, predicts the whole plan
-/// (a fall-back then costs about 1/stride of the planning), then the others. Returns
-/// false (fall back to all pairs) when the predicted or the planned work exceeds `limit`.
-bool plan_tasks(const Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
-                const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
-                std::vector<double>& work, std::int64_t& visits) {
-  const int threads = set.threads;
-  // Every stride-th task is sampled: about one per thread (planned in parallel).
-  const size_t stride =
-      std::clamp<size_t>(roots.size() / static_cast<size_t>(threads), 1, kSampleStride);
-  // The sample's share of the outer points: while it is planned, its work may not exceed
-  // that share of the limit (else the prediction exceeds the limit: stop at once).
-  double sample_share = 0.0;
-  for (size_t r = 0; r < roots.size(); r += stride)
-    sample_share += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
-  sample_share /= static_cast<double>(p.ot->size());
+/// Whether the sample predicts a plan over `limit`. Its units are the tasks of `mine`, cut
+/// into subtrees of at most N/16 points (at least kMinSamplePoints) where tasks are larger,
+/// i.e. only below N ≈ 16 000, where 4–8 tasks would make the sample half or a quarter of the
+/// planning. Every stride-th unit (stride ≤ kSampleStride) is bounded and planned; the
+/// work, scaled by the share of the outer points covered, predicts the plan's, and planning
+/// stops as soon as the work exceeds that share of the limit. A unit that is a whole task
+/// keeps its plan (`lists`, `work`, `done`); a smaller unit's plan is dropped (it plans
+/// more work per point than its task: the prediction errs towards a fall-back).
+bool sample_exceeds(Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
+                    const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
+                    std::vector<double>& work, std::vector<char>& done, std::int64_t& visits) {
+  const double n_all = static_cast<double>(p.ot->size());
+  const Eigen::Index unit_limit =
+      std::max(kMinSamplePoints, static_cast<Eigen::Index>(n_all / 16.0));
+  std::vector<int> units, task_of;  // task_of: the task a unit is, or −1 for part of one
+  for (size_t r = mine.first; r < mine.last; ++r) {
+    const size_t before = units.size();
+    task_roots(*p.ot, roots[r], unit_limit, units);
+    const bool whole = units.size() == before + 1;
+    task_of.resize(units.size(), whole ? static_cast<int>(r) : -1);
+  }
+  // At least two units (planned in parallel); not a function of the thread count, so
+  // neither is the verdict (the sums are bit-identical for any number of threads).
+  const size_t stride = std::clamp<size_t>(units.size() / 2, 1, kSampleStride);
+  std::vector<size_t> sample;
+  std::vector<int> sample_roots;
+  double covered = 0.0;
+  for (size_t u = 0; u < units.size(); u += stride) {
+    sample.push_back(u);
+    sample_roots.push_back(units[u]);
+    covered += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(units[u])]));
+  }
+  outer_bounds(p, sample_roots, set.threads);
   std::atomic<double> spent{0.0};
   std::atomic<bool> stopped{false};
-  for (int phase = 0; phase < 2 && !stopped; ++phase) {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads) reduction(+ : visits)
-    for (size_t r = mine.first; r < mine.last; ++r) {
-      if ((r % stride == 0) != (phase == 0) || stopped.load()) continue;
-      PlanState st;
-      st.spent = &spent;
-      st.limit = phase == 0 ? limit * sample_share : limit;
-      Ledger ledger;
-      if (!plan(p, roots[r], 0, st, ledger)) stopped = true;
-      visits += st.visits;
-      work[r] = st.total;
-      lists[r] = std::move(st.out);
-    }
-    double totals[3] = {stopped ? 1.0 : 0.0, 0.0, 0.0};  // stopped, sampled, covered
-    if (phase == 0)
-      for (size_t r = mine.first; r < mine.last; ++r) {
-        if (r % stride != 0) continue;
-        totals[1] += work[r];
-        totals[2] += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
-      }
-    if (set.share != nullptr) set.share->sum(totals, 3);
-    stopped = totals[0] > 0.0;
-    if (phase == 0 && !stopped && totals[2] > 0.0 &&
-        totals[1] * static_cast<double>(p.ot->size()) / totals[2] > limit)
-      stopped = true;
+  std::vector<double> sampled(sample.size(), 0.0);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits)
+  for (size_t i = 0; i < sample.size(); ++i) {
+    if (stopped.load()) continue;
+    PlanState st;
+    st.spent = &spent;
+    st.limit = limit * covered / n_all;
+    Ledger ledger;
+    if (!plan(p, sample_roots[i], 0, st, ledger)) stopped = true;
+    visits += st.visits;
+    sampled[i] = st.total;
+    const int r = task_of[sample[i]];
+    if (r < 0 || stopped.load()) continue;
+    work[static_cast<size_t>(r)] = st.total;
+    lists[static_cast<size_t>(r)] = std::move(st.out);
+    done[static_cast<size_t>(r)] = 1;
   }
-  return !stopped;
+  double totals[3] = {stopped ? 1.0 : 0.0, 0.0, covered};  // stopped, sampled work, covered
+  for (const double w : sampled) totals[1] += w;
+  if (set.share != nullptr) set.share->sum(totals, 3);
+  return totals[0] > 0.0 || (totals[2] > 0.0 && totals[1] * n_all / totals[2] > limit);
+}
+
+bool plan_tasks(Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
+                const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
+                std::vector<double>& work, std::int64_t& visits) {
+  std::vector<char> done(roots.size(), 0);  // planned by the sample
+  if (limit < kInf && sample_exceeds(p, roots, mine, limit, set, lists, work, done, visits))
+    return false;
+  std::vector<int> rest;
+  double planned = 0.0;
+  for (size_t r = mine.first; r < mine.last; ++r)
+    if (done[r])
+      planned += work[r];
+    else
+      rest.push_back(roots[r]);
+  outer_bounds(p, rest, set.threads);
+  std::atomic<double> spent{planned};
+  std::atomic<bool> stopped{false};
+#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits)
+  for (size_t r = mine.first; r < mine.last; ++r) {
+    if (done[r] || stopped.load()) continue;
+    PlanState st;
+    st.spent = &spent;
+    st.limit = limit;
+    Ledger ledger;
+    if (!plan(p, roots[r], 0, st, ledger)) stopped = true;
+    visits += st.visits;
+    work[r] = st.total;
+    lists[r] = std::move(st.out);
+  }
+  double verdict = stopped ? 1.0 : 0.0;
+  if (set.share != nullptr) set.share->sum(&verdict, 1);
+  return verdict == 0.0;
 }
 
 UnitRange rebalance(Pass& p, const std::vector<int>& roots, UnitRange planned,
