@@ -149,9 +149,10 @@ int subtree_end(const KdTree& tree, int id);
 void task_roots(const KdTree& ot, int id, Eigen::Index limit, std::vector<int>& out);
 /// Bounds (outer_bounds) and plans the tasks of `mine` (their planned work in `work`);
 /// false when the plan costs more than `limit` (fall back to all pairs). A sample of
-/// subtrees is bounded and planned first (and dropped) to predict the plan's work, so a
-/// fall-back costs about the sample's share of the planning. With a share, the prediction
-/// and the verdict are summed over the processes (each plans its own tasks).
+/// tasks, or below N ≈ 16 000 of subtrees of tasks (whose plans are then dropped), is
+/// bounded and planned first to predict the plan's work, so a fall-back costs about the
+/// sample's share of the planning. With a share, the prediction and the verdict are summed
+/// over the processes (each plans its own tasks).
 bool plan_tasks(Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
                 const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
                 std::vector<double>& work, std::int64_t& visits);

@@ -614,20 +614,19 @@ bool sample_exceeds(Pass& p, const std::vector<int>& roots, UnitRange mine, doub
   // At least two units (planned in parallel); not a function of the thread count, so
   // neither is the verdict (the sums are bit-identical for any number of threads).
   const size_t stride = std::clamp<size_t>(units.size() / 2, 1, kSampleStride);
-  std::vector<size_t> sample;
-  std::vector<int> sample_roots;
+  std::vector<int> sample_roots, sample_task;
   double covered = 0.0;
   for (size_t u = 0; u < units.size(); u += stride) {
-    sample.push_back(u);
     sample_roots.push_back(units[u]);
+    sample_task.push_back(task_of[u]);
     covered += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(units[u])]));
   }
   outer_bounds(p, sample_roots, set.threads);
   std::atomic<double> spent{0.0};
   std::atomic<bool> stopped{false};
-  std::vector<double> sampled(sample.size(), 0.0);
+  std::vector<double> sampled(sample_roots.size(), 0.0);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits)
-  for (size_t i = 0; i < sample.size(); ++i) {
+  for (size_t i = 0; i < sample_roots.size(); ++i) {
     if (stopped.load()) continue;
     PlanState st;
     st.spent = &spent;
@@ -636,7 +635,7 @@ bool sample_exceeds(Pass& p, const std::vector<int>& roots, UnitRange mine, doub
     if (!plan(p, sample_roots[i], 0, st, ledger)) stopped = true;
     visits += st.visits;
     sampled[i] = st.total;
-    const int r = task_of[sample[i]];
+    const int r = sample_task[i];
     if (r < 0 || stopped.load()) continue;
     work[static_cast<size_t>(r)] = st.total;
     lists[static_cast<size_t>(r)] = std::move(st.out);
