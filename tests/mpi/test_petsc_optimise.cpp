@@ -292,7 +292,7 @@ Eigen::VectorXd solve_permuted(const fe::SparseMatrix& K, const Eigen::VectorXd&
 // times the worst of them. The error of one factorisation is one draw from a wide spread, so
 // the serial side is an ensemble of kSerial factorisations: CHOLMOD, Eigen LLᵀ and LDLᵀ, and
 // LDLᵀ after random permutations. With only the first three, CI failed once at 3.05 times
-// (on 2 ranks, whose state varies from run to run with MUMPS's scheduling; over 7 states
+// (on 2 ranks, whose state varies from run to run with MUMPS's scheduling; over 6 states
 // single draws ranged 2.4e-9 to 4.8e-8 and PETSc over the worst serial 0.26 to 3.05).
 TEST(PetscOptimise, AdjointAsAccurateAsSerialDirectSolvers) {
   constexpr int kPermuted = 5;
