@@ -321,6 +321,14 @@ struct LongSums {
   long double S = 0, H = 0, Gm = 0, G2m = 0, G[3] = {0, 0, 0}, G2[3] = {0, 0, 0};
 };
 
+/// The scales c_o = r_min(o) + ε of the points o of Y over X (brute force).
+Eigen::VectorXd outer_scales(const PointCloud& X, const PointCloud& Y, double eps) {
+  Eigen::VectorXd scale(Y.size());
+  for (Eigen::Index j = 0; j < Y.size(); ++j)
+    scale[j] = brute_nearest(X, Y.points().row(j).transpose()) + eps;
+  return scale;
+}
+
 LongSums reference(const Eigen::VectorXd& o, long double c_o, const PointCloud& src,
                    const Eigen::VectorXd& w, const Eigen::VectorXd& h, const Eigen::VectorXd& c,
                    double alpha, double eps) {
@@ -371,14 +379,13 @@ TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
   const PointCloud Y = shaped_cloud(sc.outer, 900, sc.dim, 8);
   const double eps = 1e-3;
   const Eigen::VectorXd w = X.volumes() / X.total_volume();
-  Eigen::VectorXd h(X.size()), c(X.size()), scale(Y.size());
+  Eigen::VectorXd h(X.size()), c(X.size());
   std::mt19937_64 gen(9);
   for (Eigen::Index n = 0; n < X.size(); ++n) {
     h[n] = (gen() % 5 == 0) ? 0.0 : static_cast<double>(gen() >> 11) * 0x1.0p-53;
     c[n] = brute_nearest(Y, X.points().row(n).transpose()) + eps;
   }
-  for (Eigen::Index j = 0; j < Y.size(); ++j)
-    scale[j] = brute_nearest(X, Y.points().row(j).transpose()) + eps;
+  const Eigen::VectorXd scale = outer_scales(X, Y, eps);
   const detail::KdTree xt(X.points(), 8), yt(Y.points(), 8);
   const detail::KernelPower power(sc.alpha);
   std::vector<LongSums> ref;
@@ -481,9 +488,7 @@ TEST(PairBackends, AllAgreeWithTheReferenceThroughOneInterface) {
   const PointCloud Y = shaped_cloud(Shape::cube, 700, 3, 12);
   const double eps = 1e-3, tau = 1e-5;
   const Eigen::VectorXd w = X.volumes() / X.total_volume();
-  Eigen::VectorXd scale(Y.size());
-  for (Eigen::Index j = 0; j < Y.size(); ++j)
-    scale[j] = brute_nearest(X, Y.points().row(j).transpose()) + eps;
+  const Eigen::VectorXd scale = outer_scales(X, Y, eps);
   const detail::KdTree xt(X.points(), detail::kLeafSize), yt(Y.points(), detail::kLeafSize);
   const detail::KernelPower power(4.0);
   detail::DualTreeConfig cfg;
@@ -531,9 +536,7 @@ TEST(PairBackends, CostModelFallsBackOnCubesAndPlansClusters) {
     const double tau = shape == Shape::cube ? 1e-6 : 1e-4;
     const PointCloud X = shaped_cloud(shape, 3000, 3, 21), Y = shaped_cloud(shape, 3000, 3, 22);
     const Eigen::VectorXd w = X.volumes() / X.total_volume();
-    Eigen::VectorXd scale(Y.size());
-    for (Eigen::Index j = 0; j < Y.size(); ++j)
-      scale[j] = brute_nearest(X, Y.points().row(j).transpose()) + eps;
+    const Eigen::VectorXd scale = outer_scales(X, Y, eps);
     const detail::KdTree xt(X.points(), detail::kLeafSize), yt(Y.points(), detail::kLeafSize);
     const detail::PassSources src{&X.points(), &xt, w.data(), nullptr, nullptr};
     const detail::PassOuter out{&Y.points(), &yt, scale.data(),
