@@ -6,13 +6,16 @@
 //                   [--exact-max 100000] [--shapes cube,shell,clusters,plate]
 //                   [--taus 1e-2,1e-4,1e-6,1e-8,1e-10] [--modes value,value+grad]
 //                   [--methods nearest,exact,tree]
-//                   [--budget 300] [--threads 0] [--quick]
+//                   [--budget 300] [--threads 0] [--quick] [--no-fallback]
 //
 // Errors are measured against method exact: the full evaluation when N ≤ --exact-max,
 // else exact fields on a random subset of 500 target and 500 moving points
 // (error_reference = subset:1000; ρ̃ and gradient errors are then not measured).
 // A (method, τ, mode) whose predicted time at the next size exceeds --budget seconds
 // (time × (N'/N)^k with k = 2 for exact, 1.5 for tree, 1 for nearest) is not run.
+// The work columns (near_pairs … passes) are the SumWork of the last run (plan_s and sums_s,
+// the pair sums' wall time with the traversal: medians over the runs); --no-fallback makes
+// method tree plan every pass (its cost model's data, docs/tree_tolerance.md §8).
 
 #include <Eigen/Core>
 #include <algorithm>
@@ -50,6 +53,7 @@ struct Config {
   std::vector<std::string> methods = {"nearest", "exact", "tree"};
   double budget = 300.0;
   int threads = 0;
+  bool fallback = true;  // --no-fallback: method tree plans every pass (cost-model data)
 };
 
 std::vector<std::string> split(const std::string& s) {
@@ -139,12 +143,13 @@ std::pair<PointCloud, PointCloud> make_pair_of(const std::string& shape, Eigen::
 
 struct Timed {
   double median = 0, min = 0, cpu = 0;  // wall median, wall min, CPU-time median (all threads)
+  double plan = 0, sums = 0;            // medians of SumWork's plan_seconds and run_seconds
   HausdorffResult last;
 };
 
 Timed run(const softhd::HausdorffTarget& target, const PointCloud& X, const HausdorffRequest& req,
           int repeats) {
-  std::vector<double> t, cpu;
+  std::vector<double> t, cpu, plan, sums;
   Timed out;
   for (int r = 0; r < repeats; ++r) {
     const auto start = std::chrono::steady_clock::now();
@@ -152,12 +157,18 @@ Timed run(const softhd::HausdorffTarget& target, const PointCloud& X, const Haus
     out.last = target.evaluate(X, req);
     cpu.push_back(static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC);
     t.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    plan.push_back(out.last.work.plan_seconds);
+    sums.push_back(out.last.work.run_seconds);
   }
   std::sort(t.begin(), t.end());
   std::sort(cpu.begin(), cpu.end());
+  std::sort(plan.begin(), plan.end());
+  std::sort(sums.begin(), sums.end());
   out.median = t[t.size() / 2];
   out.min = t.front();
   out.cpu = cpu[cpu.size() / 2];
+  out.plan = plan[plan.size() / 2];
+  out.sums = sums[sums.size() / 2];
   return out;
 }
 
@@ -485,8 +496,10 @@ void usage() {
          "       [--exact-max N] [--shapes a,b,...] [--taus t1,t2,...]\n"
          "       [--modes value,value+grad] [--methods nearest,exact,tree]\n"
          "       [--budget SECONDS]\n"
-         "       [--threads T] [--quick]\n"
+         "       [--threads T] [--quick] [--no-fallback]\n"
          "  --quick: sizes 1e3..1e4, one repeat, shapes cube,plate, taus 1e-2,1e-6\n"
+         "  --no-fallback: method tree plans every pass (never sums one exactly);\n"
+         "  the work columns then calibrate its cost model\n"
          "   or: bench_hausdorff --goal cube|asym|room [--n N] [--m M] [--tau T] [--alpha A]\n"
          "       [--exact-sample K] [--error-sample K] [--methods ...] [--csv FILE]\n"
          "  --goal: one case of issue 13 (asym: the 5 555 plate nodes against M points\n"
@@ -540,6 +553,8 @@ int main(int argc, char** argv) {
       cfg.budget = std::stod(value());
     } else if (arg == "--threads") {
       cfg.threads = std::stoi(value());
+    } else if (arg == "--no-fallback") {
+      cfg.fallback = false;
     } else if (arg == "--quick") {
       cfg.min_n = 1e3;
       cfg.max_n = 1e4;
@@ -558,7 +573,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   csv << "shape,N,M,method,tau,mode,threads,median_s,min_s,cpu_s,runs,kernel_evaluations,rho,"
-         "err_rho,err_S,err_field,err_grad,error_reference\n";
+         "err_rho,err_S,err_field,err_grad,error_reference,near_pairs,far_kernel,far_basis,"
+         "node_pairs,plan_s,sums_s,exact_passes,passes\n";
   const int threads = cfg.threads;
   std::vector<double> sizes;
   for (double n = cfg.min_n; n <= cfg.max_n * 1.0001; n *= std::sqrt(10.0))
@@ -582,11 +598,15 @@ int main(int argc, char** argv) {
       };
       auto row = [&](const std::string& method, double tau, const std::string& mode, const Timed& t,
                      const Errors& e, const std::string& reference) {
+        const softhd::SumWork& w = t.last.work;
         csv << shape << ',' << X.size() << ',' << Y.size() << ',' << method << ',' << num(tau)
             << ',' << mode << ',' << (threads > 0 ? threads : 0) << ',' << num(t.median) << ','
             << num(t.min) << ',' << num(t.cpu) << ',' << cfg.repeats << ','
             << t.last.kernel_evaluations << ',' << num(t.last.rho) << ',' << num(e.rho) << ','
-            << num(e.S) << ',' << num(e.field) << ',' << num(e.grad) << ',' << reference << '\n';
+            << num(e.S) << ',' << num(e.field) << ',' << num(e.grad) << ',' << reference << ','
+            << w.near_pairs << ',' << w.far_kernel << ',' << w.far_basis << ',' << w.node_pairs
+            << ',' << num(t.plan) << ',' << num(t.sums) << ',' << w.exact_passes << ',' << w.passes
+            << '\n';
         csv.flush();
         std::cerr << "  " << method << " tau=" << num(tau) << " " << mode << " " << t.median
                   << " s, err_S " << num(e.S) << " err_grad " << num(e.grad) << "\n";
@@ -637,6 +657,7 @@ int main(int argc, char** argv) {
         HausdorffOptions o = base;
         o.method = Method::tree;
         o.tolerance = tau;
+        o.tree_fallback = cfg.fallback;
         const auto built = std::chrono::steady_clock::now();
         const softhd::HausdorffTarget target(Y, o);
         const double build_s =
