@@ -187,6 +187,40 @@ std::string bound_name(const ::testing::TestParamInfo<BoundCase>& info) {
 
 INSTANTIATE_TEST_SUITE_P(Hausdorff, ChebyshevBound, ::testing::ValuesIn(bound_cases()), bound_name);
 
+// The planner's necessary test (dual_tree_plan.cpp, least_degree): one interpolated axis's
+// bound at n points is never above the combined bound of any operation interpolating that
+// axis, at any degree m ≤ n (else the test would reject admissible pairs).
+TEST(ChebyshevAxisBound, NeverAboveTheCombinedBound) {
+  std::mt19937_64 gen(11);
+  std::uniform_real_distribution<double> half(0.01, 0.5), centre(-3.0, 3.0);
+  int compared = 0;
+  for (int pair = 0; pair < 200; ++pair) {
+    detail::Box T, S;
+    for (int k = 0; k < 3; ++k) T.a[k] = half(gen), S.a[k] = half(gen), S.c[k] = centre(gen);
+    for (const bool it : {true, false})
+      for (const bool is : {true, false}) {
+        if (!it && !is) continue;
+        detail::PairBounds pb(T, S, 3, pair % 2 == 0 ? 4.0 : 12.0, 1e-3);
+        detail::LogBounds all[detail::kMaxChebyshev + 1];
+        pb.bounds(it, is, 2, 8, all);
+        for (int side = 0; side < 2; ++side) {
+          if (side == 0 ? !it : !is) continue;
+          for (int k = 0; k < 3; ++k)
+            for (int n = 2; n <= 8; ++n) {
+              const detail::LogBounds one = pb.axis_bound(side == 0, k, n);
+              for (int m = 2; m <= n; ++m) {
+                if (!std::isfinite(all[m].value)) continue;
+                EXPECT_LE(one.value, all[m].value) << pair << " axis " << k << " n " << n;
+                EXPECT_LE(one.grad, all[m].grad) << pair << " axis " << k << " n " << n;
+                ++compared;
+              }
+            }
+        }
+      }
+  }
+  EXPECT_GT(compared, 10000);  // most random pairs are separated enough to be bounded
+}
+
 // M2M and L2L between a box and a box inside it are exact (the inner grid interpolates
 // the outer box's tensor polynomials exactly): checked against direct anterpolation and
 // direct evaluation of the outer interpolant, with the independent Lagrange products.

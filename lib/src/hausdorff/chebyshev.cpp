@@ -211,17 +211,23 @@ double combine(double* le, int m, double log_lambda) {
 PairBounds::PairBounds(const Box& T, const Box& S, int d, double alpha, double eps)
     : T_(T), S_(S), d_(d), alpha_(alpha), eps_(eps) {}
 
+const AxisTerms& PairBounds::terms(bool which_t, int axis) {
+  const int i = (which_t ? 0 : 3) + axis;
+  if (!done_[i]) terms_[i] = axis_terms(T_, S_, d_, which_t, axis, alpha_, eps_), done_[i] = true;
+  return terms_[i];
+}
+
+LogBounds PairBounds::axis_bound(bool which_t, int axis, int n) {
+  return axis_log_bound(terms(which_t, axis), n);
+}
+
 void PairBounds::bounds(bool interp_t, bool interp_s, int n_min, int n_max, LogBounds* out) {
   const AxisTerms* terms[6];
   int m = 0;
   for (int side = 0; side < 2; ++side) {
     const bool which_t = side == 0;
     if (which_t ? !interp_t : !interp_s) continue;
-    for (int k = 0; k < d_; ++k) {
-      const int i = side * 3 + k;
-      if (!done_[i]) terms_[i] = axis_terms(T_, S_, d_, which_t, k, alpha_, eps_), done_[i] = true;
-      terms[m++] = &terms_[i];
-    }
+    for (int k = 0; k < d_; ++k) terms[m++] = &this->terms(which_t, k);
   }
   const double inf = std::numeric_limits<double>::infinity();
   for (int n = std::max(n_min, 2); n <= n_max; ++n) {

@@ -100,6 +100,11 @@ class PairBounds {
   PairBounds(const Box& T, const Box& S, int d, double alpha, double eps);
   /// out[n] for n in [n_min, n_max].
   void bounds(bool interp_t, bool interp_s, int n_min, int n_max, LogBounds* out);
+  /// The bound of one interpolated axis alone at n points (of T if which_t, else of S):
+  /// at most bounds()' out[m] for every m ≤ n and every operation that interpolates this
+  /// axis (their sum over the axes gives the largest term weight Λ^0 = 1, and an axis's
+  /// bound decreases with n). A cheap necessary test before bounds().
+  LogBounds axis_bound(bool which_t, int axis, int n);
 
  private:
   Box T_, S_;
@@ -107,6 +112,7 @@ class PairBounds {
   double alpha_, eps_;
   AxisTerms terms_[6];  // T's axes, then S's
   bool done_[6] = {false, false, false, false, false, false};
+  const AxisTerms& terms(bool which_t, int axis);
 };
 
 }  // namespace softhd::detail
