@@ -574,7 +574,7 @@ int main(int argc, char** argv) {
   }
   csv << "shape,N,M,method,tau,mode,threads,median_s,min_s,cpu_s,runs,kernel_evaluations,rho,"
          "err_rho,err_S,err_field,err_grad,error_reference,near_pairs,far_kernel,far_basis,"
-         "node_pairs,plan_s,sums_s,exact_passes,passes\n";
+         "node_pairs,bound_axes,plan_s,sums_s,exact_passes,passes\n";
   const int threads = cfg.threads;
   std::vector<double> sizes;
   for (double n = cfg.min_n; n <= cfg.max_n * 1.0001; n *= std::sqrt(10.0))
@@ -605,8 +605,8 @@ int main(int argc, char** argv) {
             << t.last.kernel_evaluations << ',' << num(t.last.rho) << ',' << num(e.rho) << ','
             << num(e.S) << ',' << num(e.field) << ',' << num(e.grad) << ',' << reference << ','
             << w.near_pairs << ',' << w.far_kernel << ',' << w.far_basis << ',' << w.node_pairs
-            << ',' << num(t.plan) << ',' << num(t.sums) << ',' << w.exact_passes << ',' << w.passes
-            << '\n';
+            << ',' << w.bound_axes << ',' << num(t.plan) << ',' << num(t.sums) << ','
+            << w.exact_passes << ',' << w.passes << '\n';
         csv.flush();
         std::cerr << "  " << method << " tau=" << num(tau) << " " << mode << " " << t.median
                   << " s, err_S " << num(e.S) << " err_grad " << num(e.grad) << "\n";

@@ -96,6 +96,7 @@ struct SumWork {
   std::int64_t far_kernel = 0;  ///< method tree: kernel evaluations at interpolation points
   std::int64_t far_basis = 0;   ///< method tree: point–interpolation-point basis products
   std::int64_t node_pairs = 0;  ///< method tree: node pairs visited by the traversal
+  std::int64_t bound_axes = 0;  ///< method tree: per-axis remainder bounds it computed
   double plan_seconds = 0.0;    ///< method tree: traversal wall time
   double run_seconds = 0.0;     ///< wall time of the sums (including the traversal)
   int passes = 0;               ///< pair passes made

@@ -213,7 +213,11 @@ PairBounds::PairBounds(const Box& T, const Box& S, int d, double alpha, double e
 
 const AxisTerms& PairBounds::terms(bool which_t, int axis) {
   const int i = (which_t ? 0 : 3) + axis;
-  if (!done_[i]) terms_[i] = axis_terms(T_, S_, d_, which_t, axis, alpha_, eps_), done_[i] = true;
+  if (!done_[i]) {
+    terms_[i] = axis_terms(T_, S_, d_, which_t, axis, alpha_, eps_);
+    done_[i] = true;
+    ++computed_;
+  }
   return terms_[i];
 }
 

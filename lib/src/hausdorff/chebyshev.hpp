@@ -105,6 +105,8 @@ class PairBounds {
   /// axis (their sum over the axes gives the largest term weight Λ^0 = 1, and an axis's
   /// bound decreases with n). A cheap necessary test before bounds().
   LogBounds axis_bound(bool which_t, int axis, int n);
+  /// How many axes' ellipse terms were computed (the planning's main work).
+  int computed() const { return computed_; }
 
  private:
   Box T_, S_;
@@ -112,6 +114,7 @@ class PairBounds {
   double alpha_, eps_;
   AxisTerms terms_[6];  // T's axes, then S's
   bool done_[6] = {false, false, false, false, false, false};
+  int computed_ = 0;
   const AxisTerms& terms(bool which_t, int axis);
 };
 

@@ -106,8 +106,7 @@ void count_work(const Pass& p, const std::vector<std::vector<Interaction>>& list
           break;
       }
     }
-  const int source_fields = (p.outer_kinds() ? 1 : 0) + (p.want[kH] ? 1 : 0);
-  st.far_basis = grid_work(p, *p.st, smark, source_fields, ops.m2m) +
+  st.far_basis = grid_work(p, *p.st, smark, p.source_fields(), ops.m2m) +
                  grid_work(p, *p.ot, omark, p.nf, ops.l2l);
 }
 
@@ -117,10 +116,11 @@ double since(std::chrono::steady_clock::time_point t0) {
 
 /// All pairs, after a plan that did not pay; the stats keep the planning's cost.
 PassSums fall_back(const PassSources& src, const PassOuter& outer, const PassSettings& set,
-                   std::int64_t visits, double plan_seconds) {
+                   const PlanCounts& planning, double plan_seconds) {
   PassSums out = make_exact_backend()->sums(src, outer, set);
   out.stats.fell_back = true;
-  out.stats.node_pairs = visits;
+  out.stats.node_pairs = planning.visits;
+  out.stats.bound_axes = planning.axes;
   out.stats.plan_seconds = plan_seconds;
   out.stats.run_seconds += plan_seconds;
   return out;
@@ -222,16 +222,16 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   task_roots(*p.ot, 0, std::max<Eigen::Index>(kMinTaskPoints, p.ot->size() / 64), roots);
   std::vector<std::vector<Interaction>> lists(roots.size());
   std::vector<double> work(roots.size(), 0.0);
-  std::int64_t visits = 0;
-  const double limit = cfg_.cost_model ? kFallBack * all_pairs : kInf;
+  PlanCounts planning;
+
   // This process's tasks (all of them without a share): planned by points, run by work.
   std::vector<double> points(roots.size());
   for (size_t r = 0; r < roots.size(); ++r)
     points[r] = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(roots[r])]));
   UnitRange mine = share_of(set, points);
-  if (!plan_tasks(p, roots, mine, limit, set, lists, work, visits))
-    return fall_back(src, outer, set, visits, since(start));
-  if (set.share != nullptr) mine = rebalance(p, roots, mine, set, lists, work, visits);
+  if (!plan_tasks(p, roots, mine, cfg_.cost_model ? all_pairs : kInf, set, lists, work, planning))
+    return fall_back(src, outer, set, planning, since(start));
+  if (set.share != nullptr) mine = rebalance(p, roots, mine, set, lists, work, planning);
   // The grids: those the interactions use and their descendants (M2M and L2L).
   const size_t grids = static_cast<size_t>(p.n + 1);
   std::vector<char> smark(p.st->nodes().size() * grids, 0), omark(p.ot->nodes().size() * grids, 0);
@@ -240,9 +240,10 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   PassStats stats;
   DualTreeOps ops;
   count_planned(p, lists, smark, omark, set, stats, ops);
-  stats.node_pairs = visits;
+  stats.node_pairs = planning.visits;
+  stats.bound_axes = planning.axes;
   stats.plan_seconds = since(start);
-  // Cost model (docs/tree_tolerance.md §8): fall back unless the plan is clearly cheaper.
+  // Cost model (docs/tree_tolerance.md §8): fall back unless the planned run is cheaper.
   std::int64_t counts[3] = {stats.near_pairs, stats.far_kernel, stats.far_basis};
   if (set.share != nullptr) set.share->sum(counts, 3);  // the serial pass's counts
   const double planned = kCostNear * static_cast<double>(counts[0]) +
@@ -250,8 +251,8 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
                          kCostBasis * static_cast<double>(counts[2]);
   if (cfg_.audit) ops.budget_used = audit_budget(p, roots, mine, lists);
   if (ops_ != nullptr) *ops_ = ops;
-  if (cfg_.cost_model && planned > kFallBack * all_pairs)
-    return fall_back(src, outer, set, visits, stats.plan_seconds);
+  if (cfg_.cost_model && planned > kFallBackPlanned * all_pairs)
+    return fall_back(src, outer, set, planning, stats.plan_seconds);
   std::vector<Acc> acc(static_cast<size_t>(p.ot->size()));
   const std::int64_t skipped = run_plan(p, roots, mine, lists, smark, sderive, set.threads, acc);
   stats.near_pairs -= skipped;

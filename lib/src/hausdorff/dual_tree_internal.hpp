@@ -24,12 +24,17 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 enum Op : std::uint8_t { kP2P, kM2P, kP2L, kM2L, kPrune, kNone };
 enum Kind { kS = 0, kG = 1, kH = 2, kG2 = 3 };  // the four sums; budgets per kind
 
-// Cost model: work per unit relative to one pair of the all-pairs kernel
-// (docs/tree_tolerance.md §8).
-constexpr double kCostNear = 1.3;   // direct pairs in short slices (leaf pairs)
-constexpr double kCostFar = 1.0;    // kernel evaluations at interpolation points
-constexpr double kCostBasis = 0.3;  // point-interpolation-point basis products
-constexpr double kFallBack = 0.8;   // the plan must cost < 80 % of all pairs
+// Cost model (docs/tree_tolerance.md §8): work in units of one pair of the all-pairs
+// kernel, fitted to the ladder's planned passes (bench_hausdorff --no-fallback,
+// 3 162 ≤ N = M ≤ 31 623, four shapes, τ = 1e-2…1e-6; plan + run within −8 %…+10 %).
+constexpr double kCostNear = 1.0;     // direct pairs in leaf slices
+constexpr double kCostFar = 1.0;      // kernel evaluations at interpolation points
+constexpr double kCostBasis = 0.7;    // point-interpolation-point basis products
+constexpr double kCostVisit = 25.0;   // planning: per node pair visited
+constexpr double kCostAxis = 250.0;   // planning: per axis's remainder-bound terms
+constexpr double kCostBound = 230.0;  // planning: the lower bounds of one outer point
+constexpr double kFallBack = 0.9;     // predicted by the sample: plan and run < 90 % of all pairs
+constexpr double kFallBackPlanned = 1.0;  // planned: the run < all pairs (planning is spent)
 // Outer subtrees planned and run as tasks: N/64 points, at least kMinTaskPoints (smaller
 // tasks make worse plans: an outer box never interacts above its task's root).
 constexpr Eigen::Index kMinTaskPoints = 1024;
@@ -48,6 +53,16 @@ struct Choice {
   Op op = kNone;
   int deg = 0;
   double lv = -kInf, lg = -kInf;
+  int axes = 0;  // axes' ellipse terms computed to choose (planning work)
+};
+
+/// The planning's work: node pairs visited, axes' ellipse terms computed (cost model).
+struct PlanCounts {
+  std::int64_t visits = 0, axes = 0;
+  PlanCounts& operator+=(const PlanCounts& o) {
+    visits += o.visits, axes += o.axes;
+    return *this;
+  }
 };
 
 /// Sums accumulated for one outer point.
@@ -110,6 +125,8 @@ struct Pass {
 
   int points(int m) const { return d == 2 ? m * m : m * m * m; }
   bool outer_kinds() const { return want[kS] || want[kG]; }
+  /// Fields of a source box's proxies: the weights of S and G, and those of H and G2.
+  int source_fields() const { return (outer_kinds() ? 1 : 0) + (want[kH] ? 1 : 0); }
   /// Whether source node s may carry proxies at degree m (more points than proxies).
   bool has_proxy(int s, int m) const {
     return interp && size_of(st->nodes()[static_cast<size_t>(s)]) > points(m);
@@ -148,25 +165,29 @@ int subtree_end(const KdTree& tree, int id);
 /// Outer subtrees processed as independent tasks (nodes of at most `limit` points).
 void task_roots(const KdTree& ot, int id, Eigen::Index limit, std::vector<int>& out);
 /// Bounds (outer_bounds) and plans the tasks of `mine` (their planned work in `work`);
-/// false when the plan costs more than `limit` (fall back to all pairs). A sample of
+/// false when the plan costs more than its limit (fall back to all pairs): with `all_pairs`
+/// N·M, kFallBack·N·M for the sample's prediction, kFallBackPlanned·N·M for the planned
+/// run (all_pairs = ∞: never). A sample of
 /// tasks, or below N ≈ 16 000 of subtrees of tasks (whose plans are then dropped), is
 /// bounded and planned first to predict the plan's work, so a fall-back costs about the
 /// sample's share of the planning. With a share, the prediction and the verdict are summed
 /// over the processes (each plans its own tasks).
-bool plan_tasks(Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
+bool plan_tasks(Pass& p, const std::vector<int>& roots, UnitRange mine, double all_pairs,
                 const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
-                std::vector<double>& work, std::int64_t& visits);
+                std::vector<double>& work, PlanCounts& counts);
 /// Distributed passes: the tasks this process executes, split by planned work (summed
 /// over the processes); tasks that move are planned again by their new process (a task's
 /// plan depends on the task alone), the lists of tasks that left are dropped.
 UnitRange rebalance(Pass& p, const std::vector<int>& roots, UnitRange planned,
                     const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
-                    std::vector<double>& work, std::int64_t& visits);
+                    std::vector<double>& work, PlanCounts& counts);
 /// Whether source node s may be dropped for the outer point o (tree position q) alone.
 bool prunable_for_point(const Pass& p, const double* o, Eigen::Index q, int s);
 /// The own term of the budget of pair (t, s) for sum k: τ_own W_S u(R_max), at most τ_own
 /// times S's contribution to the sum of every point of T (0 without own_budget).
 double own_term(const Pass& p, int t, int s, int k);
+/// The planning's work in pair units: `c` for the lower bounds of `points` outer points.
+double planning_cost(const PlanCounts& c, double points);
 /// Planned work of one interaction in pair units (kCost weights).
 double interaction_cost(const Pass& p, const Interaction& it);
 /// The budget audit (DualTreeConfig::audit): per outer point of the tasks of `mine`, the

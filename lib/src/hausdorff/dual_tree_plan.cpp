@@ -415,6 +415,7 @@ Choice choose(const Pass& p, int t, int s, double gap, const Ledger* ledger) {
     if (grids_ok && cost < best_cost) best_cost = cost, best = {op, m, e.value, e.grad};
     if (best.op != kNone) break;  // the cheapest at degree n that fits, at its least degree
   }
+  best.axes = pb.computed();
   return best;
 }
 
@@ -424,7 +425,7 @@ Choice choose(const Pass& p, int t, int s, double gap, const Ledger* ledger) {
 /// tasks, and planning stops.
 struct PlanState {
   std::vector<Interaction> out;
-  std::int64_t visits = 0;
+  PlanCounts counts;
   double pending = 0.0;  // work not yet added to `spent`
   double total = 0.0;    // all work planned by this task
   std::atomic<double>* spent = nullptr;
@@ -465,7 +466,7 @@ void book(const Pass& p, int t, int s, const Choice* c, Ledger& ledger) {
 /// them in T's ledger (recycling only). Returns false when planning was stopped (the plan
 /// costs more than the limit).
 bool plan(const Pass& p, int t, int s, PlanState& st, Ledger& ledger) {
-  ++st.visits;
+  ++st.counts.visits;
   const KdNode& T = p.ot->nodes()[static_cast<size_t>(t)];
   const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
   const bool outer_mass = p.outer_kinds() && p.mw[static_cast<size_t>(s)].mass > 0.0;
@@ -474,6 +475,7 @@ bool plan(const Pass& p, int t, int s, PlanState& st, Ledger& ledger) {
   const double gap = node_gap(T, S, p.d);
   if (gap > 0.0) {
     const Choice c = choose(p, t, s, gap, p.recycle ? &ledger : nullptr);
+    st.counts.axes += c.axes;
     if (c.op != kNone) {
       st.add(p, {t, s, c.op, static_cast<std::uint8_t>(c.deg)});
       if (p.recycle) book(p, t, s, &c, ledger);
@@ -510,6 +512,11 @@ constexpr size_t kSampleStride = 64;            // planning units sampled to pre
 constexpr Eigen::Index kMinSamplePoints = 256;  // the smallest unit of the sample
 
 }  // namespace
+
+double planning_cost(const PlanCounts& c, double points) {
+  return kCostVisit * static_cast<double>(c.visits) + kCostAxis * static_cast<double>(c.axes) +
+         kCostBound * points;
+}
 
 double interaction_cost(const Pass& p, const Interaction& it) {
   const double nT = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(it.t)]));
@@ -597,17 +604,33 @@ void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const P
   prepare_outer(p, outer);
 }
 
+/// The basis work (kCostBasis weights) of the grids that the sample's interactions mark:
+/// added to `outer` for the outer boxes' (L2L, L2P: it grows with the outer points), to
+/// `source` for the source boxes' (anterpolation, M2M: shared by every outer box).
+void sample_basis(const Pass& p, const std::vector<std::vector<Interaction>>& lists, double& outer,
+                  double& source) {
+  const size_t grids = static_cast<size_t>(p.n + 1);
+  std::vector<char> smark(p.st->nodes().size() * grids, 0), omark(p.ot->nodes().size() * grids, 0);
+  std::vector<char> sderive(smark.size(), 0);
+  mark_grids(p, lists, smark, sderive, omark);
+  std::int64_t translations = 0;
+  outer += kCostBasis * static_cast<double>(grid_work(p, *p.ot, omark, p.nf, translations));
+  source +=
+      kCostBasis * static_cast<double>(grid_work(p, *p.st, smark, p.source_fields(), translations));
+}
+
 /// Whether the sample predicts a plan over `limit`. Its units are the tasks of `mine`, cut
 /// into subtrees of at most N/16 points (at least kMinSamplePoints) where tasks are larger,
 /// i.e. only below N ≈ 16 000, where 4–8 tasks would make the sample half or a quarter of the
 /// planning. Every stride-th unit (stride ≤ kSampleStride) is bounded and planned; the
 /// work, scaled by the share of the outer points covered, predicts the plan's, and planning
-/// stops as soon as the work exceeds that share of the limit. A unit that is a whole task
+/// stops as soon as the work exceeds that share of the limit. The prediction adds the
+/// planning still to do (the sample's per point, planning_cost). A unit that is a whole task
 /// keeps its plan (`lists`, `work`, `done`); a smaller unit's plan is dropped (it plans
 /// more work per point than its task: the prediction errs towards a fall-back).
 bool sample_exceeds(Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
                     const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
-                    std::vector<double>& work, std::vector<char>& done, std::int64_t& visits) {
+                    std::vector<double>& work, std::vector<char>& done, PlanCounts& counts) {
   const double n_all = static_cast<double>(p.ot->size());
   const Eigen::Index unit_limit =
       std::max(kMinSamplePoints, static_cast<Eigen::Index>(n_all / 16.0));
@@ -622,17 +645,22 @@ bool sample_exceeds(Pass& p, const std::vector<int>& roots, UnitRange mine, doub
   // neither is the verdict (the sums are bit-identical for any number of threads).
   const size_t stride = std::clamp<size_t>(units.size() / 2, 1, kSampleStride);
   std::vector<int> sample_roots, sample_task;
-  double covered = 0.0;
+  double covered = 0.0, kept = 0.0;  // points sampled; those of them whose plans are kept
   for (size_t u = 0; u < units.size(); u += stride) {
     sample_roots.push_back(units[u]);
     sample_task.push_back(task_of[u]);
-    covered += static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(units[u])]));
+    const double points =
+        static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(units[u])]));
+    covered += points;
+    if (task_of[u] >= 0) kept += points;
   }
   outer_bounds(p, sample_roots, set.threads);
   std::atomic<double> spent{0.0};
   std::atomic<bool> stopped{false};
   std::vector<double> sampled(sample_roots.size(), 0.0);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits)
+  std::vector<std::vector<Interaction>> sample_lists(sample_roots.size());
+  std::int64_t visits = 0, axes = 0;  // the sample's planning work
+#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits, axes)
   for (size_t i = 0; i < sample_roots.size(); ++i) {
     if (stopped.load()) continue;
     PlanState st;
@@ -640,25 +668,37 @@ bool sample_exceeds(Pass& p, const std::vector<int>& roots, UnitRange mine, doub
     st.limit = limit * covered / n_all;
     Ledger ledger;
     if (!plan(p, sample_roots[i], 0, st, ledger)) stopped = true;
-    visits += st.visits;
+    visits += st.counts.visits, axes += st.counts.axes;
     sampled[i] = st.total;
-    const int r = sample_task[i];
-    if (r < 0 || stopped.load()) continue;
-    work[static_cast<size_t>(r)] = st.total;
-    lists[static_cast<size_t>(r)] = std::move(st.out);
-    done[static_cast<size_t>(r)] = 1;
+    sample_lists[i] = std::move(st.out);
   }
-  double totals[3] = {stopped ? 1.0 : 0.0, 0.0, covered};  // stopped, sampled work, covered
+  counts += {visits, axes};
+  // stopped, the sample's planned work (with its outer grids' basis work), its points,
+  // points kept, its planning work, its source grids' basis work
+  double totals[6] = {
+      stopped ? 1.0 : 0.0, 0.0, covered, kept, planning_cost({visits, axes}, covered), 0.0};
+  if (!stopped) sample_basis(p, sample_lists, totals[1], totals[5]);
   for (const double w : sampled) totals[1] += w;
-  if (set.share != nullptr) set.share->sum(totals, 3);
-  return totals[0] > 0.0 || (totals[2] > 0.0 && totals[1] * n_all / totals[2] > limit);
+  if (set.share != nullptr) set.share->sum(totals, 6);
+  if (totals[0] > 0.0) return true;
+  for (size_t i = 0; i < sample_roots.size(); ++i) {
+    const auto r = static_cast<size_t>(sample_task[i]);
+    if (sample_task[i] < 0) continue;
+    work[r] = sampled[i], lists[r] = std::move(sample_lists[i]), done[r] = 1;
+  }
+  if (!(totals[2] > 0.0)) return false;
+  // The work left if the plan goes on: the whole plan's (predicted), the planning of every
+  // point whose plan is not kept, at the sample's planning work per point, and at least
+  // the sample's source grids (shared by every outer box, so not scaled).
+  return (totals[1] * n_all + totals[4] * (n_all - totals[3])) / totals[2] + totals[5] > limit;
 }
 
-bool plan_tasks(Pass& p, const std::vector<int>& roots, UnitRange mine, double limit,
+bool plan_tasks(Pass& p, const std::vector<int>& roots, UnitRange mine, double all_pairs,
                 const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
-                std::vector<double>& work, std::int64_t& visits) {
+                std::vector<double>& work, PlanCounts& counts) {
   std::vector<char> done(roots.size(), 0);  // planned by the sample
-  if (limit < kInf && sample_exceeds(p, roots, mine, limit, set, lists, work, done, visits))
+  if (all_pairs < kInf &&
+      sample_exceeds(p, roots, mine, kFallBack * all_pairs, set, lists, work, done, counts))
     return false;
   std::vector<int> rest;
   double planned = 0.0;
@@ -670,18 +710,20 @@ bool plan_tasks(Pass& p, const std::vector<int>& roots, UnitRange mine, double l
   outer_bounds(p, rest, set.threads);
   std::atomic<double> spent{planned};
   std::atomic<bool> stopped{false};
-#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits)
+  std::int64_t visits = 0, axes = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits, axes)
   for (size_t r = mine.first; r < mine.last; ++r) {
     if (done[r] || stopped.load()) continue;
     PlanState st;
     st.spent = &spent;
-    st.limit = limit;
+    st.limit = kFallBackPlanned * all_pairs;
     Ledger ledger;
     if (!plan(p, roots[r], 0, st, ledger)) stopped = true;
-    visits += st.visits;
+    visits += st.counts.visits, axes += st.counts.axes;
     work[r] = st.total;
     lists[r] = std::move(st.out);
   }
+  counts += {visits, axes};
   double verdict = stopped ? 1.0 : 0.0;
   if (set.share != nullptr) set.share->sum(&verdict, 1);
   return verdict == 0.0;
@@ -689,7 +731,7 @@ bool plan_tasks(Pass& p, const std::vector<int>& roots, UnitRange mine, double l
 
 UnitRange rebalance(Pass& p, const std::vector<int>& roots, UnitRange planned,
                     const PassSettings& set, std::vector<std::vector<Interaction>>& lists,
-                    std::vector<double>& work, std::int64_t& visits) {
+                    std::vector<double>& work, PlanCounts& counts) {
   set.share->sum(work.data(), work.size());
   const UnitRange mine = share_of(set, work);
   std::vector<int> moved;  // tasks new to this process: their outer points bounded first
@@ -706,7 +748,7 @@ UnitRange rebalance(Pass& p, const std::vector<int>& roots, UnitRange planned,
     st.spent = &spent;
     Ledger ledger;
     plan(p, roots[r], 0, st, ledger);
-    visits += st.visits;
+    counts += st.counts;
     lists[r] = std::move(st.out);
   }
   return mine;

@@ -161,6 +161,7 @@ void account(HausdorffResult& r, const detail::PassSums& p) {
   r.work.far_kernel += p.stats.far_kernel;
   r.work.far_basis += p.stats.far_basis;
   r.work.node_pairs += p.stats.node_pairs;
+  r.work.bound_axes += p.stats.bound_axes;
   r.work.plan_seconds += p.stats.plan_seconds;
   r.work.run_seconds += p.stats.run_seconds;
   r.work.exact_passes += p.stats.fell_back ? 1 : 0;

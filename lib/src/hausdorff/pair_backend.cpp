@@ -39,14 +39,15 @@ PassSums run_pass(const PairSumBackend& backend, const PassSources& src, const P
     if (v->size() > 0) share.sum(v->data(), static_cast<std::size_t>(v->size()));
   for (Eigen::MatrixXd* m : {&out.G, &out.G2})
     if (m->size() > 0) share.sum(m->data(), static_cast<std::size_t>(m->size()));
-  std::int64_t counts[5] = {out.kernel_evaluations, out.stats.near_pairs, out.stats.far_kernel,
-                            out.stats.far_basis, out.stats.node_pairs};
-  share.sum(counts, 5);
+  std::int64_t counts[6] = {out.kernel_evaluations, out.stats.near_pairs, out.stats.far_kernel,
+                            out.stats.far_basis,    out.stats.node_pairs, out.stats.bound_axes};
+  share.sum(counts, 6);
   out.kernel_evaluations = counts[0];
   out.stats.near_pairs = counts[1];
   out.stats.far_kernel = counts[2];
   out.stats.far_basis = counts[3];
   out.stats.node_pairs = counts[4];
+  out.stats.bound_axes = counts[5];
   return out;
 }
 

@@ -43,6 +43,7 @@ struct PassStats {
   std::int64_t far_kernel = 0;  ///< kernel evaluations at proxies (far field)
   std::int64_t far_basis = 0;   ///< point–proxy basis products (anterpolation, L2P)
   std::int64_t node_pairs = 0;  ///< node pairs visited by the traversal
+  std::int64_t bound_axes = 0;  ///< axes' remainder-bound terms computed by the traversal
   double plan_seconds = 0.0;    ///< traversal (planning) wall time
   double run_seconds = 0.0;     ///< evaluation wall time
   bool fell_back = false;       ///< the cost model chose all pairs
