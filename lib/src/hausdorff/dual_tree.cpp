@@ -223,7 +223,6 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   std::vector<std::vector<Interaction>> lists(roots.size());
   std::vector<double> work(roots.size(), 0.0);
   PlanCounts planning;
-
   // This process's tasks (all of them without a share): planned by points, run by work.
   std::vector<double> points(roots.size());
   for (size_t r = 0; r < roots.size(); ++r)
