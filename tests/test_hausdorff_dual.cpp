@@ -47,24 +47,28 @@ struct Grid {
   std::vector<std::array<double, 3>> pts;
 };
 
+/// The grid of box b at degree n: b.points_along(k, n) points along axis k (n unless the
+/// box's grid slopes are set), the last axis fastest.
 Grid grid(const detail::Box& b, int n) {
   Grid gr;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      for (int l = 0; l < n; ++l) {
+  const int m[3] = {b.points_along(0, n), b.points_along(1, n), b.points_along(2, n)};
+  for (int i = 0; i < m[0]; ++i)
+    for (int j = 0; j < m[1]; ++j)
+      for (int l = 0; l < m[2]; ++l) {
         const int idx[3] = {i, j, l};
         std::array<double, 3> p{};
-        for (int k = 0; k < 3; ++k) p[k] = b.c[k] + b.a[k] * std::cos(M_PI * idx[k] / (n - 1));
+        for (int k = 0; k < 3; ++k) p[k] = b.c[k] + b.a[k] * std::cos(M_PI * idx[k] / (m[k] - 1));
         gr.pts.push_back(p);
       }
   return gr;
 }
 
 double tensor_lagrange(const detail::Box& b, int n, size_t q, const double* x) {
-  const int idx[3] = {static_cast<int>(q) / (n * n), (static_cast<int>(q) / n) % n,
-                      static_cast<int>(q) % n};
+  const int m[3] = {b.points_along(0, n), b.points_along(1, n), b.points_along(2, n)};
+  const int i = static_cast<int>(q);
+  const int idx[3] = {i / (m[1] * m[2]), (i / m[2]) % m[1], i % m[2]};
   double v = 1.0;
-  for (int k = 0; k < 3; ++k) v *= lagrange(n, idx[k], (x[k] - b.c[k]) / b.a[k]);
+  for (int k = 0; k < 3; ++k) v *= lagrange(m[k], idx[k], (x[k] - b.c[k]) / b.a[k]);
   return v;
 }
 
@@ -91,7 +95,8 @@ struct BoundCase {
   int n;
   bool interp_t, interp_s;
   double alpha;
-  bool along_z = false;  // S placed along the flat axis of T (else in the x-y plane)
+  bool along_z = false;   // S placed along the flat axis of T (else in the x-y plane)
+  double grid_rho = 0.0;  // > 1: fewer points along the boxes' thin axes (set_grid_slopes)
 };
 
 class ChebyshevBound : public ::testing::TestWithParam<BoundCase> {};
@@ -105,6 +110,8 @@ TEST_P(ChebyshevBound, HoldsAtTheSampledWorstCase) {
   detail::Box T, S;
   T.a[0] = 0.3, T.a[1] = 0.2, T.a[2] = 0.05;  // a flat box
   S.a[0] = 0.1, S.a[1] = 0.25, S.a[2] = 0.2;
+  detail::set_grid_slopes(T, 3, bc.grid_rho);
+  detail::set_grid_slopes(S, 3, bc.grid_rho);
   const double half = std::sqrt(0.3 * 0.3 + 0.2 * 0.2 + 0.05 * 0.05) +
                       std::sqrt(0.1 * 0.1 + 0.25 * 0.25 + 0.2 * 0.2);
   if (bc.along_z) {
@@ -173,6 +180,13 @@ std::vector<BoundCase> bound_cases() {
   }
   out.push_back({1.1, 6, false, true, 4.0, false});
   out.push_back({1.1, 6, true, false, 4.0, false});
+  // Grids with fewer points along thin axes (T: 3 of 6 along z; S: 4 of 6 along x).
+  for (double sep : {1.5, 3.0, 6.0})
+    for (int n : {4, 6, 8}) {
+      out.push_back({sep, n, false, true, 4.0, false, 3.0});
+      out.push_back({sep, n, true, false, 4.0, sep < 3.0, 3.0});
+      if (n <= 4) out.push_back({sep, n, true, true, 4.0, false, 3.0});
+    }
   return out;
 }
 
@@ -182,6 +196,7 @@ std::string bound_name(const ::testing::TestParamInfo<BoundCase>& info) {
                   std::to_string(b.n) + "_a" + std::to_string(static_cast<int>(b.alpha * 10));
   s += b.interp_t && b.interp_s ? "_M2L" : (b.interp_t ? "_P2L" : "_M2P");
   if (b.along_z) s += "_z";
+  if (b.grid_rho > 1.0) s += "_thin";
   return s;
 }
 
@@ -197,6 +212,8 @@ TEST(ChebyshevAxisBound, NeverAboveTheCombinedBound) {
   for (int pair = 0; pair < 200; ++pair) {
     detail::Box T, S;
     for (int k = 0; k < 3; ++k) T.a[k] = half(gen), S.a[k] = half(gen), S.c[k] = centre(gen);
+    detail::set_grid_slopes(T, 3, pair % 4 < 2 ? 0.0 : 3.0);  // half with thin-axis grids
+    detail::set_grid_slopes(S, 3, pair % 4 < 2 ? 0.0 : 3.0);
     for (const bool it : {true, false})
       for (const bool is : {true, false}) {
         if (!it && !is) continue;
@@ -226,42 +243,54 @@ TEST(ChebyshevAxisBound, NeverAboveTheCombinedBound) {
 // direct evaluation of the outer interpolant, with the independent Lagrange products.
 TEST(ChebyshevTranslation, UpwardAndDownwardAreExact) {
   const int n = 5;
-  detail::Box outer, inner;
-  const double oc[3] = {0.1, -0.2, 0.3}, oa[3] = {0.5, 0.3, 0.2};
-  const double ic[3] = {0.3, -0.1, 0.25}, ia[3] = {0.2, 0.15, 0.05};
-  for (int k = 0; k < 3; ++k) {
-    outer.c[k] = oc[k], outer.a[k] = oa[k];
-    inner.c[k] = ic[k], inner.a[k] = ia[k];
-  }
-  const detail::ChebyshevRule rule(n);
-  detail::Translation E;
-  detail::make_translation(rule, outer, inner, 3, E);
-  std::mt19937_64 gen(3);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const size_t P = n * n * n;
-  // Upward: weights of points of the inner box, anterpolated into the inner grid and
-  // translated, against anterpolation into the outer grid directly.
-  std::vector<double> w_inner(P, 0.0), w_outer(P, 0.0), translated(P, 0.0);
-  for (int m = 0; m < 30; ++m) {
-    double x[3];
-    for (int k = 0; k < 3; ++k) x[k] = inner.c[k] + inner.a[k] * u(gen);
-    const double w = 0.5 + 0.5 * u(gen);
-    for (size_t q = 0; q < P; ++q) {
-      w_inner[q] += w * tensor_lagrange(inner, n, q, x);
-      w_outer[q] += w * tensor_lagrange(outer, n, q, x);
+  std::vector<detail::ChebyshevRule> rules;
+  for (int q = 0; q <= n; ++q) rules.emplace_back(std::max(q, 2));
+  // Isotropic grids, then grids with fewer points along some axes (outer 5 × 4 × 2,
+  // inner 5 × 5 × 3: they nest).
+  for (const bool thin : {false, true}) {
+    detail::Box outer, inner;
+    const double oc[3] = {0.1, -0.2, 0.3}, oa[3] = {0.5, 0.3, 0.1};
+    const double ic[3] = {0.3, -0.1, 0.25}, ia[3] = {0.1, 0.15, 0.02};
+    for (int k = 0; k < 3; ++k) {
+      outer.c[k] = oc[k], outer.a[k] = oa[k];
+      inner.c[k] = ic[k], inner.a[k] = ia[k];
     }
-  }
-  detail::tensor_apply(E, true, n, 3, w_inner.data(), 1.0, translated.data());
-  for (size_t q = 0; q < P; ++q) EXPECT_NEAR(translated[q], w_outer[q], 1e-12) << "M2M " << q;
-  // Downward: values at the outer grid, the outer interpolant at the inner grid points.
-  std::vector<double> f(P), down(P, 0.0);
-  for (double& v : f) v = u(gen);
-  detail::tensor_apply(E, false, n, 3, f.data(), 2.0, down.data());
-  const Grid gi = grid(inner, n);
-  for (size_t i = 0; i < P; ++i) {
-    double v = 0.0;
-    for (size_t q = 0; q < P; ++q) v += f[q] * tensor_lagrange(outer, n, q, gi.pts[i].data());
-    EXPECT_NEAR(down[i], 2.0 * v, 1e-12) << "L2L " << i;
+    if (thin) {
+      outer.slope[1] = 0.7, outer.slope[2] = 0.2;
+      inner.slope[2] = 0.4;
+      ASSERT_EQ(outer.grid_size(3, n), 5 * 4 * 2);
+      ASSERT_EQ(inner.grid_size(3, n), 5 * 5 * 3);
+    }
+    ASSERT_TRUE(detail::grid_nests(inner, outer, 3, n));
+    detail::Translation E;
+    detail::make_translation(rules.data(), outer, inner, n, 3, E);
+    std::mt19937_64 gen(3);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const size_t Po = static_cast<size_t>(outer.grid_size(3, n));
+    const size_t Pi = static_cast<size_t>(inner.grid_size(3, n));
+    // Upward: weights of points of the inner box, anterpolated into the inner grid and
+    // translated, against anterpolation into the outer grid directly.
+    std::vector<double> w_inner(Pi, 0.0), w_outer(Po, 0.0), translated(Po, 0.0);
+    for (int m = 0; m < 30; ++m) {
+      double x[3];
+      for (int k = 0; k < 3; ++k) x[k] = inner.c[k] + inner.a[k] * u(gen);
+      const double w = 0.5 + 0.5 * u(gen);
+      for (size_t q = 0; q < Pi; ++q) w_inner[q] += w * tensor_lagrange(inner, n, q, x);
+      for (size_t q = 0; q < Po; ++q) w_outer[q] += w * tensor_lagrange(outer, n, q, x);
+    }
+    detail::tensor_apply(E, true, 3, w_inner.data(), 1.0, translated.data());
+    for (size_t q = 0; q < Po; ++q)
+      EXPECT_NEAR(translated[q], w_outer[q], 1e-12) << "M2M " << q << " thin " << thin;
+    // Downward: values at the outer grid, the outer interpolant at the inner grid points.
+    std::vector<double> f(Po), down(Pi, 0.0);
+    for (double& v : f) v = u(gen);
+    detail::tensor_apply(E, false, 3, f.data(), 2.0, down.data());
+    const Grid gi = grid(inner, n);
+    for (size_t i = 0; i < Pi; ++i) {
+      double v = 0.0;
+      for (size_t q = 0; q < Po; ++q) v += f[q] * tensor_lagrange(outer, n, q, gi.pts[i].data());
+      EXPECT_NEAR(down[i], 2.0 * v, 1e-12) << "L2L " << i << " thin " << thin;
+    }
   }
 }
 
@@ -271,44 +300,67 @@ TEST(ChebyshevTranslation, UpwardAndDownwardAreExact) {
 // directly and against anterpolation at degree m directly, with the independent Lagrange
 // products.
 TEST(ChebyshevTranslation, DegreeChangesAreExact) {
-  detail::Box box;
-  const double c[3] = {0.1, -0.2, 0.3}, a[3] = {0.5, 0.3, 0.05};
-  for (int k = 0; k < 3; ++k) box.c[k] = c[k], box.a[k] = a[k];
   std::mt19937_64 gen(4);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (const auto& [m, n] : {std::pair<int, int>{2, 5}, {3, 7}, {4, 5}, {6, 9}}) {
-    std::vector<double> raise(static_cast<size_t>(n * m)), lower(static_cast<size_t>(m * n));
-    for (int j = 0; j < n; ++j)
-      for (int q = 0; q < m; ++q) {
-        const double xi = std::cos(M_PI * j / (n - 1));  // degree-n point j
-        raise[static_cast<size_t>(j * m + q)] = lagrange(m, q, xi);
-        lower[static_cast<size_t>(q * n + j)] = lagrange(m, q, xi);
+  // Isotropic grids, then grids with fewer points along two axes (per-axis matrices).
+  for (const bool thin : {false, true}) {
+    detail::Box box;
+    const double c[3] = {0.1, -0.2, 0.3}, a[3] = {0.5, 0.3, 0.05};
+    for (int k = 0; k < 3; ++k) box.c[k] = c[k], box.a[k] = a[k];
+    if (thin) box.slope[1] = 0.6, box.slope[2] = 0.3;
+    for (const auto& [m, n] : {std::pair<int, int>{2, 5}, {3, 7}, {4, 5}, {6, 9}}) {
+      std::vector<double> raise[3], lower[3];
+      const double *R[3], *L[3];
+      int mk[3], nk[3];
+      for (int k = 0; k < 3; ++k) {
+        mk[k] = box.points_along(k, m), nk[k] = box.points_along(k, n);
+        raise[k].resize(static_cast<size_t>(nk[k] * mk[k]));
+        lower[k].resize(static_cast<size_t>(mk[k] * nk[k]));
+        for (int j = 0; j < nk[k]; ++j)
+          for (int q = 0; q < mk[k]; ++q) {
+            const double xi = std::cos(M_PI * j / (nk[k] - 1));  // degree-n point j
+            raise[k][static_cast<size_t>(j * mk[k] + q)] = lagrange(mk[k], q, xi);
+            lower[k][static_cast<size_t>(q * nk[k] + j)] = lagrange(mk[k], q, xi);
+          }
+        R[k] = raise[k].data(), L[k] = lower[k].data();
       }
-    const size_t Pm = static_cast<size_t>(m * m * m), Pn = static_cast<size_t>(n * n * n);
-    // Raise: the degree-n interpolant of the raised values is the degree-m interpolant.
-    std::vector<double> f(Pm), up(Pn, 0.0);
-    for (double& v : f) v = u(gen);
-    detail::tensor_rect(raise.data(), n, m, 3, f.data(), up.data());
-    for (int trial = 0; trial < 20; ++trial) {
-      double x[3];
-      for (int k = 0; k < 3; ++k) x[k] = box.c[k] + box.a[k] * u(gen);
-      double vm = 0.0, vn = 0.0;
-      for (size_t q = 0; q < Pm; ++q) vm += f[q] * tensor_lagrange(box, m, q, x);
-      for (size_t q = 0; q < Pn; ++q) vn += up[q] * tensor_lagrange(box, n, q, x);
-      EXPECT_NEAR(vn, vm, 1e-12) << "raise " << m << " to " << n;
+      if (thin) {
+        ASSERT_LT(box.grid_size(3, n), n * n * n);
+      }
+      const size_t Pm = static_cast<size_t>(box.grid_size(3, m));
+      const size_t Pn = static_cast<size_t>(box.grid_size(3, n));
+      // Raise: the degree-n interpolant of the raised values is the degree-m interpolant.
+      std::vector<double> f(Pm), up(Pn, 0.0);
+      for (double& v : f) v = u(gen);
+      if (thin)
+        detail::tensor_rect(R, nk, mk, 3, f.data(), up.data());
+      else
+        detail::tensor_rect(R[0], n, m, 3, f.data(), up.data());
+      for (int trial = 0; trial < 20; ++trial) {
+        double x[3];
+        for (int k = 0; k < 3; ++k) x[k] = box.c[k] + box.a[k] * u(gen);
+        double vm = 0.0, vn = 0.0;
+        for (size_t q = 0; q < Pm; ++q) vm += f[q] * tensor_lagrange(box, m, q, x);
+        for (size_t q = 0; q < Pn; ++q) vn += up[q] * tensor_lagrange(box, n, q, x);
+        EXPECT_NEAR(vn, vm, 1e-12) << "raise " << m << " to " << n << " thin " << thin;
+      }
+      // Derive: degree-n weights carried to degree m equal anterpolation at degree m.
+      std::vector<double> wn(Pn, 0.0), wm(Pm, 0.0), derived(Pm, 0.0);
+      for (int p = 0; p < 30; ++p) {
+        double x[3];
+        for (int k = 0; k < 3; ++k) x[k] = box.c[k] + box.a[k] * u(gen);
+        const double w = 0.5 + 0.5 * u(gen);
+        for (size_t q = 0; q < Pn; ++q) wn[q] += w * tensor_lagrange(box, n, q, x);
+        for (size_t q = 0; q < Pm; ++q) wm[q] += w * tensor_lagrange(box, m, q, x);
+      }
+      if (thin)
+        detail::tensor_rect(L, mk, nk, 3, wn.data(), derived.data());
+      else
+        detail::tensor_rect(L[0], m, n, 3, wn.data(), derived.data());
+      for (size_t q = 0; q < Pm; ++q)
+        EXPECT_NEAR(derived[q], wm[q], 1e-12)
+            << "derive " << n << " to " << m << " at " << q << " thin " << thin;
     }
-    // Derive: degree-n weights carried to degree m equal anterpolation at degree m.
-    std::vector<double> wn(Pn, 0.0), wm(Pm, 0.0), derived(Pm, 0.0);
-    for (int p = 0; p < 30; ++p) {
-      double x[3];
-      for (int k = 0; k < 3; ++k) x[k] = box.c[k] + box.a[k] * u(gen);
-      const double w = 0.5 + 0.5 * u(gen);
-      for (size_t q = 0; q < Pn; ++q) wn[q] += w * tensor_lagrange(box, n, q, x);
-      for (size_t q = 0; q < Pm; ++q) wm[q] += w * tensor_lagrange(box, m, q, x);
-    }
-    detail::tensor_rect(lower.data(), m, n, 3, wn.data(), derived.data());
-    for (size_t q = 0; q < Pm; ++q)
-      EXPECT_NEAR(derived[q], wm[q], 1e-12) << "derive " << n << " to " << m << " at " << q;
   }
 }
 
@@ -394,7 +446,8 @@ struct SumCase {
   Shape sources, outer;
   int dim;
   double alpha;
-  bool expect_all;  // every operation must occur (else only accuracy is checked)
+  bool expect_all;        // every operation must occur (else only accuracy is checked)
+  double grid_rho = 0.0;  // > 1: fewer points along thin axes (DualTreeConfig::grid_rho)
 };
 
 class DualSums : public ::testing::TestWithParam<SumCase> {};
@@ -437,6 +490,7 @@ TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
     cfg.audit = true;
     cfg.cost_model = false;
     cfg.small_pairs = 16;
+    cfg.grid_rho = sc.grid_rho;
     detail::DualTreeOps ops;
     const auto backend = detail::make_dual_tree_backend(cfg, &ops);
     detail::PassSources src{&X.points(), &xt, w.data(), h.data(), c.data()};
@@ -467,6 +521,7 @@ TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
     total.prune += ops.prune;
     total.point_pruned += ops.point_pruned;
     total.m2m += ops.m2m, total.l2l += ops.l2l;
+    total.thin += ops.thin;
     for (int m = 0; m < 17; ++m) total.far_degree[m] += ops.far_degree[m];
   }
   // The operations checked by this case must have occurred (else the test would not
@@ -488,6 +543,9 @@ TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
     for (int m = 0; m < 17; ++m) degrees += total.far_degree[m] > 0 ? 1 : 0;
     EXPECT_GE(degrees, 2);
   }
+  if (sc.grid_rho > 1.0) {
+    EXPECT_GT(total.thin, 0);  // grids with fewer points along an axis
+  }
 }
 
 std::vector<SumCase> sum_cases() {
@@ -502,6 +560,11 @@ std::vector<SumCase> sum_cases() {
     out.push_back({Shape::cube, Shape::cube, d, 40.0, false});
     out.push_back({Shape::clusters, Shape::cube, d, 64.0, false});
     out.push_back({Shape::sphere, Shape::sphere, d, 200.0, false});
+    // Grids with fewer points along the boxes' thin axes (flat clouds: sources, outer
+    // points or both).
+    out.push_back({Shape::plane, Shape::plane, d, 4.0, false, 3.0});
+    out.push_back({Shape::plane, Shape::cube, d, 4.0, false, 3.0});
+    out.push_back({Shape::cube, Shape::plane, d, 4.0, false, 3.0});
   }
   return out;
 }
@@ -510,7 +573,8 @@ std::string sum_name(const ::testing::TestParamInfo<SumCase>& info) {
   const char* names[] = {"cube", "sphere", "clusters", "plane", "pair"};
   const SumCase& c = info.param;
   return std::to_string(c.dim) + "D_" + names[static_cast<int>(c.sources)] + "_over_" +
-         names[static_cast<int>(c.outer)] + "_a" + std::to_string(static_cast<int>(c.alpha * 10));
+         names[static_cast<int>(c.outer)] + "_a" + std::to_string(static_cast<int>(c.alpha * 10)) +
+         (c.grid_rho > 1.0 ? "_thin" : "");
 }
 
 INSTANTIATE_TEST_SUITE_P(Hausdorff, DualSums, ::testing::ValuesIn(sum_cases()), sum_name);

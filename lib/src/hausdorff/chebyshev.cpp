@@ -48,63 +48,122 @@ Box interpolation_box(const double* lo, const double* hi, int d) {
   return b;
 }
 
-void make_translation(const ChebyshevRule& rule, const Box& outer, const Box& inner, int d,
-                      Translation& t) {
-  const int n = rule.n;
-  for (int k = 0; k < d; ++k)
-    for (int i = 0; i < n; ++i)
-      rule.basis((inner.c[k] + inner.a[k] * rule.xi[i] - outer.c[k]) / outer.a[k], &t.E[k][i * n]);
+int Box::points_along(int k, int m) const {
+  if (slope[k] >= 1.0) return m;
+  const int q = static_cast<int>(std::ceil(1.0 + (m - 1) * slope[k] - 1e-9));
+  return std::clamp(q, 2, m);
 }
 
-void tensor_apply(const Translation& t, bool transpose, int n, int d, const double* in, double f,
-                  double* out) {
-  constexpr int kMax = kMaxChebyshev * kMaxChebyshev * kMaxChebyshev;
-  double buf[2][kMax];
-  int total = 1;
-  for (int k = 0; k < d; ++k) total *= n;
-  const double* src = in;
-  int stride = 1;
-  for (int k = d - 1, which = 0; k >= 0; --k, which ^= 1, stride *= n) {
-    double M[kMaxChebyshev * kMaxChebyshev];  // M[i n + j] = M_k(i, j)
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n; ++j) M[i * n + j] = transpose ? t.E[k][j * n + i] : t.E[k][i * n + j];
-    double* dst = buf[which];
-    const int block = n * stride;
-    for (int base = 0; base < total; base += block)
-      for (int i = 0; i < n; ++i)
-        for (int inner = 0; inner < stride; ++inner) {
-          double sum = 0.0;
-          for (int j = 0; j < n; ++j) sum += M[i * n + j] * src[base + j * stride + inner];
-          dst[base + i * stride + inner] = sum;
-        }
-    src = dst;
+int Box::grid_size(int d, int m) const {
+  int P = 1;
+  for (int k = 0; k < d; ++k) P *= points_along(k, m);
+  return P;
+}
+
+void set_grid_slopes(Box& b, int d, double rho_ref) {
+  double amax = 0.0;
+  for (int k = 0; k < d; ++k) amax = std::max(amax, b.a[k]);
+  for (int k = 0; k < d; ++k) {
+    b.slope[k] = 1.0;
+    if (!(rho_ref > 1.0) || !(b.a[k] < amax)) continue;
+    const double L = std::log(rho_ref);
+    b.slope[k] = L / (L + std::log(amax / b.a[k]));  // L/(L − ln(a_k/a_max))
   }
-  for (int q = 0; q < total; ++q) out[q] += f * src[q];
 }
 
-void tensor_rect(const double* A, int rows, int cols, int d, const double* in, double* out) {
+bool grid_nests(const Box& inner, const Box& outer, int d, int m) {
+  for (int k = 0; k < d; ++k)
+    if (inner.points_along(k, m) < outer.points_along(k, m)) return false;
+  return true;
+}
+
+void make_translation(const ChebyshevRule* rules, const Box& outer, const Box& inner, int m, int d,
+                      Translation& t) {
+  for (int k = 0; k < d; ++k) {
+    const int rows = inner.points_along(k, m), cols = outer.points_along(k, m);
+    assert(rows >= cols);
+    t.rows[k] = rows;
+    t.cols[k] = cols;
+    const ChebyshevRule& in = rules[rows];
+    for (int i = 0; i < rows; ++i)
+      rules[cols].basis((inner.c[k] + inner.a[k] * in.xi[i] - outer.c[k]) / outer.a[k],
+                        &t.E[k][i * cols]);
+  }
+}
+
+namespace {
+
+/// out += f (A_0 ⊗ … ⊗ A_(d−1)) in, A_k of rows[k] × cols[k], element (i, j) at
+/// A_k[i · rs[k] + j · cs[k]] (cs = 1, rs = cols: row-major; swapped: the transpose).
+void tensor_axes(const double* const* A, const int* rs, const int* cs, const int* rows,
+                 const int* cols, int d, const double* in, double f, double* out) {
   constexpr int kMax = kMaxChebyshev * kMaxChebyshev * kMaxChebyshev;
   double buf[2][kMax];
-  int dims[3] = {cols, cols, cols};
+  int dims[3] = {cols[0], d > 1 ? cols[1] : 1, d > 2 ? cols[2] : 1};
   const double* src = in;
   for (int k = d - 1, which = 0; k >= 0; --k, which ^= 1) {
     int outer = 1, inner = 1;
     for (int a = 0; a < k; ++a) outer *= dims[a];
     for (int a = k + 1; a < d; ++a) inner *= dims[a];
     double* dst = buf[which];
+    const double* M = A[k];
     for (int o = 0; o < outer; ++o)
-      for (int i = 0; i < rows; ++i)
+      for (int i = 0; i < rows[k]; ++i)
         for (int r = 0; r < inner; ++r) {
           double sum = 0.0;
-          for (int j = 0; j < cols; ++j) sum += A[i * cols + j] * src[(o * cols + j) * inner + r];
-          dst[(o * rows + i) * inner + r] = sum;
+          for (int j = 0; j < cols[k]; ++j)
+            sum += M[i * rs[k] + j * cs[k]] * src[(o * cols[k] + j) * inner + r];
+          dst[(o * rows[k] + i) * inner + r] = sum;
         }
-    dims[k] = rows;
+    dims[k] = rows[k];
     src = dst;
   }
   int total = 1;
-  for (int k = 0; k < d; ++k) total *= rows;
-  for (int q = 0; q < total; ++q) out[q] += src[q];
+  for (int k = 0; k < d; ++k) total *= rows[k];
+  for (int q = 0; q < total; ++q) out[q] += f * src[q];
+}
+
+}  // namespace
+
+void tensor_apply(const Translation& t, bool transpose, int d, const double* in, double f,
+                  double* out) {
+  const double* A[3] = {t.E[0], t.E[1], t.E[2]};
+  int rs[3], cs[3], rows[3], cols[3];
+  for (int k = 0; k < d; ++k) {
+    rows[k] = transpose ? t.cols[k] : t.rows[k];
+    cols[k] = transpose ? t.rows[k] : t.cols[k];
+    rs[k] = transpose ? 1 : t.cols[k];
+    cs[k] = transpose ? t.cols[k] : 1;
+  }
+  tensor_axes(A, rs, cs, rows, cols, d, in, f, out);
+}
+
+std::int64_t tensor_products(const int* rows, const int* cols, int d) {
+  std::int64_t dims[3] = {cols[0], d > 1 ? cols[1] : 1, d > 2 ? cols[2] : 1}, total = 0;
+  for (int k = d - 1; k >= 0; --k) {
+    std::int64_t rest = 1;
+    for (int a = 0; a < d; ++a)
+      if (a != k) rest *= dims[a];
+    total += rest * rows[k] * cols[k];
+    dims[k] = rows[k];
+  }
+  return total;
+}
+
+std::int64_t translation_products(const Translation& t, bool transpose, int d) {
+  return transpose ? tensor_products(t.cols, t.rows, d) : tensor_products(t.rows, t.cols, d);
+}
+
+void tensor_rect(const double* const* A, const int* rows, const int* cols, int d, const double* in,
+                 double* out) {
+  const int cs[3] = {1, 1, 1};
+  tensor_axes(A, cols, cs, rows, cols, d, in, 1.0, out);
+}
+
+void tensor_rect(const double* A, int rows, int cols, int d, const double* in, double* out) {
+  const double* As[3] = {A, A, A};
+  const int r[3] = {rows, rows, rows}, c[3] = {cols, cols, cols};
+  tensor_rect(As, r, c, d, in, out);
 }
 
 namespace {
@@ -222,16 +281,22 @@ const AxisTerms& PairBounds::terms(bool which_t, int axis) {
 }
 
 LogBounds PairBounds::axis_bound(bool which_t, int axis, int n) {
-  return axis_log_bound(terms(which_t, axis), n);
+  return axis_log_bound(terms(which_t, axis), (which_t ? T_ : S_).points_along(axis, n));
 }
 
 void PairBounds::bounds(bool interp_t, bool interp_s, int n_min, int n_max, LogBounds* out) {
   const AxisTerms* terms[6];
+  const Box* box[6];
+  int axis[6];
   int m = 0;
   for (int side = 0; side < 2; ++side) {
     const bool which_t = side == 0;
     if (which_t ? !interp_t : !interp_s) continue;
-    for (int k = 0; k < d_; ++k) terms[m++] = &this->terms(which_t, k);
+    for (int k = 0; k < d_; ++k, ++m) {
+      terms[m] = &this->terms(which_t, k);
+      box[m] = which_t ? &T_ : &S_;
+      axis[m] = k;
+    }
   }
   const double inf = std::numeric_limits<double>::infinity();
   for (int n = std::max(n_min, 2); n <= n_max; ++n) {
@@ -241,7 +306,7 @@ void PairBounds::bounds(bool interp_t, bool interp_s, int n_min, int n_max, LogB
     }
     double lv[6], lg[6];
     for (int j = 0; j < m; ++j) {
-      const LogBounds e = axis_log_bound(*terms[j], n);
+      const LogBounds e = axis_log_bound(*terms[j], box[j]->points_along(axis[j], n));
       lv[j] = e.value;
       lg[j] = e.grad;
     }

@@ -18,6 +18,8 @@
 // (Re s > 0) with |u| ≤ (δ + ε)^(−α), and the gradient kernel u t (o − x)/r, t = 1/(r + ε),
 // has ‖·‖ ≤ (δ + ε)^(−α−1) √((Dmin² + B²)/(Dmin² − B²)).
 
+#include <cstdint>
+
 namespace softhd::detail {
 
 constexpr int kMaxChebyshev = 16;  ///< most points per axis
@@ -35,44 +37,74 @@ struct ChebyshevRule {
 /// Λ_n ≤ (2/π) ln n + 1.
 double lebesgue_bound(int n);
 
-/// An axis-aligned box: centre and half-widths.
+/// An axis-aligned box: centre and half-widths, and the shape of its interpolation grids.
+/// At degree m (points per axis) axis k carries points_along(k, m) =
+/// max(2, ⌈1 + (m − 1) slope_k⌉) ≤ m points: all m where slope_k = 1 (the default), fewer
+/// along thin axes (set_grid_slopes). Every bound and translation uses these counts.
 struct Box {
   double c[3] = {0.0, 0.0, 0.0};
   double a[3] = {0.0, 0.0, 0.0};
+  double slope[3] = {1.0, 1.0, 1.0};
+  int points_along(int k, int m) const;
+  /// Points of the grid at degree m (the product over the d axes).
+  int grid_size(int d, int m) const;
 };
 
 /// The box [lo, hi] padded so that every half-width is > 0 (at least 1e-3 of the
 /// largest, or a tiny absolute width for a single point): interpolation boxes.
 Box interpolation_box(const double* lo, const double* hi, int d);
 
-/// Translation between a box and a box inside it, same n (M2M and L2L):
-/// E[k][i·n + j] = ℓ_j((c'_k + a'_k ξ_i − c_k)/a_k), the outer box's basis function j along
-/// axis k at the inner box's interpolation point i.
+/// Grid shapes for thin boxes: slope_k = L/(L − ln(a_k/a_max)), L = ln ρ_ref > 0. The
+/// one-axis bound falls like ρ_k^(1−m) and the largest admissible ρ_k grows like 1/a_k,
+/// so with ρ_ref the widest axis's ρ, an axis a_max/a_k times thinner reaches the same
+/// bound with about 1 + (m − 1) L/(L + ln(a_max/a_k)) points. A heuristic for the cost
+/// only: the pair bounds use the counts actually chosen. ρ_ref ≤ 1: slopes 1 (isotropic).
+void set_grid_slopes(Box& b, int d, double rho_ref);
+
+/// Whether the grids of `inner` at degree m have at least as many points along every
+/// axis as those of `outer`: then translations between them are exact (M2M, L2L).
+bool grid_nests(const Box& inner, const Box& outer, int d, int m);
+
+/// Translation between a box and a box inside it at degree m (M2M and L2L), for grids
+/// that nest (grid_nests(inner, outer)): along axis k, rows[k] = the inner grid's points,
+/// cols[k] = the outer grid's, E[k][i·cols + j] = ℓ_j((c'_k + a'_k ξ_i − c_k)/a_k), the
+/// outer box's basis function j at the inner box's interpolation point i.
 struct Translation {
+  int rows[3] = {0, 0, 0}, cols[3] = {0, 0, 0};
   double E[3][kMaxChebyshev * kMaxChebyshev];
 };
-void make_translation(const ChebyshevRule& rule, const Box& outer, const Box& inner, int d,
+/// rules[q]: the rule of q points per axis (for every q the grids use).
+void make_translation(const ChebyshevRule* rules, const Box& outer, const Box& inner, int m, int d,
                       Translation& t);
 
-/// out += f · (M_0 ⊗ … ⊗ M_(d−1)) in on the n^d tensor grid (the last axis fastest), applied
-/// one axis at a time (d n^(d+1) products), with M_k = E_k (L2L: the outer box's interpolant
-/// at the inner box's points) or M_k = E_kᵀ (`transpose`, M2M: the outer box's weights
+/// out += f · (M_0 ⊗ … ⊗ M_(d−1)) in (the last axis fastest), applied one axis at a time,
+/// with M_k = E_k (L2L: the outer box's interpolant at the inner box's points; in on the
+/// outer grid, out on the inner) or M_k = E_kᵀ (`transpose`, M2M: the outer box's weights
 /// Σ_x w_x L_q(x) from the inner box's weights). Both are exact, up to rounding: the inner
-/// grid interpolates the outer box's polynomials (degree n − 1 per axis) exactly.
-void tensor_apply(const Translation& t, bool transpose, int n, int d, const double* in, double f,
+/// grid interpolates the outer box's polynomials (degree cols_k − 1 along axis k) exactly.
+void tensor_apply(const Translation& t, bool transpose, int d, const double* in, double f,
                   double* out);
+/// The multiply-adds of tensor_apply (cost model).
+std::int64_t translation_products(const Translation& t, bool transpose, int d);
+/// The same count for the translation between grids of rows[k] and cols[k] points.
+std::int64_t tensor_products(const int* rows, const int* cols, int d);
 
-/// out += A^(⊗d) in for a rows × cols matrix A (row-major) applied along every axis, one
-/// axis at a time: in has cols^d values, out rows^d (the last axis fastest). With
-/// A[j][q] = ℓ^(m)_q(ξ^(n)_j) (rows n, cols m) it carries a degree-m grid's values to the
+/// out += (A_0 ⊗ … ⊗ A_(d−1)) in for rows[k] × cols[k] matrices A_k (row-major), one axis
+/// at a time: in has Π cols values, out Π rows (the last axis fastest). With
+/// A_k[j][q] = ℓ^(m)_q(ξ^(n)_j) (rows n, cols m) it carries a degree-m grid's values to the
 /// degree-n grid of the same box; with its transpose it carries degree-n proxy weights to
 /// degree m. Both are exact up to rounding (tree_tolerance.md §7).
+void tensor_rect(const double* const* A, const int* rows, const int* cols, int d, const double* in,
+                 double* out);
+/// The same with one matrix A (rows × cols) along every axis.
 void tensor_rect(const double* A, int rows, int cols, int d, const double* in, double* out);
 
 /// Natural logarithms of bounds, per unit source weight, on the interpolation error of
 /// u and of the gradient kernel (above), for o in box T and x in box S, when the d
-/// coordinates of o (interp_t) and/or of x (interp_s) are interpolated at n points per
-/// axis. +∞ when the boxes are too close for any ellipse.
+/// coordinates of o (interp_t) and/or of x (interp_s) are interpolated on the boxes'
+/// grids at degree n (Box::points_along(k, n) points along axis k; each term of the sum
+/// of §7 takes Λ of n, the most points of any axis, an upper bound). +∞ when the boxes
+/// are too close for any ellipse.
 struct LogBounds {
   double value;
   double grad;
@@ -100,10 +132,11 @@ class PairBounds {
   PairBounds(const Box& T, const Box& S, int d, double alpha, double eps);
   /// out[n] for n in [n_min, n_max].
   void bounds(bool interp_t, bool interp_s, int n_min, int n_max, LogBounds* out);
-  /// The bound of one interpolated axis alone at n points (of T if which_t, else of S):
-  /// at most bounds()' out[m] for every m ≤ n and every operation that interpolates this
-  /// axis (their sum over the axes gives the largest term weight Λ^0 = 1, and an axis's
-  /// bound decreases with n). A cheap necessary test before bounds().
+  /// The bound of one interpolated axis alone at degree n (of T if which_t, else of S; at
+  /// its box's points_along(axis, n) points): at most bounds()' out[m] for every m ≤ n and
+  /// every operation that interpolates this axis (their sum over the axes gives the
+  /// largest term weight Λ^0 = 1, and an axis's bound decreases with its points). A cheap
+  /// necessary test before bounds().
   LogBounds axis_bound(bool which_t, int axis, int n);
   /// How many axes' ellipse terms were computed (the planning's main work).
   int computed() const { return computed_; }

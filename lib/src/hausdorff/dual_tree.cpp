@@ -44,7 +44,7 @@ std::int64_t to_points(const Pass& p, const Interaction& it, const PairSources& 
 /// A P2L or M2L interaction: the sources summed at T's interpolation points (degree m),
 /// into T's locals (scale κ_T).
 void to_locals(const Pass& p, const Interaction& it, const PairSources& src, double* loc) {
-  const int m = it.deg, P = p.points(m);
+  const int m = it.deg, P = p.local_points(it.t, m);
   const std::vector<double> grid = grid_points(p, p.obox[static_cast<size_t>(it.t)], m);
   const double kappa = p.kappa[static_cast<size_t>(it.t)];
   for (int j = 0; j < P; ++j) {
@@ -65,13 +65,13 @@ std::int64_t execute(const Pass& p, int root, const std::vector<Interaction>& li
     if (it.op == kPrune) continue;
     const KdNode& S = p.st->nodes()[static_cast<size_t>(it.s)];
     const bool points = it.op == kP2P || it.op == kP2L;
-    const PairSources src = points ? p.slice(S) : proxy_sources(p, sp.at(p, it.s, it.deg), it.deg);
+    const PairSources src = points ? p.slice(S) : proxy_sources(p, sp.at(p, it.s, it.deg));
     if (it.op == kP2P || it.op == kM2P) {
       skipped += to_points(p, it, src, acc);
       continue;
     }
     std::vector<double>& loc = local[p.slot(it.t - root, it.deg)];
-    if (loc.empty()) loc.assign(static_cast<size_t>(p.nf * p.points(it.deg)), 0.0);
+    if (loc.empty()) loc.assign(static_cast<size_t>(p.nf * p.local_points(it.t, it.deg)), 0.0);
     to_locals(p, it, src, loc.data());
   }
   downward(p, root, local, acc);
@@ -86,28 +86,37 @@ void count_work(const Pass& p, const std::vector<std::vector<Interaction>>& list
     for (const Interaction& it : list) {
       const double nT = static_cast<double>(size_of(p.ot->nodes()[static_cast<size_t>(it.t)]));
       const double nS = static_cast<double>(size_of(p.st->nodes()[static_cast<size_t>(it.s)]));
-      const double P = p.points(std::max<int>(it.deg, 2));
-      if (it.op != kP2P && it.op != kPrune) ops.far_degree[it.deg]++;
+      if (it.op != kP2P && it.op != kPrune) {
+        ops.far_degree[it.deg]++;
+        const int full = it.deg * it.deg * (p.d == 3 ? it.deg : 1);
+        const bool thin_s = it.op != kP2L && p.proxy_points(it.s, it.deg) < full;
+        const bool thin_t = it.op != kM2P && p.local_points(it.t, it.deg) < full;
+        if (thin_s || thin_t) ops.thin++;
+      }
       switch (it.op) {
         case kP2P:
           ops.p2p++, st.near_pairs += static_cast<std::int64_t>(nT * nS);
           break;
         case kM2P:
-          ops.m2p++, st.far_kernel += static_cast<std::int64_t>(nT * P);
+          ops.m2p++;
+          st.far_kernel += static_cast<std::int64_t>(nT * p.proxy_points(it.s, it.deg));
           break;
         case kP2L:
-          ops.p2l++, st.far_kernel += static_cast<std::int64_t>(P * nS);
+          ops.p2l++;
+          st.far_kernel += static_cast<std::int64_t>(p.local_points(it.t, it.deg) * nS);
           break;
         case kM2L:
-          ops.m2l++, st.far_kernel += static_cast<std::int64_t>(P * P);
+          ops.m2l++;
+          st.far_kernel +=
+              std::int64_t{p.local_points(it.t, it.deg)} * p.proxy_points(it.s, it.deg);
           break;
         default:
           ops.prune++;
           break;
       }
     }
-  st.far_basis = grid_work(p, *p.st, smark, p.source_fields(), ops.m2m) +
-                 grid_work(p, *p.ot, omark, p.nf, ops.l2l);
+  st.far_basis = grid_work(p, *p.st, p.sbox, smark, p.source_fields(), ops.m2m) +
+                 grid_work(p, *p.ot, p.obox, omark, p.nf, ops.l2l);
 }
 
 double since(std::chrono::steady_clock::time_point t0) {

@@ -9,8 +9,9 @@
 //     M2P    S's interpolation points (weights Σ w L_p(x)) to each o ∈ T  cost |T| P
 //     P2L    S's points to T's interpolation points (locals)             cost P |S|
 //     M2L    S's interpolation points to T's                             cost P²
-// (P = m^d points per box, m = 2 … n points per axis chosen per node pair: the least m
-// whose remainder bound fits the pair's budget); otherwise the larger node is split, and
+// (P ≤ m^d points per box, m = 2 … n points per axis chosen per node pair: the least m
+// whose remainder bound fits the pair's budget; fewer than m along a box's thin axes,
+// grid_rho); otherwise the larger node is split, and
 // leaf pairs (or small pairs) are summed directly (P2P) with the vectorised kernel. Above
 // max_interp_alpha (pruning only), a leaf pair's source box is also pruned point by
 // point, with each outer point's own lower bound and distance to the box. Proxy weights
@@ -52,6 +53,9 @@ struct DualTreeConfig {
   bool cost_model = true;          ///< false: never fall back to exact (tests)
   double max_interp_alpha = 16.0;  ///< above: pruning only (the far field is negligible)
   int small_pairs = 4096;  ///< α ≤ max_interp_alpha: pairs with |T||S| ≤ this are summed directly
+  /// Grids with fewer points along a box's thin axes (set_grid_slopes, reference ρ;
+  /// docs/tree_tolerance.md §7); ≤ 1: every axis at the pair's degree
+  double grid_rho = 3.0;
 };
 
 /// The largest n from τ: 4 at τ = 1e-2, 6 at 1e-4, 8 at 1e-6, at most 12.
@@ -63,6 +67,7 @@ struct DualTreeOps {
   std::int64_t point_pruned = 0;     ///< direct pairs skipped by pruning point by point
   std::int64_t m2m = 0, l2l = 0;     ///< translations between a box's grid and a child's
   std::int64_t far_degree[17] = {};  ///< far-field node pairs per points per axis m
+  std::int64_t thin = 0;  ///< far-field node pairs with a grid of fewer points along an axis
   /// With DualTreeConfig::audit: the largest, over outer points and requested sums, of
   /// (sum of the error bounds of the interactions covering the point) / (τ · its lower
   /// bound); the guarantee needs ≤ 1

@@ -119,22 +119,28 @@ struct Pass {
   int nf = 0;                                 // fields of an outer box's locals (P values each):
   int field[4] = {-1, -1, -1, -1};            // first field of S, G (d), H, G2 (d), or −1
   double log_total[4] = {0.0, 0.0, 0.0, 0.0};
-  std::vector<ChebyshevRule> rules;  // rules[m]: m points per axis (m ≥ 2)
-  // raise[m]: n × m, raise[m][j m + q] = ℓ^(m)_q(ξ^(n)_j) (a degree-m grid to degree n)
-  std::vector<std::vector<double>> raise;
+  std::vector<ChebyshevRule> rules;  // rules[q]: q points per axis (q ≥ 2)
+  // lagrange[a (n + 1) + b], 2 ≤ b ≤ a ≤ n: a × b, [j b + q] = ℓ^(b)_q(ξ^(a)_j) (the values
+  // of a b-point axis's basis at an a-point axis's nodes: raises a grid's axis from b to a)
+  std::vector<std::vector<double>> lagrange;
 
-  int points(int m) const { return d == 2 ? m * m : m * m * m; }
+  const double* raise(int a, int b) const {
+    return lagrange[static_cast<size_t>(a * (n + 1) + b)].data();
+  }
+  /// Points of source box s's grid at degree m (outer box t's: local_points).
+  int proxy_points(int s, int m) const { return sbox[static_cast<size_t>(s)].grid_size(d, m); }
+  int local_points(int t, int m) const { return obox[static_cast<size_t>(t)].grid_size(d, m); }
   bool outer_kinds() const { return want[kS] || want[kG]; }
   /// Fields of a source box's proxies: the weights of S and G, and those of H and G2.
   int source_fields() const { return (outer_kinds() ? 1 : 0) + (want[kH] ? 1 : 0); }
   /// Whether source node s may carry proxies at degree m (more points than proxies).
   bool has_proxy(int s, int m) const {
-    return interp && size_of(st->nodes()[static_cast<size_t>(s)]) > points(m);
+    return interp && size_of(st->nodes()[static_cast<size_t>(s)]) > proxy_points(s, m);
   }
   /// Whether outer node t may carry locals at degree m.
   bool has_local(int t, int m) const {
     return local_ok[static_cast<size_t>(t)] &&
-           size_of(ot->nodes()[static_cast<size_t>(t)]) > points(m);
+           size_of(ot->nodes()[static_cast<size_t>(t)]) > local_points(t, m);
   }
   /// Index of (node, degree) in per-degree arrays.
   size_t slot(int node, int m) const {
@@ -217,7 +223,7 @@ void mark_grids(const Pass& p, const std::vector<std::vector<Interaction>>& list
 void source_upward(const Pass& p, const std::vector<char>& smark, const std::vector<char>& sderive,
                    SourceProxies& out, int threads);
 /// The proxies of one source box as the kernel's sources.
-PairSources proxy_sources(const Pass& p, const ProxySet& ps, int m);
+PairSources proxy_sources(const Pass& p, const ProxySet& ps);
 /// The tensor grid of interpolation points of box b at degree m (d blocks of m^d).
 std::vector<double> grid_points(const Pass& p, const Box& b, int m);
 /// Adds one interpolation point's sums to an outer box's locals (the requested fields).
@@ -226,7 +232,7 @@ void add_local(const Pass& p, const PairSums& s, int j, int P, double* loc);
 void downward(const Pass& p, int root, std::vector<std::vector<double>>& local,
               std::vector<Acc>& acc);
 /// Basis work of the marked grids and the number of translations (stats).
-std::int64_t grid_work(const Pass& p, const KdTree& tree, const std::vector<char>& mark, int fields,
-                       std::int64_t& translations);
+std::int64_t grid_work(const Pass& p, const KdTree& tree, const std::vector<Box>& box,
+                       const std::vector<char>& mark, int fields, std::int64_t& translations);
 
 }  // namespace softhd::detail::dual

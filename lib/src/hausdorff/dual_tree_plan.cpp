@@ -27,6 +27,24 @@ double node_radius2(const KdNode& a, int d) {
   return r2;
 }
 
+/// Grids that nest down the subtree of `root`: every child's slopes at least its
+/// parent's (preorder: parents first), so that its grids have at least as many points
+/// along every axis and M2M, L2L translate between them (grid_nests).
+void inherit_slopes(const KdTree& tree, int root, int d, std::vector<Box>& box) {
+  const std::vector<KdNode>& nodes = tree.nodes();
+  const int end = subtree_end(tree, root);
+  for (int id = root; id < end; ++id) {
+    const KdNode& n = nodes[static_cast<size_t>(id)];
+    if (n.right < 0) continue;
+    const Box& parent = box[static_cast<size_t>(id)];
+    for (const int ch : {id + 1, n.right})
+      for (int k = 0; k < d; ++k) {
+        double& s = box[static_cast<size_t>(ch)].slope[k];
+        s = std::max(s, parent.slope[k]);
+      }
+  }
+}
+
 /// Source data in tree order, node moments, and the totals of the budget shares.
 void prepare_sources(Pass& p, const PassSources& in) {
   const KdTree& st = *p.st;
@@ -63,8 +81,11 @@ void prepare_sources(Pass& p, const PassSources& in) {
     }
   if (!p.interp) return;
   p.sbox.resize(nodes.size());
-  for (size_t i = 0; i < nodes.size(); ++i)
+  for (size_t i = 0; i < nodes.size(); ++i) {
     p.sbox[i] = interpolation_box(nodes[i].lo, nodes[i].hi, p.d);
+    set_grid_slopes(p.sbox[i], p.d, p.cfg.grid_rho);
+  }
+  inherit_slopes(st, 0, p.d, p.sbox);
 }
 
 /// Depth of the lower bounds' coarse partition (source nodes at this depth): 5, plus
@@ -234,7 +255,10 @@ void outer_bounds(Pass& p, const std::vector<int>& roots, int threads) {
       // Locals carry (κ_T t)^α; the factor (c_o/κ_T)^α must not underflow.
       p.local_ok[id] = p.alpha * (std::log(p.kappa[id]) - std::log(p.cmin[id])) <= 300.0;
       p.obox[id] = interpolation_box(nodes[id].lo, nodes[id].hi, p.d);
+      set_grid_slopes(p.obox[id], p.d, p.cfg.grid_rho);
     }
+  if (p.interp)
+    for (const int root : roots) inherit_slopes(ot, root, p.d, p.obox);
 }
 
 namespace {
@@ -326,13 +350,12 @@ Budget budget(const Pass& p, int t, int s, const Ledger* ledger) {
   return b;
 }
 
-/// Work of operation op at degree m for a pair of nT outer and nS source points, in
+/// Work of operation op at degree m for pair (t, s) of nT outer and nS source points, in
 /// kernel evaluations.
-double far_cost(const Pass& p, Op op, int m, double nT, double nS) {
-  const double P = p.points(m);
-  if (op == kM2L) return P * P;
-  if (op == kM2P) return nT * P;
-  return P * nS;  // kP2L
+double far_cost(const Pass& p, Op op, int m, int t, int s, double nT, double nS) {
+  if (op == kM2L) return static_cast<double>(p.local_points(t, m)) * p.proxy_points(s, m);
+  if (op == kM2P) return nT * p.proxy_points(s, m);
+  return p.local_points(t, m) * nS;  // kP2L
 }
 
 /// The smallest degree in [2, p.n] at which operation op's remainder bound fits the
@@ -392,7 +415,7 @@ Choice choose(const Pass& p, int t, int s, double gap, const Ledger* ledger) {
   for (const Op op : {kM2L, kM2P, kP2L}) {
     const bool m_ok = op == kP2L || p.has_proxy(s, p.m_lo);
     const bool l_ok = op == kM2P || p.has_local(t, p.m_lo);
-    if (m_ok && l_ok) options[count++] = {far_cost(p, op, p.n, nT, nS), op};
+    if (m_ok && l_ok) options[count++] = {far_cost(p, op, p.n, t, s, nT, nS), op};
   }
   for (int i = 1; i < count; ++i)  // insertion sort by cost at degree n (count ≤ 3)
     for (int j = i; j > 0 && options[j].cost < options[j - 1].cost; --j)
@@ -405,11 +428,11 @@ Choice choose(const Pass& p, int t, int s, double gap, const Ledger* ledger) {
   for (int i = 0; i < count; ++i) {
     const Op op = options[i].op;
     // Skipped when even its lowest degree would not be cheaper than the best so far.
-    if (!(far_cost(p, op, p.m_lo, nT, nS) < best_cost)) continue;
+    if (!(far_cost(p, op, p.m_lo, t, s, nT, nS) < best_cost)) continue;
     LogBounds e{kInf, kInf};
     const int m = least_degree(p, b, op, bt, bs, pb, l, e);
     if (m == 0) continue;
-    const double cost = far_cost(p, op, m, nT, nS);
+    const double cost = far_cost(p, op, m, t, s, nT, nS);
     // The grids must have fewer points than their boxes (else the op is not cheaper).
     const bool grids_ok = (op == kP2L || p.has_proxy(s, m)) && (op == kM2P || p.has_local(t, m));
     if (grids_ok && cost < best_cost) best_cost = cost, best = {op, m, e.value, e.grad};
@@ -523,7 +546,7 @@ double interaction_cost(const Pass& p, const Interaction& it) {
   const double nS = static_cast<double>(size_of(p.st->nodes()[static_cast<size_t>(it.s)]));
   if (it.op == kP2P) return kCostNear * nT * nS;
   if (it.op == kPrune) return 0.0;
-  return kCostFar * far_cost(p, it.op, it.deg, nT, nS);
+  return kCostFar * far_cost(p, it.op, it.deg, it.t, it.s, nT, nS);
 }
 
 /// Whether source node s may be dropped for the outer point o (tree position q) alone:
@@ -572,14 +595,15 @@ void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const P
   p.m_lo = cfg.min_degree > 0 ? std::min(cfg.min_degree, p.n) : p.n;
   p.rules.clear();
   for (int m = 0; m <= p.n; ++m) p.rules.emplace_back(std::max(m, 2));
-  p.raise.assign(static_cast<size_t>(p.n + 1), {});
-  for (int m = 2; m < p.n; ++m) {
-    std::vector<double>& R = p.raise[static_cast<size_t>(m)];
-    R.resize(static_cast<size_t>(p.n * m));
-    for (int j = 0; j < p.n; ++j)
-      p.rules[static_cast<size_t>(m)].basis(p.rules[static_cast<size_t>(p.n)].xi[j],
-                                            &R[static_cast<size_t>(j * m)]);
-  }
+  p.lagrange.assign(static_cast<size_t>((p.n + 1) * (p.n + 1)), {});
+  for (int a = 2; a <= p.n; ++a)
+    for (int b = 2; b <= a; ++b) {
+      std::vector<double>& R = p.lagrange[static_cast<size_t>(a * (p.n + 1) + b)];
+      R.resize(static_cast<size_t>(a * b));
+      for (int j = 0; j < a; ++j)
+        p.rules[static_cast<size_t>(b)].basis(p.rules[static_cast<size_t>(a)].xi[j],
+                                              &R[static_cast<size_t>(j * b)]);
+    }
   p.flags = outer.flags;
   p.want[kS] = (p.flags & kOuterSum) != 0;
   p.want[kG] = (p.flags & kOuterGrad) != 0;
@@ -614,9 +638,9 @@ void sample_basis(const Pass& p, const std::vector<std::vector<Interaction>>& li
   std::vector<char> sderive(smark.size(), 0);
   mark_grids(p, lists, smark, sderive, omark);
   std::int64_t translations = 0;
-  outer += kCostBasis * static_cast<double>(grid_work(p, *p.ot, omark, p.nf, translations));
-  source +=
-      kCostBasis * static_cast<double>(grid_work(p, *p.st, smark, p.source_fields(), translations));
+  outer += kCostBasis * static_cast<double>(grid_work(p, *p.ot, p.obox, omark, p.nf, translations));
+  source += kCostBasis * static_cast<double>(
+                             grid_work(p, *p.st, p.sbox, smark, p.source_fields(), translations));
 }
 
 /// Whether the sample predicts a plan over `limit`. Its units are the tasks of `mine`, cut
