@@ -228,7 +228,7 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   Pass p;
   prepare(p, cfg_, src, outer, set);
   std::vector<int> roots;
-  task_roots(*p.ot, 0, std::max<Eigen::Index>(kMinTaskPoints, p.ot->size() / 64), roots);
+  task_roots(*p.ot, 0, task_limit(p.ot->size()), roots);
   std::vector<std::vector<Interaction>> lists(roots.size());
   std::vector<double> work(roots.size(), 0.0);
   PlanCounts planning;

@@ -8,6 +8,7 @@
 //   evaluation   (dual_tree.cpp)          the interactions of each task, the cost model.
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -36,8 +37,16 @@ constexpr double kCostBound = 230.0;  // planning: the lower bounds of one outer
 constexpr double kFallBack = 0.9;     // predicted by the sample: plan and run < 90 % of all pairs
 constexpr double kFallBackPlanned = 1.0;  // planned: the run < all pairs (planning is spent)
 // Outer subtrees planned and run as tasks: N/64 points, at least kMinTaskPoints (smaller
-// tasks make worse plans: an outer box never interacts above its task's root).
+// tasks make worse plans: an outer box never interacts above its task's root), but at
+// most N/kFewTasks, so that a small pass still has tasks for every thread (task_limit).
 constexpr Eigen::Index kMinTaskPoints = 1024;
+constexpr Eigen::Index kFewTasks = 4;
+/// The most outer points of a task for N outer points (independent of the thread count,
+/// so that the result is too): max(min(kMinTaskPoints, ⌈N/kFewTasks⌉), N/64).
+inline Eigen::Index task_limit(Eigen::Index N) {
+  const Eigen::Index few = (N + kFewTasks - 1) / kFewTasks;
+  return std::max(std::min(kMinTaskPoints, few), N / 64);
+}
 
 /// One planned node pair: outer node t, source node s, the operation and, for the far
 /// field, the points per axis of its interpolation grids.
