@@ -86,9 +86,10 @@ int main(int argc, char** argv) try {
       sf.push_back(rf.seconds);
     }
     const double e = median(se), m = median(sm), f = median(sf);
-    std::printf("tau %g: exact %.4f s, tree %.4f s (%.2f x exact), every pass planned %.4f s "
-                "(%.2f x)\n",
-                tau, e, m, m / e, f, f / e);
+    std::printf(
+        "tau %g: exact %.4f s, tree %.4f s (%.2f x exact), every pass planned %.4f s "
+        "(%.2f x)\n",
+        tau, e, m, m / e, f, f / e);
     print_work("tree", rm);
     print_work("planned", rf);
   }
