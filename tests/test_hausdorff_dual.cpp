@@ -72,6 +72,21 @@ double tensor_lagrange(const detail::Box& b, int n, size_t q, const double* x) {
   return v;
 }
 
+/// Weights in [0, 1] of 30 random points of box `where` anterpolated, Σ w L_q(x), into the
+/// grid of box a at degree na (wa) and of box b at degree nb (wb).
+void anterpolate_random(const detail::Box& where, const detail::Box& a, int na,
+                        const detail::Box& b, int nb, std::mt19937_64& gen, std::vector<double>& wa,
+                        std::vector<double>& wb) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int p = 0; p < 30; ++p) {
+    double x[3];
+    for (int k = 0; k < 3; ++k) x[k] = where.c[k] + where.a[k] * u(gen);
+    const double w = 0.5 + 0.5 * u(gen);
+    for (size_t q = 0; q < wa.size(); ++q) wa[q] += w * tensor_lagrange(a, na, q, x);
+    for (size_t q = 0; q < wb.size(); ++q) wb[q] += w * tensor_lagrange(b, nb, q, x);
+  }
+}
+
 /// A sample of a box: its corners, face centres and random points.
 std::vector<std::array<double, 3>> samples(const detail::Box& b, std::mt19937_64& gen, int random) {
   std::vector<std::array<double, 3>> out;
@@ -271,13 +286,7 @@ TEST(ChebyshevTranslation, UpwardAndDownwardAreExact) {
     // Upward: weights of points of the inner box, anterpolated into the inner grid and
     // translated, against anterpolation into the outer grid directly.
     std::vector<double> w_inner(Pi, 0.0), w_outer(Po, 0.0), translated(Po, 0.0);
-    for (int m = 0; m < 30; ++m) {
-      double x[3];
-      for (int k = 0; k < 3; ++k) x[k] = inner.c[k] + inner.a[k] * u(gen);
-      const double w = 0.5 + 0.5 * u(gen);
-      for (size_t q = 0; q < Pi; ++q) w_inner[q] += w * tensor_lagrange(inner, n, q, x);
-      for (size_t q = 0; q < Po; ++q) w_outer[q] += w * tensor_lagrange(outer, n, q, x);
-    }
+    anterpolate_random(inner, inner, n, outer, n, gen, w_inner, w_outer);
     detail::tensor_apply(E, true, 3, w_inner.data(), 1.0, translated.data());
     for (size_t q = 0; q < Po; ++q)
       EXPECT_NEAR(translated[q], w_outer[q], 1e-12) << "M2M " << q << " thin " << thin;
@@ -346,13 +355,7 @@ TEST(ChebyshevTranslation, DegreeChangesAreExact) {
       }
       // Derive: degree-n weights carried to degree m equal anterpolation at degree m.
       std::vector<double> wn(Pn, 0.0), wm(Pm, 0.0), derived(Pm, 0.0);
-      for (int p = 0; p < 30; ++p) {
-        double x[3];
-        for (int k = 0; k < 3; ++k) x[k] = box.c[k] + box.a[k] * u(gen);
-        const double w = 0.5 + 0.5 * u(gen);
-        for (size_t q = 0; q < Pn; ++q) wn[q] += w * tensor_lagrange(box, n, q, x);
-        for (size_t q = 0; q < Pm; ++q) wm[q] += w * tensor_lagrange(box, m, q, x);
-      }
+      anterpolate_random(box, box, n, box, m, gen, wn, wm);
       if (thin)
         detail::tensor_rect(L, mk, nk, 3, wn.data(), derived.data());
       else
