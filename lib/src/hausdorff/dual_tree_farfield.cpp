@@ -66,9 +66,9 @@ void anterpolate(const Pass& p, int s, int m, Eigen::Index begin, Eigen::Index e
   }
 }
 
-/// The proxies of source box s at degree m: from its marked children whose grids nest by
-/// translation (M2M; an inner weight is rescaled by (C_child/C)^α ≤ 1), from the points of
-/// the others.
+/// The proxies of source box s at degree m: from its marked children by translation (M2M;
+/// an inner weight is rescaled by (C_child/C)^α ≤ 1; their grids nest, inherit_slopes),
+/// from the points of the others.
 void source_proxies(const Pass& p, int s, int m, SourceProxies& sp) {
   const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
   ProxySet& ps = sp.sets[static_cast<size_t>(sp.slot[p.slot(s, m)])];
@@ -87,7 +87,7 @@ void source_proxies(const Pass& p, int s, int m, SourceProxies& sp) {
     const KdNode& C = p.st->nodes()[static_cast<size_t>(ch)];
     const int slot = sp.slot[p.slot(ch, m)];
     const Box &parent = p.sbox[static_cast<size_t>(s)], &child = p.sbox[static_cast<size_t>(ch)];
-    if (slot < 0 || !grid_nests(child, parent, p.d, m)) {
+    if (slot < 0) {
       anterpolate(p, s, m, C.begin, C.end, ps);
       continue;
     }
@@ -148,19 +148,17 @@ void raise_locals(const Pass& p, int t, int i, std::vector<std::vector<double>>&
   }
 }
 
-/// Marks (id, m) and its descendants that may carry grids at degree m and translate to
-/// or from their parent's (grid_nests); the others' points are anterpolated or
-/// interpolated directly.
+/// Marks (id, m) and its descendants that may carry grids at degree m (a child's grid
+/// nests in its parent's, inherit_slopes, so they translate).
 template <class Eligible>
-void mark_subtree(const Pass& p, const KdTree& tree, const std::vector<Box>& box, Eligible eligible,
-                  int id, int m, std::vector<char>& mark) {
+void mark_subtree(const Pass& p, const KdTree& tree, Eligible eligible, int id, int m,
+                  std::vector<char>& mark) {
   if (!eligible(id, m) || mark[p.slot(id, m)]) return;
   mark[p.slot(id, m)] = 1;
   const KdNode& n = tree.nodes()[static_cast<size_t>(id)];
   if (n.right < 0) return;
-  for (const int ch : {id + 1, n.right})
-    if (grid_nests(box[static_cast<size_t>(ch)], box[static_cast<size_t>(id)], p.d, m))
-      mark_subtree(p, tree, box, eligible, ch, m, mark);
+  mark_subtree(p, tree, eligible, id + 1, m, mark);
+  mark_subtree(p, tree, eligible, n.right, m, mark);
 }
 
 /// L2P: the degree-m locals of outer box t interpolated to its points [begin, end), the
@@ -195,8 +193,8 @@ void locals_to_points(const Pass& p, int t, int m, Eigen::Index begin, Eigen::In
 }
 
 /// The degree-m locals of outer box t to its children: L2L to those that carry locals at
-/// degree m on nesting grids (the outer fields rescaled by (κ_child/κ_T)^α ≤ 1), L2P to the
-/// others' points.
+/// degree m (their grids nest, inherit_slopes; the outer fields rescaled by
+/// (κ_child/κ_T)^α ≤ 1), L2P to the others' points.
 void locals_to_children(const Pass& p, int t, int m, int root, const double* loc,
                         std::vector<std::vector<double>>& local, std::vector<Acc>& acc) {
   const std::vector<KdNode>& nodes = p.ot->nodes();
@@ -205,7 +203,7 @@ void locals_to_children(const Pass& p, int t, int m, int root, const double* loc
   for (const int ch : {t + 1, T.right}) {
     const KdNode& C = nodes[static_cast<size_t>(ch)];
     const Box &parent = p.obox[static_cast<size_t>(t)], &child = p.obox[static_cast<size_t>(ch)];
-    if (!p.has_local(ch, m) || !grid_nests(child, parent, p.d, m)) {
+    if (!p.has_local(ch, m)) {
       locals_to_points(p, t, m, C.begin, C.end, loc, acc);
       continue;
     }
@@ -250,11 +248,11 @@ void mark_grids(const Pass& p, const std::vector<std::vector<Interaction>>& list
       if (it.op == kM2P || it.op == kM2L) {
         const bool derive = it.deg < p.n && p.has_proxy(it.s, p.n);
         if (derive) sderive[p.slot(it.s, it.deg)] = 1;
-        mark_subtree(p, *p.st, p.sbox, proxy, it.s, derive ? p.n : it.deg, smark);
+        mark_subtree(p, *p.st, proxy, it.s, derive ? p.n : it.deg, smark);
       }
       if (it.op == kP2L || it.op == kM2L) {
         const int m = p.has_local(it.t, p.n) ? p.n : it.deg;
-        mark_subtree(p, *p.ot, p.obox, local, it.t, m, omark);
+        mark_subtree(p, *p.ot, local, it.t, m, omark);
       }
     }
 }
@@ -355,7 +353,7 @@ std::int64_t grid_work(const Pass& p, const KdTree& tree, const std::vector<Box>
         continue;
       }
       for (const size_t ch : {id + 1, static_cast<size_t>(nodes[id].right)}) {
-        if (mark[p.slot(static_cast<int>(ch), m)] && grid_nests(box[ch], box[id], p.d, m)) {
+        if (mark[p.slot(static_cast<int>(ch), m)]) {
           int rows[3], cols[3];
           for (int k = 0; k < p.d; ++k)
             rows[k] = box[ch].points_along(k, m), cols[k] = box[id].points_along(k, m);
