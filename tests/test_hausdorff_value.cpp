@@ -51,6 +51,10 @@ TEST(HausdorffValue, MatchesLongDoubleReference) {
     expect_matches_reference(X, Y, HausdorffOptions{}, 1e-12);
     expect_matches_reference(X, Y, options(7.5, 2.5, 3.0, 1e-2), 1e-12);
     expect_matches_reference(Y, X, options(1.0, 1.0, 1.0, 0.1), 1e-12);
+    // α = 16 and 64 take the kernel's unrolled powers (α = 4 above too), 7.5 and 1 its
+    // general one (pair_kernel.cpp).
+    expect_matches_reference(X, Y, options(16.0, 4.0, 2.0, 1e-2), 1e-12);
+    expect_matches_reference(Y, X, options(64.0, 4.0, 2.0, 0.05), 1e-12);
   }
 }
 

@@ -55,9 +55,98 @@ double KernelPower::scalar(double q) const {
 
 namespace {
 
+/// p · base^N by the steps of KernelPower's binary exponentiation, unrolled at compile time;
+/// fixed_power<N>(q) = power_steps<N>(1, q) is the same number, bit for bit, as KernelPower::apply.
+template <unsigned N>
+inline double power_steps(double p, double base) {
+  if constexpr ((N & 1u) != 0) p *= base;
+  if constexpr ((N >> 1) == 0) {
+    return p;
+  } else {
+    return power_steps<(N >> 1)>(p, base * base);
+  }
+}
+
+template <unsigned P>
+inline double fixed_power(double q) {
+  return power_steps<P>(1.0, q);
+}
+
+/// The sums of one outer point for α = P, the power inlined: one vectorised loop over the
+/// sources, no buffers.
+template <int D, unsigned F, unsigned P>
+void fused_sums(const double* o, double c_o, const PairSources& src, double eps, PairSums& out) {
+  constexpr bool kSum = (F & kOuterSum) != 0;
+  constexpr bool kGrad = (F & kOuterGrad) != 0;
+  constexpr bool kIn = (F & kInner) != 0;
+  constexpr bool kMag = (F & kMagnitude) != 0;
+  const double* bx = src.coord[0];
+  const double* by = src.coord[1];
+  const double* bz = D == 3 ? src.coord[2] : src.coord[1];
+  const double* w = src.weight;
+  const double* h = src.coef;
+  const double* c = src.scale;
+  const double ox = o[0], oy = o[1], oz = D == 3 ? o[2] : 0.0;
+  double S = 0.0, Gx = 0.0, Gy = 0.0, Gz = 0.0, H = 0.0, Hx = 0.0, Hy = 0.0, Hz = 0.0;
+  double Gm = 0.0, G2m = 0.0;
+  const Eigen::Index n1 = src.size;
+  const double inv_eps = 1.0 / eps;
+  // Selects only, no branches, so that the loop vectorises: a coincident pair (r = 0)
+  // gets t = 1/ε and t/r = 0 (its 1/0 is computed and discarded).
+#pragma omp simd reduction(+ : S, Gx, Gy, Gz, Gm, H, Hx, Hy, Hz, G2m)
+  for (Eigen::Index k = 0; k < n1; ++k) {
+    const double dx = ox - bx[k], dy = oy - by[k];
+    const double dz = D == 3 ? oz - bz[k] : 0.0;
+    const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const bool apart = r > 0.0;
+    double t, tr = 0.0;
+    if constexpr (kGrad || kIn) {
+      const double inv = 1.0 / (r * (r + eps));  // t/r = 1/(r (r + ε)), t = r · t/r
+      const double rt = r * inv;
+      t = apart ? rt : inv_eps;
+      tr = apart ? inv : 0.0;
+    } else {
+      t = 1.0 / (r + eps);
+    }
+    const double t_apart = apart ? t : 0.0;  // the magnitude sums skip coincident pairs
+    if constexpr (kSum || kGrad) {
+      const double wp = w[k] * fixed_power<P>(c_o * t);  // w (c_o t)^α
+      if constexpr (kSum) S += wp;
+      if constexpr (kGrad) {
+        const double g = wp * tr;  // w p t / r
+        Gx += g * dx;
+        Gy += g * dy;
+        Gz += g * dz;
+        if constexpr (kMag) Gm += wp * t_apart;
+      }
+    }
+    if constexpr (kIn) {
+      const double hp = h[k] * fixed_power<P>(c[k] * t);  // h (c_n t)^α
+      H += hp;
+      const double g = hp * tr;
+      Hx += g * dx;
+      Hy += g * dy;
+      Hz += g * dz;
+      if constexpr (kMag) G2m += hp * t_apart;
+    }
+  }
+  out.S = S;
+  out.G[0] = Gx;
+  out.G[1] = Gy;
+  out.G[2] = D == 3 ? Gz : 0.0;
+  out.H = H;
+  out.G2[0] = Hx;
+  out.G2[1] = Hy;
+  out.G2[2] = D == 3 ? Hz : 0.0;
+  out.Gm = Gm;
+  out.G2m = G2m;
+}
+
+/// The sums of one outer point for any α: the powers of a block of 256 pairs at a time
+/// (KernelPower::apply) between vectorised sweeps.
 template <int D, unsigned F>
-PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
-                        const KernelPower& power, double eps) {
+PairSums buffered_sums(const double* o, double c_o, const PairSources& src,
+                       const KernelPower& power, double eps) {
   constexpr bool kSum = (F & kOuterSum) != 0;
   constexpr bool kGrad = (F & kOuterGrad) != 0;
   constexpr bool kIn = (F & kInner) != 0;
@@ -143,6 +232,32 @@ PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
   out.Gm = Gm;
   out.G2m = G2m;
   return out;
+}
+
+/// The fused loop where α is one of the unrolled powers, else the buffered one.
+template <int D, unsigned F>
+PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
+                        const KernelPower& power, double eps) {
+  PairSums out;
+  switch (power.fixed()) {
+    case 2:
+      fused_sums<D, F, 2>(o, c_o, src, eps, out);
+      return out;
+    case 4:
+      fused_sums<D, F, 4>(o, c_o, src, eps, out);
+      return out;
+    case 8:
+      fused_sums<D, F, 8>(o, c_o, src, eps, out);
+      return out;
+    case 16:
+      fused_sums<D, F, 16>(o, c_o, src, eps, out);
+      return out;
+    case 64:
+      fused_sums<D, F, 64>(o, c_o, src, eps, out);
+      return out;
+    default:
+      return buffered_sums<D, F>(o, c_o, src, power, eps);
+  }
 }
 
 using PairFn = PairSums (*)(const double*, double, const PairSources&, const KernelPower&, double);

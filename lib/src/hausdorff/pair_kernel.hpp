@@ -20,7 +20,9 @@
 namespace softhd::detail {
 
 /// p = q^α for q ∈ (0, 1]: repeated squaring when α is an integer (exact to a few
-/// ulps per squaring, vectorised over a block), exp(α log q) otherwise.
+/// ulps per squaring, vectorised over a block), exp(α log q) otherwise. For α ∈ {2, 4, 8,
+/// 16, 64} pair_sums unrolls the same squarings inside its one loop over the sources
+/// (the same numbers, without the block buffers: 2–3× faster, docs/bench_hausdorff.md).
 class KernelPower {
  public:
   explicit KernelPower(double alpha);
@@ -28,6 +30,8 @@ class KernelPower {
   /// q^α for one q ≥ 0 (the same arithmetic as apply).
   double scalar(double q) const;
   double alpha() const { return alpha_; }
+  /// α when it is an integer ≤ 2^30, else 0.
+  unsigned long long fixed() const { return integer_; }
 
  private:
   double alpha_;
