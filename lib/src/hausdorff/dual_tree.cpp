@@ -61,9 +61,27 @@ std::int64_t execute(const Pass& p, int root, const std::vector<Interaction>& li
   std::int64_t skipped = 0;
   const size_t nodes = static_cast<size_t>(subtree_end(*p.ot, root) - root);
   std::vector<std::vector<double>> local(nodes * static_cast<size_t>(p.n + 1));
-  for (const Interaction& it : list) {
+  for (size_t i = 0; i < list.size(); ++i) {
+    const Interaction& it = list[i];
     if (it.op == kPrune) continue;
     const KdNode& S = p.st->nodes()[static_cast<size_t>(it.s)];
+    if (it.op == kP2P && !p.point_prune) {
+      // The direct sums of T over this leaf and the next ones of T whose sources follow
+      // on in the source order: one loop per outer point over the whole run.
+      Eigen::Index begin = S.begin, end = S.end;
+      for (; i + 1 < list.size() && list[i + 1].op == kP2P && list[i + 1].t == it.t; ++i) {
+        const KdNode& next = p.st->nodes()[static_cast<size_t>(list[i + 1].s)];
+        if (next.begin == end) {
+          end = next.end;
+        } else if (next.end == begin) {
+          begin = next.begin;
+        } else {
+          break;
+        }
+      }
+      to_points(p, it, p.range(begin, end), acc);
+      continue;
+    }
     const bool points = it.op == kP2P || it.op == kP2L;
     const PairSources src = points ? p.slice(S) : proxy_sources(p, sp.at(p, it.s, it.deg));
     if (it.op == kP2P || it.op == kM2P) {

@@ -155,15 +155,17 @@ struct Pass {
   size_t slot(int node, int m) const {
     return static_cast<size_t>(node) * static_cast<size_t>(n + 1) + static_cast<size_t>(m);
   }
-  PairSources slice(const KdNode& s) const {
+  /// The sources [begin, end) of the source tree's order.
+  PairSources range(Eigen::Index begin, Eigen::Index end) const {
     PairSources sub = src;
-    sub.size = size_of(s);
-    for (int k = 0; k < d; ++k) sub.coord[k] += s.begin;
-    if (sub.weight != nullptr) sub.weight += s.begin;
-    if (sub.coef != nullptr) sub.coef += s.begin;
-    if (sub.scale != nullptr) sub.scale += s.begin;
+    sub.size = end - begin;
+    for (int k = 0; k < d; ++k) sub.coord[k] += begin;
+    if (sub.weight != nullptr) sub.weight += begin;
+    if (sub.coef != nullptr) sub.coef += begin;
+    if (sub.scale != nullptr) sub.scale += begin;
     return sub;
   }
+  PairSources slice(const KdNode& s) const { return range(s.begin, s.end); }
 };
 
 // ---- planning (dual_tree_plan.cpp) ----
