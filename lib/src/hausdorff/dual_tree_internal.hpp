@@ -87,6 +87,13 @@ struct Acc {
   }
 };
 
+/// The source nodes of the lower bounds' partition as arrays: box corners per axis, the
+/// weights of S and G (mw) and the weights and scales of H and G2 (mh).
+struct CutBoxes {
+  std::vector<double> lo[3], hi[3];
+  std::vector<double> w, hw, hs;
+};
+
 /// The interpolation points of one source box at one degree, and their weights.
 struct ProxySet {
   std::vector<double> coord;             // d blocks of P coordinates
@@ -122,6 +129,7 @@ struct Pass {
   std::vector<char> local_ok;     // per outer node: locals allowed (scales do not underflow)
   std::vector<double> cmin;       // per outer node: min c_o
   std::vector<int> cut;           // source nodes of the lower bounds (cut_nodes)
+  CutBoxes cut_boxes;             // their boxes and moments, structure of arrays
   int cut_depth = 5;              // their depth in the source tree
   std::vector<double> log_weight, log_share;  // 4 per source node (prepare_sources)
   std::vector<Box> obox, sbox;                // interpolation boxes (interp only)

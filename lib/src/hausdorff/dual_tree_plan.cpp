@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <stdexcept>
 
 #include "dual_tree_internal.hpp"
 
@@ -134,46 +135,117 @@ void cut_nodes(const KdTree& st, int id, int depth, int cut_at, std::vector<int>
   cut_nodes(st, n.right, depth + 1, cut_at, out);
 }
 
-/// Lower bounds (scaled, as pair_sums returns them) of the four sums at o: over the
-/// partition `cut`, each node contributes W k(R_max) (every term is ≥ its value at the
-/// farthest corner; the vector sums only from boxes not containing o, whose terms all
-/// have r > 0), except the node `near_cut` holding `leaf`, which contributes the larger
-/// of that and the exact sum over `leaf`.
-PairSums lower_sums(const Pass& p, const double* o, double c_o, const std::vector<int>& cut,
-                    int near_cut, const PairSums& leaf) {
-  PairSums low;
-  const std::vector<KdNode>& nodes = p.st->nodes();
-  for (int id : cut) {
-    const KdNode& n = nodes[static_cast<size_t>(id)];
-    double near2 = 0.0, far2 = 0.0;
-    for (int k = 0; k < p.d; ++k) {
-      const double gap = std::max({n.lo[k] - o[k], o[k] - n.hi[k], 0.0});
-      const double span = std::max(std::fabs(o[k] - n.lo[k]), std::fabs(o[k] - n.hi[k]));
-      near2 += gap * gap;
-      far2 += span * span;
-    }
-    const double t = 1.0 / (std::sqrt(far2) + p.eps), inside = near2 > 0.0 ? 1.0 : 0.0;
-    PairSums b;
-    if (p.outer_kinds()) {
-      b.S = p.mw[static_cast<size_t>(id)].weight * p.power->scalar(c_o * t);
-      b.Gm = inside * b.S * t;
-    }
-    if (p.want[kH]) {
-      const NodeMoments& m = p.mh[static_cast<size_t>(id)];
-      b.H = m.weight * p.power->scalar(m.scale * t);
-      b.G2m = inside * b.H * t;
-    }
-    if (id == near_cut) {
-      b.S = std::max(b.S, leaf.S);
-      b.Gm = std::max(b.Gm, leaf.Gm);
-      b.H = std::max(b.H, leaf.H);
-      b.G2m = std::max(b.G2m, leaf.G2m);
-    }
-    low.S += b.S;
-    low.Gm += b.Gm;
-    low.H += b.H;
-    low.G2m += b.G2m;
+/// The cut's boxes and moments as arrays (lower_sums).
+void fill_cut_boxes(Pass& p) {
+  CutBoxes& c = p.cut_boxes;
+  const size_t n = p.cut.size();
+  for (int k = 0; k < p.d; ++k) {
+    c.lo[k].resize(n);
+    c.hi[k].resize(n);
   }
+  c.w.assign(n, 0.0);
+  c.hw.assign(n, 0.0);
+  c.hs.assign(n, 1.0);
+  for (size_t i = 0; i < n; ++i) {
+    const size_t id = static_cast<size_t>(p.cut[i]);
+    const KdNode& node = p.st->nodes()[id];
+    for (int k = 0; k < p.d; ++k) {
+      c.lo[k][i] = node.lo[k];
+      c.hi[k][i] = node.hi[k];
+    }
+    if (p.outer_kinds()) c.w[i] = p.mw[id].weight;
+    if (p.want[kH]) {
+      c.hw[i] = p.mh[id].weight;
+      c.hs[i] = p.mh[id].scale;
+    }
+  }
+}
+
+/// One cut box's lower bounds at o: W k(R_max), the value kernel at the farthest corner
+/// (every term is ≥ it), and W k(R_max) t_max for the vector sums where the box does not
+/// contain o (there every term has r > 0).
+PairSums box_lower(const Pass& p, const double* o, double c_o, size_t i) {
+  const CutBoxes& c = p.cut_boxes;
+  double near2 = 0.0, far2 = 0.0;
+  for (int k = 0; k < p.d; ++k) {
+    const double gap = std::max({c.lo[k][i] - o[k], o[k] - c.hi[k][i], 0.0});
+    const double span = std::max(std::fabs(o[k] - c.lo[k][i]), std::fabs(o[k] - c.hi[k][i]));
+    near2 += gap * gap;
+    far2 += span * span;
+  }
+  const double t = 1.0 / (std::sqrt(far2) + p.eps), inside = near2 > 0.0 ? 1.0 : 0.0;
+  PairSums b;
+  b.S = c.w[i] * p.power->scalar(c_o * t);
+  b.Gm = inside * b.S * t;
+  if (p.want[kH]) {
+    b.H = c.hw[i] * p.power->scalar(c.hs[i] * t);
+    b.G2m = inside * b.H * t;
+  }
+  return b;
+}
+
+/// Σ of box_lower over the cut boxes [i0, i1), 256 at a time: the distances in one
+/// vectorised sweep, the powers by KernelPower::apply, the sums in another.
+void add_box_lowers(const Pass& p, const double* o, double c_o, size_t i0, size_t i1,
+                    PairSums& low) {
+  constexpr int kChunk = 256;
+  const CutBoxes& c = p.cut_boxes;
+  const bool inner = p.want[kH];
+  alignas(64) double t[kChunk], in[kChunk], q[kChunk], pw[kChunk];
+  for (size_t b0 = i0; b0 < i1; b0 += kChunk) {
+    const int len = static_cast<int>(std::min<size_t>(kChunk, i1 - b0));
+#pragma omp simd
+    for (int j = 0; j < len; ++j) {
+      double near2 = 0.0, far2 = 0.0;
+      for (int k = 0; k < p.d; ++k) {
+        const double lo = c.lo[k][b0 + j], hi = c.hi[k][b0 + j];
+        const double gap = std::max(std::max(lo - o[k], o[k] - hi), 0.0);
+        const double span = std::max(std::fabs(o[k] - lo), std::fabs(o[k] - hi));
+        near2 += gap * gap;
+        far2 += span * span;
+      }
+      t[j] = 1.0 / (std::sqrt(far2) + p.eps);
+      in[j] = near2 > 0.0 ? 1.0 : 0.0;
+      q[j] = c_o * t[j];
+    }
+    p.power->apply(q, pw, len);
+    double S = 0.0, Gm = 0.0;
+#pragma omp simd reduction(+ : S, Gm)
+    for (int j = 0; j < len; ++j) {
+      const double v = c.w[b0 + j] * pw[j];
+      S += v;
+      Gm += in[j] * v * t[j];
+    }
+    low.S += S;
+    low.Gm += Gm;
+    if (!inner) continue;
+#pragma omp simd
+    for (int j = 0; j < len; ++j) q[j] = c.hs[b0 + j] * t[j];
+    p.power->apply(q, pw, len);
+    double H = 0.0, G2m = 0.0;
+#pragma omp simd reduction(+ : H, G2m)
+    for (int j = 0; j < len; ++j) {
+      const double v = c.hw[b0 + j] * pw[j];
+      H += v;
+      G2m += in[j] * v * t[j];
+    }
+    low.H += H;
+    low.G2m += G2m;
+  }
+}
+
+/// Lower bounds (scaled, as pair_sums returns them) of the four sums at o: the sum of
+/// box_lower over the partition `cut`, except for the box `near` (its index in the cut)
+/// holding `leaf`, which contributes the larger of that and the exact sum over `leaf`.
+PairSums lower_sums(const Pass& p, const double* o, double c_o, size_t near, const PairSums& leaf) {
+  PairSums low;
+  add_box_lowers(p, o, c_o, 0, near, low);
+  add_box_lowers(p, o, c_o, near + 1, p.cut.size(), low);
+  const PairSums b = box_lower(p, o, c_o, near);
+  low.S += std::max(b.S, leaf.S);
+  low.Gm += std::max(b.Gm, leaf.Gm);
+  low.H += std::max(b.H, leaf.H);
+  low.G2m += std::max(b.G2m, leaf.G2m);
   return low;
 }
 
@@ -191,6 +263,7 @@ void prepare_outer(Pass& p, const PassOuter& in) {
   if (p.interp) p.obox.resize(nn);
   p.cut_depth = cut_depth(ot.size(), p.st->size());
   cut_nodes(*p.st, 0, 0, p.cut_depth, p.cut);
+  fill_cut_boxes(p);
 }
 
 /// The lower bounds of the outer points of `leaf` (lower_sums with the source leaf found
@@ -206,7 +279,12 @@ void leaf_bounds(Pass& p, size_t id, double w_min) {
     const int leaf_id = leaf_near(*p.st, o, p.d, p.cut_depth, near_cut);
     const PairSources leaf = p.slice(p.st->nodes()[static_cast<size_t>(leaf_id)]);
     const PairSums exact = pair_sums(o, p.oc[q], leaf, *p.power, p.eps, flags);
-    PairSums s = lower_sums(p, o, p.oc[q], p.cut, near_cut, exact);
+    // The cut lists its nodes in increasing id order (depth first, left before right).
+    const size_t near =
+        static_cast<size_t>(std::lower_bound(p.cut.begin(), p.cut.end(), near_cut) - p.cut.begin());
+    if (near == p.cut.size() || p.cut[near] != near_cut)
+      throw std::logic_error("leaf_bounds: the near leaf's node is not in the cut");
+    PairSums s = lower_sums(p, o, p.oc[q], near, exact);
     // The nearest source (r = r_min, so p = 1) alone gives S ≥ w_min, and, when
     // r_min > 0, Gm ≥ w_min/c_o: the bound that matters at large α.
     s.S = std::max(s.S, w_min);
