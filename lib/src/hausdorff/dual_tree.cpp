@@ -274,7 +274,7 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   if (set.share != nullptr) set.share->sum(counts, 3);  // the serial pass's counts
   const double planned = kCostNear * static_cast<double>(counts[0]) +
                          kCostFar * static_cast<double>(counts[1]) +
-                         kCostBasis * static_cast<double>(counts[2]);
+                         kCostBasis * p.overhead_scale() * static_cast<double>(counts[2]);
   if (cfg_.audit) ops.budget_used = audit_budget(p, roots, mine, lists);
   if (ops_ != nullptr) *ops_ = ops;
   if (cfg_.cost_model && planned > kFallBackPlanned * all_pairs)

@@ -26,15 +26,19 @@ enum Op : std::uint8_t { kP2P, kM2P, kP2L, kM2L, kPrune, kNone };
 enum Kind { kS = 0, kG = 1, kH = 2, kG2 = 3 };  // the four sums; budgets per kind
 
 // Cost model (docs/tree_tolerance.md §8): work in units of one pair of the all-pairs
-// kernel, fitted to the ladder's planned passes (bench_hausdorff --no-fallback,
-// 3 162 ≤ N = M ≤ 31 623, four shapes, τ = 1e-2…1e-6; plan + run within −8 %…+10 %).
-constexpr double kCostNear = 1.0;     // direct pairs in leaf slices
-constexpr double kCostFar = 1.0;      // kernel evaluations at interpolation points
-constexpr double kCostBasis = 0.7;    // point-interpolation-point basis products
-constexpr double kCostVisit = 25.0;   // planning: per node pair visited
-constexpr double kCostAxis = 250.0;   // planning: per axis's remainder-bound terms
-constexpr double kCostBound = 230.0;  // planning: the lower bounds of one outer point
-constexpr double kFallBack = 0.9;     // predicted by the sample: plan and run < 90 % of all pairs
+// kernel summing S alone, fitted to the ladder's planned passes in value mode
+// (bench_hausdorff --no-fallback, 3 162 ≤ N = M ≤ 31 623, four shapes, τ = 1e-2…1e-6).
+// Direct pairs and kernel evaluations cost what an all-pairs pair of the same sums costs;
+// basis work and planning do not grow with the sums, so in a pass with gradient or inner
+// sums they weigh 1/kGradPairCost as much (Pass::overhead_scale).
+constexpr double kCostNear = 1.4;      // direct pairs in leaf slices
+constexpr double kCostFar = 1.15;      // kernel evaluations at interpolation points
+constexpr double kCostBasis = 1.5;     // point-interpolation-point basis products
+constexpr double kCostVisit = 20.0;    // planning: per node pair visited
+constexpr double kCostAxis = 850.0;    // planning: per axis's remainder-bound terms
+constexpr double kCostBound = 800.0;   // planning: the lower bounds of one outer point
+constexpr double kGradPairCost = 1.5;  // an all-pairs pair with more sums than S (≥ 1.5 S's)
+constexpr double kFallBack = 0.9;      // predicted by the sample: plan and run < 90 % of all pairs
 constexpr double kFallBackPlanned = 1.0;  // planned: the run < all pairs (planning is spent)
 // Outer subtrees planned and run as tasks: N/64 points, at least kMinTaskPoints (smaller
 // tasks make worse plans: an outer box never interacts above its task's root), but at
@@ -148,6 +152,8 @@ struct Pass {
   int proxy_points(int s, int m) const { return sbox[static_cast<size_t>(s)].grid_size(d, m); }
   int local_points(int t, int m) const { return obox[static_cast<size_t>(t)].grid_size(d, m); }
   bool outer_kinds() const { return want[kS] || want[kG]; }
+  /// The weight of basis and planning work relative to kCost* (S alone: 1).
+  double overhead_scale() const { return want[kG] || want[kH] ? 1.0 / kGradPairCost : 1.0; }
   /// Fields of a source box's proxies: the weights of S and G, and those of H and G2.
   int source_fields() const { return (outer_kinds() ? 1 : 0) + (want[kH] ? 1 : 0); }
   /// Whether source node s may carry proxies at degree m (more points than proxies).
@@ -212,7 +218,7 @@ bool prunable_for_point(const Pass& p, const double* o, Eigen::Index q, int s);
 /// times S's contribution to the sum of every point of T (0 without own_budget).
 double own_term(const Pass& p, int t, int s, int k);
 /// The planning's work in pair units: `c` for the lower bounds of `points` outer points.
-double planning_cost(const PlanCounts& c, double points);
+double planning_cost(const Pass& p, const PlanCounts& c, double points);
 /// Planned work of one interaction in pair units (kCost weights).
 double interaction_cost(const Pass& p, const Interaction& it);
 /// The budget audit (DualTreeConfig::audit): per outer point of the tasks of `mine`, the

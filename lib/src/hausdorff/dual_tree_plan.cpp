@@ -614,9 +614,9 @@ constexpr Eigen::Index kMinSamplePoints = 256;  // the smallest unit of the samp
 
 }  // namespace
 
-double planning_cost(const PlanCounts& c, double points) {
-  return kCostVisit * static_cast<double>(c.visits) + kCostAxis * static_cast<double>(c.axes) +
-         kCostBound * points;
+double planning_cost(const Pass& p, const PlanCounts& c, double points) {
+  return p.overhead_scale() * (kCostVisit * static_cast<double>(c.visits) +
+                               kCostAxis * static_cast<double>(c.axes) + kCostBound * points);
 }
 
 double interaction_cost(const Pass& p, const Interaction& it) {
@@ -716,9 +716,10 @@ void sample_basis(const Pass& p, const std::vector<std::vector<Interaction>>& li
   std::vector<char> sderive(smark.size(), 0);
   mark_grids(p, lists, smark, sderive, omark);
   std::int64_t translations = 0;
-  outer += kCostBasis * static_cast<double>(grid_work(p, *p.ot, p.obox, omark, p.nf, translations));
-  source += kCostBasis * static_cast<double>(
-                             grid_work(p, *p.st, p.sbox, smark, p.source_fields(), translations));
+  const double basis = kCostBasis * p.overhead_scale();
+  outer += basis * static_cast<double>(grid_work(p, *p.ot, p.obox, omark, p.nf, translations));
+  source += basis * static_cast<double>(
+                        grid_work(p, *p.st, p.sbox, smark, p.source_fields(), translations));
 }
 
 /// Whether the sample predicts a plan over `limit`. Its units are the tasks of `mine`, cut
@@ -778,7 +779,7 @@ bool sample_exceeds(Pass& p, const std::vector<int>& roots, UnitRange mine, doub
   // stopped, the sample's planned work (with its outer grids' basis work), its points,
   // points kept, its planning work, its source grids' basis work
   double totals[6] = {
-      stopped ? 1.0 : 0.0, 0.0, covered, kept, planning_cost({visits, axes}, covered), 0.0};
+      stopped ? 1.0 : 0.0, 0.0, covered, kept, planning_cost(p, {visits, axes}, covered), 0.0};
   if (!stopped) sample_basis(p, sample_lists, totals[1], totals[5]);
   for (const double w : sampled) totals[1] += w;
   if (set.share != nullptr) set.share->sum(totals, 6);
