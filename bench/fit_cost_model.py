@@ -8,8 +8,11 @@ backend measured in the same run:
 
 Least squares on each row divided by its all-pairs work 2·N·M, so that every case
 weighs the same. Prints the weights and, per case, measured against modelled work.
+By default only the value rows are fitted: there both passes sum S alone, the unit of
+the library's weights (dual_tree_internal.hpp; passes with gradient sums divide the
+basis and planning weights by kGradPairCost).
 
-    bench/fit_cost_model.py LADDER.csv [--min-n 3000]
+    bench/fit_cost_model.py LADDER.csv [--min-n 3000] [--mode value|value+grad|all]
 """
 import argparse
 import csv
@@ -51,8 +54,10 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("csv")
     ap.add_argument("--min-n", type=int, default=3000)
+    ap.add_argument("--mode", default="value", choices=["value", "value+grad", "all"])
     a = ap.parse_args()
-    data = load(a.csv, a.min_n)
+    data = [d for d in load(a.csv, a.min_n)
+            if a.mode == "all" or d["case"].endswith(" " + a.mode)]
     run_cols = ["near_pairs", "far_kernel", "far_basis"]
     plan_cols = ["node_pairs", "bound_axes", "points"]
     wr, pr = fit(data, run_cols, "run")
