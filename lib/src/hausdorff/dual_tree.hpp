@@ -49,7 +49,7 @@ struct DualTreeConfig {
   /// Tests: after planning, every outer point's error bounds are summed again from the
   /// interaction lists (DualTreeOps::budget_used); costly
   bool audit = false;
-  double min_pairs = 1.5e7;        ///< passes with fewer N·M pairs are summed exactly
+  double min_pairs = 3.0e7;        ///< passes with fewer N·M pairs are summed exactly
   bool cost_model = true;          ///< false: never fall back to exact (tests)
   double max_interp_alpha = 16.0;  ///< above: pruning only (the far field is negligible)
   int small_pairs = 4096;  ///< α ≤ max_interp_alpha: pairs with |T||S| ≤ this are summed directly
