@@ -184,14 +184,30 @@ PairSums box_lower(const Pass& p, const double* o, double c_o, size_t i) {
   return b;
 }
 
-/// Σ of box_lower over the cut boxes [i0, i1), 256 at a time: the distances in one
-/// vectorised sweep, the powers by KernelPower::apply, the sums in another.
+constexpr int kChunk = 256;  // cut boxes per sweep of add_box_lowers
+
+/// One chunk's Σ_j w_j q_j^α (added to `sum`) and Σ_j in_j w_j q_j^α t_j (to `vec`).
+void chunk_sums(const KernelPower& power, const double* q, const double* w, const double* t,
+                const double* in, int len, double& sum, double& vec) {
+  alignas(64) double pw[kChunk];
+  power.apply(q, pw, len);
+  double S = 0.0, V = 0.0;
+#pragma omp simd reduction(+ : S, V)
+  for (int j = 0; j < len; ++j) {
+    const double v = w[j] * pw[j];
+    S += v;
+    V += in[j] * v * t[j];
+  }
+  sum += S;
+  vec += V;
+}
+
+/// Σ of box_lower over the cut boxes [i0, i1), kChunk at a time: the distances in one
+/// vectorised sweep, the powers and sums by chunk_sums.
 void add_box_lowers(const Pass& p, const double* o, double c_o, size_t i0, size_t i1,
                     PairSums& low) {
-  constexpr int kChunk = 256;
   const CutBoxes& c = p.cut_boxes;
-  const bool inner = p.want[kH];
-  alignas(64) double t[kChunk], in[kChunk], q[kChunk], pw[kChunk];
+  alignas(64) double t[kChunk], in[kChunk], q[kChunk];
   for (size_t b0 = i0; b0 < i1; b0 += kChunk) {
     const int len = static_cast<int>(std::min<size_t>(kChunk, i1 - b0));
 #pragma omp simd
@@ -208,29 +224,11 @@ void add_box_lowers(const Pass& p, const double* o, double c_o, size_t i0, size_
       in[j] = near2 > 0.0 ? 1.0 : 0.0;
       q[j] = c_o * t[j];
     }
-    p.power->apply(q, pw, len);
-    double S = 0.0, Gm = 0.0;
-#pragma omp simd reduction(+ : S, Gm)
-    for (int j = 0; j < len; ++j) {
-      const double v = c.w[b0 + j] * pw[j];
-      S += v;
-      Gm += in[j] * v * t[j];
-    }
-    low.S += S;
-    low.Gm += Gm;
-    if (!inner) continue;
+    chunk_sums(*p.power, q, &c.w[b0], t, in, len, low.S, low.Gm);
+    if (!p.want[kH]) continue;
 #pragma omp simd
     for (int j = 0; j < len; ++j) q[j] = c.hs[b0 + j] * t[j];
-    p.power->apply(q, pw, len);
-    double H = 0.0, G2m = 0.0;
-#pragma omp simd reduction(+ : H, G2m)
-    for (int j = 0; j < len; ++j) {
-      const double v = c.hw[b0 + j] * pw[j];
-      H += v;
-      G2m += in[j] * v * t[j];
-    }
-    low.H += H;
-    low.G2m += G2m;
+    chunk_sums(*p.power, q, &c.hw[b0], t, in, len, low.H, low.G2m);
   }
 }
 
