@@ -161,29 +161,6 @@ void fill_cut_boxes(Pass& p) {
   }
 }
 
-/// One cut box's lower bounds at o: W k(R_max), the value kernel at the farthest corner
-/// (every term is ≥ it), and W k(R_max) t_max for the vector sums where the box does not
-/// contain o (there every term has r > 0).
-PairSums box_lower(const Pass& p, const double* o, double c_o, size_t i) {
-  const CutBoxes& c = p.cut_boxes;
-  double near2 = 0.0, far2 = 0.0;
-  for (int k = 0; k < p.d; ++k) {
-    const double gap = std::max({c.lo[k][i] - o[k], o[k] - c.hi[k][i], 0.0});
-    const double span = std::max(std::fabs(o[k] - c.lo[k][i]), std::fabs(o[k] - c.hi[k][i]));
-    near2 += gap * gap;
-    far2 += span * span;
-  }
-  const double t = 1.0 / (std::sqrt(far2) + p.eps), inside = near2 > 0.0 ? 1.0 : 0.0;
-  PairSums b;
-  b.S = c.w[i] * p.power->scalar(c_o * t);
-  b.Gm = inside * b.S * t;
-  if (p.want[kH]) {
-    b.H = c.hw[i] * p.power->scalar(c.hs[i] * t);
-    b.G2m = inside * b.H * t;
-  }
-  return b;
-}
-
 constexpr int kChunk = 256;  // cut boxes per sweep of add_box_lowers
 
 /// One chunk's Σ_j w_j q_j^α (added to `sum`) and Σ_j in_j w_j q_j^α t_j (to `vec`).
@@ -202,8 +179,10 @@ void chunk_sums(const KernelPower& power, const double* q, const double* w, cons
   vec += V;
 }
 
-/// Σ of box_lower over the cut boxes [i0, i1), kChunk at a time: the distances in one
-/// vectorised sweep, the powers and sums by chunk_sums.
+/// Adds to `low` the lower bounds of the cut boxes [i0, i1) at o, kChunk at a time (the
+/// distances in one vectorised sweep, the powers and sums by chunk_sums): per box W k(R_max),
+/// the value kernel at the farthest corner (every term is ≥ it), and W k(R_max) t_max for
+/// the vector sums where the box does not contain o (there every term has r > 0).
 void add_box_lowers(const Pass& p, const double* o, double c_o, size_t i0, size_t i1,
                     PairSums& low) {
   const CutBoxes& c = p.cut_boxes;
@@ -233,13 +212,15 @@ void add_box_lowers(const Pass& p, const double* o, double c_o, size_t i0, size_
 }
 
 /// Lower bounds (scaled, as pair_sums returns them) of the four sums at o: the sum of
-/// box_lower over the partition `cut`, except for the box `near` (its index in the cut)
-/// holding `leaf`, which contributes the larger of that and the exact sum over `leaf`.
+/// the boxes' bounds (add_box_lowers) over the partition `cut`, except for the box `near` (its
+/// index in the cut) holding `leaf`, which contributes the larger of that and the exact sum over
+/// `leaf`.
 PairSums lower_sums(const Pass& p, const double* o, double c_o, size_t near, const PairSums& leaf) {
   PairSums low;
   add_box_lowers(p, o, c_o, 0, near, low);
   add_box_lowers(p, o, c_o, near + 1, p.cut.size(), low);
-  const PairSums b = box_lower(p, o, c_o, near);
+  PairSums b;
+  add_box_lowers(p, o, c_o, near, near + 1, b);
   low.S += std::max(b.S, leaf.S);
   low.Gm += std::max(b.Gm, leaf.Gm);
   low.H += std::max(b.H, leaf.H);

@@ -75,7 +75,7 @@ inline double fixed_power(double q) {
 /// The sums of one outer point for α = P, the power inlined: one vectorised loop over the
 /// sources, no buffers.
 template <int D, unsigned F, unsigned P>
-void fused_sums(const double* o, double c_o, const PairSources& src, double eps, PairSums& out) {
+PairSums fused_sums(const double* o, double c_o, const PairSources& src, double eps) {
   constexpr bool kSum = (F & kOuterSum) != 0;
   constexpr bool kGrad = (F & kOuterGrad) != 0;
   constexpr bool kIn = (F & kInner) != 0;
@@ -130,6 +130,7 @@ void fused_sums(const double* o, double c_o, const PairSources& src, double eps,
       if constexpr (kMag) G2m += hp * t_apart;
     }
   }
+  PairSums out;
   out.S = S;
   out.G[0] = Gx;
   out.G[1] = Gy;
@@ -140,6 +141,7 @@ void fused_sums(const double* o, double c_o, const PairSources& src, double eps,
   out.G2[2] = D == 3 ? Hz : 0.0;
   out.Gm = Gm;
   out.G2m = G2m;
+  return out;
 }
 
 /// The sums of one outer point for any α: the powers of a block of 256 pairs at a time
@@ -238,23 +240,17 @@ PairSums buffered_sums(const double* o, double c_o, const PairSources& src,
 template <int D, unsigned F>
 PairSums pair_sums_impl(const double* o, double c_o, const PairSources& src,
                         const KernelPower& power, double eps) {
-  PairSums out;
   switch (power.fixed()) {
     case 2:
-      fused_sums<D, F, 2>(o, c_o, src, eps, out);
-      return out;
+      return fused_sums<D, F, 2>(o, c_o, src, eps);
     case 4:
-      fused_sums<D, F, 4>(o, c_o, src, eps, out);
-      return out;
+      return fused_sums<D, F, 4>(o, c_o, src, eps);
     case 8:
-      fused_sums<D, F, 8>(o, c_o, src, eps, out);
-      return out;
+      return fused_sums<D, F, 8>(o, c_o, src, eps);
     case 16:
-      fused_sums<D, F, 16>(o, c_o, src, eps, out);
-      return out;
+      return fused_sums<D, F, 16>(o, c_o, src, eps);
     case 64:
-      fused_sums<D, F, 64>(o, c_o, src, eps, out);
-      return out;
+      return fused_sums<D, F, 64>(o, c_o, src, eps);
     default:
       return buffered_sums<D, F>(o, c_o, src, power, eps);
   }
