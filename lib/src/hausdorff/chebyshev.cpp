@@ -6,6 +6,13 @@
 #include <limits>
 #include <utility>
 
+#ifdef SOFTHD_HAVE_LIBMVEC
+#include <immintrin.h>
+// glibc's vector maths (libmvec), 4 doubles per call in the x86-64 vector function ABI.
+extern "C" __m256d _ZGVdN4v_log(__m256d);
+extern "C" __m256d _ZGVdN4v_log1p(__m256d);
+#endif
+
 namespace softhd::detail {
 
 ChebyshevRule::ChebyshevRule(int points) : n(points) {
@@ -186,22 +193,46 @@ double box_gap2(const Box& T, const Box& S, int d, bool which_t, int axis, doubl
 ///     min_{x∈[−1,1]} dist(A x, [lo, hi])² − B² (1 − x²).
 /// (For a given real part the boundary has the largest |Im z|, so the minimum over the
 /// filled ellipse lies on the boundary, z = A x ± i B √(1 − x²).) Each piece of [−1, 1] is
-/// a convex quadratic in x, minimised in closed form.
-double ellipse_min(double A, double B, double lo, double hi) {
-  double best = std::numeric_limits<double>::infinity();
-  auto outside = [&](double L, double x0, double x1) {  // dist = |L − A x| on [x0, x1]
-    if (x0 > x1) return;
-    const double x = std::clamp(L * A / (A * A + B * B), x0, x1);
-    best = std::min(best, (L - A * x) * (L - A * x) - B * B * (1.0 - x * x));
-  };
-  if (lo > -A) outside(lo, -1.0, std::min(1.0, lo / A));  // A x ≤ lo
-  if (hi < A) outside(hi, std::max(-1.0, hi / A), 1.0);   // A x ≥ hi
-  const double x0 = std::max(-1.0, lo / A), x1 = std::min(1.0, hi / A);
-  if (x0 <= x1) {  // A x inside [lo, hi]: dist = 0, smallest |x| gives the most negative
-    const double x = std::clamp(0.0, x0, x1);
-    best = std::min(best, -B * B * (1.0 - x * x));
-  }
-  return best;
+/// a convex quadratic in x, minimised in closed form. Branch-free (an empty piece gives
+/// +∞), so that the loop over the ellipses vectorises.
+inline double ellipse_min(double A, double B, double lo, double hi) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const double B2 = B * B, AB2 = A * A + B2, rl = lo / A, rh = hi / A;
+  // A x ≤ lo, x ∈ [−1, min(1, lo/A)], non-empty iff lo > −A: dist = lo − A x.
+  const double xl = std::min(std::max(lo * A / AB2, -1.0), std::min(1.0, rl));
+  const double vl = lo > -A ? (lo - A * xl) * (lo - A * xl) - B2 * (1.0 - xl * xl) : inf;
+  // A x ≥ hi, x ∈ [max(−1, hi/A), 1], non-empty iff hi < A: dist = A x − hi.
+  const double xh = std::min(std::max(hi * A / AB2, std::max(-1.0, rh)), 1.0);
+  const double vh = hi < A ? (hi - A * xh) * (hi - A * xh) - B2 * (1.0 - xh * xh) : inf;
+  // A x inside [lo, hi]: dist = 0, the smallest |x| gives the most negative value.
+  const double x0 = std::max(-1.0, rl), x1 = std::min(1.0, rh);
+  const double xi = std::min(std::max(0.0, x0), x1);
+  const double vi = x0 <= x1 ? -B2 * (1.0 - xi * xi) : inf;
+  return std::min(vl, std::min(vh, vi));
+}
+
+constexpr double kLog4 = 1.3862943611198906;  // log 4
+static_assert(AxisTerms::kGrid % 4 == 0, "the grid's logs are taken four at a time");
+
+/// y = log x over the ellipse grid: libmvec's AVX2 log (within 4 ulp) where the build has
+/// it, else std::log. Any rounding of a log shifts a bound by a few ulp of its logarithm.
+void logs(const double (&x)[AxisTerms::kGrid], double (&y)[AxisTerms::kGrid]) {
+#ifdef SOFTHD_HAVE_LIBMVEC
+  for (int i = 0; i < AxisTerms::kGrid; i += 4)
+    _mm256_storeu_pd(y + i, _ZGVdN4v_log(_mm256_loadu_pd(x + i)));
+#else
+  for (int i = 0; i < AxisTerms::kGrid; ++i) y[i] = std::log(x[i]);
+#endif
+}
+
+/// y = log(1 + x) over the ellipse grid, as logs().
+void logs1p(const double (&x)[AxisTerms::kGrid], double (&y)[AxisTerms::kGrid]) {
+#ifdef SOFTHD_HAVE_LIBMVEC
+  for (int i = 0; i < AxisTerms::kGrid; i += 4)
+    _mm256_storeu_pd(y + i, _ZGVdN4v_log1p(_mm256_loadu_pd(x + i)));
+#else
+  for (int i = 0; i < AxisTerms::kGrid; ++i) y[i] = std::log1p(x[i]);
+#endif
 }
 
 AxisTerms axis_terms(const Box& T, const Box& S, int d, bool which_t, int axis, double alpha,
@@ -223,20 +254,34 @@ AxisTerms axis_terms(const Box& T, const Box& S, int d, bool which_t, int axis, 
   // side of the other box plus `across`: ρ < ρ_top.
   const double far2 = std::max(lo * lo, hi * hi) + across;
   const double rho_top = std::sqrt(2.0 * far2) / a + 1.0;
-  static constexpr double kGrid[AxisTerms::kGrid] = {
-      0.02, 0.05, 0.09, 0.14, 0.2, 0.27, 0.34, 0.41, 0.48, 0.55, 0.62, 0.69, 0.76, 0.83, 0.9, 0.96};
-  for (double f : kGrid) {
-    const double rho = 1.0 + (rho_top - 1.0) * f;
-    const double A = 0.5 * a * (rho + 1.0 / rho), B = 0.5 * a * (rho - 1.0 / rho);
-    const double re2 = across + ellipse_min(A, B, lo, hi);  // ≤ Re s
-    if (!(re2 > 0.0)) continue;
-    const double delta = std::sqrt(re2);
-    const double ld = std::log(delta + eps);
-    const double value = std::log(4.0) - std::log(rho - 1.0) - alpha * ld;
+  static constexpr int kG = AxisTerms::kGrid;
+  static constexpr double kGrid[kG] = {0.02, 0.05, 0.09, 0.14, 0.2,  0.27, 0.34, 0.41,
+                                       0.48, 0.55, 0.62, 0.69, 0.76, 0.83, 0.9,  0.96};
+  // The ellipses first, then their logarithms four at a time (they were most of the
+  // planning's transcendental work), then the bounds of the ellipses with Re s > 0.
+  double rho[kG], rho_minus_1[kG], delta_eps[kG], im_ratio[kG], re2[kG];
+#pragma omp simd
+  for (int f = 0; f < kG; ++f) {
+    rho[f] = 1.0 + (rho_top - 1.0) * kGrid[f];
+    const double A = 0.5 * a * (rho[f] + 1.0 / rho[f]), B = 0.5 * a * (rho[f] - 1.0 / rho[f]);
+    re2[f] = across + ellipse_min(A, B, lo, hi);   // ≤ Re s
+    const double s = re2[f] > 0.0 ? re2[f] : 1.0;  // placeholders for the skipped ellipses
+    rho_minus_1[f] = rho[f] - 1.0;
+    delta_eps[f] = std::sqrt(s) + eps;  // δ + ε
+    im_ratio[f] = 2.0 * B * B / s;
+  }
+  double log_rho[kG], log_rho1[kG], ld[kG], log_im[kG];
+  logs(rho, log_rho);
+  logs(rho_minus_1, log_rho1);
+  logs(delta_eps, ld);
+  logs1p(im_ratio, log_im);
+  for (int f = 0; f < kG; ++f) {
+    if (!(re2[f] > 0.0)) continue;
+    const double value = kLog4 - log_rho1[f] - alpha * ld[f];
     // ‖o − x‖² = Re s + 2 (Im d)² ≤ Re s + 2 B², |r|² = |s| ≥ Re s.
-    out.log_rho[out.count] = std::log(rho);
+    out.log_rho[out.count] = log_rho[f];
     out.base_v[out.count] = value;
-    out.base_g[out.count] = value - ld + 0.5 * std::log1p(2.0 * B * B / re2);
+    out.base_g[out.count] = value - ld[f] + 0.5 * log_im[f];
     ++out.count;
   }
   return out;
