@@ -517,6 +517,20 @@ TEST_P(DualSums, WithinToleranceOfLongDoubleReference) {
     // The planned error bounds of every point (beyond the own terms) fit τ_share times
     // its lower bound.
     EXPECT_LE(ops.budget_used, 1.0 + 1e-12) << "tau " << tau;
+    // The lower bounds that set the budget (unscaled: S/c^α, Gm/c^α, H, G2m) are at most
+    // the true sums; their far boxes are bounded per outer leaf, the near ones per point.
+    ASSERT_EQ(ops.log_lower.size(), 4 * static_cast<size_t>(Y.size()));
+    for (Eigen::Index j = 0; j < Y.size(); ++j) {
+      const LongSums& r = ref[static_cast<size_t>(j)];
+      const long double lc = sc.alpha * std::log(static_cast<long double>(scale[j]));
+      const long double truth[4] = {std::log(r.S) - lc, std::log(r.Gm) - lc, std::log(r.H),
+                                    std::log(r.G2m)};
+      // Rounding: the double α log c (its absolute error grows with α |log c|).
+      const long double slack = kRounding * (1.0L + std::fabs(lc));
+      for (size_t k = 0; k < 4; ++k)
+        ASSERT_LE(ops.log_lower[4 * static_cast<size_t>(j) + k], truth[k] + slack)
+            << "lower bound of sum " << k << ", point " << j;
+    }
     ::testing::Test::RecordProperty(
         "budget_used_" + std::to_string(static_cast<int>(-std::log10(tau))),
         std::to_string(ops.budget_used));

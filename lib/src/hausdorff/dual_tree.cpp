@@ -275,7 +275,14 @@ PassSums DualTreeBackend::sums(const PassSources& src, const PassOuter& outer,
   const double planned = kCostNear * static_cast<double>(counts[0]) +
                          kCostFar * static_cast<double>(counts[1]) +
                          kCostBasis * p.overhead_scale() * static_cast<double>(counts[2]);
-  if (cfg_.audit) ops.budget_used = audit_budget(p, roots, mine, lists);
+  if (cfg_.audit) {
+    ops.budget_used = audit_budget(p, roots, mine, lists);
+    ops.log_lower.assign(p.point_low.size(), 0.0);
+    const std::vector<Eigen::Index>& order = p.ot->order();
+    for (size_t q = 0; q < order.size(); ++q)
+      for (size_t k = 0; k < 4; ++k)
+        ops.log_lower[4 * static_cast<size_t>(order[q]) + k] = p.point_low[4 * q + k];
+  }
   if (ops_ != nullptr) *ops_ = ops;
   if (cfg_.cost_model && planned > kFallBackPlanned * all_pairs)
     return fall_back(src, outer, set, planning, stats.plan_seconds);

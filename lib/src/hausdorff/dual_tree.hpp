@@ -34,6 +34,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "pair_backend.hpp"
 
@@ -72,6 +73,10 @@ struct DualTreeOps {
   /// (sum of the error bounds of the interactions covering the point) / (τ · its lower
   /// bound); the guarantee needs ≤ 1
   double budget_used = 0.0;
+  /// With DualTreeConfig::audit: per outer point (the caller's order), the logarithms of
+  /// the lower bounds of its four sums in the unscaled form (S/c_o^α, Gm/c_o^α, H, G2m)
+  /// that set the budget; each must be at most the true sum's.
+  std::vector<double> log_lower;
 };
 
 std::unique_ptr<PairSumBackend> make_dual_tree_backend(const DualTreeConfig& config,

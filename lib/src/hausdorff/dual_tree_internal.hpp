@@ -187,10 +187,15 @@ struct Pass {
 /// The pass's settings, source data and outer lower bounds.
 void prepare(Pass& p, const DualTreeConfig& cfg, const PassSources& src, const PassOuter& outer,
              const PassSettings& set);
-/// Lower bounds of the sums of every outer point in the subtrees of `roots`, their minima
-/// per outer node, and the locals' scales, for those subtrees' nodes: the planning of a
-/// task reads nothing else, so a process bounds only the tasks it plans.
+/// Lower bounds (dual_tree_bounds.cpp) of the sums of every outer point in the subtrees of `roots`,
+/// their minima per outer node, and the locals' scales, for those subtrees' nodes: the planning of
+/// a task reads nothing else, so a process bounds only the tasks it plans.
 void outer_bounds(Pass& p, const std::vector<int>& roots, int threads);
+/// The outer data every task shares (dual_tree_bounds.cpp): scales in tree order, room for
+/// the per-node bounds, and the partition of the sources the lower bounds use.
+void prepare_outer(Pass& p, const PassOuter& in);
+/// Grids that nest down the subtree of `root` (each child's slopes at least its parent's).
+void inherit_slopes(const KdTree& tree, int root, int d, std::vector<Box>& box);
 /// The end of node id's subtree in preorder (its nodes are [id, end)).
 int subtree_end(const KdTree& tree, int id);
 /// Outer subtrees processed as independent tasks (nodes of at most `limit` points).

@@ -1,6 +1,6 @@
-// Planning of the dual-tree backend (dual_tree_internal.hpp): the lower bounds of every
-// sum that set the budget, and the dual traversal choosing per node pair an operation
-// and a degree (docs/tree_tolerance.md §7).
+// Planning of the dual-tree backend (dual_tree_internal.hpp): the pass's source data, and
+// the dual traversal choosing per node pair an operation and a degree within the budget
+// that the lower bounds (dual_tree_bounds.cpp) set (docs/tree_tolerance.md §7).
 
 #include <algorithm>
 #include <atomic>
@@ -28,6 +28,8 @@ double node_radius2(const KdNode& a, int d) {
   return r2;
 }
 
+}  // namespace
+
 /// Grids that nest down the subtree of `root`: every child's slopes at least its
 /// parent's (preorder: parents first), so that its grids have at least as many points
 /// along every axis and M2M, L2L translate between them (grid_nests).
@@ -45,6 +47,8 @@ void inherit_slopes(const KdTree& tree, int root, int d, std::vector<Box>& box) 
       }
   }
 }
+
+namespace {
 
 /// Source data in tree order, node moments, and the totals of the budget shares.
 void prepare_sources(Pass& p, const PassSources& in) {
@@ -88,237 +92,6 @@ void prepare_sources(Pass& p, const PassSources& in) {
   }
   inherit_slopes(st, 0, p.d, p.sbox);
 }
-
-/// Depth of the lower bounds' coarse partition (source nodes at this depth): 5, plus
-/// log2 of the sources per outer point when there are more sources than outer points
-/// (at most 11). It costs 2^depth kernel evaluations per outer point, at most 32 per
-/// source point, and tightens the bounds where the outer points are few.
-int cut_depth(Eigen::Index outer, Eigen::Index sources) {
-  const double ratio =
-      static_cast<double>(sources) / static_cast<double>(std::max<Eigen::Index>(outer, 1));
-  return std::clamp(5 + static_cast<int>(std::floor(std::log2(std::max(ratio, 1.0)))), 5, 11);
-}
-
-/// Greedy descent to a source leaf near q (any leaf gives a valid lower bound); `cut`
-/// receives its ancestor at depth `cut_at` (or the leaf, if shallower).
-int leaf_near(const KdTree& st, const double* q, int d, int cut_at, int& cut) {
-  const std::vector<KdNode>& nodes = st.nodes();
-  int id = 0, depth = 0;
-  cut = 0;
-  while (nodes[static_cast<size_t>(id)].right >= 0) {
-    if (depth == cut_at) cut = id;
-    const int l = id + 1, r = nodes[static_cast<size_t>(id)].right;
-    double dl = 0.0, dr = 0.0;
-    for (int k = 0; k < d; ++k) {
-      const KdNode& a = nodes[static_cast<size_t>(l)];
-      const KdNode& b = nodes[static_cast<size_t>(r)];
-      const double ga = std::max({a.lo[k] - q[k], q[k] - a.hi[k], 0.0});
-      const double gb = std::max({b.lo[k] - q[k], q[k] - b.hi[k], 0.0});
-      dl += ga * ga;
-      dr += gb * gb;
-    }
-    id = dl <= dr ? l : r;
-    ++depth;
-  }
-  if (depth <= cut_at) cut = id;
-  return id;
-}
-
-/// The source nodes at depth `cut_at`, and the leaves above it: a partition.
-void cut_nodes(const KdTree& st, int id, int depth, int cut_at, std::vector<int>& out) {
-  const KdNode& n = st.nodes()[static_cast<size_t>(id)];
-  if (depth == cut_at || n.right < 0) {
-    out.push_back(id);
-    return;
-  }
-  cut_nodes(st, id + 1, depth + 1, cut_at, out);
-  cut_nodes(st, n.right, depth + 1, cut_at, out);
-}
-
-/// The cut's boxes and moments as arrays (lower_sums).
-void fill_cut_boxes(Pass& p) {
-  CutBoxes& c = p.cut_boxes;
-  const size_t n = p.cut.size();
-  for (int k = 0; k < p.d; ++k) {
-    c.lo[k].resize(n);
-    c.hi[k].resize(n);
-  }
-  c.w.assign(n, 0.0);
-  c.hw.assign(n, 0.0);
-  c.hs.assign(n, 1.0);
-  for (size_t i = 0; i < n; ++i) {
-    const size_t id = static_cast<size_t>(p.cut[i]);
-    const KdNode& node = p.st->nodes()[id];
-    for (int k = 0; k < p.d; ++k) {
-      c.lo[k][i] = node.lo[k];
-      c.hi[k][i] = node.hi[k];
-    }
-    if (p.outer_kinds()) c.w[i] = p.mw[id].weight;
-    if (p.want[kH]) {
-      c.hw[i] = p.mh[id].weight;
-      c.hs[i] = p.mh[id].scale;
-    }
-  }
-}
-
-constexpr int kChunk = 256;  // cut boxes per sweep of add_box_lowers
-
-/// One chunk's Σ_j w_j q_j^α (added to `sum`) and Σ_j in_j w_j q_j^α t_j (to `vec`).
-void chunk_sums(const KernelPower& power, const double* q, const double* w, const double* t,
-                const double* in, int len, double& sum, double& vec) {
-  alignas(64) double pw[kChunk];
-  power.apply(q, pw, len);
-  double S = 0.0, V = 0.0;
-#pragma omp simd reduction(+ : S, V)
-  for (int j = 0; j < len; ++j) {
-    const double v = w[j] * pw[j];
-    S += v;
-    V += in[j] * v * t[j];
-  }
-  sum += S;
-  vec += V;
-}
-
-/// Adds to `low` the lower bounds of the cut boxes [i0, i1) at o, kChunk at a time (the
-/// distances in one vectorised sweep, the powers and sums by chunk_sums): per box W k(R_max),
-/// the value kernel at the farthest corner (every term is ≥ it), and W k(R_max) t_max for
-/// the vector sums where the box does not contain o (there every term has r > 0).
-void add_box_lowers(const Pass& p, const double* o, double c_o, size_t i0, size_t i1,
-                    PairSums& low) {
-  const CutBoxes& c = p.cut_boxes;
-  alignas(64) double t[kChunk], in[kChunk], q[kChunk];
-  for (size_t b0 = i0; b0 < i1; b0 += kChunk) {
-    const int len = static_cast<int>(std::min<size_t>(kChunk, i1 - b0));
-#pragma omp simd
-    for (int j = 0; j < len; ++j) {
-      double near2 = 0.0, far2 = 0.0;
-      for (int k = 0; k < p.d; ++k) {
-        const double lo = c.lo[k][b0 + j], hi = c.hi[k][b0 + j];
-        const double gap = std::max(std::max(lo - o[k], o[k] - hi), 0.0);
-        const double span = std::max(std::fabs(o[k] - lo), std::fabs(o[k] - hi));
-        near2 += gap * gap;
-        far2 += span * span;
-      }
-      t[j] = 1.0 / (std::sqrt(far2) + p.eps);
-      in[j] = near2 > 0.0 ? 1.0 : 0.0;
-      q[j] = c_o * t[j];
-    }
-    chunk_sums(*p.power, q, &c.w[b0], t, in, len, low.S, low.Gm);
-    if (!p.want[kH]) continue;
-#pragma omp simd
-    for (int j = 0; j < len; ++j) q[j] = c.hs[b0 + j] * t[j];
-    chunk_sums(*p.power, q, &c.hw[b0], t, in, len, low.H, low.G2m);
-  }
-}
-
-/// Lower bounds (scaled, as pair_sums returns them) of the four sums at o: the sum of
-/// the boxes' bounds (add_box_lowers) over the partition `cut`, except for the box `near` (its
-/// index in the cut) holding `leaf`, which contributes the larger of that and the exact sum over
-/// `leaf`.
-PairSums lower_sums(const Pass& p, const double* o, double c_o, size_t near, const PairSums& leaf) {
-  PairSums low;
-  add_box_lowers(p, o, c_o, 0, near, low);
-  add_box_lowers(p, o, c_o, near + 1, p.cut.size(), low);
-  PairSums b;
-  add_box_lowers(p, o, c_o, near, near + 1, b);
-  low.S += std::max(b.S, leaf.S);
-  low.Gm += std::max(b.Gm, leaf.Gm);
-  low.H += std::max(b.H, leaf.H);
-  low.G2m += std::max(b.G2m, leaf.G2m);
-  return low;
-}
-
-/// The outer data every task shares: scales in tree order and room for the per-node
-/// bounds (outer_bounds fills them for the tasks a process plans).
-void prepare_outer(Pass& p, const PassOuter& in) {
-  const KdTree& ot = *p.ot;
-  const size_t nn = ot.nodes().size();
-  p.oc = ot.permute(Eigen::Map<const Eigen::VectorXd>(in.scale, ot.size()));
-  p.log_low.assign(4 * nn, kInf);
-  if (p.point_prune || p.cfg.audit) p.point_low.assign(4 * static_cast<size_t>(ot.size()), kInf);
-  p.kappa.assign(nn, 0.0);
-  p.cmin.assign(nn, kInf);
-  p.local_ok.assign(nn, 0);
-  if (p.interp) p.obox.resize(nn);
-  p.cut_depth = cut_depth(ot.size(), p.st->size());
-  cut_nodes(*p.st, 0, 0, p.cut_depth, p.cut);
-  fill_cut_boxes(p);
-}
-
-/// The lower bounds of the outer points of `leaf` (lower_sums with the source leaf found
-/// by descending towards each point), their minima, and the leaf's scales.
-void leaf_bounds(Pass& p, size_t id, double w_min) {
-  const KdNode& T = p.ot->nodes()[id];
-  const Eigen::MatrixXd& X = p.ot->points();
-  const unsigned flags = p.flags | kMagnitude;
-  for (Eigen::Index q = T.begin; q < T.end; ++q) {
-    double o[3] = {0.0, 0.0, 0.0};
-    for (int k = 0; k < p.d; ++k) o[k] = X(q, k);
-    int near_cut = 0;
-    const int leaf_id = leaf_near(*p.st, o, p.d, p.cut_depth, near_cut);
-    const PairSources leaf = p.slice(p.st->nodes()[static_cast<size_t>(leaf_id)]);
-    const PairSums exact = pair_sums(o, p.oc[q], leaf, *p.power, p.eps, flags);
-    // The cut lists its nodes in increasing id order (depth first, left before right).
-    const size_t near =
-        static_cast<size_t>(std::lower_bound(p.cut.begin(), p.cut.end(), near_cut) - p.cut.begin());
-    if (near == p.cut.size() || p.cut[near] != near_cut)
-      throw std::logic_error("leaf_bounds: the near leaf's node is not in the cut");
-    PairSums s = lower_sums(p, o, p.oc[q], near, exact);
-    // The nearest source (r = r_min, so p = 1) alone gives S ≥ w_min, and, when
-    // r_min > 0, Gm ≥ w_min/c_o: the bound that matters at large α.
-    s.S = std::max(s.S, w_min);
-    if (p.oc[q] > p.eps) s.Gm = std::max(s.Gm, w_min / p.oc[q]);
-    const double lc = p.alpha * std::log(p.oc[q]);
-    const double v[4] = {std::log(s.S) - lc, std::log(s.Gm) - lc, std::log(s.H), std::log(s.G2m)};
-    for (int k = 0; k < 4; ++k) p.log_low[4 * id + k] = std::min(p.log_low[4 * id + k], v[k]);
-    if (!p.point_low.empty()) std::copy(v, v + 4, &p.point_low[4 * static_cast<size_t>(q)]);
-    p.kappa[id] = std::max(p.kappa[id], p.oc[q]);
-    p.cmin[id] = std::min(p.cmin[id], p.oc[q]);
-  }
-}
-
-}  // namespace
-
-int subtree_end(const KdTree& tree, int id) {
-  while (tree.nodes()[static_cast<size_t>(id)].right >= 0)
-    id = tree.nodes()[static_cast<size_t>(id)].right;
-  return id + 1;
-}
-
-void outer_bounds(Pass& p, const std::vector<int>& roots, int threads) {
-  const KdTree& ot = *p.ot;
-  const std::vector<KdNode>& nodes = ot.nodes();
-  std::vector<int> leaves;
-  for (const int root : roots) {
-    const int end = subtree_end(ot, root);
-    for (int id = root; id < end; ++id)
-      if (nodes[static_cast<size_t>(id)].right < 0) leaves.push_back(id);
-  }
-  const double w_min = p.outer_kinds() ? p.w.minCoeff() : 0.0;
-#pragma omp parallel for schedule(dynamic, 8) num_threads(threads)
-  for (size_t l = 0; l < leaves.size(); ++l) leaf_bounds(p, static_cast<size_t>(leaves[l]), w_min);
-  for (const int root : roots)
-    for (size_t id = static_cast<size_t>(subtree_end(ot, root));
-         id-- > static_cast<size_t>(root);) {
-      const KdNode& T = nodes[id];  // children follow their parents
-      if (T.right >= 0) {
-        const size_t l = id + 1, r = static_cast<size_t>(T.right);
-        for (int k = 0; k < 4; ++k)
-          p.log_low[4 * id + k] = std::min(p.log_low[4 * l + k], p.log_low[4 * r + k]);
-        p.kappa[id] = std::max(p.kappa[l], p.kappa[r]);
-        p.cmin[id] = std::min(p.cmin[l], p.cmin[r]);
-      }
-      if (!p.interp) continue;
-      // Locals carry (κ_T t)^α; the factor (c_o/κ_T)^α must not underflow.
-      p.local_ok[id] = p.alpha * (std::log(p.kappa[id]) - std::log(p.cmin[id])) <= 300.0;
-      p.obox[id] = interpolation_box(nodes[id].lo, nodes[id].hi, p.d);
-      set_grid_slopes(p.obox[id], p.d, p.cfg.grid_rho);
-    }
-  if (p.interp)
-    for (const int root : roots) inherit_slopes(ot, root, p.d, p.obox);
-}
-
-namespace {
 
 /// The budget ledger of an outer box T during its traversal (DualTreeConfig::recycle), per
 /// kind: `done`, the mass share of the source boxes already planned for every point of T,
