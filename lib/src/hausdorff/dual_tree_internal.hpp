@@ -31,12 +31,12 @@ enum Kind { kS = 0, kG = 1, kH = 2, kG2 = 3 };  // the four sums; budgets per ki
 // Direct pairs and kernel evaluations cost what an all-pairs pair of the same sums costs;
 // basis work and planning do not grow with the sums, so in a pass with gradient or inner
 // sums they weigh 1/kGradPairCost as much (Pass::overhead_scale).
-constexpr double kCostNear = 1.4;      // direct pairs in leaf slices
-constexpr double kCostFar = 1.15;      // kernel evaluations at interpolation points
-constexpr double kCostBasis = 1.5;     // point-interpolation-point basis products
-constexpr double kCostVisit = 20.0;    // planning: per node pair visited
-constexpr double kCostAxis = 850.0;    // planning: per axis's remainder-bound terms
-constexpr double kCostBound = 800.0;   // planning: the lower bounds of one outer point
+constexpr double kCostNear = 1.6;      // direct pairs in leaf slices
+constexpr double kCostFar = 1.0;       // kernel evaluations at interpolation points
+constexpr double kCostBasis = 0.33;    // point-interpolation-point basis products
+constexpr double kCostVisit = 270.0;   // planning: per node pair visited
+constexpr double kCostAxis = 430.0;    // planning: per axis's remainder-bound terms
+constexpr double kCostBound = 440.0;   // planning: the lower bounds of one outer point
 constexpr double kGradPairCost = 1.5;  // an all-pairs pair with more sums than S (≥ 1.5 S's)
 constexpr double kFallBack = 0.9;      // predicted by the sample: plan and run < 90 % of all pairs
 constexpr double kFallBackPlanned = 1.0;  // planned: the run < all pairs (planning is spent)
