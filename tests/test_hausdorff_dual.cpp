@@ -14,6 +14,8 @@
 
 #include "hausdorff/chebyshev.hpp"
 #include "hausdorff/dual_tree.hpp"
+#include "hausdorff/kd_tree.hpp"
+#include "hausdorff/nearest_index.hpp"
 #include "hausdorff_reference.hpp"
 
 namespace softhd::test {
@@ -679,6 +681,52 @@ TEST(PairBackends, CostModelFallsBackOnCubesAndPlansClusters) {
       for (int k = 0; k < 3; ++k) dG += (two.G(j, k) - r.G[k]) * (two.G(j, k) - r.G[k]);
       ASSERT_LE(std::fabs(two.S[j] - r.S), (tau + kRounding) * r.S) << "point " << j;
       ASSERT_LE(std::sqrt(dG), (tau + kRounding) * r.Gm) << "point " << j;
+    }
+  }
+}
+
+// The nearest-source distances found query leaf by query leaf equal brute force (to the
+// rounding of one distance), on clouds where a search from the root cannot prune (sources
+// on a circular arc, queries near its centre: every source nearly equidistant), on clouds
+// away from a plane, with coincident points (distance 0), in 2D and 3D.
+TEST(NearestDistances, EqualBruteForce) {
+  std::mt19937_64 gen(21);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  auto cloud = [](const Eigen::MatrixXd& P) {
+    return PointCloud(P, Eigen::VectorXd::Ones(P.rows()));
+  };
+  for (int d : {2, 3}) {
+    Eigen::MatrixXd arc(3000, d), centre(700, d), cube(2500, d), plane(2000, d), above(900, d);
+    for (Eigen::Index i = 0; i < arc.rows(); ++i) {
+      const double t = M_PI * static_cast<double>(i) / static_cast<double>(arc.rows());
+      arc(i, 0) = 3.0 * std::cos(t);
+      arc(i, 1) = 3.0 * std::sin(t);
+      if (d == 3) arc(i, 2) = 0.05 * u(gen);
+    }
+    for (Eigen::Index i = 0; i < centre.rows(); ++i)
+      for (int k = 0; k < d; ++k) centre(i, k) = 0.3 * u(gen);
+    for (Eigen::Index i = 0; i < cube.rows(); ++i)
+      for (int k = 0; k < d; ++k) cube(i, k) = u(gen);
+    for (Eigen::Index i = 0; i < plane.rows(); ++i) {
+      for (int k = 0; k < d; ++k) plane(i, k) = u(gen);
+      plane(i, d - 1) = 0.0;
+      for (int k = 0; k < d; ++k) above(i % above.rows(), k) = 2.0 * u(gen);
+    }
+    Eigen::MatrixXd shared = cube.topRows(400);  // coincident with sources: distance 0
+    const std::vector<std::pair<Eigen::MatrixXd, Eigen::MatrixXd>> cases = {
+        {arc, centre},
+        {centre, arc},
+        {cube, cube.bottomRows(1200)},
+        {plane, above},
+        {cube, shared}};
+    for (size_t c = 0; c < cases.size(); ++c) {
+      const PointCloud src = cloud(cases[c].first), qry = cloud(cases[c].second);
+      const detail::KdTree st(src.points(), 32), qt(qry.points(), 32);
+      const Eigen::VectorXd got = detail::nearest_distances(st, qt, 2);
+      for (Eigen::Index j = 0; j < qry.size(); ++j) {
+        const double want = brute_nearest(src, qry.points().row(j).transpose());
+        ASSERT_NEAR(got[j], want, 4e-16 * want) << "dim " << d << " case " << c << " query " << j;
+      }
     }
   }
 }

@@ -80,9 +80,9 @@ struct HausdorffTarget::Impl {
       } else {
         backend = detail::make_exact_backend();
       }
-      // The target's tree serves every evaluation (sources of pass 2, outer points of 1, 3).
-      if (backend->uses_trees())
-        kd = std::make_unique<detail::KdTree>(cloud.points(), detail::kLeafSize);
+      // The target's tree serves every evaluation: its nearest-source distances (every
+      // backend), and with a tree backend the sources of pass 2, the outer points of 1, 3.
+      kd = std::make_unique<detail::KdTree>(cloud.points(), detail::kLeafSize);
     }
   }
   PointCloud cloud;
@@ -90,7 +90,7 @@ struct HausdorffTarget::Impl {
   detail::NearestIndex tree;  // over cloud.points(): must be declared after cloud
   Eigen::VectorXd weights;
   std::unique_ptr<detail::PairSumBackend> backend;
-  std::unique_ptr<detail::KdTree> kd;  // tree backends only
+  std::unique_ptr<detail::KdTree> kd;  // methods exact and tree
 
   HausdorffResult evaluate_nearest(const PointCloud& X, const HausdorffRequest& req) const;
   HausdorffResult evaluate_sums(const PointCloud& X, const HausdorffRequest& req) const;
@@ -199,13 +199,12 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   const Eigen::VectorXd v = X.volumes() / X.total_volume();  // V_i/|X|
   const Eigen::VectorXd& w = weights;                        // W_j/|Y|
 
-  // Scales c = r_min + ε of every point, from the k-d trees.
-  const detail::NearestIndex moving_tree(X.points());
+  // Scales c = r_min + ε of every point, from the k-d trees: the targets' leaf by leaf
+  // (each target leaf's candidates found once), the moving points' one by one.
+  const auto x_kd = std::make_unique<detail::KdTree>(X.points(), detail::kLeafSize);
   const Eigen::VectorXd scale_y =
-      moving_tree.distances(Y.points(), set.threads, set.share).array() + eps;
+      detail::nearest_distances(*x_kd, *kd, set.threads, set.share).array() + eps;
   const Eigen::VectorXd scale_x = tree.distances(X.points(), set.threads, set.share).array() + eps;
-  std::unique_ptr<detail::KdTree> x_kd;
-  if (backend->uses_trees()) x_kd = std::make_unique<detail::KdTree>(X.points(), detail::kLeafSize);
   // Every exact S is ≤ 1 (each term ≤ its weight, the weights sum to 1), so clipping an
   // approximate sum at 1 only moves it towards the exact value and keeps d̃ ≥ r_min ≥ 0.
   const bool clip = options.method != Method::exact;

@@ -1,7 +1,13 @@
 #include "nearest_index.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <nanoflann.hpp>
+#include <utility>
+#include <vector>
+
+#include "kd_tree.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -22,8 +28,9 @@ struct MatrixRows {
     return false;
   }
 };
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, MatrixRows>,
-                                                   MatrixRows, -1, size_t>;
+using FlannTree =
+    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, MatrixRows>,
+                                        MatrixRows, -1, size_t>;
 }  // namespace
 
 // The adaptor must live at a fixed address as long as the tree (nanoflann keeps a
@@ -33,7 +40,7 @@ struct NearestIndex::Tree {
       : rows{&p},
         index(static_cast<int>(p.cols()), rows, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {}
   MatrixRows rows;
-  KdTree index;
+  FlannTree index;
 };
 
 NearestIndex::NearestIndex(const Eigen::MatrixXd& points) : tree_(std::make_unique<Tree>(points)) {}
@@ -73,6 +80,157 @@ Eigen::VectorXd NearestIndex::distances(const Eigen::MatrixXd& queries, int thre
     out[q] = std::sqrt(dist2);
   }
   if (share != nullptr) share->sum(out.data(), static_cast<size_t>(n));
+  return out;
+}
+
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+/// Squared distance from q to the box of n.
+double box_point2(const KdNode& n, const double* q, int d) {
+  double g2 = 0.0;
+  for (int k = 0; k < d; ++k) {
+    const double gap = std::max({n.lo[k] - q[k], q[k] - n.hi[k], 0.0});
+    g2 += gap * gap;
+  }
+  return g2;
+}
+
+/// Squared distance between the boxes of a and b.
+double box_box2(const KdNode& a, const KdNode& b, int d) {
+  double g2 = 0.0;
+  for (int k = 0; k < d; ++k) {
+    const double gap = std::max({a.lo[k] - b.hi[k], b.lo[k] - a.hi[k], 0.0});
+    g2 += gap * gap;
+  }
+  return g2;
+}
+
+/// min over the source points [begin, end) (tree order) of |q − x|², below `best`.
+double scan2(const double* const* x, Eigen::Index begin, Eigen::Index end, const double* q, int d,
+             double best) {
+#pragma omp simd reduction(min : best)
+  for (Eigen::Index i = begin; i < end; ++i) {
+    double r2 = 0.0;
+    for (int k = 0; k < d; ++k) {
+      const double diff = q[k] - x[k][i];
+      r2 += diff * diff;
+    }
+    best = std::min(best, r2);
+  }
+  return best;
+}
+
+/// The leaf holding q's nearest source: branch and bound from the root, nearer child first.
+int nearest_leaf(const KdTree& src, const double* const* x, const double* q,
+                 std::vector<int>& stack) {
+  const std::vector<KdNode>& nodes = src.nodes();
+  const int d = src.dim();
+  double best = kInfinity;
+  int leaf = 0;
+  stack.assign(1, 0);
+  while (!stack.empty()) {
+    const KdNode& n = nodes[static_cast<size_t>(stack.back())];
+    const int id = stack.back();
+    stack.pop_back();
+    if (box_point2(n, q, d) >= best) continue;
+    if (n.right < 0) {
+      const double b = scan2(x, n.begin, n.end, q, d, best);
+      if (b < best) best = b, leaf = id;
+      continue;
+    }
+    const int l = id + 1, r = n.right;
+    const bool left_first = box_point2(nodes[static_cast<size_t>(l)], q, d) <=
+                            box_point2(nodes[static_cast<size_t>(r)], q, d);
+    stack.push_back(left_first ? r : l);  // popped last
+    stack.push_back(left_first ? l : r);
+  }
+  return leaf;
+}
+
+/// Per thread: the traversal stack and the candidate source leaves of one query leaf.
+struct LeafScratch {
+  std::vector<int> stack;
+  std::vector<std::pair<double, int>> candidates;  // (squared box distance, leaf id)
+};
+
+/// The nearest-source distances of the points of query leaf T (tree positions), into out.
+void leaf_nearest(const KdTree& src, const double* const* x, const KdTree& qt, const KdNode& T,
+                  LeafScratch& s, double* out) {
+  const int d = src.dim();
+  const Eigen::MatrixXd& Q = qt.points();
+  double q[3] = {0.0, 0.0, 0.0}, diag2 = 0.0;
+  for (int k = 0; k < d; ++k) {
+    q[k] = Q(T.begin, k);
+    diag2 += (T.hi[k] - T.lo[k]) * (T.hi[k] - T.lo[k]);
+  }
+  // Every o in T: |o − y| ≤ |o − q₀| + |q₀ − y| ≤ diag T + d₀ for y the nearest source of
+  // q₀ (in leaf L₀), so o's nearest source lies in a leaf whose box is within that of T's
+  // box (a margin for rounding). L₀'s points also give every o its first bound.
+  const int first = nearest_leaf(src, x, q, s.stack);
+  const KdNode& L0 = src.nodes()[static_cast<size_t>(first)];
+  const double d0 = std::sqrt(scan2(x, L0.begin, L0.end, q, d, kInfinity));
+  const double bound = (d0 + std::sqrt(diag2)) * (1.0 + 1e-9);
+  const std::vector<KdNode>& nodes = src.nodes();
+  s.candidates.clear();
+  s.stack.assign(1, 0);
+  while (!s.stack.empty()) {
+    const int id = s.stack.back();
+    s.stack.pop_back();
+    const KdNode& n = nodes[static_cast<size_t>(id)];
+    const double g2 = box_box2(n, T, d);
+    if (g2 > bound * bound) continue;
+    if (n.right < 0) {
+      s.candidates.emplace_back(g2, id);
+    } else {
+      s.stack.push_back(n.right);
+      s.stack.push_back(id + 1);
+    }
+  }
+  std::sort(s.candidates.begin(), s.candidates.end());
+  for (Eigen::Index i = T.begin; i < T.end; ++i) {
+    for (int k = 0; k < d; ++k) q[k] = Q(i, k);
+    double best = scan2(x, L0.begin, L0.end, q, d, kInfinity);
+    for (const auto& c : s.candidates) {
+      const KdNode& n = nodes[static_cast<size_t>(c.second)];
+      if (box_point2(n, q, d) >= best) continue;
+      best = scan2(x, n.begin, n.end, q, d, best);
+    }
+    out[i] = std::sqrt(best);
+  }
+}
+
+}  // namespace
+
+Eigen::VectorXd nearest_distances(const KdTree& sources, const KdTree& queries, int threads,
+                                  const WorkShare* share) {
+  const std::vector<KdNode>& qnodes = queries.nodes();
+  std::vector<int> leaves;
+  std::vector<double> cost;
+  for (size_t id = 0; id < qnodes.size(); ++id)
+    if (qnodes[id].right < 0) {
+      leaves.push_back(static_cast<int>(id));
+      cost.push_back(static_cast<double>(qnodes[id].end - qnodes[id].begin));
+    }
+  UnitRange mine{0, leaves.size()};
+  if (share != nullptr) mine = split_by_cost(cost, share->size(), share->rank());
+  const double* x[3] = {nullptr, nullptr, nullptr};
+  for (int k = 0; k < sources.dim(); ++k) x[k] = sources.points().col(k).data();
+  Eigen::VectorXd in_tree_order = Eigen::VectorXd::Zero(queries.size());
+#pragma omp parallel num_threads(resolve_threads(threads))
+  {
+    LeafScratch scratch;
+#pragma omp for schedule(dynamic, 16)
+    for (size_t l = mine.first; l < mine.last; ++l)
+      leaf_nearest(sources, x, queries, qnodes[static_cast<size_t>(leaves[l])], scratch,
+                   in_tree_order.data());
+  }
+  if (share != nullptr) share->sum(in_tree_order.data(), static_cast<size_t>(queries.size()));
+  Eigen::VectorXd out(queries.size());
+  const std::vector<Eigen::Index>& order = queries.order();
+  for (size_t q = 0; q < order.size(); ++q)
+    out[order[q]] = in_tree_order[static_cast<Eigen::Index>(q)];
   return out;
 }
 

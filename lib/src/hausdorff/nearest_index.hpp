@@ -29,6 +29,19 @@ class NearestIndex {
   std::unique_ptr<Tree> tree_;
 };
 
+class KdTree;
+
+/// For every point q of `queries` (a k-d tree over them): min_x |q − x| over the points x of
+/// `sources` (Euclidean), in the caller's order of the queries. One query leaf at a time:
+/// its first point's nearest source bounds every point of the leaf (plus the leaf's
+/// diagonal), the source leaves within that bound of the leaf's box are the candidates,
+/// and each query point scans them nearest box first, skipping boxes beyond its best.
+/// Where a kd search from the root cannot prune (sources nearly equidistant from a query,
+/// a curved body seen from its centre of curvature) this visits them once per query leaf.
+/// OpenMP over the query leaves; with a share, as NearestIndex::distances.
+Eigen::VectorXd nearest_distances(const KdTree& sources, const KdTree& queries, int threads,
+                                  const WorkShare* share = nullptr);
+
 /// Number of threads to use: `threads` if positive, else OpenMP's default (1 without OpenMP).
 int resolve_threads(int threads);
 
