@@ -224,7 +224,6 @@ std::int64_t run_plan(const Pass& p, const std::vector<int>& roots, UnitRange mi
 class DualTreeBackend final : public PairSumBackend {
  public:
   DualTreeBackend(const DualTreeConfig& cfg, DualTreeOps* ops) : cfg_(cfg), ops_(ops) {}
-  bool uses_trees() const override { return true; }
   PassSums sums(const PassSources& src, const PassOuter& outer,
                 const PassSettings& set) const override;
 

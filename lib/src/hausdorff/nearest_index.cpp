@@ -193,6 +193,7 @@ void leaf_nearest(const KdTree& src, const double* const* x, const KdTree& qt, c
     for (int k = 0; k < d; ++k) q[k] = Q(i, k);
     double best = scan2(x, L0.begin, L0.end, q, d, kInfinity);
     for (const auto& c : s.candidates) {
+      if (c.second == first) continue;  // scanned above
       const KdNode& n = nodes[static_cast<size_t>(c.second)];
       if (box_point2(n, q, d) >= best) continue;
       best = scan2(x, n.begin, n.end, q, d, best);

@@ -85,7 +85,6 @@ std::vector<double> point_costs(const PassOuter& outer) {
 /// so any thread count gives the same bits.
 class ExactBackend final : public PairSumBackend {
  public:
-  bool uses_trees() const override { return false; }
   PassSums sums(const PassSources& src, const PassOuter& outer,
                 const PassSettings& set) const override {
     const auto start = std::chrono::steady_clock::now();
@@ -124,7 +123,6 @@ class ExactBackend final : public PairSumBackend {
 /// outer points in their own tree's order (neighbouring points together).
 class SingleTreeBackend final : public PairSumBackend {
  public:
-  bool uses_trees() const override { return true; }
   PassSums sums(const PassSources& src, const PassOuter& outer,
                 const PassSettings& set) const override {
     const auto start = std::chrono::steady_clock::now();

@@ -73,8 +73,6 @@ struct PassSettings {
 class PairSumBackend {
  public:
   virtual ~PairSumBackend() = default;
-  /// Whether sums() needs PassSources::tree and PassOuter::tree.
-  virtual bool uses_trees() const = 0;
   /// The sums of every outer point over all sources: one call per pass.
   virtual PassSums sums(const PassSources& src, const PassOuter& outer,
                         const PassSettings& set) const = 0;
