@@ -214,24 +214,18 @@ inline double ellipse_min(double A, double B, double lo, double hi) {
 constexpr double kLog4 = 1.3862943611198906;  // log 4
 static_assert(AxisTerms::kGrid % 4 == 0, "the grid's logs are taken four at a time");
 
-/// y = log x over the ellipse grid: libmvec's AVX2 log (within 4 ulp) where the build has
-/// it, else std::log. Any rounding of a log shifts a bound by a few ulp of its logarithm.
+/// y = log x (Plus1: log(1 + x)) over the ellipse grid: libmvec's AVX2 log and log1p (within
+/// 4 ulp) where the build has them, else std::log, std::log1p. Any rounding of a log
+/// shifts a bound by a few ulp of its logarithm.
+template <bool Plus1>
 void logs(const double (&x)[AxisTerms::kGrid], double (&y)[AxisTerms::kGrid]) {
 #ifdef SOFTHD_HAVE_LIBMVEC
-  for (int i = 0; i < AxisTerms::kGrid; i += 4)
-    _mm256_storeu_pd(y + i, _ZGVdN4v_log(_mm256_loadu_pd(x + i)));
+  for (int i = 0; i < AxisTerms::kGrid; i += 4) {
+    const __m256d v = _mm256_loadu_pd(x + i);
+    _mm256_storeu_pd(y + i, Plus1 ? _ZGVdN4v_log1p(v) : _ZGVdN4v_log(v));
+  }
 #else
-  for (int i = 0; i < AxisTerms::kGrid; ++i) y[i] = std::log(x[i]);
-#endif
-}
-
-/// y = log(1 + x) over the ellipse grid, as logs().
-void logs1p(const double (&x)[AxisTerms::kGrid], double (&y)[AxisTerms::kGrid]) {
-#ifdef SOFTHD_HAVE_LIBMVEC
-  for (int i = 0; i < AxisTerms::kGrid; i += 4)
-    _mm256_storeu_pd(y + i, _ZGVdN4v_log1p(_mm256_loadu_pd(x + i)));
-#else
-  for (int i = 0; i < AxisTerms::kGrid; ++i) y[i] = std::log1p(x[i]);
+  for (int i = 0; i < AxisTerms::kGrid; ++i) y[i] = Plus1 ? std::log1p(x[i]) : std::log(x[i]);
 #endif
 }
 
@@ -271,10 +265,10 @@ AxisTerms axis_terms(const Box& T, const Box& S, int d, bool which_t, int axis, 
     im_ratio[f] = 2.0 * B * B / s;
   }
   double log_rho[kG], log_rho1[kG], ld[kG], log_im[kG];
-  logs(rho, log_rho);
-  logs(rho_minus_1, log_rho1);
-  logs(delta_eps, ld);
-  logs1p(im_ratio, log_im);
+  logs<false>(rho, log_rho);
+  logs<false>(rho_minus_1, log_rho1);
+  logs<false>(delta_eps, ld);
+  logs<true>(im_ratio, log_im);
   for (int f = 0; f < kG; ++f) {
     if (!(re2[f] > 0.0)) continue;
     const double value = kLog4 - log_rho1[f] - alpha * ld[f];
