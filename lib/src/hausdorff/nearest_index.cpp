@@ -219,7 +219,9 @@ Eigen::VectorXd nearest_distances(const KdTree& sources, const KdTree& queries, 
   const double* x[3] = {nullptr, nullptr, nullptr};
   for (int k = 0; k < sources.dim(); ++k) x[k] = sources.points().col(k).data();
   Eigen::VectorXd in_tree_order = Eigen::VectorXd::Zero(queries.size());
-#pragma omp parallel num_threads(resolve_threads(threads))
+  // Small query sets in one thread, as in NearestIndex::distances: waking a team costs more.
+  const bool parallel = queries.size() > 256;
+#pragma omp parallel num_threads(resolve_threads(threads)) if (parallel)
   {
     LeafScratch scratch;
 #pragma omp for schedule(dynamic, 16)
