@@ -20,12 +20,7 @@ LogBounds interaction_bound(const Pass& p, const Interaction& it) {
   if (it.op == kPrune) {
     const KdNode& T = p.ot->nodes()[static_cast<size_t>(it.t)];
     const KdNode& S = p.st->nodes()[static_cast<size_t>(it.s)];
-    double g2 = 0.0;
-    for (int k = 0; k < p.d; ++k) {
-      const double gap = std::max({T.lo[k] - S.hi[k], S.lo[k] - T.hi[k], 0.0});
-      g2 += gap * gap;
-    }
-    const double l = std::log(std::sqrt(g2) + p.eps);
+    const double l = std::log(std::sqrt(box_gap2(T, S, p.d)) + p.eps);
     return {-p.alpha * l, -(p.alpha + 1.0) * l};
   }
   return interpolation_log_bound(p.obox[static_cast<size_t>(it.t)], it.op != kM2P,

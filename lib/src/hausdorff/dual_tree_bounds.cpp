@@ -32,15 +32,8 @@ int leaf_near(const KdTree& st, const double* q, int d, int cut_at, int& cut) {
   while (nodes[static_cast<size_t>(id)].right >= 0) {
     if (depth == cut_at) cut = id;
     const int l = id + 1, r = nodes[static_cast<size_t>(id)].right;
-    double dl = 0.0, dr = 0.0;
-    for (int k = 0; k < d; ++k) {
-      const KdNode& a = nodes[static_cast<size_t>(l)];
-      const KdNode& b = nodes[static_cast<size_t>(r)];
-      const double ga = std::max({a.lo[k] - q[k], q[k] - a.hi[k], 0.0});
-      const double gb = std::max({b.lo[k] - q[k], q[k] - b.hi[k], 0.0});
-      dl += ga * ga;
-      dr += gb * gb;
-    }
+    const double dl = box_gap2(nodes[static_cast<size_t>(l)], q, d);
+    const double dr = box_gap2(nodes[static_cast<size_t>(r)], q, d);
     id = dl <= dr ? l : r;
     ++depth;
   }
@@ -199,7 +192,8 @@ void split_cut(const Pass& p, const KdNode& T, LeafCut& lc) {
     b->hs.clear();
   }
   lc.position.assign(c.w.size(), -1);
-  for (const int i : lc.near_of) lc.position[static_cast<size_t>(i)] = 0;
+  constexpr int kHoldsSourceLeaf = -2;  // marks the cut boxes that hold a point's source leaf
+  for (const int i : lc.near_of) lc.position[static_cast<size_t>(i)] = kHoldsSourceLeaf;
   double diag2 = 0.0;
   for (int k = 0; k < p.d; ++k) diag2 += (T.hi[k] - T.lo[k]) * (T.hi[k] - T.lo[k]);
   const double reach2 = kReach * kReach * diag2;
@@ -209,7 +203,7 @@ void split_cut(const Pass& p, const KdNode& T, LeafCut& lc) {
       const double gap = std::max({c.lo[k][i] - T.hi[k], T.lo[k] - c.hi[k][i], 0.0});
       gap2 += gap * gap;
     }
-    const bool nearby = lc.position[i] == 0 || !(gap2 > reach2) || !(gap2 > 0.0);
+    const bool nearby = lc.position[i] == kHoldsSourceLeaf || !(gap2 > reach2) || !(gap2 > 0.0);
     lc.position[i] = nearby ? static_cast<int>(lc.nearby.w.size()) : -1;
     append_box(c, i, p.d, nearby ? lc.nearby : lc.far);
   }

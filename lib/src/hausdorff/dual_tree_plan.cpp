@@ -13,14 +13,7 @@ namespace softhd::detail::dual {
 
 namespace {
 
-double node_gap(const KdNode& a, const KdNode& b, int d) {
-  double g2 = 0.0;
-  for (int k = 0; k < d; ++k) {
-    const double gap = std::max({a.lo[k] - b.hi[k], b.lo[k] - a.hi[k], 0.0});
-    g2 += gap * gap;
-  }
-  return std::sqrt(g2);
-}
+double node_gap(const KdNode& a, const KdNode& b, int d) { return std::sqrt(box_gap2(a, b, d)); }
 
 double node_radius2(const KdNode& a, int d) {
   double r2 = 0.0;
@@ -384,12 +377,7 @@ double interaction_cost(const Pass& p, const Interaction& it) {
 /// The boxes dropped for o are still disjoint, so the budget argument is unchanged.
 bool prunable_for_point(const Pass& p, const double* o, Eigen::Index q, int s) {
   const KdNode& S = p.st->nodes()[static_cast<size_t>(s)];
-  double g2 = 0.0;
-  for (int k = 0; k < p.d; ++k) {
-    const double gap = std::max({S.lo[k] - o[k], o[k] - S.hi[k], 0.0});
-    g2 += gap * gap;
-  }
-  const double l = std::log(std::sqrt(g2) + p.eps);
+  const double l = std::log(std::sqrt(box_gap2(S, o, p.d)) + p.eps);
   for (int k = 0; k < 4; ++k) {
     if (!p.want[k]) continue;
     const double lw = p.log_weight[4 * static_cast<size_t>(s) + k];

@@ -4,6 +4,7 @@
 // the source points of a pair pass into boxes and carries what the error bounds need.
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <vector>
 
 #include "pair_kernel.hpp"
@@ -19,6 +20,26 @@ struct KdNode {
   Eigen::Index end = 0;
   int right = -1;
 };
+
+/// Squared distance from the point q to the box of n (0 inside).
+inline double box_gap2(const KdNode& n, const double* q, int d) {
+  double g2 = 0.0;
+  for (int k = 0; k < d; ++k) {
+    const double gap = std::max({n.lo[k] - q[k], q[k] - n.hi[k], 0.0});
+    g2 += gap * gap;
+  }
+  return g2;
+}
+
+/// Squared distance between the boxes of a and b (0 where they overlap).
+inline double box_gap2(const KdNode& a, const KdNode& b, int d) {
+  double g2 = 0.0;
+  for (int k = 0; k < d; ++k) {
+    const double gap = std::max({a.lo[k] - b.hi[k], b.lo[k] - a.hi[k], 0.0});
+    g2 += gap * gap;
+  }
+  return g2;
+}
 
 /// Median splits along the widest side of the bounding box until a node has at most
 /// `leaf_size` points. Stores the points in tree order (N by d, one contiguous array

@@ -87,26 +87,6 @@ namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-/// Squared distance from q to the box of n.
-double box_point2(const KdNode& n, const double* q, int d) {
-  double g2 = 0.0;
-  for (int k = 0; k < d; ++k) {
-    const double gap = std::max({n.lo[k] - q[k], q[k] - n.hi[k], 0.0});
-    g2 += gap * gap;
-  }
-  return g2;
-}
-
-/// Squared distance between the boxes of a and b.
-double box_box2(const KdNode& a, const KdNode& b, int d) {
-  double g2 = 0.0;
-  for (int k = 0; k < d; ++k) {
-    const double gap = std::max({a.lo[k] - b.hi[k], b.lo[k] - a.hi[k], 0.0});
-    g2 += gap * gap;
-  }
-  return g2;
-}
-
 /// min over the source points [begin, end) (tree order) of |q − x|², below `best`.
 double scan2(const double* const* x, Eigen::Index begin, Eigen::Index end, const double* q, int d,
              double best) {
@@ -134,15 +114,15 @@ int nearest_leaf(const KdTree& src, const double* const* x, const double* q,
     const KdNode& n = nodes[static_cast<size_t>(stack.back())];
     const int id = stack.back();
     stack.pop_back();
-    if (box_point2(n, q, d) >= best) continue;
+    if (box_gap2(n, q, d) >= best) continue;
     if (n.right < 0) {
       const double b = scan2(x, n.begin, n.end, q, d, best);
       if (b < best) best = b, leaf = id;
       continue;
     }
     const int l = id + 1, r = n.right;
-    const bool left_first = box_point2(nodes[static_cast<size_t>(l)], q, d) <=
-                            box_point2(nodes[static_cast<size_t>(r)], q, d);
+    const bool left_first = box_gap2(nodes[static_cast<size_t>(l)], q, d) <=
+                            box_gap2(nodes[static_cast<size_t>(r)], q, d);
     stack.push_back(left_first ? r : l);  // popped last
     stack.push_back(left_first ? l : r);
   }
@@ -179,7 +159,7 @@ void leaf_nearest(const KdTree& src, const double* const* x, const KdTree& qt, c
     const int id = s.stack.back();
     s.stack.pop_back();
     const KdNode& n = nodes[static_cast<size_t>(id)];
-    const double g2 = box_box2(n, T, d);
+    const double g2 = box_gap2(n, T, d);
     if (g2 > bound * bound) continue;
     if (n.right < 0) {
       s.candidates.emplace_back(g2, id);
@@ -195,7 +175,7 @@ void leaf_nearest(const KdTree& src, const double* const* x, const KdTree& qt, c
     for (const auto& c : s.candidates) {
       if (c.second == first) continue;  // scanned above
       const KdNode& n = nodes[static_cast<size_t>(c.second)];
-      if (box_point2(n, q, d) >= best) continue;
+      if (box_gap2(n, q, d) >= best) continue;
       best = scan2(x, n.begin, n.end, q, d, best);
     }
     out[i] = std::sqrt(best);
