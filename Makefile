@@ -17,8 +17,12 @@ build: deps
 	@cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=Release $(CMAKE_EXTRA) > $(BUILD_DIR)/configure.log 2>&1 || (cat $(BUILD_DIR)/configure.log; exit 1)
 	@cmake --build $(BUILD_DIR) -j $(JOBS)
 
+# CTest runs JOBS tests at once, most of them with an OpenMP team of their own: threads
+# that wait sleep (OMP_WAIT_POLICY=passive) rather than spin on the cores the other tests
+# need. Measured on 2 cores, the suite without the sanitizer run: 140 s against 169-186 s
+# spinning (user time 225 s against 288 s).
 test: build
-	@cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+	@cd $(BUILD_DIR) && OMP_WAIT_POLICY=passive ctest --output-on-failure -j $(JOBS)
 
 # The demo needs only the library and the softhd tool, not the tests and benchmarks.
 demo: deps
