@@ -199,12 +199,13 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   const Eigen::VectorXd v = X.volumes() / X.total_volume();  // V_i/|X|
   const Eigen::VectorXd& w = weights;                        // W_j/|Y|
 
-  // Scales c = r_min + ε of every point, from the k-d trees: the targets' leaf by leaf
-  // (each target leaf's candidates found once), the moving points' one by one.
+  // Scales c = r_min + ε of every point, from the k-d trees, leaf by leaf (each leaf's
+  // candidates found once).
   const auto x_kd = std::make_unique<detail::KdTree>(X.points(), detail::kLeafSize);
   const Eigen::VectorXd scale_y =
       detail::nearest_distances(*x_kd, *kd, set.threads, set.share).array() + eps;
-  const Eigen::VectorXd scale_x = tree.distances(X.points(), set.threads, set.share).array() + eps;
+  const Eigen::VectorXd scale_x =
+      detail::nearest_distances(*kd, *x_kd, set.threads, set.share).array() + eps;
   // Every exact S is ≤ 1 (each term ≤ its weight, the weights sum to 1), so clipping an
   // approximate sum at 1 only moves it towards the exact value and keeps d̃ ≥ r_min ≥ 0.
   const bool clip = options.method != Method::exact;

@@ -87,19 +87,27 @@ namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
-/// min over the source points [begin, end) (tree order) of |q − x|², below `best`.
-double scan2(const double* const* x, Eigen::Index begin, Eigen::Index end, const double* q, int d,
-             double best) {
+/// min over the source points [begin, end) (tree order) of |q − x|², below `best`: one
+/// vectorised loop per dimension count (a loop over the coordinates inside did not vectorise).
+template <int D>
+double scan2_d(const double* const* x, Eigen::Index begin, Eigen::Index end, const double* q,
+               double best) {
+  const double* x0 = x[0];
+  const double* x1 = x[1];
+  const double* x2 = x[D - 1];
+  const double q0 = q[0], q1 = q[1], q2 = q[D - 1];
 #pragma omp simd reduction(min : best)
   for (Eigen::Index i = begin; i < end; ++i) {
-    double r2 = 0.0;
-    for (int k = 0; k < d; ++k) {
-      const double diff = q[k] - x[k][i];
-      r2 += diff * diff;
-    }
-    best = std::min(best, r2);
+    const double a = q0 - x0[i], b = q1 - x1[i];
+    const double c = D == 3 ? q2 - x2[i] : 0.0;
+    best = std::min(best, a * a + b * b + c * c);
   }
   return best;
+}
+
+double scan2(const double* const* x, Eigen::Index begin, Eigen::Index end, const double* q, int d,
+             double best) {
+  return d == 3 ? scan2_d<3>(x, begin, end, q, best) : scan2_d<2>(x, begin, end, q, best);
 }
 
 /// The leaf holding q's nearest source: branch and bound from the root, nearer child first.
@@ -173,6 +181,8 @@ void leaf_nearest(const KdTree& src, const double* const* x, const KdTree& qt, c
     for (int k = 0; k < d; ++k) q[k] = Q(i, k);
     double best = scan2(x, L0.begin, L0.end, q, d, kInfinity);
     for (const auto& c : s.candidates) {
+      // The candidates come by their gap to T's box, a lower bound of their gap to o.
+      if (c.first >= best) break;
       if (c.second == first) continue;  // scanned above
       const KdNode& n = nodes[static_cast<size_t>(c.second)];
       if (box_gap2(n, q, d) >= best) continue;
