@@ -70,9 +70,11 @@ Method method_from_string(const std::string& name) {
 }
 
 struct HausdorffTarget::Impl {
-  Impl(PointCloud c, HausdorffOptions o) : cloud(std::move(c)), options(o), tree(cloud.points()) {
+  Impl(PointCloud c, HausdorffOptions o) : cloud(std::move(c)), options(o) {
     weights = cloud.volumes() / cloud.total_volume();  // W_j/|Y|
-    if (options.method != Method::nearest) {
+    if (options.method == Method::nearest) {
+      tree = std::make_unique<detail::NearestIndex>(cloud.points());
+    } else {
       if (options.method == Method::tree) {
         detail::DualTreeConfig config;
         config.cost_model = options.tree_fallback;
@@ -80,14 +82,15 @@ struct HausdorffTarget::Impl {
       } else {
         backend = detail::make_exact_backend();
       }
-      // The target's tree serves every evaluation: its nearest-source distances (every
-      // backend), and with a tree backend the sources of pass 2, the outer points of 1, 3.
+      // The target's tree serves every evaluation: the nearest-source distances both ways
+      // (every backend), and with a tree backend the sources of pass 2, the outer points
+      // of passes 1 and 3.
       kd = std::make_unique<detail::KdTree>(cloud.points(), detail::kLeafSize);
     }
   }
   PointCloud cloud;
   HausdorffOptions options;
-  detail::NearestIndex tree;  // over cloud.points(): must be declared after cloud
+  std::unique_ptr<detail::NearestIndex> tree;  // method nearest
   Eigen::VectorXd weights;
   std::unique_ptr<detail::PairSumBackend> backend;
   std::unique_ptr<detail::KdTree> kd;  // methods exact and tree
@@ -140,7 +143,7 @@ HausdorffResult HausdorffTarget::Impl::evaluate_nearest(const PointCloud& X,
   const WorkShare* share = options.share.get();
   const detail::NearestIndex moving_tree(X.points());
   Eigen::VectorXd dist_target = moving_tree.distances(cloud.points(), threads, share);
-  Eigen::VectorXd dist_moving = tree.distances(X.points(), threads, share);
+  Eigen::VectorXd dist_moving = tree->distances(X.points(), threads, share);
   HausdorffResult r;
   r.A = dist_target.maxCoeff();
   r.B = dist_moving.maxCoeff();

@@ -181,7 +181,7 @@ void leaf_nearest(const KdTree& src, const double* const* x, const KdTree& qt, c
     for (int k = 0; k < d; ++k) q[k] = Q(i, k);
     double best = scan2(x, L0.begin, L0.end, q, d, kInfinity);
     for (const auto& c : s.candidates) {
-      // The candidates come by their gap to T's box, a lower bound of their gap to o.
+      // The candidates come by their gap to T's box, a lower bound of their gap to q.
       if (c.first >= best) break;
       if (c.second == first) continue;  // scanned above
       const KdNode& n = nodes[static_cast<size_t>(c.second)];
