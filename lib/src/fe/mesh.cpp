@@ -12,10 +12,20 @@ namespace softhd::fe {
 const std::vector<int>& Mesh::face(const std::string& name) const {
   auto it = boundary_nodes.find(name);
   if (it == boundary_nodes.end()) {
-    throw InvalidArgument("mesh: unknown boundary face '" + name +
-                          "' (expected one of x0, x1, y0, y1" + (dim == 3 ? ", z0, z1)" : ")"));
+    std::string names;
+    for (const auto& [n, nodes] : boundary_nodes) names += (names.empty() ? "" : ", ") + n;
+    throw InvalidArgument("mesh: unknown boundary face '" + name + "' (expected one of " +
+                          (names.empty() ? "none: the mesh has no named boundary" : names) + ")");
   }
   return it->second;
+}
+
+int Mesh::region(const std::string& name) const {
+  for (std::size_t r = 0; r < region_names.size(); ++r)
+    if (region_names[r] == name) return static_cast<int>(r);
+  std::string names;
+  for (const auto& n : region_names) names += (names.empty() ? "" : ", ") + n;
+  throw InvalidArgument("mesh: unknown region '" + name + "' (expected one of " + names + ")");
 }
 
 MeshSize box_mesh_size(const Eigen::VectorXd& cells, int order) {
@@ -78,6 +88,7 @@ Mesh make_box_mesh(const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
   Mesh m;
   m.dim = dim;
   m.order = order;
+  m.cell = cell_type(dim, order, false);
   m.box_lo = lo;
   m.box_hi = hi;
   m.cells = cells;
@@ -136,6 +147,7 @@ Mesh make_box_mesh(const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
     m.boundary_nodes[std::string(1, axes[d]) + "0"] = f0;
     m.boundary_nodes[std::string(1, axes[d]) + "1"] = f1;
   }
+  m.element_region = Eigen::VectorXi::Zero(num_el);
   return m;
 }
 

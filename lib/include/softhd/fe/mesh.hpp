@@ -1,7 +1,9 @@
 #pragma once
 /// \file mesh.hpp
-/// Structured Lagrange meshes of a box (docs/formulation.md §3.5): 8-node (Q1) and 27-node (Q2)
-/// hexahedra in 3D, 4-node and 9-node quadrilaterals in 2D (plane strain).
+/// Lagrange meshes (docs/formulation.md §3.5, §7): one type for every body. A box is a
+/// generator of it (structured Q1/Q2 hexahedra or quadrilaterals, faces named x0..z1); a
+/// Gmsh file is another (fe/gmsh_mesh.hpp: tetrahedra, hexahedra, triangles, quadrilaterals
+/// of any shape, physical groups as regions and named boundary node sets).
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -9,33 +11,45 @@
 #include <string>
 #include <vector>
 
+#include "softhd/fe/reference_element.hpp"
+
 namespace softhd::fe {
 
 /// Row-major integer matrix: one element (its node ids) per row.
 using Connectivity = Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-/// A Lagrange mesh. Element nodes are numbered in tensor-product order: local node
-/// a = i + (p+1) (j + (p+1) k), i, j, k in 0..p, with reference coordinate
-/// xi = -1 + 2 i / p along each axis (p = order).
+/// A Lagrange mesh of one cell type. Element nodes are in the internal local order of
+/// reference_element(cell) (tensor-product for quadrilaterals and hexahedra).
 struct Mesh {
   int dim = 3;    ///< 2 or 3
-  int order = 1;  ///< 1 (Q1) or 2 (Q2)
+  int order = 1;  ///< 1 or 2: reference_element(cell).order
+  CellType cell = CellType::kHex8;  ///< the cell type of every element
   /// N by dim reference coordinates.
   Eigen::MatrixXd nodes;
-  /// E by (p+1)^dim node ids.
+  /// E by nodes-per-element node ids.
   Connectivity elements;
-  /// E by 2^dim vertex ids (the element corners, in tensor-product order, numbered
-  /// among the mesh vertices 0..num_vertices-1): the support of Q1 controls.
+  /// E by corners-per-element vertex ids (the element corners, in the local order of the
+  /// linear cell, numbered among the mesh vertices 0..num_vertices-1): the support of
+  /// P1/Q1 controls.
   Connectivity element_vertices;
   /// Node id of each vertex (num_vertices entries).
   Eigen::VectorXi vertex_nodes;
-  /// Named boundary faces ("x0", "x1", "y0", "y1", and in 3D "z0", "z1"): sorted node ids.
+  /// Named boundary node sets: a box's faces ("x0", "x1", "y0", "y1", and in 3D "z0",
+  /// "z1"), a Gmsh file's physical groups one dimension below the body's. Sorted node ids.
   std::map<std::string, std::vector<int>> boundary_nodes;
+  /// Region index of each element (E entries, into region_names).
+  Eigen::VectorXi element_region;
+  /// Region names: {"body"} for a box, a Gmsh file's physical volumes (surfaces in 2D).
+  std::vector<std::string> region_names{"body"};
   ///@{
-  /// Structured-box data, used to locate points: lower corner, upper corner, cells.
+  /// Structured-box data, used to locate points by arithmetic: lower corner, upper
+  /// corner, cells. Empty for unstructured meshes (structured() is false).
   Eigen::VectorXd box_lo, box_hi;
   Eigen::VectorXi cells;
   ///@}
+
+  /// True for a structured box mesh (locate by arithmetic, grid halving possible).
+  bool structured() const { return cells.size() == dim; }
 
   /// The number of nodes.
   Eigen::Index num_nodes() const { return nodes.rows(); }
@@ -46,8 +60,11 @@ struct Mesh {
   /// Nodes per element, (p+1)^dim.
   int nodes_per_element() const { return static_cast<int>(elements.cols()); }
 
-  /// Node ids of a named face; throws InvalidArgument naming the face if unknown.
+  /// Node ids of a named boundary set; throws InvalidArgument naming it and listing the
+  /// names the mesh has if unknown.
   const std::vector<int>& face(const std::string& name) const;
+  /// Index of a named region; throws InvalidArgument listing the names if unknown.
+  int region(const std::string& name) const;
 };
 
 /// Counts of a structured box mesh in 64 bits (they can exceed 2^31 before anything is
@@ -82,7 +99,7 @@ Mesh make_box_mesh(const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
 
 /// Element containing the reference point X of a structured box mesh and the
 /// element's reference coordinates xi in [-1, 1]^dim. Returns -1 if X is outside
-/// the box (tolerance 1e-10 relative to the box size).
+/// the box (tolerance 1e-10 relative to the box size). Any mesh: fe/locator.hpp.
 int locate(const Mesh& mesh, const Eigen::VectorXd& X, Eigen::VectorXd* xi);
 
 }  // namespace softhd::fe

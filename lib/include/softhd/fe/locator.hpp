@@ -1,0 +1,34 @@
+#pragma once
+/// \file locator.hpp
+/// Point location in any Mesh (docs/formulation.md §7): the element containing a reference
+/// point X and its reference coordinates ξ with X = Σ_a X_a N_a(ξ). Structured boxes by
+/// arithmetic (fe::locate); otherwise a k-d tree over the element bounding boxes and Newton
+/// inversion of the isoparametric map in each candidate element.
+
+#include <Eigen/Core>
+#include <memory>
+
+#include "softhd/fe/mesh.hpp"
+
+namespace softhd::fe {
+
+/// Locates points in one mesh; built once, then const and thread-safe.
+class PointLocator {
+ public:
+  /// Keeps a reference to `mesh`, which must outlive the locator.
+  explicit PointLocator(const Mesh& mesh);
+  ~PointLocator();
+  PointLocator(PointLocator&&) noexcept;
+  PointLocator& operator=(PointLocator&&) noexcept;
+
+  /// The element containing X (dim entries) and ξ in it, or -1 if X is outside the mesh
+  /// (tolerance 1e-10 relative to the mesh's size, in reference coordinates for ξ).
+  int locate(const Eigen::VectorXd& X, Eigen::VectorXd* xi) const;
+
+ private:
+  struct Tree;
+  const Mesh* mesh_;
+  std::unique_ptr<Tree> tree_;  ///< null for structured meshes
+};
+
+}  // namespace softhd::fe
