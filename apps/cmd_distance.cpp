@@ -3,11 +3,13 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
 #include "cli.hpp"
+#include "softhd/io/atomic_file.hpp"
 #include "commands.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/cloud_io.hpp"
@@ -44,12 +46,12 @@ MPI builds: under 'mpirun -np K softhd distance ...' every rank reads both cloud
 and the pair sums (and nearest queries) are split across the ranks; rank 0 prints
 and writes --grad. The result equals the one-process result (docs/scaling.md).
 
-exit status: 0 on success, 2 on bad input (one line on stderr names the problem).
+exit status: 0 done; 1 numerical failure; 2 bad input or refused (one line on stderr
+names the file, line or flag).
 )";
 
 void write_gradient(const std::string& path, const PointCloud& X, const HausdorffResult& r) {
-  std::ofstream out(path);
-  if (!out) throw FileError("cannot write '" + path + "'");
+  std::ostringstream out;
   const int d = X.dim();
   out << "# gradient of rho w.r.t. the moving cloud: " << (d == 3 ? "x y z" : "x y")
       << (d == 3 ? " drho/dx drho/dy drho/dz" : " drho/dx drho/dy") << " drho/dV\n";
@@ -59,7 +61,7 @@ void write_gradient(const std::string& path, const PointCloud& X, const Hausdorf
     for (int k = 0; k < d; ++k) out << r.gradient_points(i, k) << ' ';
     out << r.gradient_volumes[i] << '\n';
   }
-  if (!out) throw FileError("error while writing '" + path + "'");
+  write_file_atomically(path, out.str());
 }
 
 }  // namespace

@@ -73,7 +73,10 @@ constexpr const char* kUsage =
     "                         --factorize-every-step. PETSc options (e.g.\n"
     "                         -softhd_state_ksp_monitor) go in the environment variable\n"
     "                         PETSC_OPTIONS\n"
-    "  --write-control-nodes FILE  write the control nodes with their current values and stop\n";
+    "  --write-control-nodes FILE  write the control nodes with their current values and stop\n"
+    "\n"
+    "exit status: 0 done; 1 numerical failure (the state solve did not converge); 2 bad\n"
+    "input or refused (one line on stderr names the file, key or flag).\n";
 
 struct Args {
   std::string scene, control_file, out_dir = "out", write_nodes, linear_solver, write_cloud;
@@ -160,8 +163,9 @@ bool parse(int argc, char** argv, Args* a) {
       a->threads = static_cast<int>(t);
     } else if (s == "--coarse-levels") {
       const std::string v = value();
+      // -1 is the internal code for auto, not a value a user may give.
       const double k = v == "auto" ? -1.0 : parse_number(v, s);
-      if (!(k >= -1 && k <= 8 && k == static_cast<int>(k)))
+      if (!(v == "auto" || (k >= 0 && k <= 8 && k == static_cast<int>(k))))
         throw softhd::InvalidArgument("--coarse-levels expects auto or an integer from 0 to 8");
       a->coarse_levels = static_cast<int>(k);
     } else if (s == "--max-memory") {
@@ -371,6 +375,8 @@ int run_forward(int argc, char** argv) {
       return 0;
     }
     return forward(args);
+  } catch (const softhd::NumericalError& e) {
+    return softhd::cli::report_failure("forward", 1, std::string("error: ") + e.what());
   } catch (const softhd::Error& e) {
     return softhd::cli::report_failure("forward", 2, std::string("error: ") + e.what());
   } catch (const std::filesystem::filesystem_error& e) {

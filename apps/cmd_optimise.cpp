@@ -3,6 +3,11 @@
 // (status "interrupted" until the end) and the checkpoint log kept up to date as the run
 // goes (resumable with --resume).
 
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -26,9 +31,12 @@
 #include "softhd/fe/state_backend.hpp"
 #include "softhd/fe/state_equation.hpp"
 #include "softhd/io/cloud_io.hpp"
+#include "softhd/io/folder_lock.hpp"
 #include "softhd/io/vtu.hpp"
 #include "softhd/parallel.hpp"
 #include "softhd/work_share.hpp"
+
+extern char** environ;
 
 namespace softhd::cli {
 
@@ -91,6 +99,13 @@ scene targets ("target" in the scene file):
 writes: history.csv, control.csv (readable by 'softhd forward --control'),
 body_NNNN.vtu, target.vtu, body.pvd, body_final.ply, target.ply, summary.json,
 checkpoint.bin, and convergence.png when python3 with matplotlib is available.
+
+exit status: 0 done (also when stopped by --max-iter or --max-seconds); 1 numerical
+failure (the state solve at the start or at the
+best control failed); 2 bad input or refused (one line on stderr names the file, key or
+flag; also when another run holds the --out folder's lock). Ctrl-C or a kill ends the
+run at once (status 130 or the signal's); the checkpoint, history and summary written so
+far are complete, and --resume continues the same run.
 
 MPI builds: under 'mpiexec -n K softhd optimise ...' every rank runs the optimiser
 on the same numbers: the distance's pair sums are split across the ranks (as in
@@ -312,6 +327,26 @@ void print_end(const ShapeTrackingSummary& s, const fs::path& out) {
   std::fprintf(stderr, "\n  results in %s\n", out.string().c_str());
 }
 
+// Runs argv[0] with the arguments, without a shell, its output discarded; returns its exit
+// status, or -1 if it could not be started or did not exit normally.
+int run_quietly(const std::vector<std::string>& argv) {
+  std::vector<char*> args;
+  for (const std::string& s : argv) args.push_back(const_cast<char*>(s.c_str()));
+  args.push_back(nullptr);
+  posix_spawn_file_actions_t io;
+  posix_spawn_file_actions_init(&io);
+  posix_spawn_file_actions_addopen(&io, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&io, 2, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, args[0], &io, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&io);
+  if (rc != 0) return -1;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) return -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
 fs::path output_directory(const OptimiseArgs& a, const fe::Scene& scene) {
   const fs::path out = a.out ? fs::path(*a.out) : fs::path("results") / scene.name;
   std::error_code ec;
@@ -351,6 +386,9 @@ int run_optimise(const std::vector<std::string>& tokens) {
     throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
                           "D but the scene's body is " + std::to_string(scene.dim()) + "D");
   const fs::path out = output_directory(a, scene);
+  // One run per folder (rank 0 writes; the other ranks' files are not written).
+  std::optional<FolderLock> lock;
+  if (writer) lock.emplace(out.string());
   ShapeTrackingOptions& to = a.tracking;
   to.checkpoint = (out / "checkpoint.bin").string();
   to.write_checkpoint = writer;
@@ -447,10 +485,13 @@ int run_optimise(const std::vector<std::string>& tokens) {
   add_final(s, sum);
   files.write_summary(sum);
 #ifdef SOFTHD_PLOT_SCRIPT
-  const std::string plot = std::string("/usr/bin/python3 ") + SOFTHD_PLOT_SCRIPT + " " +
-                           out.string() + " >/dev/null 2>&1";
-  if (std::system(plot.c_str()) != 0 && !a.quiet)
-    std::fprintf(stderr, "  (convergence.png not drawn: needs python3-matplotlib)\n");
+  // No shell: the folder is one argument, whatever characters it holds.
+  const int status = run_quietly({"/usr/bin/python3", SOFTHD_PLOT_SCRIPT, out.string()});
+  if (status != 0 && !a.quiet)
+    std::fprintf(stderr, "  (convergence.png not drawn: %s)\n",
+                 status == 3    ? "needs python3-matplotlib"
+                 : status == -1 ? "cannot run /usr/bin/python3"
+                                : "scripts/plot_convergence.py failed");
 #endif
   if (!a.quiet) print_end(s, out);
   if (a.json) std::cout << sum.dump(2) << '\n';

@@ -98,6 +98,9 @@ int main(int argc, char** argv) {
     if (command == "optimise" || command == "optimize") return softhd::cli::run_optimise(rest);
     err << "softhd: unknown command '" << command << "' (see softhd --help)\n";
     return 2;
+  } catch (const softhd::NumericalError& e) {
+    // Valid input on which the numerics failed (e.g. a state solve): exit 1, not "bad input".
+    std::tie(code, error) = std::pair(1, std::string("error: ") + e.what());
   } catch (const softhd::Error& e) {
     std::tie(code, error) = std::pair(2, std::string("error: ") + e.what());
   } catch (const std::filesystem::filesystem_error& e) {

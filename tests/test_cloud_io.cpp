@@ -1,4 +1,6 @@
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -16,6 +18,7 @@
 
 #include "expect_error.hpp"
 #include "softhd/error.hpp"
+#include "softhd/io/atomic_file.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/point_cloud.hpp"
 
@@ -519,4 +522,46 @@ TEST_F(CloudIo, LargeFiles) {
                 std::chrono::duration<double>(t1 - t0).count(),
                 std::chrono::duration<double>(t2 - t1).count());
   }
+}
+
+// Issue 29 item 7: a write that fails part way (here a file-size limit, as a full disk)
+// throws FileError naming the file, leaves the earlier file intact and no temporary behind.
+TEST(AtomicFile, AFailedWriteKeepsTheOldFileAndLeavesNoTemporary) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(::testing::TempDir()) / "softhd_atomic";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string path = (dir / "out.txt").string();
+  softhd::write_file_atomically(path, "old\n");
+  struct sigaction ignore {}, old_action {};
+  ignore.sa_handler = SIG_IGN;
+  sigaction(SIGXFSZ, &ignore, &old_action);  // writes past the limit then fail with EFBIG
+  rlimit old_limit{};
+  getrlimit(RLIMIT_FSIZE, &old_limit);
+  rlimit small = old_limit;
+  small.rlim_cur = 1000;
+  setrlimit(RLIMIT_FSIZE, &small);
+  bool threw = false;
+  try {
+    softhd::write_file_atomically(path, std::string(100000, 'x'));
+  } catch (const softhd::FileError& e) {
+    threw = true;
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  setrlimit(RLIMIT_FSIZE, &old_limit);
+  sigaction(SIGXFSZ, &old_action, nullptr);
+  EXPECT_TRUE(threw);
+  std::ifstream in(path);
+  std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(content, "old\n");
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) files += entry.is_regular_file();
+  EXPECT_EQ(files, 1);  // out.txt alone: the temporary was removed
+}
+
+// A device is written directly (no rename over the device node), with its errors reported.
+TEST(AtomicFile, ADeviceIsWrittenDirectlyAndAFullOneIsAnError) {
+  EXPECT_NO_THROW(softhd::write_file_atomically("/dev/null", "x"));
+  EXPECT_THROW(softhd::write_file_atomically("/dev/full", "x"), softhd::FileError);
+  EXPECT_TRUE(std::filesystem::is_character_device("/dev/full"));
 }

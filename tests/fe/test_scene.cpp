@@ -4,7 +4,9 @@
 #include <sstream>
 
 #include "softhd/error.hpp"
+#include "softhd/fe/forward.hpp"
 #include "softhd/fe/scene.hpp"
+#include <nlohmann/json.hpp>
 
 using namespace softhd::fe;
 
@@ -71,4 +73,82 @@ TEST(Scene, InvalidFilesNameTheKey) {
   expect_error(replace(good, "\"upper\": 0", "\"upper\": 3e5"), {"control.upper", "2a"});
   expect_error(replace(good, "\"space\": \"vertex\"", "\"space\": \"nodal\""), {"control.space"});
   EXPECT_THROW(load_scene("/nonexistent/scene.json"), softhd::FileError);
+}
+
+// Issue 29 item 3: the state problem is invariant under lengths × L and stresses × S (u
+// scales by L). At both ends of the ranges a scene accepts (sizes 1e-6..1e6, stiffnesses
+// 1e-6..1e12) the solve must be the unit problem's, scaled; beyond them the scene is refused
+// with one line naming the key (a box scaled by 1e80 used to "converge" at u = 0).
+namespace {
+
+std::string scaled_strip(double L, double S) {
+  std::ostringstream s;
+  s.precision(17);
+  s << R"({"name": "strip", "mesh": {"type": "box", "lower": [0, 0, 0], "upper": [)" << L << ", "
+    << 0.2 * L << ", " << 0.1 * L << R"(], "cells": [4, 1, 1], "order": 1},
+      "material": {"model": "mooney_rivlin", "a": )"
+    << S << ", \"b\": " << 0.2 * S << ", \"c\": " << 3 * S << R"(},
+      "fibers": [1, 0, 0], "clamp": ["x0"],
+      "control": {"space": "vertex", "lower": )"
+    << -S << R"(, "upper": 0, "initial": 0}})";
+  return s.str();
+}
+
+Eigen::VectorXd strip_displacement(double L, double S) {
+  const Scene scene = parse_scene(scaled_strip(L, S), "strip.json");
+  const Assembler a = scene.make_assembler();
+  const ControlSpace c(a.mesh(), a.geometry(), scene.control_kind);
+  const ForwardResult r =
+      solve_forward(scene, a, c, Eigen::VectorXd::Constant(c.size(), -0.5 * S));
+  EXPECT_TRUE(r.summary.converged()) << "L = " << L << ", S = " << S;
+  EXPECT_GT(r.summary.iterations, 0) << "L = " << L << ", S = " << S;
+  return r.state.u / L;
+}
+
+}  // namespace
+
+TEST(Scene, ScaleRangeEndsSolveTheScaledUnitProblem) {
+  const Eigen::VectorXd unit = strip_displacement(1.0, 1.0);
+  ASSERT_GT(unit.lpNorm<Eigen::Infinity>(), 1e-3);  // a visible bend
+  for (double L : {1e-6, 1e6})
+    for (double S : {1e-6, 1e12}) {
+      const Eigen::VectorXd u = strip_displacement(L, S);
+      EXPECT_LT((u - unit).lpNorm<Eigen::Infinity>(), 1e-8 * unit.lpNorm<Eigen::Infinity>())
+          << "L = " << L << ", S = " << S;
+    }
+  expect_error(scaled_strip(1e80, 1.0), {"mesh.upper", "1e-6 to 1e6"});
+  expect_error(scaled_strip(1e-90, 1.0), {"mesh.upper", "1e-6 to 1e6"});
+  expect_error(scaled_strip(1.0, 1e160), {"material", "1e-6 to 1e12"});
+  expect_error(scaled_strip(1.0, 1e-200), {"material", "1e-6 to 1e12"});
+}
+
+// Issue 29 item 6: a typo in a key is refused, naming it, the keys allowed there and the
+// closest one; "description" and "comment" stay free keys.
+TEST(Scene, UnknownKeysAreRefusedWithTheClosestName) {
+  const std::string b = read(kBending);
+  expect_error(replace(b, "\"initial\"", "\"inital\""),
+               {"in 'control'", "unknown key 'inital'", "did you mean 'initial'"});
+  expect_error(replace(b, "\"order\"", "\"oder\""), {"in 'mesh'", "did you mean 'order'"});
+  expect_error(replace(b, "\"upper\": 0", "\"uper\": 0"), {"'uper'", "did you mean 'upper'"});
+  expect_error(replace(b, "\"clamp\": [\"x0\"],", "\"clamp\": [\"x0\"], \"clmap\": [],"),
+               {"unknown key 'clmap'", "did you mean 'clamp'"});
+  expect_error(replace(b, "\"clamp\": [\"x0\"],", "\"clamp\": [\"x0\"], \"constraint\": [],"),
+               {"unknown key 'constraint'", "did you mean 'constraints'"});
+  expect_error(replace(b, "\"a\": 1e5,", "\"a\": 1e5, \"d\": 1,"), {"in 'material'", "'d'"});
+  expect_error(replace(b, "\"clamp\": [\"x0\"],",
+                       "\"clamp\": [\"x0\"], \"constraints\": [{\"face\": \"z0\", "
+                       "\"component\": [2]}],"),
+               {"constraints[]", "did you mean 'components'"});
+  EXPECT_NO_THROW(parse_scene(replace(b, "\"fibers\"", "\"comment\": \"x\", \"fibers\""), "c"));
+}
+
+// Issue 29 items 1 and 10: the name names the output folder, so it must be a plain file
+// name; control.initial outside the bounds names its key.
+TEST(Scene, NameMustBeAPlainFileNameAndInitialWithinBounds) {
+  const std::string b = read(kBending);
+  for (const char* bad : {"x;touch PWNED;#", "../up", "a/b", ".hidden", "", "-rf", "a b"})
+    expect_error(replace(b, "\"bending\"", nlohmann::json(bad).dump()), {"'name'", "plain"});
+  EXPECT_EQ(parse_scene(replace(b, "\"name\": \"bending\",", ""), "dir/my scene.json").name,
+            "my_scene");
+  expect_error(replace(b, "\"initial\": 0", "\"initial\": 5"), {"control.initial", "within"});
 }

@@ -43,4 +43,11 @@ class NumericalError : public Error {
   using Error::Error;
 };
 
+/// A state solve (the equilibrium for a control) that failed on valid input: Newton did not
+/// converge within its load steps. The CLI exits 1 for it, as for any NumericalError.
+class StateSolveError : public NumericalError {
+ public:
+  using NumericalError::NumericalError;
+};
+
 }  // namespace softhd

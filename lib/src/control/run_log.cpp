@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "softhd/error.hpp"
+#include "softhd/io/atomic_file.hpp"
 
 namespace softhd {
 
@@ -351,16 +352,23 @@ RunLogWriter::RunLogWriter(const std::string& path, const RunFingerprint& finger
   file_ = std::fopen(tmp.c_str(), "wb");
   if (!file_)
     throw FileError(path + ": cannot write the checkpoint (" + std::strerror(errno) + ")");
-  if (std::fwrite(kMagic, 1, 8, file_) != 8)
-    throw FileError(path + ": cannot write the checkpoint");
-  Encoder h;
-  h.put<std::uint64_t>(run_id_);
-  write_record('H', h.out + encode_fingerprint(fingerprint));
-  if (replayed)
-    for (const LoggedEvaluation& e : replayed->evaluations) append(e);
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw FileError(path + ": cannot write the checkpoint (" + ec.message() + ")");
+  try {
+    if (std::fwrite(kMagic, 1, 8, file_) != 8)
+      throw FileError(path + ": cannot write the checkpoint (" + std::strerror(errno) + ")");
+    Encoder h;
+    h.put<std::uint64_t>(run_id_);
+    write_record('H', h.out + encode_fingerprint(fingerprint));
+    if (replayed)
+      for (const LoggedEvaluation& e : replayed->evaluations) append(e);
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) throw FileError(path + ": cannot write the checkpoint (" + ec.message() + ")");
+  } catch (...) {  // no half-written temporary left behind
+    std::fclose(file_);
+    file_ = nullptr;
+    std::remove(tmp.c_str());
+    throw;
+  }
 }
 
 RunLogWriter::~RunLogWriter() {
@@ -381,15 +389,8 @@ void RunLogWriter::write_states(const RunSnapshot& snapshot) {
   r.put<std::uint64_t>(payload.size());
   r.out += payload;
   r.put<std::uint64_t>(fnv1a(r.out.data() + 8, r.out.size() - 8));
-  const std::string path = states_path(path_), tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out.write(r.out.data(), static_cast<std::streamsize>(r.out.size()));
-    if (!out) throw FileError(path + ": cannot write the checkpoint's states");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw FileError(path + ": cannot write the checkpoint's states (" + ec.message() + ")");
+  const std::string path = states_path(path_);
+  write_file_atomically(path, r.out);
 }
 
 void RunLogWriter::write_record(char kind, const std::string& payload) {

@@ -12,6 +12,7 @@
 #include "softhd/error.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/samplers.hpp"
+#include "../io/keys.hpp"
 
 namespace softhd {
 
@@ -101,8 +102,15 @@ SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh, double me
   if (!t.contains("kind") || !t["kind"].is_string())
     throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\"");
   const std::string kind = t["kind"].get<std::string>();
-  if (kind == "arc") return arc_target(scene, mesh, t, memory_limit);
-  if (kind == "cloud") return cloud_target(scene, mesh, t, memory_limit);
+  const std::string where = "scene " + scene.source;
+  if (kind == "arc") {
+    io::check_keys(t, where, "target", {"kind", "angle", "cells"});
+    return arc_target(scene, mesh, t, memory_limit);
+  }
+  if (kind == "cloud") {
+    io::check_keys(t, where, "target", {"kind", "file", "solved_on"});
+    return cloud_target(scene, mesh, t, memory_limit);
+  }
   throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\", got \"" + kind +
                         "\"");
 }

@@ -164,7 +164,7 @@ void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimize
   objective.remember_state(r.x, *best_state);
   const ShapeEvaluation final_eval = objective.evaluate(r.x, false);
   if (!final_eval.ok)
-    throw Error("the state solve at the best control failed: " + final_eval.failure);
+    throw StateSolveError("the state solve at the best control failed: " + final_eval.failure);
   s->control = r.x;
   s->displacement = objective.last_state().u;
   s->rho_final = final_eval.rho;
@@ -259,7 +259,8 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   const std::optional<double> floor = s.floor();
 
   const ShapeEvaluation start = objective.evaluate(m0, false);
-  if (!start.ok) throw Error("the state solve at the starting control failed: " + start.failure);
+  if (!start.ok)
+    throw StateSolveError("the state solve at the starting control failed: " + start.failure);
   s.rho_start = start.rho;
   if (callbacks.on_start) callbacks.on_start(s);
 

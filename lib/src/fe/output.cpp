@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "softhd/error.hpp"
+#include "softhd/io/atomic_file.hpp"
 #include "softhd/fe/shape.hpp"
 #include "softhd/io/vtu.hpp"
 
@@ -57,6 +58,7 @@ Eigen::VectorXd read_control_file(const std::string& path, const Eigen::MatrixXd
   }
   const double tol = std::isfinite(gap) ? 0.01 * gap : 1e-9;
   std::vector<Eigen::VectorXd> rows;
+  std::vector<int> row_lines;  // the file line of each row
   std::string line;
   int line_no = 0;
   while (std::getline(in, line)) {
@@ -80,16 +82,24 @@ Eigen::VectorXd read_control_file(const std::string& path, const Eigen::MatrixXd
                       " (X1 X2" + (dim == 3 ? " X3" : "") + " m)");
     }
     rows.push_back(Eigen::Map<Eigen::VectorXd>(v.data(), dim + 1));
+    row_lines.push_back(line_no);
   }
   // Linear search per control node: O(N rows), fine for the control meshes of the scenes.
   std::vector<char> used(rows.size(), 0);
   Eigen::VectorXd m(positions.rows());
   for (Eigen::Index k = 0; k < positions.rows(); ++k) {
     bool found = false;
-    for (size_t r = 0; r < rows.size() && !found; ++r) {
-      if ((rows[r].head(dim) - positions.row(k).transpose()).norm() <= tol) {
+    std::size_t first = 0;
+    for (size_t r = 0; r < rows.size(); ++r) {
+      if ((rows[r].head(dim) - positions.row(k).transpose()).norm() > tol) continue;
+      if (!found) {
         m[k] = rows[r][dim];
         found = true;
+        first = r;
+      } else if (rows[r][dim] != m[k]) {  // two values for one node: which one was meant?
+        throw FileError("control file " + path + ": lines " + std::to_string(row_lines[first]) +
+                        " and " + std::to_string(row_lines[r]) +
+                        " give different values for the same control node");
       }
     }
     if (!found) {
@@ -104,15 +114,14 @@ Eigen::VectorXd read_control_file(const std::string& path, const Eigen::MatrixXd
 
 void write_control_file(const std::string& path, const Eigen::MatrixXd& positions,
                         const Eigen::VectorXd& values) {
-  std::ofstream out(path);
-  if (!out) throw FileError("cannot write " + path);
+  std::ostringstream out;
   out << "# control nodes: X1 X2" << (positions.cols() == 3 ? " X3" : "") << " m\n";
   out.precision(17);
   for (Eigen::Index k = 0; k < positions.rows(); ++k) {
     for (Eigen::Index d = 0; d < positions.cols(); ++d) out << positions(k, d) << ' ';
     out << values[k] << '\n';
   }
-  if (!out) throw FileError("error while writing " + path);
+  write_file_atomically(path, out.str());
 }
 
 }  // namespace softhd::fe

@@ -7,6 +7,7 @@
 
 #include "softhd/error.hpp"
 #include "softhd/fe/newton.hpp"
+#include "../io/keys.hpp"
 
 namespace softhd::fe {
 
@@ -19,6 +20,11 @@ class Reader {
  public:
   explicit Reader(std::string source) : source_(std::move(source)) {}
 
+  // Refuses keys of `object` (at `path`, "" for the top level) outside `allowed`.
+  void keys(const json& object, const std::string& path,
+            std::initializer_list<const char*> allowed) const {
+    io::check_keys(object, "scene " + source_, path, allowed);
+  }
   [[noreturn]] void fail(const std::string& key, const std::string& expected) const {
     throw FileError("scene " + source_ + ": key '" + key + "' " + expected);
   }
@@ -64,6 +70,8 @@ class Reader {
 
 std::shared_ptr<const Material> read_material(const Reader& r, const json& m, std::string* model) {
   *model = r.string(m, "model", "material.model");
+  if (*model == "mooney_rivlin") r.keys(m, "material", {"model", "a", "b", "c"});
+  if (*model == "transversely_isotropic") r.keys(m, "material", {"model", "a", "b", "c", "d", "f"});
   try {
     if (*model == "mooney_rivlin") {
       return std::make_shared<MooneyRivlin>(r.number(m, "a", "material.a"),
@@ -83,6 +91,49 @@ std::shared_ptr<const Material> read_material(const Reader& r, const json& m, st
          "must be \"mooney_rivlin\" or \"transversely_isotropic\", got \"" + *model + "\"");
 }
 
+// A scene's name names its default output folder (results/<name>): a plain file name of
+// letters, digits, '.', '_', '+' and '-', not starting with '.' or '-', at most 100 characters.
+bool plain_file_name(const std::string& name) {
+  if (name.empty() || name.size() > 100 || name[0] == '.' || name[0] == '-') return false;
+  for (char c : name) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '.' || c == '_' || c == '+' || c == '-';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+// The name of a scene without "name": its file name without folder and extension, made plain.
+std::string default_name(const std::string& source) {
+  std::string stem = source.substr(source.find_last_of('/') + 1);
+  stem = stem.substr(0, stem.find_last_of('.'));
+  for (char& c : stem)
+    if (!plain_file_name(std::string("a") + c)) c = '_';
+  while (!stem.empty() && (stem[0] == '.' || stem[0] == '-')) stem.erase(0, 1);
+  return plain_file_name(stem) ? stem : "scene";
+}
+
+// Lengths and stresses softhd solves in double precision: |Ω₀|, residuals (stress × area)
+// and tangents (stress × length) stay far from overflow and underflow, and the state's
+// tolerances (relative to stiffness × |Ω₀|^((d-1)/d)) stay meaningful. Tested at both ends
+// of both ranges against the unit problem, scaled (tests/fe/test_scene.cpp).
+constexpr double kMinLength = 1e-6, kMaxLength = 1e6;
+constexpr double kMinStress = 1e-6, kMaxStress = 1e12;
+
+void check_scales(const Reader& r, const Scene& s) {
+  const double size = (s.upper - s.lower).maxCoeff();
+  if (!(size >= kMinLength && size <= kMaxLength))
+    r.fail("mesh.upper", "gives a body of size " + std::to_string(size) +
+                             ": softhd solves bodies from 1e-6 to 1e6 in size (change units)");
+  for (int d = 0; d < s.dim(); ++d)
+    if (!(std::abs(s.lower[d]) <= 1e3 * kMaxLength))
+      r.fail("mesh.lower", "must lie within 1e9 of the origin (change units or origin)");
+  const double stress = s.material->stiffness_scale();
+  if (!(stress >= kMinStress && stress <= kMaxStress))
+    r.fail("material", "has a stiffness of " + std::to_string(stress) +
+                           ": softhd solves stiffnesses from 1e-6 to 1e12 (change units)");
+}
+
 }  // namespace
 
 Scene parse_scene(const std::string& text, const std::string& source, double memory_limit) {
@@ -94,10 +145,17 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
   }
   const Reader r(source);
   if (!doc.is_object()) r.fail("(top level)", "must be an object");
+  r.keys(doc, "",
+                 {"name", "mesh", "material", "fibers", "clamp", "constraints", "control", "target"});
   Scene s;
   s.source = source;
-  s.name = doc.contains("name") ? r.string(doc, "name", "name") : source;
+  s.name = doc.contains("name") ? r.string(doc, "name", "name") : default_name(source);
+  if (!plain_file_name(s.name))
+    r.fail("name", "must be a plain file name (letters, digits, '.', '_', '+', '-'; not starting "
+                   "with '.' or '-'; at most 100 characters): it names the output folder, got " +
+                       json(s.name).dump());
   const json& mesh = r.object(doc, "mesh", "mesh");
+  r.keys(mesh, "mesh", {"type", "lower", "upper", "cells", "order"});
   if (r.string(mesh, "type", "mesh.type") != "box") r.fail("mesh.type", "must be \"box\"");
   s.lower = r.numbers(mesh, "lower", "mesh.lower", 2, 3);
   s.upper = r.numbers(mesh, "upper", "mesh.upper", 2, 3);
@@ -115,7 +173,9 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
   if (order != 1 && order != 2) r.fail("mesh.order", "must be 1 or 2");
   s.order = static_cast<int>(order);
   check_mesh_size(box_mesh_size(cells, s.order), memory_limit, "scene " + source + ": the mesh");
-  s.material = read_material(r, r.object(doc, "material", "material"), &s.material_model);
+  const json& material = r.object(doc, "material", "material");
+  s.material = read_material(r, material, &s.material_model);
+  check_scales(r, s);
   const Eigen::VectorXd f = r.numbers(doc, "fibers", "fibers", 3, 3);
   if (!(f.norm() > 0.0)) r.fail("fibers", "must be a non-zero vector");
   if (s.dim() == 2 && f[2] != 0.0) r.fail("fibers", "must have a zero third component in 2D");
@@ -129,6 +189,7 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
   if (doc.contains("constraints")) {
     if (!doc["constraints"].is_array()) r.fail("constraints", "must be an array");
     for (const json& c : doc["constraints"]) {
+      r.keys(c, "constraints[]", {"face", "components"});
       const Eigen::VectorXd comps = r.numbers(c, "components", "constraints[].components", 1, 3);
       DirichletConstraint dc{r.string(c, "face", "constraints[].face"), {}};
       for (double k : comps) {
@@ -142,6 +203,7 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
     }
   }
   const json& control = r.object(doc, "control", "control");
+  r.keys(control, "control", {"space", "lower", "upper", "initial"});
   try {
     s.control_kind = parse_control_kind(r.string(control, "space", "control.space"));
   } catch (const InvalidArgument&) {
@@ -152,6 +214,10 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
   s.control_initial =
       control.contains("initial") ? r.number(control, "initial", "control.initial") : 0.0;
   if (!(s.control_lower <= s.control_upper)) r.fail("control.upper", "must be >= control.lower");
+  if (!(s.control_initial >= s.control_lower && s.control_initial <= s.control_upper))
+    r.fail("control.initial", "must lie within [control.lower, control.upper] = [" +
+                                  std::to_string(s.control_lower) + ", " +
+                                  std::to_string(s.control_upper) + "]");
   if (!(s.control_upper < 2.0 * s.material->a()))
     r.fail("control.upper", "must be < 2a (docs/formulation.md §3.3: existence needs m < 2a)");
   if (doc.contains("target")) s.target_json = doc["target"].dump();

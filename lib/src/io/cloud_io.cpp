@@ -13,6 +13,8 @@
 #include <vector>
 
 #include "softhd/error.hpp"
+#include "softhd/hausdorff.hpp"
+#include "softhd/io/atomic_file.hpp"
 
 namespace softhd {
 namespace {
@@ -38,16 +40,7 @@ std::string read_file(const std::string& path) {
 }
 
 void write_file(const std::string& path, const std::string& data) {
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  if (f == nullptr) {
-    throw FileError("cannot open '" + path + "' for writing: " + std::strerror(errno));
-  }
-  const bool wrote = std::fwrite(data.data(), 1, data.size(), f) == data.size();
-  const int err = errno;
-  const bool closed = std::fclose(f) == 0;
-  if (!wrote || !closed) {
-    throw FileError("cannot write '" + path + "': " + std::strerror(err != 0 ? err : EIO));
-  }
+  write_file_atomically(path, data);
 }
 
 [[noreturn]] void fail_at(const std::string& path, std::size_t line, const std::string& what) {
@@ -83,6 +76,11 @@ const char* parse_double(std::string_view token, double& value) {
 const char* check_value(double value, bool volume) {
   if (!std::isfinite(value)) return volume ? "non-finite volume" : "non-finite coordinate";
   if (volume && !(value > 0.0)) return "volume must be > 0";
+  // The distance refuses larger coordinates (their squares could overflow): say so here,
+  // where the file and line are known.
+  if (!volume && std::abs(value) > kMaxCoordinate)
+    return "coordinate beyond +-1e150, which the distance cannot square (rescale the cloud and "
+           "epsilon)";
   return nullptr;
 }
 

@@ -8,19 +8,6 @@
 
 namespace softhd {
 
-void write_file_atomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw FileError("cannot write '" + tmp + "'");
-    out << text;
-    out.flush();
-    if (!out) throw FileError("error while writing '" + tmp + "'");
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0)
-    throw FileError("cannot rename '" + tmp + "' to '" + path + "'");
-}
-
 namespace {
 
 void check_rows(const std::vector<VtuField>& fields, Eigen::Index rows, const char* what) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "softhd/fe/mesh.hpp"
+#include "softhd/io/atomic_file.hpp"
 #include "softhd/point_cloud.hpp"
 
 namespace softhd {
@@ -34,9 +35,5 @@ void write_vtu_cloud(const std::string& path, const PointCloud& cloud,
 
 /// A ParaView collection: (time, file name relative to the .pvd) pairs.
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& files);
-
-/// Writes `text` to `path` atomically (a temporary file renamed over it), so an
-/// interrupted run never leaves a truncated file. Throws FileError.
-void write_file_atomically(const std::string& path, const std::string& text);
 
 }  // namespace softhd
