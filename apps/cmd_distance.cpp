@@ -3,15 +3,15 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <sstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <stdexcept>
 
 #include "cli.hpp"
-#include "softhd/io/atomic_file.hpp"
 #include "commands.hpp"
 #include "softhd/hausdorff.hpp"
+#include "softhd/io/atomic_file.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/work_share.hpp"
 

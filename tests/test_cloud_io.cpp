@@ -533,7 +533,8 @@ TEST(AtomicFile, AFailedWriteKeepsTheOldFileAndLeavesNoTemporary) {
   fs::create_directories(dir);
   const std::string path = (dir / "out.txt").string();
   softhd::write_file_atomically(path, "old\n");
-  struct sigaction ignore {}, old_action {};
+  struct sigaction ignore {
+  }, old_action{};
   ignore.sa_handler = SIG_IGN;
   sigaction(SIGXFSZ, &ignore, &old_action);  // writes past the limit then fail with EFBIG
   rlimit old_limit{};
@@ -563,5 +564,5 @@ TEST(AtomicFile, AFailedWriteKeepsTheOldFileAndLeavesNoTemporary) {
 TEST(AtomicFile, ADeviceIsWrittenDirectlyAndAFullOneIsAnError) {
   EXPECT_NO_THROW(softhd::write_file_atomically("/dev/null", "x"));
   EXPECT_THROW(softhd::write_file_atomically("/dev/full", "x"), softhd::FileError);
-  EXPECT_TRUE(std::filesystem::is_character_device("/dev/full"));
+  EXPECT_TRUE(std::filesystem::is_character_file("/dev/full"));
 }

@@ -111,5 +111,27 @@ TEST(ShapeTracking, RejectsAMapOfTheWrongSize) {
       [&] { track_shape(J, z.array() - 1.0, z, z, Eigen::VectorXd::Zero(5)); }, "known map");
 }
 
+// A start whose state solve fails on valid input is a numerical failure (StateSolveError, a
+// NumericalError: the CLI exits 1), not bad input. Newton is given one iteration and one
+// load step, which cannot reach the bent state.
+TEST(ShapeTracking, AFailedStartingSolveIsAStateSolveError) {
+  const fe::Assembler A = beam();
+  const fe::ControlSpace space(A.mesh(), A.geometry(), fe::ControlKind::kVertex);
+  ShapeObjectiveOptions o;
+  o.newton.max_iterations = 1;
+  o.newton.max_load_steps = 1;
+  ShapeObjective J(A, space, HausdorffTarget(manufacture(A, space).target, o.hausdorff), o);
+  const Eigen::VectorXd z = Eigen::VectorXd::Zero(space.size());
+  const Eigen::VectorXd m0 = Eigen::VectorXd::Constant(space.size(), -0.5);
+  try {
+    track_shape(J, z.array() - 1.0, z, m0, std::nullopt);
+    ADD_FAILURE() << "no error";
+  } catch (const StateSolveError& e) {
+    EXPECT_NE(std::string(e.what()).find("starting control failed"), std::string::npos);
+    const NumericalError* numerical = &e;  // the CLI's exit status 1
+    EXPECT_NE(numerical, nullptr);
+  }
+}
+
 }  // namespace
 }  // namespace softhd::test

@@ -8,11 +8,11 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "../io/keys.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/samplers.hpp"
-#include "../io/keys.hpp"
 
 namespace softhd {
 

@@ -153,11 +153,15 @@ TrackingIteration record(const IterationRecord& rec, const ShapeEvaluation& last
 // The final state (the best control's, re-solved from the nearest warm start) and the
 // summary's totals.
 void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimizerSummary& r,
-            const std::optional<Eigen::VectorXd>& map_displacement, fe::State* best_state,
-            ShapeTrackingSummary* s) {
-  // The states at the end too, so that a finished run resumed replays all of it; then, in a
-  // run resumed after its end, the states it ended with.
-  recorder.snapshot(r.iterations, *best_state);
+            const std::optional<Eigen::VectorXd>& map_displacement, int checkpoint_every,
+            fe::State* best_state, ShapeTrackingSummary* s) {
+  // The states at the end only on the checkpoint schedule (every checkpoint_every
+  // iterations), where the uninterrupted run renews its solver too: a finished run continued
+  // with a larger limit then replays to its last scheduled snapshot and recomputes the
+  // iterations after it, and so is the uninterrupted run bit for bit (an extra snapshot at an
+  // off-schedule end renewed the solver there, which the uninterrupted run never does).
+  if (r.iterations % checkpoint_every == 0) recorder.snapshot(r.iterations, *best_state);
+  // In a run resumed after its end, the states it ended with.
   recorder.restore(best_state);
   // The best control's state, evaluated again from its own state (Newton stops at once
   // there, so the final ρ̃ is the one the optimiser saw).
@@ -319,7 +323,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     opt.max_seconds = std::max(1e-9, opt.max_seconds - recorder.logged_seconds());
   const BoundedOptimizerSummary r = minimise(f, m0, lower, upper, opt, on_iteration);
   if (error) std::rethrow_exception(error);
-  finish(objective, recorder, r, map_displacement, &best_state, &s);
+  finish(objective, recorder, r, map_displacement, options.checkpoint_every, &best_state, &s);
   if (self_floor && map_displacement) s.floor_self = Y.evaluate(Y.cloud()).rho;
   return s;
 }

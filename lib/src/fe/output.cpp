@@ -8,8 +8,8 @@
 #include <sstream>
 
 #include "softhd/error.hpp"
-#include "softhd/io/atomic_file.hpp"
 #include "softhd/fe/shape.hpp"
+#include "softhd/io/atomic_file.hpp"
 #include "softhd/io/vtu.hpp"
 
 namespace softhd::fe {

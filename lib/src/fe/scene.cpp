@@ -5,9 +5,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "../io/keys.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/newton.hpp"
-#include "../io/keys.hpp"
 
 namespace softhd::fe {
 
@@ -146,14 +146,15 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
   const Reader r(source);
   if (!doc.is_object()) r.fail("(top level)", "must be an object");
   r.keys(doc, "",
-                 {"name", "mesh", "material", "fibers", "clamp", "constraints", "control", "target"});
+         {"name", "mesh", "material", "fibers", "clamp", "constraints", "control", "target"});
   Scene s;
   s.source = source;
   s.name = doc.contains("name") ? r.string(doc, "name", "name") : default_name(source);
   if (!plain_file_name(s.name))
-    r.fail("name", "must be a plain file name (letters, digits, '.', '_', '+', '-'; not starting "
-                   "with '.' or '-'; at most 100 characters): it names the output folder, got " +
-                       json(s.name).dump());
+    r.fail("name",
+           "must be a plain file name (letters, digits, '.', '_', '+', '-'; not starting "
+           "with '.' or '-'; at most 100 characters): it names the output folder, got " +
+               json(s.name).dump());
   const json& mesh = r.object(doc, "mesh", "mesh");
   r.keys(mesh, "mesh", {"type", "lower", "upper", "cells", "order"});
   if (r.string(mesh, "type", "mesh.type") != "box") r.fail("mesh.type", "must be \"box\"");

@@ -27,8 +27,7 @@ std::string holder_pid(int fd) {
 FolderLock::FolderLock(const std::string& dir) {
   const std::string path = dir + "/.softhd.lock";
   fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd_ < 0)
-    throw FileError("cannot lock the folder '" + dir + "': " + std::strerror(errno));
+  if (fd_ < 0) throw FileError("cannot lock the folder '" + dir + "': " + std::strerror(errno));
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
     const std::string pid = holder_pid(fd_);
