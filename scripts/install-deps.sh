@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages softhd needs to build, test, run the demo, draw its
 # plots, build and test the Python module (pybind11, pytest, PyTorch for softhd.torch) and
-# build the API reference (doxygen), and only those that are missing.
+# build the API reference (doxygen), make and check meshes (gmsh, python3-meshio: the
+# program only, libgmsh is never linked), and only those that are missing.
 # Safe to run again. --mpi adds Open MPI and PETSc (the SOFTHD_WITH_MPI build:
 # libopenmpi-dev, openmpi-bin, petsc-dev).
 set -euo pipefail
@@ -14,6 +15,7 @@ packages=(
   python3-dev pybind11-dev python3-pytest python3-torch
   clang libclang-rt-14-dev libomp-14-dev
   doxygen
+  gmsh python3-meshio
 )
 if [ "${1:-}" = "--mpi" ]; then
   packages+=(libopenmpi-dev openmpi-bin petsc-dev)

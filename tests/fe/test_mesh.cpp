@@ -44,14 +44,14 @@ TEST(Shape, PartitionOfUnityKroneckerAndGradient) {
 }
 
 TEST(Shape, GaussRuleIntegratesOddDegreeExactly) {
-  for (int n = 1; n <= 4; ++n) {
+  for (int n = 1; n <= 12; ++n) {  // closed forms up to 4, Golub-Welsch beyond
     Eigen::VectorXd x, w;
     gauss_legendre(n, &x, &w);
     for (int k = 0; k <= 2 * n - 1; ++k) {
       const double exact = (k % 2 == 1) ? 0.0 : 2.0 / (k + 1);
       double sum = 0.0;
       for (int i = 0; i < n; ++i) sum += w[i] * std::pow(x[i], k);
-      EXPECT_NEAR(sum, exact, 1e-14) << n << " " << k;
+      EXPECT_NEAR(sum, exact, 2e-14) << n << " " << k;
     }
   }
 }

@@ -5,30 +5,6 @@
 
 namespace softhd::fe {
 
-void gauss_legendre(int n, Eigen::VectorXd* points, Eigen::VectorXd* weights) {
-  assert(n >= 1 && n <= 4);
-  points->resize(n);
-  weights->resize(n);
-  if (n == 1) {
-    *points << 0.0;
-    *weights << 2.0;
-  } else if (n == 2) {
-    const double g = 1.0 / std::sqrt(3.0);
-    *points << -g, g;
-    *weights << 1.0, 1.0;
-  } else if (n == 3) {
-    const double g = std::sqrt(0.6);
-    *points << -g, 0.0, g;
-    *weights << 5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0;
-  } else {
-    const double a = std::sqrt(3.0 / 7.0 - 2.0 / 7.0 * std::sqrt(1.2));
-    const double b = std::sqrt(3.0 / 7.0 + 2.0 / 7.0 * std::sqrt(1.2));
-    const double wa = (18.0 + std::sqrt(30.0)) / 36.0, wb = (18.0 - std::sqrt(30.0)) / 36.0;
-    *points << -b, -a, a, b;
-    *weights << wb, wa, wa, wb;
-  }
-}
-
 namespace {
 
 // 1-D Lagrange basis of order p at equispaced nodes -1 + 2i/p: values and derivatives.

@@ -7,7 +7,8 @@
 
 namespace softhd::fe {
 
-/// Gauss-Legendre rule with n = 1..4 points on [-1, 1]: points and weights.
+/// Gauss-Legendre rule with n >= 1 points on [-1, 1]: points and weights (closed forms up to
+/// 4 points, Golub-Welsch beyond; lib/src/fe/quadrature.cpp).
 void gauss_legendre(int n, Eigen::VectorXd* points, Eigen::VectorXd* weights);
 
 /// Values (nen) and reference gradients (nen by dim) of the order-p Lagrange shape
