@@ -182,7 +182,7 @@ TEST(Assembly, ElementSinkSumsToTheAssembledTangent) {
 TEST(Assembly, LeanAssemblerEqualsFullToRounding) {
   for (const Discretisation& s : setups()) {
     const Assembler A = make(s);
-    const Assembler B(A.mesh(), fe_test::mooney_rivlin(), A.fiber(), {{"x0", {}}},
+    const Assembler B(A.mesh(), fe_test::mooney_rivlin(), A.fiber(0, 0), {{"x0", {}}},
                       AssemblerStorage::kLean);
     EXPECT_TRUE(A.geometry().stores_gradients());
     EXPECT_FALSE(B.geometry().stores_gradients());

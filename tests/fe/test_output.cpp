@@ -60,7 +60,7 @@ TEST(Output, ControlFileRoundTripAndMissingNode) {
   std::remove(path.c_str());
 }
 
-TEST(Output, VtuHasOneLinearCellPerSubCell) {
+TEST(Output, VtuHasOneQuadraticCellPerElement) {
   const Assembler A(fe_test::box(2, 2, {2.0, 1.0, 0.0}, {3, 2, 1}), fe_test::mooney_rivlin(),
                     Eigen::Vector3d::UnitX(), {});
   const std::string path = std::string(SOFTHD_BINARY_DIR) + "/test_output.vtu";
@@ -70,6 +70,7 @@ TEST(Output, VtuHasOneLinearCellPerSubCell) {
   std::ifstream in(path);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("NumberOfPoints=\"35\""), std::string::npos);  // 7 × 5 nodes
-  EXPECT_NE(text.find("NumberOfCells=\"24\""), std::string::npos);   // 6 elements × 4
+  EXPECT_NE(text.find("NumberOfCells=\"6\""), std::string::npos);  // one VTK_BIQUADRATIC_QUAD each
+  EXPECT_NE(text.find("\n 28 28 28 28 28 28\n"), std::string::npos);
   std::remove(path.c_str());
 }

@@ -47,7 +47,8 @@ Eigen::Vector3i arc_grid(const fe::Scene& scene, const nlohmann::json& t, double
 
 SceneTarget arc_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlohmann::json& t,
                        double memory_limit) {
-  if (scene.dim() != 3) throw InvalidArgument(scene.source + ": target.kind arc needs a 3D body");
+  if (scene.dim() != 3 || !scene.is_box())
+    throw InvalidArgument(scene.source + ": target.kind arc needs a 3D box body (mesh.type box)");
   double angle = ArcMap().angle;
   if (t.contains("angle")) {
     if (!t["angle"].is_number())

@@ -210,7 +210,7 @@ ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::Control
     // make |R(0; m)| tiny, and 1e-9 of a tiny reference lies below the residual's round-off.
     const double volume = fe::lumped_volumes(assembler.mesh(), assembler.geometry()).sum();
     options.newton.absolute_tolerance =
-        fe::residual_floor(assembler.material().stiffness_scale(), volume, assembler.mesh().dim);
+        fe::residual_floor(assembler.stiffness_scale(), volume, assembler.mesh().dim);
   }
   impl_ = std::make_unique<Impl>(assembler, control, std::move(target), std::move(options),
                                  make_solver);

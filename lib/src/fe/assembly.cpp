@@ -30,21 +30,40 @@ constexpr Eigen::Index kChunk = 128;
 
 }  // namespace
 
+namespace {
+
+FiberField uniform(const Eigen::Vector3d& a0) {
+  FiberField f;
+  f.values = a0;
+  return f;
+}
+
+}  // namespace
+
 Assembler::Assembler(Mesh mesh, std::shared_ptr<const Material> material, const Eigen::Vector3d& a0,
                      const std::vector<DirichletConstraint>& constraints, AssemblerStorage storage)
+    : Assembler(std::move(mesh),
+                std::vector<std::shared_ptr<const Material>>(1, std::move(material)), uniform(a0),
+                constraints, storage) {}
+
+Assembler::Assembler(Mesh mesh, std::vector<std::shared_ptr<const Material>> materials,
+                     const FiberField& fibers, const std::vector<DirichletConstraint>& constraints,
+                     AssemblerStorage storage)
     : mesh_(std::move(mesh)),
       storage_(storage),
       geometry_(mesh_, storage == AssemblerStorage::kFull ? GradientStorage::kStored
                                                           : GradientStorage::kOnDemand),
-      material_(std::move(material)) {
-  if (!material_) throw InvalidArgument("assembler: no material given");
-  const double n = a0.norm();
-  if (!(n > 0.0) || !std::isfinite(n))
-    throw InvalidArgument("assembler: fiber direction must be non-zero");
-  a0_ = a0 / n;
-  if (mesh_.dim == 2 && a0_[2] != 0.0) {
-    throw InvalidArgument("assembler: in 2D the fiber direction must lie in the plane (a0[2] = 0)");
-  }
+      materials_(std::move(materials)) {
+  if (materials_.empty()) throw InvalidArgument("assembler: no material given");
+  for (const auto& m : materials_)
+    if (!m) throw InvalidArgument("assembler: no material given");
+  if (mesh_.element_region.size() == 0) mesh_.element_region.setZero(mesh_.num_elements());
+  if (mesh_.element_region.size() != mesh_.num_elements() ||
+      mesh_.element_region.maxCoeff() >= static_cast<int>(materials_.size()) ||
+      mesh_.element_region.minCoeff() < 0)
+    throw InvalidArgument("assembler: " + std::to_string(materials_.size()) +
+                          " materials for the mesh's regions");
+  set_fibers(fibers);
   dofs_ = make_dof_map(mesh_, constraints);
   if (storage_ == AssemblerStorage::kLean) return;
   // Sparsity pattern of the lower triangle on the free dofs, then element maps into it.
@@ -80,6 +99,50 @@ Assembler::Assembler(Mesh mesh, std::shared_ptr<const Material> material, const 
             static_cast<int>(std::lower_bound(begin, end, fr[i]) - inner);
       }
   }
+}
+
+void Assembler::set_fibers(const FiberField& field) {
+  const Eigen::Index E = mesh_.num_elements(), N = mesh_.num_nodes();
+  const int nq = geometry_.points_per_element(), nen = mesh_.nodes_per_element();
+  const Eigen::Index expected = field.kind == FiberField::Kind::kUniform   ? 1
+                                : field.kind == FiberField::Kind::kElement ? E
+                                                                           : N;
+  if (field.values.cols() != expected)
+    throw InvalidArgument("assembler: the fiber field has " + std::to_string(field.values.cols()) +
+                          " directions for " + std::to_string(expected));
+  if (field.kind == FiberField::Kind::kUniform) {
+    fibers_ = field.values;
+  } else {
+    fibers_.resize(3, E * nq);
+    for (Eigen::Index e = 0; e < E; ++e)
+      for (int q = 0; q < nq; ++q) {
+        // a₀(X_q) = Σ_a N_a(ξ_q) a_a (per node) or the element's, then normalised
+        Eigen::Vector3d a = Eigen::Vector3d::Zero();
+        if (field.kind == FiberField::Kind::kElement)
+          a = field.values.col(e);
+        else
+          for (int b = 0; b < nen; ++b)
+            a += geometry_.shape_values()(q, b) * field.values.col(mesh_.elements(e, b));
+        fibers_.col(e * nq + q) = a;
+      }
+  }
+  for (Eigen::Index k = 0; k < fibers_.cols(); ++k) {
+    const double n = fibers_.col(k).norm();
+    if (!(n > 0.0) || !std::isfinite(n))
+      throw InvalidArgument("assembler: fiber direction must be non-zero" +
+                            (fibers_.cols() > 1 ? " (element " + std::to_string(k / nq) + ")"
+                                                : std::string()));
+    fibers_.col(k) /= n;
+    if (mesh_.dim == 2 && fibers_(2, k) != 0.0)
+      throw InvalidArgument(
+          "assembler: in 2D the fiber direction must lie in the plane (a0[2] = 0)");
+  }
+}
+
+double Assembler::stiffness_scale() const {
+  double s = 0.0;
+  for (const auto& m : materials_) s = std::max(s, m->stiffness_scale());
+  return s;
 }
 
 SparseMatrix Assembler::tangent_pattern() const {
@@ -138,7 +201,9 @@ bool Assembler::element_kernel(const Eigen::VectorXd& u, const Eigen::MatrixXd& 
     Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
     F.topLeftCorner(dim, dim).noalias() += w.Ue * G.transpose();
     if (!(F.determinant() > 0.0)) return false;
-    const PointResponse pr = evaluate_point(*material_, a0_, m_qp(e, q), F, tangent != nullptr);
+    const PointResponse pr =
+        evaluate_point(*materials_[mesh_.element_region[e]], fiber(e, q), m_qp(e, q), F,
+                       tangent != nullptr);
     const double wq = geometry_.weights()(e, q);
     We += wq * pr.W;  // Π_e = Σ_q w_q det J0 (W + W_m)
     // r_e(a, i) = Σ_q w_q Σ_J P_iJ ∂N_a/∂X_J
@@ -283,7 +348,8 @@ Eigen::MatrixXd Assembler::fiber_sensitivity(const Eigen::VectorXd& u,
       const Eigen::Matrix3d F = deformation_gradient(u, e, q);
       // ∇λ = Σ_a λ_a ⊗ ∇N_a, computed as "F − I" of λ
       const Eigen::Matrix3d Glam = deformation_gradient(lambda, e, q) - Eigen::Matrix3d::Identity();
-      s(e, q) = geometry_.weights()(e, q) * (F * a0_).dot(Glam * a0_);
+      const Eigen::Vector3d a0 = fiber(e, q);
+      s(e, q) = geometry_.weights()(e, q) * (F * a0).dot(Glam * a0);
     }
   return s;
 }

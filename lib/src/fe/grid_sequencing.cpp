@@ -22,6 +22,9 @@ std::string GridSequencingReport::BriefReport() const {
 }
 
 Scene coarsened(const Scene& scene) {
+  if (!scene.is_box())
+    throw InvalidArgument("grid sequencing: the body's mesh comes from a file (" + scene.mesh_file +
+                          "), which cannot be halved");
   Scene coarse = scene;
   bool halved = false;
   for (Eigen::Index k = 0; k < coarse.cells.size(); ++k) {
@@ -40,6 +43,9 @@ Scene coarsened(const Scene& scene) {
 
 int grid_levels(const Scene& scene, const GridSequencingOptions& options) {
   options.validate();
+  // A mesh from a file has no structured grid to halve: automatic levels are 0, and asking
+  // for levels is refused by coarsened().
+  if (!scene.is_box() && options.levels < 0) return 0;
   if (options.levels >= 0) {
     Scene s = scene;
     for (int l = 0; l < options.levels; ++l) s = coarsened(s);  // throws if it cannot

@@ -1,13 +1,17 @@
 #include "softhd/fe/scene.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "../io/keys.hpp"
 #include "softhd/error.hpp"
+#include "softhd/fe/gmsh_mesh.hpp"
 #include "softhd/fe/newton.hpp"
+#include "softhd/io/cloud_io.hpp"
+#include "softhd/io/msh.hpp"
 
 namespace softhd::fe {
 
@@ -122,16 +126,228 @@ constexpr double kMinStress = 1e-6, kMaxStress = 1e12;
 
 void check_scales(const Reader& r, const Scene& s) {
   const double size = (s.upper - s.lower).maxCoeff();
+  const char* where = s.is_box() ? "mesh.upper" : "mesh.scale";
   if (!(size >= kMinLength && size <= kMaxLength))
-    r.fail("mesh.upper", "gives a body of size " + std::to_string(size) +
+    r.fail(where, "gives a body of size " + std::to_string(size) +
                              ": softhd solves bodies from 1e-6 to 1e6 in size (change units)");
   for (int d = 0; d < s.dim(); ++d)
     if (!(std::abs(s.lower[d]) <= 1e3 * kMaxLength))
-      r.fail("mesh.lower", "must lie within 1e9 of the origin (change units or origin)");
-  const double stress = s.material->stiffness_scale();
-  if (!(stress >= kMinStress && stress <= kMaxStress))
-    r.fail("material", "has a stiffness of " + std::to_string(stress) +
-                           ": softhd solves stiffnesses from 1e-6 to 1e12 (change units)");
+      r.fail(s.is_box() ? "mesh.lower" : "mesh.scale",
+             "must lie within 1e9 of the origin (change units or origin)");
+  for (const auto& m : s.materials) {
+    const double stress = m->stiffness_scale();
+    if (!(stress >= kMinStress && stress <= kMaxStress))
+      r.fail(s.materials.size() > 1 ? "materials" : "material",
+             "has a stiffness of " + std::to_string(stress) +
+                 ": softhd solves stiffnesses from 1e-6 to 1e12 (change units)");
+  }
+}
+
+}  // namespace
+
+namespace {
+
+void parse_box_mesh(const Reader& r, const json& mesh, double memory_limit, Scene* s) {
+  r.keys(mesh, "mesh", {"type", "lower", "upper", "cells", "order", "quadrature_degree"});
+  s->lower = r.numbers(mesh, "lower", "mesh.lower", 2, 3);
+  s->upper = r.numbers(mesh, "upper", "mesh.upper", 2, 3);
+  if (s->upper.size() != s->lower.size())
+    r.fail("mesh.upper", "must have the size of mesh.lower");
+  for (int d = 0; d < s->dim(); ++d)
+    if (!(s->upper[d] > s->lower[d])) r.fail("mesh.upper", "must be > mesh.lower on every axis");
+  const Eigen::VectorXd cells = r.numbers(mesh, "cells", "mesh.cells", s->dim(), s->dim());
+  s->cells.resize(s->dim());
+  for (int d = 0; d < s->dim(); ++d) {
+    if (!(cells[d] >= 1) || cells[d] != std::floor(cells[d]) || cells[d] > 1e6)
+      r.fail("mesh.cells", "must hold positive integers, got " + std::to_string(cells[d]));
+    s->cells[d] = static_cast<int>(cells[d]);
+  }
+  const double order = r.number(mesh, "order", "mesh.order");
+  if (order != 1 && order != 2) r.fail("mesh.order", "must be 1 or 2");
+  s->order = static_cast<int>(order);
+  check_mesh_size(box_mesh_size(cells, s->order), memory_limit,
+                  "scene " + s->source + ": the mesh");
+  s->volume = (s->upper - s->lower).prod();
+}
+
+// mesh.type "gmsh": the file (relative to the scene's folder) read and turned into the mesh.
+void parse_gmsh_mesh(const Reader& r, const json& mesh, Scene* s) {
+  r.keys(mesh, "mesh", {"type", "file", "order", "scale", "quadrature_degree"});
+  GmshMeshOptions o;
+  if (mesh.contains("order")) {
+    const double order = r.number(mesh, "order", "mesh.order");
+    if (order != 1 && order != 2) r.fail("mesh.order", "must be 1 or 2 (or absent: the file's)");
+    o.order = static_cast<int>(order);
+  }
+  if (mesh.contains("scale")) {
+    o.scale = r.number(mesh, "scale", "mesh.scale");
+    if (!(o.scale > 0.0) || !std::isfinite(o.scale)) r.fail("mesh.scale", "must be > 0");
+  }
+  const std::filesystem::path dir = std::filesystem::path(s->source).parent_path();
+  s->mesh_file = (dir / r.string(mesh, "file", "mesh.file")).lexically_normal().string();
+  const io::MshFile file = io::read_msh(s->mesh_file);  // FileError names the file
+  try {
+    s->gmsh_options = o;
+    auto m = std::make_shared<Mesh>(mesh_from_gmsh(file, o));
+    s->file_mesh = m;
+  } catch (const InvalidArgument& e) {
+    throw FileError(s->mesh_file + ": " + e.what());
+  }
+  const Mesh& m = *s->file_mesh;
+  s->order = m.order;
+  s->lower = m.nodes.colwise().minCoeff().transpose();
+  s->upper = m.nodes.colwise().maxCoeff().transpose();
+  try {
+    const ReferenceGeometry g(m, GradientStorage::kOnDemand);  // checks det dX/dξ > 0
+    s->volume = g.weights().sum();
+  } catch (const InvalidArgument& e) {
+    throw FileError(s->mesh_file + ": " + e.what());
+  }
+}
+
+// "material" (the whole body) or "materials" (one per region of the mesh, by name).
+void parse_materials(const Reader& r, const json& doc, const Mesh& mesh, Scene* s) {
+  if (doc.contains("material") == doc.contains("materials"))
+    r.fail("material", "give either \"material\" (the whole body) or \"materials\" (one per "
+                       "region of the mesh), not both or neither");
+  if (doc.contains("material")) {
+    s->material = read_material(r, r.object(doc, "material", "material"), &s->material_model);
+    s->materials.assign(mesh.region_names.size(), s->material);
+    return;
+  }
+  const json& all = r.object(doc, "materials", "materials");
+  s->materials.assign(mesh.region_names.size(), nullptr);
+  for (const auto& item : all.items()) {
+    int region = -1;
+    try {
+      region = mesh.region(item.key());
+    } catch (const InvalidArgument& e) {
+      r.fail("materials", e.what());
+    }
+    if (!item.value().is_object()) r.fail("materials." + item.key(), "must be an object");
+    std::string model;
+    s->materials[region] = read_material(r, item.value(), &model);
+    if (!s->material) s->material = s->materials[region], s->material_model = model;
+  }
+  for (std::size_t k = 0; k < s->materials.size(); ++k)
+    if (!s->materials[k]) r.fail("materials", "has no material for region '" + mesh.region_names[k] + "'");
+}
+
+// A fibre field from a text file: rows of 3 numbers (io's cloud reader), one per element or
+// per node of the mesh.
+FiberField read_fiber_file(const std::string& path, bool per_element, const Mesh& mesh) {
+  FiberField f;
+  f.kind = per_element ? FiberField::Kind::kElement : FiberField::Kind::kNode;
+  const Eigen::MatrixXd rows = read_cloud(path, 3).points();
+  const Eigen::Index expected = per_element ? mesh.num_elements() : mesh.num_nodes();
+  if (rows.rows() != expected)
+    throw FileError(path + ": " + std::to_string(rows.rows()) + " fibre rows for the mesh's " +
+                    std::to_string(expected) + (per_element ? " elements" : " nodes"));
+  f.values = rows.transpose();
+  return f;
+}
+
+// "fibers": a vector; {"data": NAME} (a $NodeData / $ElementData block of the mesh file);
+// {"file": PATH, "per": "element" | "node"} (rows of 3 numbers).
+void parse_fibers(const Reader& r, const json& doc, const Mesh& mesh, Scene* s) {
+  if (!doc.contains("fibers") || !doc["fibers"].is_object()) {
+    const Eigen::VectorXd f = r.numbers(doc, "fibers", "fibers", 3, 3);
+    if (!(f.norm() > 0.0)) r.fail("fibers", "must be a non-zero vector");
+    if (s->dim() == 2 && f[2] != 0.0) r.fail("fibers", "must have a zero third component in 2D");
+    s->fibers = f.normalized();
+    s->fiber_field.values = s->fibers;
+    return;
+  }
+  const json& f = doc["fibers"];
+  r.keys(f, "fibers", {"data", "file", "per"});
+  if (s->is_box()) r.fail("fibers", "a fibre field needs a mesh from a file (mesh.type \"gmsh\")");
+  if (f.contains("data")) {
+    const std::string name = r.string(f, "data", "fibers.data");
+    try {
+      s->fiber_field = gmsh_fiber_field(io::read_msh(s->mesh_file), name, s->gmsh_options);
+    } catch (const InvalidArgument& e) {
+      r.fail("fibers.data", e.what());
+    }
+    (void)mesh;
+    return;
+  }
+  const std::string per = r.string(f, "per", "fibers.per");
+  if (per != "element" && per != "node") r.fail("fibers.per", "must be \"element\" or \"node\"");
+  const std::filesystem::path dir = std::filesystem::path(s->source).parent_path();
+  const std::string path =
+      (dir / r.string(f, "file", "fibers.file")).lexically_normal().string();
+  s->fiber_field = read_fiber_file(path, per == "element", mesh);
+}
+
+}  // namespace
+
+namespace {
+
+// "clamp" (names of boundary sets: box faces or the mesh file's physical groups) and
+// "constraints" ([{"group" or "face": NAME, "components": [...]}]).
+void parse_constraints(const Reader& r, const json& doc, Scene* s) {
+  if (!doc.contains("clamp") || !doc["clamp"].is_array() || doc["clamp"].empty())
+    r.fail("clamp", "must be a non-empty array of boundary names (box faces x0, x1, y0, ..., or "
+                    "a mesh file's physical groups)");
+  for (const json& face : doc["clamp"]) {
+    if (!face.is_string()) r.fail("clamp", "must hold boundary names as strings");
+    s->constraints.push_back({face.get<std::string>(), {}});
+  }
+  if (!doc.contains("constraints")) return;
+  if (!doc["constraints"].is_array()) r.fail("constraints", "must be an array");
+  for (const json& c : doc["constraints"]) {
+    r.keys(c, "constraints[]", {"face", "group", "components"});
+    const Eigen::VectorXd comps = r.numbers(c, "components", "constraints[].components", 1, 3);
+    if (c.contains("face") == c.contains("group"))
+      r.fail("constraints[]", "needs one of \"group\" or \"face\" (the same: a boundary name)");
+    const char* key = c.contains("group") ? "group" : "face";
+    DirichletConstraint dc{r.string(c, key, std::string("constraints[].") + key), {}};
+    for (double k : comps) {
+      if (!(k >= 0 && k < s->dim() && k == std::floor(k)))
+        r.fail("constraints[].components", "must hold axis indices 0 to " +
+                                               std::to_string(s->dim() - 1) + ", got " +
+                                               c["components"].dump());
+      dc.components.push_back(static_cast<int>(k));
+    }
+    s->constraints.push_back(dc);
+  }
+}
+
+void parse_control(const Reader& r, const json& doc, const Mesh& mesh, Scene* s) {
+  const json& control = r.object(doc, "control", "control");
+  r.keys(control, "control", {"space", "lower", "upper", "initial", "region"});
+  try {
+    s->control_kind = parse_control_kind(r.string(control, "space", "control.space"));
+  } catch (const InvalidArgument&) {
+    r.fail("control.space", "must be \"vertex\" or \"element\"");
+  }
+  s->control_lower = r.number(control, "lower", "control.lower");
+  s->control_upper = r.number(control, "upper", "control.upper");
+  s->control_initial =
+      control.contains("initial") ? r.number(control, "initial", "control.initial") : 0.0;
+  if (!(s->control_lower <= s->control_upper))
+    r.fail("control.upper", "must be >= control.lower");
+  if (!(s->control_initial >= s->control_lower && s->control_initial <= s->control_upper))
+    r.fail("control.initial", "must lie within [control.lower, control.upper] = [" +
+                                  std::to_string(s->control_lower) + ", " +
+                                  std::to_string(s->control_upper) + "]");
+  std::vector<int> regions;  // where the control acts
+  if (control.contains("region")) {
+    s->control_region = r.string(control, "region", "control.region");
+    try {
+      regions.push_back(mesh.region(s->control_region));
+    } catch (const InvalidArgument& e) {
+      r.fail("control.region", e.what());
+    }
+  } else {
+    for (int k = 0; k < static_cast<int>(s->materials.size()); ++k) regions.push_back(k);
+  }
+  for (int k : regions)  // existence needs m < 2a wherever m acts
+    if (!(s->control_upper < 2.0 * s->materials[k]->a()))
+      r.fail("control.upper", "must be < 2a (docs/formulation.md §3.3: existence needs m < 2a)" +
+                                  (s->materials.size() > 1 ? " in region '" +
+                                                                 mesh.region_names[k] + "'"
+                                                           : std::string()));
 }
 
 }  // namespace
@@ -145,8 +361,8 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
   }
   const Reader r(source);
   if (!doc.is_object()) r.fail("(top level)", "must be an object");
-  r.keys(doc, "",
-         {"name", "mesh", "material", "fibers", "clamp", "constraints", "control", "target"});
+  r.keys(doc, "", {"name", "mesh", "material", "materials", "fibers", "clamp", "constraints",
+                   "control", "target"});
   Scene s;
   s.source = source;
   s.name = doc.contains("name") ? r.string(doc, "name", "name") : default_name(source);
@@ -156,75 +372,29 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
            "with '.' or '-'; at most 100 characters): it names the output folder, got " +
                json(s.name).dump());
   const json& mesh = r.object(doc, "mesh", "mesh");
-  r.keys(mesh, "mesh", {"type", "lower", "upper", "cells", "order"});
-  if (r.string(mesh, "type", "mesh.type") != "box") r.fail("mesh.type", "must be \"box\"");
-  s.lower = r.numbers(mesh, "lower", "mesh.lower", 2, 3);
-  s.upper = r.numbers(mesh, "upper", "mesh.upper", 2, 3);
-  if (s.upper.size() != s.lower.size()) r.fail("mesh.upper", "must have the size of mesh.lower");
-  for (int d = 0; d < s.dim(); ++d)
-    if (!(s.upper[d] > s.lower[d])) r.fail("mesh.upper", "must be > mesh.lower on every axis");
-  const Eigen::VectorXd cells = r.numbers(mesh, "cells", "mesh.cells", s.dim(), s.dim());
-  s.cells.resize(s.dim());
-  for (int d = 0; d < s.dim(); ++d) {
-    if (!(cells[d] >= 1) || cells[d] != std::floor(cells[d]) || cells[d] > 1e6)
-      r.fail("mesh.cells", "must hold positive integers, got " + std::to_string(cells[d]));
-    s.cells[d] = static_cast<int>(cells[d]);
+  const std::string type = r.string(mesh, "type", "mesh.type");
+  if (type == "box")
+    parse_box_mesh(r, mesh, memory_limit, &s);
+  else if (type == "gmsh")
+    parse_gmsh_mesh(r, mesh, &s);
+  else
+    r.fail("mesh.type", "must be \"box\" or \"gmsh\", got \"" + type + "\"");
+  if (mesh.contains("quadrature_degree")) {
+    const double q = r.number(mesh, "quadrature_degree", "mesh.quadrature_degree");
+    if (!(q >= 1 && q <= 8 && q == std::floor(q)))
+      r.fail("mesh.quadrature_degree", "must be an integer from 1 to 8");
+    s.quadrature_degree = static_cast<int>(q);
   }
-  const double order = r.number(mesh, "order", "mesh.order");
-  if (order != 1 && order != 2) r.fail("mesh.order", "must be 1 or 2");
-  s.order = static_cast<int>(order);
-  check_mesh_size(box_mesh_size(cells, s.order), memory_limit, "scene " + source + ": the mesh");
-  const json& material = r.object(doc, "material", "material");
-  s.material = read_material(r, material, &s.material_model);
+  const Mesh body = s.make_mesh();
+  parse_materials(r, doc, body, &s);
   check_scales(r, s);
-  const Eigen::VectorXd f = r.numbers(doc, "fibers", "fibers", 3, 3);
-  if (!(f.norm() > 0.0)) r.fail("fibers", "must be a non-zero vector");
-  if (s.dim() == 2 && f[2] != 0.0) r.fail("fibers", "must have a zero third component in 2D");
-  s.fibers = f.normalized();
-  if (!doc.contains("clamp") || !doc["clamp"].is_array() || doc["clamp"].empty())
-    r.fail("clamp", "must be a non-empty array of face names (x0, x1, y0, ...)");
-  for (const json& face : doc["clamp"]) {
-    if (!face.is_string()) r.fail("clamp", "must hold face names as strings");
-    s.constraints.push_back({face.get<std::string>(), {}});
-  }
-  if (doc.contains("constraints")) {
-    if (!doc["constraints"].is_array()) r.fail("constraints", "must be an array");
-    for (const json& c : doc["constraints"]) {
-      r.keys(c, "constraints[]", {"face", "components"});
-      const Eigen::VectorXd comps = r.numbers(c, "components", "constraints[].components", 1, 3);
-      DirichletConstraint dc{r.string(c, "face", "constraints[].face"), {}};
-      for (double k : comps) {
-        if (!(k >= 0 && k < s.dim() && k == std::floor(k)))
-          r.fail("constraints[].components", "must hold axis indices 0 to " +
-                                                 std::to_string(s.dim() - 1) + ", got " +
-                                                 c["components"].dump());
-        dc.components.push_back(static_cast<int>(k));
-      }
-      s.constraints.push_back(dc);
-    }
-  }
-  const json& control = r.object(doc, "control", "control");
-  r.keys(control, "control", {"space", "lower", "upper", "initial"});
-  try {
-    s.control_kind = parse_control_kind(r.string(control, "space", "control.space"));
-  } catch (const InvalidArgument&) {
-    r.fail("control.space", "must be \"vertex\" or \"element\"");
-  }
-  s.control_lower = r.number(control, "lower", "control.lower");
-  s.control_upper = r.number(control, "upper", "control.upper");
-  s.control_initial =
-      control.contains("initial") ? r.number(control, "initial", "control.initial") : 0.0;
-  if (!(s.control_lower <= s.control_upper)) r.fail("control.upper", "must be >= control.lower");
-  if (!(s.control_initial >= s.control_lower && s.control_initial <= s.control_upper))
-    r.fail("control.initial", "must lie within [control.lower, control.upper] = [" +
-                                  std::to_string(s.control_lower) + ", " +
-                                  std::to_string(s.control_upper) + "]");
-  if (!(s.control_upper < 2.0 * s.material->a()))
-    r.fail("control.upper", "must be < 2a (docs/formulation.md §3.3: existence needs m < 2a)");
+  parse_fibers(r, doc, body, &s);
+  parse_constraints(r, doc, &s);
+  parse_control(r, doc, body, &s);
   if (doc.contains("target")) s.target_json = doc["target"].dump();
-  // Faces and components are checked against the mesh now, so errors name the file.
+  // Boundary names and components are checked against the mesh now, so errors name the file.
   try {
-    make_dof_map(s.make_mesh(), s.constraints);
+    make_dof_map(body, s.constraints);
   } catch (const InvalidArgument& e) {
     r.fail("clamp/constraints", std::string("is invalid: ") + e.what());
   }
@@ -239,14 +409,18 @@ Scene load_scene(const std::string& path, double memory_limit) {
   return parse_scene(ss.str(), path, memory_limit);
 }
 
-Mesh Scene::make_mesh() const { return make_box_mesh(lower, upper, cells, order); }
+Mesh Scene::make_mesh() const {
+  return file_mesh ? *file_mesh : make_box_mesh(lower, upper, cells, order);
+}
 
 Assembler Scene::make_assembler() const {
-  return Assembler(make_mesh(), material, fibers, constraints);
+  return Assembler(make_mesh(), materials, fiber_field, constraints);
 }
 
 double Scene::residual_floor() const {
-  return fe::residual_floor(material->stiffness_scale(), (upper - lower).prod(), dim());
+  double stiffness = 0.0;
+  for (const auto& m : materials) stiffness = std::max(stiffness, m->stiffness_scale());
+  return fe::residual_floor(stiffness, volume, dim());
 }
 
 }  // namespace softhd::fe

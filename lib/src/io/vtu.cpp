@@ -66,7 +66,7 @@ const char* kFooter = "    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
 void write_vtu_mesh(const std::string& path, const fe::Mesh& mesh, const Eigen::VectorXd& u,
                     const std::vector<VtuField>& point_fields,
                     const std::vector<VtuField>& cell_fields) {
-  const int d = mesh.dim, p = mesh.order;
+  const int d = mesh.dim;
   if (u.size() != mesh.num_nodes() * d)
     throw InvalidArgument("VTU: displacement has " + std::to_string(u.size()) +
                           " entries, expected " + std::to_string(mesh.num_nodes() * d));
@@ -74,44 +74,27 @@ void write_vtu_mesh(const std::string& path, const fe::Mesh& mesh, const Eigen::
   check_rows(cell_fields, mesh.num_elements(), "elements");
   const Eigen::MatrixXd x =
       mesh.nodes + Eigen::Map<const Eigen::MatrixXd>(u.data(), d, mesh.num_nodes()).transpose();
-  // Each element as p^d linear sub-cells; local node a = i + (p+1)(j + (p+1)k).
-  std::vector<std::vector<int>> cells;
-  std::vector<Eigen::Index> parent;
-  auto local = [p](int i, int j, int k) { return i + (p + 1) * (j + (p + 1) * k); };
-  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e) {
-    for (int k = 0; k < (d == 3 ? p : 1); ++k)
-      for (int j = 0; j < p; ++j)
-        for (int i = 0; i < p; ++i) {
-          std::vector<int> c;
-          const int kk[2] = {k, k + 1};
-          for (int layer = 0; layer < (d == 3 ? 2 : 1); ++layer) {
-            const int z = d == 3 ? kk[layer] : 0;
-            for (auto [a, b] : {std::pair{i, j}, {i + 1, j}, {i + 1, j + 1}, {i, j + 1}})
-              c.push_back(mesh.elements(e, local(a, b, z)));
-          }
-          cells.push_back(std::move(c));
-          parent.push_back(e);
-        }
-  }
-  std::vector<VtuField> sub_cell_fields;
-  for (const VtuField& f : cell_fields) {
-    VtuField g{f.name, Eigen::MatrixXd(static_cast<Eigen::Index>(cells.size()), f.values.cols())};
-    for (size_t c = 0; c < cells.size(); ++c)
-      g.values.row(static_cast<Eigen::Index>(c)) = f.values.row(parent[c]);
-    sub_cell_fields.push_back(std::move(g));
-  }
+  // One VTK cell per element, of the cell type's VTK type, nodes in VTK's order
+  // (reference_element(cell).vtk_order: VTK 29 and 24 for hex27 and tet10, 28 and 22 in 2D).
+  const fe::ReferenceElement& ref = fe::reference_element(mesh.cell);
+  std::vector<std::vector<int>> cells(static_cast<std::size_t>(mesh.num_elements()));
+  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
+    for (int a : ref.vtk_order) cells[static_cast<std::size_t>(e)].push_back(mesh.elements(e, a));
+  std::vector<VtuField> cf = cell_fields;
+  if (mesh.region_names.size() > 1)  // region ids (mesh.region_names order)
+    cf.push_back({"region", mesh.element_region.cast<double>()});
   std::ostringstream s;
   s.precision(12);
   s << kHeader << "    <Piece NumberOfPoints=\"" << x.rows() << "\" NumberOfCells=\""
     << cells.size() << "\">\n";
   write_points(s, x);
-  write_cells(s, cells, d == 3 ? 12 : 9);  // VTK_HEXAHEDRON, VTK_QUAD
+  write_cells(s, cells, ref.vtk_type);
   std::vector<VtuField> pf = point_fields;
   Eigen::MatrixXd u3 = Eigen::MatrixXd::Zero(mesh.num_nodes(), 3);
   u3.leftCols(d) = x - mesh.nodes;
   pf.insert(pf.begin(), VtuField{"displacement", u3});
   write_fields(s, "PointData", pf);
-  write_fields(s, "CellData", sub_cell_fields);
+  write_fields(s, "CellData", cf);
   s << kFooter;
   write_file_atomically(path, s.str());
 }

@@ -48,6 +48,15 @@ class ElementMatrixSink {
   virtual void add(Eigen::Index first, Eigen::Index count, const double* Ke) = 0;
 };
 
+/// Fibre directions a₀ of a body: one for all, or a field per element or per node
+/// (interpolated to the quadrature points and normalised there).
+struct FiberField {
+  enum class Kind { kUniform, kElement, kNode };
+  Kind kind = Kind::kUniform;
+  /// 3 by 1 (uniform), 3 by E (per element) or 3 by N (per node); non-zero columns.
+  Eigen::Matrix3Xd values = Eigen::Vector3d::UnitX();
+};
+
 /// Everything that defines the discrete state problem except the control.
 class Assembler {
  public:
@@ -58,6 +67,13 @@ class Assembler {
   Assembler(Mesh mesh, std::shared_ptr<const Material> material, const Eigen::Vector3d& a0,
             const std::vector<DirichletConstraint>& constraints,
             AssemblerStorage storage = AssemblerStorage::kFull);
+  /// A body of several parts: `materials[r]` on the elements of region r
+  /// (mesh.element_region; one entry per mesh.region_names), and a fibre field. Throws
+  /// InvalidArgument on a missing material, a field of the wrong size, or a fibre that is
+  /// zero or (in 2D) out of the plane at a quadrature point.
+  Assembler(Mesh mesh, std::vector<std::shared_ptr<const Material>> materials,
+            const FiberField& fibers, const std::vector<DirichletConstraint>& constraints,
+            AssemblerStorage storage = AssemblerStorage::kFull);
 
   /// The mesh.
   const Mesh& mesh() const { return mesh_; }
@@ -65,10 +81,19 @@ class Assembler {
   const ReferenceGeometry& geometry() const { return geometry_; }
   /// The numbering of the free dofs.
   const DofMap& dofs() const { return dofs_; }
-  /// The stored energy.
-  const Material& material() const { return *material_; }
-  /// The unit fiber direction a₀.
-  const Eigen::Vector3d& fiber() const { return a0_; }
+  /// The stored energy of region 0 (of the whole body when it has one material).
+  const Material& material() const { return *materials_[0]; }
+  /// The stored energy of region r.
+  const Material& material(int region) const { return *materials_[region]; }
+  /// The number of materials (one per region).
+  int num_materials() const { return static_cast<int>(materials_.size()); }
+  /// The largest stiffness_scale() of the materials.
+  double stiffness_scale() const;
+  /// The unit fiber direction a₀ at quadrature point q of element e.
+  Eigen::Vector3d fiber(Eigen::Index e, int q) const {
+    return fibers_.cols() == 1 ? Eigen::Vector3d(fibers_.col(0))
+                               : Eigen::Vector3d(fibers_.col(e * geometry_.points_per_element() + q));
+  }
 
   /// An all-zero tangent with the fixed sparsity pattern (free by free, lower triangle).
   SparseMatrix tangent_pattern() const;
@@ -116,8 +141,10 @@ class Assembler {
   Mesh mesh_;
   AssemblerStorage storage_;
   ReferenceGeometry geometry_;
-  std::shared_ptr<const Material> material_;
-  Eigen::Vector3d a0_;
+  std::vector<std::shared_ptr<const Material>> materials_;  ///< per region
+  Eigen::Matrix3Xd fibers_;  ///< unit a₀: one column, or one per quadrature point (e nq + q)
+  /// Sets fibers_ from `field`; throws InvalidArgument.
+  void set_fibers(const FiberField& field);
   DofMap dofs_;
   SparseMatrix pattern_;
   /// Per element, (ndof_e)² entries: index into the tangent's values or -1.

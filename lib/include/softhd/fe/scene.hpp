@@ -17,6 +17,14 @@
 ///
 /// Material models: "mooney_rivlin" (a, b, c) and "transversely_isotropic" (a, b, c, d,
 /// direction f as an array).
+///
+/// A body from Gmsh (docs/guide.md, "A body from Gmsh"):
+///
+///     "mesh": { "type": "gmsh", "file": "finger.msh", "order": 2, "scale": 1 },
+///     "materials": { "body": {...}, "layer": {...} },     (or one "material")
+///     "fibers": [1, 0, 0] | { "data": "fibres" } | { "file": "f.txt", "per": "element" },
+///     "clamp": ["base"],
+///     "control": { "space": "vertex", "region": "body", "lower": -1e5, "upper": 0 }
 
 #include <Eigen/Core>
 #include <memory>
@@ -25,6 +33,7 @@
 
 #include "softhd/fe/assembly.hpp"
 #include "softhd/fe/control.hpp"
+#include "softhd/fe/gmsh_mesh.hpp"
 #include "softhd/fe/materials.hpp"
 
 namespace softhd::fe {
@@ -33,15 +42,26 @@ namespace softhd::fe {
 struct Scene {
   std::string name;    ///< "name", or the file name
   std::string source;  ///< file name (for messages)
+  /// The body's mesh when it comes from a file (mesh.type "gmsh"); null for a box, whose
+  /// mesh make_mesh() generates from lower, upper, cells and order.
+  std::shared_ptr<const Mesh> file_mesh;
+  std::string mesh_file;  ///< mesh.file as resolved against the scene's folder ("" for a box)
+  GmshMeshOptions gmsh_options;  ///< mesh.order and mesh.scale of a file mesh
   ///@{
-  /// mesh.lower and mesh.upper: the box's corners (2 or 3 entries).
+  /// The body's bounding box: a box's mesh.lower and mesh.upper (2 or 3 entries), or the
+  /// bounds of a file mesh's nodes.
   Eigen::VectorXd lower, upper;
   ///@}
-  Eigen::VectorXi cells;                              ///< mesh.cells: elements per axis
-  int order = 2;                                      ///< mesh.order: 1 (Q1) or 2 (Q2)
-  std::shared_ptr<const Material> material;           ///< from "material"
-  std::string material_model;                         ///< material.model
-  Eigen::Vector3d fibers = Eigen::Vector3d::UnitX();  ///< "fibers", normalised
+  Eigen::VectorXi cells;  ///< mesh.cells: elements per axis (a box; empty for a file mesh)
+  int order = 2;          ///< mesh.order: 1 or 2
+  int quadrature_degree = 0;                ///< mesh.quadrature_degree (0: the cell's default)
+  std::shared_ptr<const Material> material; ///< "material", or the first of "materials"
+  std::string material_model;               ///< its model
+  /// One material per mesh region (mesh.region_names order): "materials", or `material`.
+  std::vector<std::shared_ptr<const Material>> materials;
+  Eigen::Vector3d fibers = Eigen::Vector3d::UnitX();  ///< "fibers" as a vector, normalised
+  FiberField fiber_field;  ///< "fibers": the vector, or a field per element or node
+  std::string control_region;  ///< control.region ("" : the whole body)
   std::vector<DirichletConstraint> constraints;       ///< the clamp, then the extra constraints
   ControlKind control_kind = ControlKind::kVertex;    ///< control.space
   ///@{
@@ -52,13 +72,17 @@ struct Scene {
 
   /// The body's dimension (2 or 3).
   int dim() const { return static_cast<int>(lower.size()); }
-  /// The structured box mesh.
+  /// True for a structured box (grid sequencing, arc targets and the PETSc slab partition
+  /// need one).
+  bool is_box() const { return file_mesh == nullptr; }
+  /// The body's mesh: the structured box mesh, or a copy of the file's.
   Mesh make_mesh() const;
   /// The assembler of the body: mesh, material, fibers and constraints.
   Assembler make_assembler() const;
-  /// residual_floor() (fe/newton.hpp) of this body: its material's stiffness and the box's
-  /// volume. The Newton tolerance the solvers use when none is given.
+  /// residual_floor() (fe/newton.hpp) of this body: its stiffest material and its volume.
+  /// The Newton tolerance the solvers use when none is given.
   double residual_floor() const;
+  double volume = 0.0;  ///< |Ω₀|: the box's, or the file mesh's (Σ w_q det J0)
 };
 
 /// Parses JSON text; `source` names it in error messages. Throws FileError, and

@@ -42,6 +42,9 @@ void face_axis(const std::string& face, int* axis, int* side) {
 }  // namespace
 
 SlabPartition make_slab_partition(const Scene& scene, int rank, int size) {
+  if (!scene.is_box())
+    throw InvalidArgument("the PETSc state backends partition box bodies only; the mesh of " +
+                          scene.mesh_file + " is solved with --state-backend cholmod");
   const int dim = scene.dim(), p = scene.order;
   SlabPartition s;
   s.rank = rank;

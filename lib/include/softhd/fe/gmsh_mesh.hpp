@@ -1,0 +1,44 @@
+#pragma once
+/// \file gmsh_mesh.hpp
+/// A Mesh from a Gmsh file's data (io/msh.hpp; docs/formulation.md §7): the elements of the
+/// file's top dimension (tetrahedra or hexahedra in 3D, triangles or quadrilaterals in 2D,
+/// one cell type per mesh) with Gmsh's local node order mapped to the internal one, the
+/// physical groups of the top dimension as regions and those of lower dimensions as named
+/// boundary node sets (a physical surface "base" becomes mesh.face("base")).
+
+#include <string>
+
+#include "softhd/fe/assembly.hpp"
+#include "softhd/fe/mesh.hpp"
+#include "softhd/io/msh.hpp"
+
+namespace softhd::fe {
+
+/// How the file's elements become the mesh.
+struct GmshMeshOptions {
+  /// 0: the file's order; 1: the elements' vertices only (P1/Q1 on a second-order file);
+  /// 2: second order, straight-sided midside nodes added to a first-order file (a
+  /// second-order file is kept isoparametric).
+  int order = 0;
+  /// Coordinates are multiplied by this (e.g. 1e-3 for a file in mm and a scene in m).
+  double scale = 1.0;
+
+  /// Throws InvalidArgument naming the field.
+  void validate() const;
+};
+
+/// The mesh of `file`. Throws InvalidArgument with one line naming what is wrong (no
+/// elements of the body's dimension — Gmsh writes none for a geometry with physical
+/// surfaces but no physical volume —, mixed cell types or orders, an element type softhd
+/// does not solve on, an entity in two physical volumes); callers prefix the file name.
+/// Unused nodes (e.g. geometry points) are dropped; nodes are numbered in file order.
+Mesh mesh_from_gmsh(const io::MshFile& file, const GmshMeshOptions& options = {});
+
+/// The fibre field of the file's $ElementData or $NodeData block `name` (3 components) on
+/// mesh_from_gmsh(file, options): per element, or per node (a new midside node gets the mean
+/// of its support's). Throws InvalidArgument naming the block and what is wrong (missing,
+/// not 3 components, an element or node without a value).
+FiberField gmsh_fiber_field(const io::MshFile& file, const std::string& name,
+                            const GmshMeshOptions& options = {});
+
+}  // namespace softhd::fe

@@ -1,0 +1,336 @@
+#include "softhd/fe/gmsh_mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "softhd/error.hpp"
+
+namespace softhd::fe {
+
+namespace {
+
+[[noreturn]] void fail(const std::string& what) { throw InvalidArgument("mesh: " + what); }
+
+// The cell type whose Gmsh code is `gmsh_type`, or false.
+bool cell_of_gmsh(int gmsh_type, CellType* cell) {
+  for (CellType c : {CellType::kQuad4, CellType::kQuad9, CellType::kTri3, CellType::kTri6,
+                     CellType::kHex8, CellType::kHex27, CellType::kTet4, CellType::kTet10})
+    if (reference_element(c).gmsh_type == gmsh_type) {
+      *cell = c;
+      return true;
+    }
+  return false;
+}
+
+std::string group_name(const io::MshFile& f, int dim, int tag) {
+  for (const io::MshPhysicalGroup& g : f.physical_groups)
+    if (g.dim == dim && g.tag == tag && !g.name.empty()) return g.name;
+  return std::to_string(tag);  // an unnamed group is named by its tag
+}
+
+// True if every node lies in one plane z = const (a planar mesh of triangles or quads).
+bool planar(const Eigen::MatrixXd& nodes) {
+  if (nodes.rows() == 0) return true;
+  const double z0 = nodes(0, 2);
+  double extent = 0.0;
+  for (Eigen::Index i = 0; i < nodes.rows(); ++i)
+    extent = std::max(extent, (nodes.row(i) - nodes.row(0)).cwiseAbs().maxCoeff());
+  for (Eigen::Index i = 0; i < nodes.rows(); ++i)
+    if (std::abs(nodes(i, 2) - z0) > 1e-12 * std::max(extent, 1e-300)) return false;
+  return true;
+}
+
+// The body's cell type (from the file's top-dimension blocks, which must agree) and dim.
+CellType body_cell(const io::MshFile& f, int* dim) {
+  *dim = f.max_element_dim();
+  if (*dim < 2) fail("the file has no volume or surface elements");
+  if (*dim == 2 && !planar(f.nodes))
+    fail(
+        "the file has surface elements only, and they are not planar: Gmsh writes only the "
+        "elements of physical groups, so add a Physical Volume for the body");
+  int gmsh_type = -1;
+  for (const io::MshElementBlock& b : f.blocks) {
+    if (b.dim != *dim) continue;
+    if (gmsh_type >= 0 && b.gmsh_type != gmsh_type)
+      fail("mixed element types of dimension " + std::to_string(*dim) + " (Gmsh types " +
+           std::to_string(gmsh_type) + " and " + std::to_string(b.gmsh_type) +
+           "): softhd solves on one cell type and order per mesh");
+    gmsh_type = b.gmsh_type;
+  }
+  CellType cell;
+  if (!cell_of_gmsh(gmsh_type, &cell))
+    fail("Gmsh element type " + std::to_string(gmsh_type) +
+         " is not one softhd solves on (tet4, tet10, hex8, hex27, tri3, tri6, quad4, quad9)");
+  return cell;
+}
+
+// Elements of the body in the internal local order, node ids of the file, and the region
+// of each (its block's physical group); fills region names.
+void body_elements(const io::MshFile& f, int dim, CellType cell, Connectivity* elements,
+                   Eigen::VectorXi* region, std::vector<std::string>* names,
+                   std::vector<std::int64_t>* tags_out) {
+  const ReferenceElement& ref = reference_element(cell);
+  Eigen::Index count = 0;
+  std::vector<int> tags;  // physical tags of the top dimension, in first-seen order
+  for (const io::MshElementBlock& b : f.blocks) {
+    if (b.dim != dim) continue;
+    count += b.nodes.rows();
+    if (b.physical_tags.size() > 1)
+      fail("entity " + std::to_string(b.entity) + " belongs to " +
+           std::to_string(b.physical_tags.size()) +
+           " physical groups of the body's dimension: give each part of the body one");
+    if (!b.physical_tags.empty() &&
+        std::find(tags.begin(), tags.end(), b.physical_tags[0]) == tags.end())
+      tags.push_back(b.physical_tags[0]);
+  }
+  std::sort(tags.begin(), tags.end());
+  names->clear();
+  for (int t : tags) names->push_back(group_name(f, dim, t));
+  if (names->empty()) names->push_back("body");
+  elements->resize(count, ref.nodes);
+  region->resize(count);
+  Eigen::Index e = 0;
+  for (const io::MshElementBlock& b : f.blocks) {
+    if (b.dim != dim) continue;
+    const int r = b.physical_tags.empty()
+                      ? 0
+                      : static_cast<int>(std::find(tags.begin(), tags.end(), b.physical_tags[0]) -
+                                         tags.begin());
+    for (Eigen::Index i = 0; i < b.nodes.rows(); ++i, ++e) {
+      for (int a = 0; a < ref.nodes; ++a) (*elements)(e, a) = b.nodes(i, ref.gmsh_order[a]);
+      (*region)[e] = r;
+      tags_out->push_back(b.element_tags[static_cast<std::size_t>(i)]);
+    }
+  }
+}
+
+// A mesh under construction: node ids of the file (or -1 for new midside nodes) and the
+// positions of the new ones.
+struct NodeTable {
+  std::vector<int> new_id;                     // file node -> mesh node, -1 if unused
+  std::vector<int> file_of;                    // mesh node -> file node (-1: new)
+  std::vector<Eigen::VectorXd> new_position;   // of the new nodes, in order
+  std::map<std::vector<int>, int> by_support;  // sorted vertex mesh ids -> new node id
+  std::vector<std::vector<int>> support_of;    // per new node, its support (vertex mesh ids)
+};
+
+// Numbers the file nodes that `elements` use, in file order, and renumbers `elements`.
+void number_used(Connectivity* elements, Eigen::Index file_nodes, NodeTable* t) {
+  t->new_id.assign(file_nodes, -1);
+  std::vector<char> used(file_nodes, 0);
+  for (Eigen::Index e = 0; e < elements->rows(); ++e)
+    for (Eigen::Index a = 0; a < elements->cols(); ++a) used[(*elements)(e, a)] = 1;
+  for (Eigen::Index n = 0; n < file_nodes; ++n)
+    if (used[n]) {
+      t->new_id[n] = static_cast<int>(t->file_of.size());
+      t->file_of.push_back(static_cast<int>(n));
+    }
+  for (Eigen::Index e = 0; e < elements->rows(); ++e)
+    for (Eigen::Index a = 0; a < elements->cols(); ++a)
+      (*elements)(e, a) = t->new_id[(*elements)(e, a)];
+}
+
+// Second-order elements on first-order ones (`corners`: mesh node ids in the linear cell's
+// order): a node per sub-entity (edge, face, cell) shared by the elements that share its
+// vertices, at X(ξ_a) = Σ_b N^lin_b(ξ_a) X_b (straight-sided).
+Connectivity elevate(const Connectivity& corners, CellType quadratic, const Eigen::MatrixXd& X,
+                     NodeTable* t) {
+  const ReferenceElement& q = reference_element(quadratic);
+  const ReferenceElement& lin = reference_element(q.linear);
+  const int nv = lin.nodes, dim = q.dim;
+  Connectivity out(corners.rows(), q.nodes);
+  std::vector<double> N(nv), dN(nv * dim);
+  const Eigen::Index base = static_cast<Eigen::Index>(t->file_of.size());
+  for (Eigen::Index e = 0; e < corners.rows(); ++e)
+    for (int a = 0; a < q.nodes; ++a) {
+      const std::vector<int>& local = q.node_support[a];
+      if (local.size() == 1) {
+        out(e, a) = corners(e, local[0]);
+        continue;
+      }
+      std::vector<int> key;
+      for (int k : local) key.push_back(corners(e, k));
+      std::sort(key.begin(), key.end());
+      auto [it, fresh] =
+          t->by_support.emplace(key, static_cast<int>(base + t->new_position.size()));
+      if (fresh) {
+        const Eigen::VectorXd xi = q.node_coordinates.row(a).transpose();
+        shape_functions(q.linear, xi.data(), N.data(), dN.data());
+        Eigen::VectorXd x = Eigen::VectorXd::Zero(dim);
+        for (int b = 0; b < nv; ++b) x += N[b] * X.row(corners(e, b)).transpose();
+        t->new_position.push_back(x);
+        t->support_of.push_back(key);
+      }
+      out(e, a) = it->second;
+    }
+  return out;
+}
+
+}  // namespace
+
+void GmshMeshOptions::validate() const {
+  if (order != 0 && order != 1 && order != 2)
+    throw InvalidArgument("mesh options: order must be 0 (the file's), 1 or 2");
+  if (!(scale > 0.0) || !std::isfinite(scale))
+    throw InvalidArgument("mesh options: scale must be finite and > 0");
+}
+
+namespace {
+
+// Named boundary node sets: every physical group below the body's dimension, as the mesh
+// nodes of its elements; with elevated elements also the new nodes whose support lies in
+// one of the group's facets.
+std::map<std::string, std::vector<int>> boundary_sets(const io::MshFile& f, int dim,
+                                                      const NodeTable& t, Eigen::Index new_base) {
+  std::map<std::string, std::set<int>> sets;
+  std::map<std::string, std::vector<std::vector<int>>> facets;  // vertex mesh ids, sorted
+  for (const io::MshElementBlock& b : f.blocks) {
+    if (b.dim >= dim || b.physical_tags.empty()) continue;
+    for (int tag : b.physical_tags) {
+      const std::string name = group_name(f, b.dim, tag);
+      std::set<int>& nodes = sets[name];
+      for (Eigen::Index i = 0; i < b.nodes.rows(); ++i) {
+        std::vector<int> facet;
+        for (Eigen::Index a = 0; a < b.nodes.cols(); ++a) {
+          const int n = t.new_id[b.nodes(i, a)];
+          if (n >= 0) nodes.insert(n), facet.push_back(n);
+        }
+        std::sort(facet.begin(), facet.end());
+        if (!t.support_of.empty()) facets[name].push_back(facet);
+      }
+    }
+  }
+  std::map<std::string, std::vector<int>> out;
+  for (auto& [name, nodes] : sets) {
+    for (std::size_t k = 0; k < t.support_of.size(); ++k) {
+      const std::vector<int>& sup = t.support_of[k];
+      for (const std::vector<int>& facet : facets[name])
+        if (std::includes(facet.begin(), facet.end(), sup.begin(), sup.end())) {
+          nodes.insert(static_cast<int>(new_base + static_cast<Eigen::Index>(k)));
+          break;
+        }
+    }
+    out[name] = std::vector<int>(nodes.begin(), nodes.end());
+  }
+  return out;
+}
+
+// The vertices of the mesh (element corners, in node order) and each element's corners.
+void number_vertices(Mesh* m) {
+  const ReferenceElement& ref = reference_element(m->cell);
+  const int nv = static_cast<int>(ref.vertex_nodes.size());
+  std::vector<int> vertex_of(m->num_nodes(), -1);
+  for (Eigen::Index e = 0; e < m->num_elements(); ++e)
+    for (int k = 0; k < nv; ++k) vertex_of[m->elements(e, ref.vertex_nodes[k])] = 0;
+  std::vector<int> nodes;
+  for (Eigen::Index n = 0; n < m->num_nodes(); ++n)
+    if (vertex_of[n] == 0) {
+      vertex_of[n] = static_cast<int>(nodes.size());
+      nodes.push_back(static_cast<int>(n));
+    }
+  m->vertex_nodes =
+      Eigen::Map<Eigen::VectorXi>(nodes.data(), static_cast<Eigen::Index>(nodes.size()));
+  m->element_vertices.resize(m->num_elements(), nv);
+  for (Eigen::Index e = 0; e < m->num_elements(); ++e)
+    for (int k = 0; k < nv; ++k)
+      m->element_vertices(e, k) = vertex_of[m->elements(e, ref.vertex_nodes[k])];
+}
+
+// mesh_from_gmsh, with the node table and the Gmsh tag of each element.
+Mesh build_mesh(const io::MshFile& f, const GmshMeshOptions& o, NodeTable* table,
+                std::vector<std::int64_t>* element_tags) {
+  o.validate();
+  NodeTable& t = *table;
+  int dim = 0;
+  const CellType file_cell = body_cell(f, &dim);
+  const ReferenceElement& fref = reference_element(file_cell);
+  Mesh m;
+  Connectivity el;
+  body_elements(f, dim, file_cell, &el, &m.element_region, &m.region_names, element_tags);
+  const int order = o.order == 0 ? fref.order : o.order;
+  m.cell = order == fref.order ? file_cell : order == 1 ? fref.linear : fref.quadratic;
+  m.dim = dim;
+  m.order = order;
+  if (order < fref.order) {  // the vertices only
+    Connectivity corners(el.rows(), static_cast<Eigen::Index>(fref.vertex_nodes.size()));
+    for (Eigen::Index k = 0; k < corners.cols(); ++k) corners.col(k) = el.col(fref.vertex_nodes[k]);
+    el = corners;
+  }
+  number_used(&el, f.nodes.rows(), &t);
+  Eigen::MatrixXd X(static_cast<Eigen::Index>(t.file_of.size()), dim);
+  for (Eigen::Index n = 0; n < X.rows(); ++n)
+    X.row(n) = o.scale * f.nodes.row(t.file_of[n]).head(dim);
+  const Eigen::Index new_base = X.rows();
+  if (order > fref.order) el = elevate(el, m.cell, X, &t);
+  m.nodes.resize(new_base + static_cast<Eigen::Index>(t.new_position.size()), dim);
+  m.nodes.topRows(new_base) = X;
+  for (std::size_t k = 0; k < t.new_position.size(); ++k)
+    m.nodes.row(new_base + static_cast<Eigen::Index>(k)) = t.new_position[k].transpose();
+  m.elements = std::move(el);
+  m.boundary_nodes = boundary_sets(f, dim, t, new_base);
+  number_vertices(&m);
+  for (std::size_t r = 0; r < m.region_names.size(); ++r)
+    if ((m.element_region.array() == static_cast<int>(r)).count() == 0)
+      fail("region '" + m.region_names[r] + "' has no elements");
+  return m;
+}
+
+}  // namespace
+
+Mesh mesh_from_gmsh(const io::MshFile& f, const GmshMeshOptions& o) {
+  NodeTable t;
+  std::vector<std::int64_t> tags;
+  return build_mesh(f, o, &t, &tags);
+}
+
+FiberField gmsh_fiber_field(const io::MshFile& f, const std::string& name,
+                            const GmshMeshOptions& o) {
+  const io::MshDataBlock* block = nullptr;
+  for (const io::MshDataBlock& d : f.data)
+    if (d.name == name) block = &d;
+  if (!block) fail("no $NodeData or $ElementData block named '" + name + "'");
+  if (block->components != 3)
+    fail("data block '" + name + "' has " + std::to_string(block->components) +
+         " components, a fibre needs 3");
+  NodeTable t;
+  std::vector<std::int64_t> tags;
+  const Mesh m = build_mesh(f, o, &t, &tags);
+  FiberField field;
+  if (block->per_element) {
+    std::map<std::int64_t, Eigen::Index> row;  // element tag -> row of the block
+    for (std::size_t k = 0; k < block->tags.size(); ++k)
+      row[block->tags[k]] = static_cast<Eigen::Index>(k);
+    field.kind = FiberField::Kind::kElement;
+    field.values.resize(3, m.num_elements());
+    for (Eigen::Index e = 0; e < m.num_elements(); ++e) {
+      auto it = row.find(tags[static_cast<std::size_t>(e)]);
+      if (it == row.end())
+        fail("data block '" + name + "' has no value for element " +
+             std::to_string(tags[static_cast<std::size_t>(e)]));
+      field.values.col(e) = block->values.row(it->second).transpose();
+    }
+    return field;
+  }
+  std::vector<Eigen::Index> row(static_cast<std::size_t>(f.nodes.rows()), -1);
+  for (std::size_t k = 0; k < block->tags.size(); ++k)
+    row[static_cast<std::size_t>(block->tags[k])] = static_cast<Eigen::Index>(k);
+  field.kind = FiberField::Kind::kNode;
+  field.values.resize(3, m.num_nodes());
+  const Eigen::Index base = static_cast<Eigen::Index>(t.file_of.size());
+  for (Eigen::Index n = 0; n < base; ++n) {
+    const Eigen::Index r = row[static_cast<std::size_t>(t.file_of[n])];
+    if (r < 0) fail("data block '" + name + "' has no value for node " +
+                    std::to_string(f.node_tags[static_cast<std::size_t>(t.file_of[n])]));
+    field.values.col(n) = block->values.row(r).transpose();
+  }
+  for (std::size_t k = 0; k < t.support_of.size(); ++k) {  // midside nodes: the mean
+    Eigen::Vector3d a = Eigen::Vector3d::Zero();
+    for (int v : t.support_of[k]) a += field.values.col(v);
+    field.values.col(base + static_cast<Eigen::Index>(k)) = a / double(t.support_of[k].size());
+  }
+  return field;
+}
+
+}  // namespace softhd::fe

@@ -1,0 +1,197 @@
+// Meshes from Gmsh files (issue 30): regions and boundary sets from physical groups, order
+// elevation against Gmsh's own second-order mesh, patch tests on every cell type read from
+// Gmsh, a Gmsh-made hex27 box against the structured box, and scenes on file meshes.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include "softhd/error.hpp"
+#include "softhd/fe/assembly.hpp"
+#include "softhd/fe/forward.hpp"
+#include "softhd/fe/gmsh_mesh.hpp"
+#include "softhd/fe/newton.hpp"
+#include "softhd/fe/scene.hpp"
+#include "softhd/io/msh.hpp"
+
+namespace softhd::fe {
+namespace {
+
+std::string mesh_path(const std::string& name) {
+  return std::string(SOFTHD_SOURCE_DIR) + "/tests/data/meshes/" + name;
+}
+
+Mesh read(const std::string& name, int order = 0) {
+  GmshMeshOptions o;
+  o.order = order;
+  return mesh_from_gmsh(io::read_msh(mesh_path(name)), o);
+}
+
+// The node coordinates of a mesh, rounded to 1e-12 and sorted (independent of numbering).
+std::vector<std::vector<double>> sorted_nodes(const Mesh& m) {
+  std::vector<std::vector<double>> v;
+  for (Eigen::Index n = 0; n < m.num_nodes(); ++n) {
+    std::vector<double> p;
+    for (int d = 0; d < m.dim; ++d) p.push_back(std::round(m.nodes(n, d) * 1e12) / 1e12);
+    v.push_back(p);
+  }
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+double volume(const Mesh& m) { return ReferenceGeometry(m).weights().sum(); }
+
+TEST(GmshMesh, RegionsAndBoundarySetsComeFromPhysicalGroups) {
+  const Mesh m = read("cube_tet4_v41.msh");
+  EXPECT_EQ(m.cell, CellType::kTet4);
+  EXPECT_EQ(m.dim, 3);
+  ASSERT_EQ(m.region_names, (std::vector<std::string>{"body", "layer"}));
+  EXPECT_NEAR(volume(m), 1.0, 1e-12);
+  const ReferenceGeometry g(m);
+  double layer = 0.0;  // the layer is z > 0.6: volume 0.4
+  for (Eigen::Index e = 0; e < m.num_elements(); ++e)
+    if (m.element_region[e] == 1) layer += g.weights().row(e).sum();
+  EXPECT_NEAR(layer, 0.4, 1e-12);
+  for (int n : m.face("base")) EXPECT_NEAR(m.nodes(n, 0), 0.0, 1e-12);
+  for (int n : m.face("tip")) EXPECT_NEAR(m.nodes(n, 0), 1.0, 1e-12);
+  EXPECT_GE(m.face("base").size(), 9u);
+  try {
+    m.face("bottom");
+    ADD_FAILURE();
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("base, tip"), std::string::npos) << e.what();
+  }
+}
+
+// "order": 2 on the tet4 file puts midside nodes where Gmsh's own second-order mesh of the
+// same geometry has them (Gmsh elevates the same first-order mesh, -order 2); "order": 1 on
+// the tet10 file gives the tet4 mesh.
+TEST(GmshMesh, OrderElevationMatchesGmshsSecondOrderMesh) {
+  const Mesh p1 = read("cube_tet4_v41.msh"), p2 = read("cube_tet10_v41.msh");
+  const Mesh up = read("cube_tet4_v41.msh", 2), down = read("cube_tet10_v41.msh", 1);
+  EXPECT_EQ(up.cell, CellType::kTet10);
+  EXPECT_EQ(down.cell, CellType::kTet4);
+  EXPECT_EQ(sorted_nodes(up), sorted_nodes(p2));
+  EXPECT_EQ(sorted_nodes(down), sorted_nodes(p1));
+  EXPECT_EQ(up.face("base").size(), p2.face("base").size());
+  EXPECT_EQ(up.num_vertices(), p1.num_nodes());
+  EXPECT_NEAR(volume(up), 1.0, 1e-12);
+}
+
+// A patch test on meshes Gmsh made: the affine displacement u = A X gives F = I + A at every
+// quadrature point of every element, to round-off (tet4, tet10, hex27 and hex8 from it, and
+// the 2D plate's tri6 / quad9 halves are separate files of one cell type each).
+TEST(GmshMesh, AffineDisplacementGivesAUniformF) {
+  Eigen::Matrix3d A;
+  A << 0.1, -0.2, 0.05, 0.03, 0.07, -0.11, 0.2, 0.01, -0.04;
+  for (const auto& [name, order] : std::vector<std::pair<std::string, int>>{
+           {"cube_tet4_v41.msh", 0},
+           {"cube_tet10_v41.msh", 0},
+           {"box_hex27_v41.msh", 0},
+           {"box_hex27_v41.msh", 1}}) {
+    SCOPED_TRACE(name + " order " + std::to_string(order));
+    const Assembler a(read(name, order), std::make_shared<MooneyRivlin>(1.0, 0.2, 3.0),
+                      Eigen::Vector3d::UnitX(), {});
+    const Mesh& m = a.mesh();
+    Eigen::VectorXd u(m.num_nodes() * 3);
+    for (Eigen::Index n = 0; n < m.num_nodes(); ++n)
+      u.segment<3>(3 * n) = A * m.nodes.row(n).transpose();
+    double worst = 0.0;
+    for (Eigen::Index e = 0; e < m.num_elements(); ++e)
+      for (int q = 0; q < a.geometry().points_per_element(); ++q)
+        worst = std::max(worst, (a.deformation_gradient(u, e, q) -
+                                 Eigen::Matrix3d::Identity() - A).cwiseAbs().maxCoeff());
+    EXPECT_LT(worst, 1e-12);
+  }
+}
+
+// The Gmsh-made 27-node hexahedral box (transfinite, recombined) is the structured box: the
+// same nodes, and the same forward solve to 1e-12.
+TEST(GmshMesh, Hex27BoxFromGmshIsTheStructuredBox) {
+  const Mesh g = read("box_hex27_v41.msh");
+  const Mesh b = make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d(2, 1, 1),
+                               Eigen::Vector3i(4, 2, 2), 2);
+  ASSERT_EQ(g.cell, CellType::kHex27);
+  ASSERT_EQ(sorted_nodes(g), sorted_nodes(b));
+  auto solve = [](const Mesh& m, const std::string& clamp) {
+    const Assembler a(m, std::make_shared<MooneyRivlin>(1.0, 0.2, 3.0), Eigen::Vector3d::UnitX(),
+                      {{clamp, {}}});
+    NewtonSolver newton(a);
+    State s = rest_state(a);
+    const Eigen::MatrixXd m_qp = Eigen::MatrixXd::Constant(m.num_elements(),
+                                                           a.geometry().points_per_element(), -0.3);
+    EXPECT_TRUE(newton.solve(m_qp, &s).converged());
+    // displacement by node position
+    std::map<std::vector<double>, Eigen::Vector3d> by_position;
+    for (Eigen::Index n = 0; n < m.num_nodes(); ++n) {
+      std::vector<double> p;
+      for (int d = 0; d < 3; ++d) p.push_back(std::round(m.nodes(n, d) * 1e9) / 1e9);
+      by_position[p] = s.u.segment<3>(3 * n);
+    }
+    return by_position;
+  };
+  const auto ug = solve(g, "x0"), ub = solve(b, "x0");
+  double scale = 0.0, worst = 0.0;
+  for (const auto& [p, u] : ub) {
+    scale = std::max(scale, u.cwiseAbs().maxCoeff());
+    worst = std::max(worst, (ug.at(p) - u).cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(scale, 1e-2);
+  EXPECT_LT(worst, 1e-12 * scale);
+}
+
+TEST(GmshMesh, BadMeshesAreRefusedWithOneLine) {
+  // A file with only surface elements that are not planar: Gmsh wrote no volume elements.
+  io::MshFile f = io::read_msh(mesh_path("cube_tet4_v41.msh"));
+  f.blocks.erase(std::remove_if(f.blocks.begin(), f.blocks.end(),
+                                [](const io::MshElementBlock& b) { return b.dim == 3; }),
+                 f.blocks.end());
+  try {
+    mesh_from_gmsh(f);
+    ADD_FAILURE();
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("add a Physical Volume"), std::string::npos) << e.what();
+  }
+}
+
+// A scene on the two-part cube: materials per region, a clamp on a physical surface, controls
+// on one region, solved; unknown names refused listing the file's.
+TEST(GmshMesh, ASceneOnAFileMesh) {
+  const std::string dir = ::testing::TempDir();
+  const std::string scene = R"({
+    "name": "cube",
+    "mesh": {"type": "gmsh", "file": ")" + mesh_path("cube_tet10_v41.msh") + R"("},
+    "materials": {"body": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3},
+                  "layer": {"model": "mooney_rivlin", "a": 10, "b": 2, "c": 30}},
+    "fibers": [1, 0, 0], "clamp": ["base"],
+    "control": {"space": "vertex", "region": "body", "lower": -1, "upper": 0}})";
+  const Scene s = parse_scene(scene, dir + "/cube.json");
+  EXPECT_FALSE(s.is_box());
+  EXPECT_NEAR(s.volume, 1.0, 1e-12);
+  ASSERT_EQ(s.materials.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.materials[1]->a(), 10.0);
+  const Assembler a = s.make_assembler();
+  const ControlSpace c(a.mesh(), a.geometry(), s.control_kind);
+  const ForwardResult r = solve_forward(s, a, c, Eigen::VectorXd::Constant(c.size(), -0.3));
+  EXPECT_TRUE(r.summary.converged());
+  auto refused = [&](const std::string& from, const std::string& to, const std::string& needle) {
+    std::string t = scene;
+    t.replace(t.find(from), from.size(), to);
+    try {
+      parse_scene(t, dir + "/cube.json");
+      ADD_FAILURE() << to;
+    } catch (const FileError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  refused("\"clamp\": [\"base\"]", "\"clamp\": [\"bottom\"]", "base, tip");
+  refused("\"region\": \"body\"", "\"region\": \"muscle\"", "body, layer");
+  refused("\"layer\": {", "\"lyer\": {", "unknown region 'lyer'");
+  refused("cube_tet10_v41.msh", "missing.msh", "missing.msh");
+}
+
+}  // namespace
+}  // namespace softhd::fe
