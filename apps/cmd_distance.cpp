@@ -95,6 +95,8 @@ int run_distance(const std::vector<std::string>& tokens) {
 
   const PointCloud X = read_cloud(files[0], static_cast<int>(dim));
   const PointCloud Y = read_cloud(files[1], static_cast<int>(dim));
+  check_coordinates(X, files[0]);  // the limit's message names the file
+  check_coordinates(Y, files[1]);
   if (X.dim() != Y.dim()) {
     throw InvalidArgument("mixed dimensions: '" + files[0] + "' is " + std::to_string(X.dim()) +
                           "D but '" + files[1] + "' is " + std::to_string(Y.dim()) + "D");

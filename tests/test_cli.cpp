@@ -163,7 +163,7 @@ TEST_F(Cli, BadInputGivesExitCode2AndOneLine) {
                      "above the limit of 1e+150");
     expect_bad_input(
         "distance " + origin + " " + write("huge.txt", "1e308 0 0\n") + " --method " + method,
-        "target cloud has a coordinate of magnitude 1e+308");
+        "huge.txt cloud: point 1 has a coordinate of magnitude 1e+308");
   }
   expect_bad_input("distance " + good + " " + good + " --eps 1e-320",
                    "--eps: 1e-320 is below the smallest normal double");

@@ -122,7 +122,7 @@ TEST(Coordinates, BeyondTheLimitTheyAreRefusedNotAnsweredWrongly) {
     HausdorffOptions o;
     o.method = method;
     expect_error<InvalidArgument>([&] { hausdorff(PointCloud(far), PointCloud(origin), o); },
-                                  "moving cloud has a coordinate of magnitude 1e+155");
+                                  "moving cloud: point 1 has a coordinate of magnitude 1e+155");
     expect_error<InvalidArgument>([&] { hausdorff(PointCloud(origin), PointCloud(far), o); },
                                   "above the limit of 1e+150");
   }

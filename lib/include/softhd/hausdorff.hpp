@@ -27,6 +27,11 @@ namespace softhd {
 /// coordinates when ε is scaled along).
 constexpr double kMaxCoordinate = 1e150;
 
+/// Throws InvalidArgument "<which> cloud: point i has a coordinate of magnitude ..." (i from 1)
+/// if a coordinate of `cloud` exceeds kMaxCoordinate. Every evaluation checks it; callers that
+/// read a cloud from a file call it with the file's name so the message names it.
+void check_coordinates(const PointCloud& cloud, const std::string& which);
+
 /// The functional's parameters; defaults are the paper's.
 struct HausdorffParams {
   double alpha = 4.0;     ///< exponent of the kernel mean I (α > 0); larger is closer to min

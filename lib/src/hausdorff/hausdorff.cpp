@@ -46,17 +46,18 @@ void validate_options(const HausdorffOptions& options) {
     throw InvalidArgument(msg.str());
   }
 }
-// Refuses coordinates whose squares could overflow (see kMaxCoordinate).
-void check_coordinates(const PointCloud& cloud, const char* which) {
-  const double largest = cloud.points().cwiseAbs().maxCoeff();
+}  // namespace
+
+void check_coordinates(const PointCloud& cloud, const std::string& which) {
+  Eigen::Index row = 0, col = 0;
+  const double largest = cloud.points().cwiseAbs().maxCoeff(&row, &col);
   if (largest > kMaxCoordinate) {
     std::ostringstream msg;
-    msg << which << " cloud has a coordinate of magnitude " << largest << ", above the limit of "
-        << kMaxCoordinate << " (rescale the clouds and epsilon)";
+    msg << which << " cloud: point " << row + 1 << " has a coordinate of magnitude " << largest
+        << ", above the limit of " << kMaxCoordinate << " (rescale the clouds and epsilon)";
     throw InvalidArgument(msg.str());
   }
 }
-}  // namespace
 
 namespace {
 constexpr EnumNames<Method, 3> kMethodNames{

@@ -20,26 +20,26 @@ namespace softhd::fe {
 
 /// The element shapes softhd solves on (2D: plane strain).
 enum class CellType {
-  kQuad4,   ///< bilinear quadrilateral (Q1)
-  kQuad9,   ///< biquadratic quadrilateral (Q2)
-  kTri3,    ///< linear triangle (P1)
-  kTri6,    ///< quadratic triangle (P2)
-  kHex8,    ///< trilinear hexahedron (Q1)
-  kHex27,   ///< triquadratic hexahedron (Q2)
-  kTet4,    ///< linear tetrahedron (P1)
-  kTet10,   ///< quadratic tetrahedron (P2)
+  kQuad4,  ///< bilinear quadrilateral (Q1)
+  kQuad9,  ///< biquadratic quadrilateral (Q2)
+  kTri3,   ///< linear triangle (P1)
+  kTri6,   ///< quadratic triangle (P2)
+  kHex8,   ///< trilinear hexahedron (Q1)
+  kHex27,  ///< triquadratic hexahedron (Q2)
+  kTet4,   ///< linear tetrahedron (P1)
+  kTet10,  ///< quadratic tetrahedron (P2)
 };
 
 /// One cell type's constant data. Corner (vertex) nodes are the local nodes in
 /// `vertex_nodes`; the P1/Q1 cell on them is `linear`.
 struct ReferenceElement {
-  CellType type = CellType::kHex8;
-  int dim = 3;        ///< 2 or 3
-  int order = 1;      ///< 1 or 2
-  int nodes = 8;      ///< local nodes
-  bool simplex = false;
-  CellType linear = CellType::kHex8;     ///< the order-1 cell on the same vertices
-  CellType quadratic = CellType::kHex27; ///< the order-2 cell on the same vertices
+  CellType type = CellType::kHex8;        ///< the cell type of this entry
+  int dim = 3;                            ///< 2 or 3
+  int order = 1;                          ///< 1 or 2
+  int nodes = 8;                          ///< local nodes
+  bool simplex = false;                   ///< triangle or tetrahedron
+  CellType linear = CellType::kHex8;      ///< the order-1 cell on the same vertices
+  CellType quadratic = CellType::kHex27;  ///< the order-2 cell on the same vertices
   /// Local ids of the corner nodes, in the local order of the `linear` cell.
   std::vector<int> vertex_nodes;
   /// Per local node, the local corner ids (positions in vertex_nodes, sorted) of the
