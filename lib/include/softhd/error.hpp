@@ -43,4 +43,11 @@ class NumericalError : public Error {
   using Error::Error;
 };
 
+/// A long call stopped because the interrupt check (softhd/interrupt.hpp) asked it to, e.g.
+/// on Ctrl-C in Python (raised there as KeyboardInterrupt).
+class Interrupted : public Error {
+ public:
+  using Error::Error;
+};
+
 }  // namespace softhd

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "softhd/error.hpp"
+#include "softhd/interrupt.hpp"
 
 namespace softhd {
 
@@ -272,6 +273,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   const BoundedObjective f = [&](const Eigen::VectorXd& m, double& value, Eigen::VectorXd* g) {
     if (error) return false;
     try {
+      check_interrupt("between optimiser evaluations");
       last_replayed = recorder.replaying();
       last = recorder.evaluate(m, g != nullptr, &best_state);
     } catch (...) {
@@ -317,7 +319,17 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   if (opt.max_seconds > 0.0)  // a total over the resumes
     opt.max_seconds = std::max(1e-9, opt.max_seconds - recorder.logged_seconds());
   const BoundedOptimizerSummary r = minimise(f, m0, lower, upper, opt, on_iteration);
-  if (error) std::rethrow_exception(error);
+  if (error) {
+    try {
+      std::rethrow_exception(error);
+    } catch (const Interrupted& e) {
+      // The checkpoint holds every evaluation finished and the states of the last save, as
+      // when the process is killed: resuming it continues the uninterrupted run.
+      if (options.checkpoint.empty() || !options.write_checkpoint) throw;
+      throw Interrupted(std::string(e.what()) + " after " + std::to_string(r.iterations) +
+                        " iterations (resume from the checkpoint '" + options.checkpoint + "')");
+    }
+  }
   finish(objective, recorder, r, map_displacement, &best_state, &s);
   if (self_floor && map_displacement) s.floor_self = Y.evaluate(Y.cloud()).rho;
   return s;

@@ -14,6 +14,7 @@
 #include "scaled_means.hpp"
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
+#include "softhd/interrupt.hpp"
 
 namespace softhd {
 
@@ -142,7 +143,9 @@ HausdorffResult HausdorffTarget::Impl::evaluate_nearest(const PointCloud& X,
   const int threads = detail::resolve_threads(options.threads);
   const WorkShare* share = options.share.get();
   const detail::NearestIndex moving_tree(X.points());
+  check_interrupt("between distance passes");
   Eigen::VectorXd dist_target = moving_tree.distances(cloud.points(), threads, share);
+  check_interrupt("between distance passes");
   Eigen::VectorXd dist_moving = tree->distances(X.points(), threads, share);
   HausdorffResult r;
   r.A = dist_target.maxCoeff();
