@@ -92,6 +92,9 @@ def test_misuse():
         st.HausdorffLoss()(X.numpy(), Y)
     with pytest.raises(ValueError, match="eps"):
         st.HausdorffLoss(eps=-1.0)(X, Y)
+    # Issue 29: a segfault at threads=100000.
+    with pytest.raises(ValueError, match="threads must be from 0 to 1024"):
+        st.HausdorffLoss(threads=100000)(X, Y)
 
 
 def test_threads_default_to_torchs_count(monkeypatch):

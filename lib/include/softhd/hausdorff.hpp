@@ -55,7 +55,7 @@ Method method_from_string(const std::string& name);
 struct HausdorffOptions {
   HausdorffParams params;         ///< α, β, γ, ε (paper defaults)
   Method method = Method::exact;  ///< pair-sum evaluation method
-  int threads = 0;                ///< OpenMP threads; 0 uses OpenMP's default
+  int threads = 0;  ///< OpenMP threads, 0 to kMaxThreads (parallel.hpp); 0: OpenMP's default
   /// Method tree only: guaranteed bound τ ∈ (0, 1) on the relative error of every
   /// kernel sum, |S − S_exact| ≤ τ S_exact (likewise the volume-gradient sums H), and of
   /// every vector gradient sum relative to the sum of its terms' norms,

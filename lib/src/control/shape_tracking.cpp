@@ -1,7 +1,5 @@
 #include "softhd/control/shape_tracking.hpp"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -12,6 +10,7 @@
 
 #include "softhd/error.hpp"
 #include "softhd/interrupt.hpp"
+#include "softhd/parallel.hpp"
 
 namespace softhd {
 
@@ -207,7 +206,7 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
   f["distance"] = "alpha " + exact_text(h.params.alpha) + " beta " + exact_text(h.params.beta) +
                   " gamma " + exact_text(h.params.gamma) + " eps " + exact_text(h.params.epsilon) +
                   " method " + to_string(h.method) + " tol " + exact_text(h.tolerance);
-  f["threads"] = std::to_string(h.threads > 0 ? h.threads : omp_get_max_threads());
+  f["threads"] = std::to_string(resolve_threads(h.threads));
   f["objective"] = "particles " + to_string(so.particles) + " volumes " + to_string(so.volumes) +
                    " tikhonov " + exact_text(so.tikhonov_mass) + " " +
                    exact_text(so.tikhonov_gradient) + " warm starts " +

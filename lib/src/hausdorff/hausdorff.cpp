@@ -15,6 +15,7 @@
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 #include "softhd/interrupt.hpp"
+#include "softhd/parallel.hpp"
 
 namespace softhd {
 
@@ -40,7 +41,7 @@ void HausdorffParams::validate() const {
 namespace {
 void validate_options(const HausdorffOptions& options) {
   options.params.validate();
-  if (options.threads < 0) throw InvalidArgument("threads must be >= 0 (0: OpenMP default)");
+  check_threads(options.threads);
   if (!(options.tolerance > 0.0 && options.tolerance < 1.0)) {
     std::ostringstream msg;
     msg << "Hausdorff option tolerance must be in (0, 1), got " << options.tolerance;
@@ -140,7 +141,7 @@ HausdorffResult HausdorffTarget::evaluate(const PointCloud& moving,
 // Exact Hausdorff distance: A = max_j dist(y_j, X), B = max_i dist(x_i, Y), ρ = max(A, B).
 HausdorffResult HausdorffTarget::Impl::evaluate_nearest(const PointCloud& X,
                                                         const HausdorffRequest& req) const {
-  const int threads = detail::resolve_threads(options.threads);
+  const int threads = resolve_threads(options.threads);
   const WorkShare* share = options.share.get();
   const detail::NearestIndex moving_tree(X.points());
   check_interrupt("between distance passes");
@@ -200,7 +201,7 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   set.power = &power;
   set.eps = eps;
   set.tau = options.tolerance;
-  set.threads = detail::resolve_threads(options.threads);
+  set.threads = resolve_threads(options.threads);
   set.share = options.share.get();
   const Eigen::VectorXd v = X.volumes() / X.total_volume();  // V_i/|X|
   const Eigen::VectorXd& w = weights;                        // W_j/|Y|
