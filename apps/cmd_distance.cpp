@@ -90,7 +90,7 @@ int run_distance(const std::vector<std::string>& tokens) {
     throw UsageError("expected two cloud files (MOVING TARGET), got " +
                      std::to_string(files.size()) + " (see --help)");
   }
-  opt.params.validate();
+  opt.validate();
 
   const PointCloud X = read_cloud(files[0], static_cast<int>(dim));
   const PointCloud Y = read_cloud(files[1], static_cast<int>(dim));

@@ -167,8 +167,14 @@ TEST_F(Cli, BadInputGivesExitCode2AndOneLine) {
         "distance " + origin + " " + write("huge.txt", "1e308 0 0\n") + " --method " + method,
         "target cloud has a coordinate of magnitude 1e+308");
   }
+  // Issue 29: the library's bound, not "use 0" (0 is refused too).
   expect_bad_input("distance " + good + " " + good + " --eps 1e-320",
-                   "--eps: 1e-320 is below the smallest normal double");
+                   "epsilon must be at least 1e-300, got 9.99989e-321");
+  expect_bad_input("distance " + good + " " + good + " --eps 1e-400",
+                   "--eps: 1e-400 underflows to 0 in double precision");
+  expect_bad_input(
+      "distance " + good + " " + good + " --alpha 1e-320",
+      "alpha must be at least 2.22507e-308, got 9.99989e-321 (the smallest normal double)");
   expect_bad_input("distance " + good + " " + good + " --eps 1e400",
                    "--eps: 1e400 is not a finite");
   expect_bad_input("distance " + good + " " + good + " --threads 99999",

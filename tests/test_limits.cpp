@@ -3,7 +3,7 @@
 // squares would overflow are refused, and within the limit ρ̃ scales with the coordinates
 // (ε scaled along) over 300 orders of magnitude. Thread counts above softhd's cap are refused,
 // and an OpenMP default above it (OMP_NUM_THREADS=100000) is clamped instead of crashing
-// libgomp.
+// libgomp; ε below its smallest accepted value is refused with that bound.
 
 #include <gtest/gtest.h>
 #include <omp.h>
@@ -206,6 +206,40 @@ TEST(Threads, AnOpenMpDefaultAboveTheCapIsClampedNotCrashed) {
   EXPECT_EQ(e, e0);
   EXPECT_TRUE(R == R0);
   omp_set_num_threads(before);
+}
+
+TEST(Epsilon, BelowTheSmallestAcceptedValueItIsRefusedWithTheBound) {
+  EXPECT_EQ(kMinEpsilon, 1e-300);
+  const PointCloud X = random_cloud(50, 3, 5, -1.0, 1.0);
+  for (double eps : {1e-320, 1e-310, 1e-305, 0.5e-300}) {
+    SCOPED_TRACE(eps);
+    HausdorffOptions o;
+    o.params.epsilon = eps;
+    expect_error<InvalidArgument>([&] { o.params.validate(); },
+                                  "epsilon must be at least 1e-300, got");
+    expect_error<InvalidArgument>([&] { o.validate(); }, "epsilon must be at least 1e-300");
+    expect_error<InvalidArgument>([&] { HausdorffTarget(X, o); },
+                                  "epsilon must be at least 1e-300");
+  }
+  // At the bound every gradient is finite, also for coincident clouds (the kernel at 1/ε).
+  HausdorffRequest req;
+  req.gradient_points = req.gradient_volumes = req.gradient_target = true;
+  for (Method method : {Method::exact, Method::tree}) {
+    for (double alpha : {1.0, 4.0, 1e4}) {
+      SCOPED_TRACE(to_string(method) + " alpha " + std::to_string(alpha));
+      HausdorffOptions o;
+      o.method = method;
+      o.params.alpha = alpha;
+      o.params.epsilon = kMinEpsilon;
+      for (const PointCloud* Y : {&X}) {
+        const HausdorffResult r = hausdorff(X, *Y, o, req);
+        EXPECT_TRUE(std::isfinite(r.rho));
+        EXPECT_TRUE(r.gradient_points.allFinite());
+        EXPECT_TRUE(r.gradient_volumes.allFinite());
+        EXPECT_TRUE(r.gradient_target.allFinite());
+      }
+    }
+  }
 }
 
 }  // namespace

@@ -161,3 +161,22 @@ def test_a_large_omp_num_threads_is_clamped_not_crashed(scene_file):
     assert p.returncode == 0, p.stderr
     assert p.stdout.strip() == "True"
 
+
+@pytest.mark.parametrize("eps", [1e-320, 1e-310, 1e-305])
+def test_eps_below_the_bound_is_refused_with_the_bound(eps):
+    """Issue 29 item 8: eps=1e-320 gave NaN gradients for coincident clouds."""
+    message = "epsilon must be at least 1e-300, got"
+    with pytest.raises(softhd.InvalidArgument, match=message):
+        softhd.distance(P, P, eps=eps, gradient=True)
+    with pytest.raises(softhd.InvalidArgument, match=message):
+        softhd.Target(P, eps=eps)
+    r = softhd.distance(P, P, eps=1e-300, gradient=True, gradient_volumes=True,
+                        gradient_target=True)
+    assert np.isfinite(r.gradient).all() and np.isfinite(r.gradient_volumes).all()
+    assert np.isfinite(r.gradient_target).all()
+
+
+def test_optimise_refuses_eps_below_the_bound(scene_file):
+    scene = softhd.Scene.load(scene_file(SMALL_2D))
+    with pytest.raises(softhd.InvalidArgument, match="epsilon must be at least 1e-300"):
+        softhd.optimise(scene, np.array([[0.0, 0.0], [2.0, 0.4]]), eps=1e-320)

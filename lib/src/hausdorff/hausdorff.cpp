@@ -4,6 +4,7 @@
 #include "softhd/hausdorff.hpp"
 
 #include <algorithm>
+#include <cfloat>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -21,10 +22,16 @@ namespace softhd {
 
 namespace {
 
-void check_positive(double value, const char* name) {
+// Finite and at least `least` (> 0), `why` saying where that bound comes from.
+void check_positive(double value, const char* name, double least, const char* why) {
+  std::ostringstream msg;
+  msg << "Hausdorff parameter " << name;
   if (!std::isfinite(value) || !(value > 0.0)) {
-    std::ostringstream msg;
-    msg << "Hausdorff parameter " << name << " must be finite and > 0, got " << value;
+    msg << " must be finite and > 0, got " << value;
+    throw InvalidArgument(msg.str());
+  }
+  if (value < least) {
+    msg << " must be at least " << least << ", got " << value << " (" << why << ")";
     throw InvalidArgument(msg.str());
   }
 }
@@ -32,22 +39,25 @@ void check_positive(double value, const char* name) {
 }  // namespace
 
 void HausdorffParams::validate() const {
-  check_positive(alpha, "alpha");
-  check_positive(beta, "beta");
-  check_positive(gamma, "gamma");
-  check_positive(epsilon, "epsilon");
+  // Subnormal exponents: their inverses overflow.
+  const char* normal = "the smallest normal double";
+  check_positive(alpha, "alpha", DBL_MIN, normal);
+  check_positive(beta, "beta", DBL_MIN, normal);
+  check_positive(gamma, "gamma", DBL_MIN, normal);
+  check_positive(epsilon, "epsilon", kMinEpsilon, "below it 1/epsilon overflows the gradients");
 }
 
-namespace {
-void validate_options(const HausdorffOptions& options) {
-  options.params.validate();
-  check_threads(options.threads);
-  if (!(options.tolerance > 0.0 && options.tolerance < 1.0)) {
+void HausdorffOptions::validate() const {
+  params.validate();
+  check_threads(threads);
+  if (!(tolerance > 0.0 && tolerance < 1.0)) {
     std::ostringstream msg;
-    msg << "Hausdorff option tolerance must be in (0, 1), got " << options.tolerance;
+    msg << "Hausdorff option tolerance must be in (0, 1), got " << tolerance;
     throw InvalidArgument(msg.str());
   }
 }
+
+namespace {
 // Refuses coordinates whose squares could overflow (see kMaxCoordinate).
 void check_coordinates(const PointCloud& cloud, const char* which) {
   const double largest = cloud.points().cwiseAbs().maxCoeff();
@@ -102,7 +112,7 @@ struct HausdorffTarget::Impl {
 };
 
 HausdorffTarget::HausdorffTarget(PointCloud target, HausdorffOptions options) {
-  validate_options(options);
+  options.validate();
   check_coordinates(target, "target");
   impl_ = std::make_unique<Impl>(std::move(target), options);
 }
