@@ -49,11 +49,14 @@ double parse_number(const std::string& text, const std::string& what) {
   if (text.empty() || end != text.c_str() + text.size()) {
     throw UsageError(what + ": expected a finite number, got '" + text + "'");
   }
-  if (errno == ERANGE && std::fabs(v) < 1.0) {
+  // A subnormal (1e-320) is a double like any other: the option's own validation (e.g.
+  // HausdorffParams::validate for --eps) judges it and names the bound. Only a nonzero
+  // literal read as 0 is refused here.
+  if (errno == ERANGE && v == 0.0) {
     throw UsageError(what + ": " + text +
-                     " is below the smallest normal double (2.2e-308); use 0 or a larger value");
+                     " underflows to 0 in double precision (the smallest double is 4.9e-324)");
   }
-  if (errno == ERANGE || !std::isfinite(v)) {
+  if ((errno == ERANGE && std::fabs(v) >= 1.0) || !std::isfinite(v)) {
     throw UsageError(what + ": " + text + " is not a finite double (at most 1.8e308 in magnitude)");
   }
   return v;

@@ -42,7 +42,8 @@ class Args {
   std::vector<bool> used_;
 };
 
-/// Parses a whole string as a finite double; `what` names it in the error.
+/// Parses a whole string as a finite double (subnormals included; a nonzero literal that
+/// underflows to 0 is refused); `what` names it in the error.
 double parse_number(const std::string& text, const std::string& what);
 
 }  // namespace softhd::cli

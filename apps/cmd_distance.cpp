@@ -13,6 +13,7 @@
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/atomic_file.hpp"
 #include "softhd/io/cloud_io.hpp"
+#include "softhd/parallel.hpp"
 #include "softhd/work_share.hpp"
 
 namespace softhd::cli {
@@ -81,7 +82,7 @@ int run_distance(const std::vector<std::string>& tokens) {
   opt.params.epsilon = args.number("--eps", opt.params.epsilon);
   opt.method = method_from_string(args.value("--method").value_or("exact"));
   opt.tolerance = args.number("--tol", opt.tolerance);
-  opt.threads = static_cast<int>(args.integer("--threads", 0, 0, 4096));
+  opt.threads = static_cast<int>(args.integer("--threads", 0, 0, kMaxThreads));
   const long dim = args.integer("--dim", 0);
   if (dim != 0 && dim != 2 && dim != 3) throw UsageError("--dim must be 2 or 3");
   const std::optional<std::string> grad_path = args.value("--grad");
@@ -91,10 +92,12 @@ int run_distance(const std::vector<std::string>& tokens) {
     throw UsageError("expected two cloud files (MOVING TARGET), got " +
                      std::to_string(files.size()) + " (see --help)");
   }
-  opt.params.validate();
+  opt.validate();
 
   const PointCloud X = read_cloud(files[0], static_cast<int>(dim));
   const PointCloud Y = read_cloud(files[1], static_cast<int>(dim));
+  check_coordinates(X, files[0]);  // the limit's message names the file
+  check_coordinates(Y, files[1]);
   if (X.dim() != Y.dim()) {
     throw InvalidArgument("mixed dimensions: '" + files[0] + "' is " + std::to_string(X.dim()) +
                           "D but '" + files[1] + "' is " + std::to_string(Y.dim()) + "D");

@@ -158,8 +158,9 @@ bool parse(int argc, char** argv, Args* a) {
       a->factorize_every_step = true;
     } else if (s == "--threads") {
       const double t = parse_number(value(), s);
-      if (!(t >= 0 && t <= 1024 && t == static_cast<int>(t)))
-        throw softhd::InvalidArgument("--threads expects an integer from 0 to 1024");
+      if (!(t >= 0 && t <= softhd::kMaxThreads && t == static_cast<int>(t)))
+        throw softhd::InvalidArgument("--threads expects an integer from 0 to " +
+                                      std::to_string(softhd::kMaxThreads));
       a->threads = static_cast<int>(t);
     } else if (s == "--coarse-levels") {
       const std::string v = value();

@@ -176,7 +176,7 @@ OptimiseArgs parse_optimise(Args& args) {
   so.hausdorff.tolerance = args.number("--tol", 1e-2);
   so.tikhonov_mass = args.number("--tikhonov-mass", 0.0);
   so.tikhonov_gradient = args.number("--tikhonov-grad", 0.0);
-  so.hausdorff.threads = static_cast<int>(args.integer("--threads", 0, 0, 4096));
+  so.hausdorff.threads = static_cast<int>(args.integer("--threads", 0, 0, kMaxThreads));
   set_threads(so.hausdorff.threads);  // the FE assembly too
   a.vtu_every = args.integer("--vtu-every", 10, 0, 1000000000);
   a.tracking.checkpoint_every = static_cast<int>(args.integer("--checkpoint-every", 5, 1, 1000000));

@@ -38,9 +38,11 @@ class Cli : public ::testing::Test {
     std::ofstream(path(name)) << text;
     return path(name);
   }
-  Outcome run(const std::string& args) const {
+  // `env`: assignments put before the command, e.g. "OMP_NUM_THREADS=4".
+  Outcome run(const std::string& args, const std::string& env = "") const {
     const std::string out = path("stdout"), err = path("stderr");
-    const std::string cmd = std::string(SOFTHD_CLI) + " " + args + " >" + out + " 2>" + err;
+    const std::string cmd =
+        env + " " + std::string(SOFTHD_CLI) + " " + args + " >" + out + " 2>" + err;
     Outcome r;
     const int raw = std::system(cmd.c_str());
     r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
@@ -163,14 +165,20 @@ TEST_F(Cli, BadInputGivesExitCode2AndOneLine) {
                      "above the limit of 1e+150");
     expect_bad_input(
         "distance " + origin + " " + write("huge.txt", "1e308 0 0\n") + " --method " + method,
-        "target cloud has a coordinate of magnitude 1e+308");
+        "huge.txt cloud: point 1 has a coordinate of magnitude 1e+308");
   }
+  // Issue 29: the library's bound, not "use 0" (0 is refused too).
   expect_bad_input("distance " + good + " " + good + " --eps 1e-320",
-                   "--eps: 1e-320 is below the smallest normal double");
+                   "epsilon must be at least 1e-300, got 9.99989e-321");
+  expect_bad_input("distance " + good + " " + good + " --eps 1e-400",
+                   "--eps: 1e-400 underflows to 0 in double precision");
+  expect_bad_input(
+      "distance " + good + " " + good + " --alpha 1e-320",
+      "alpha must be at least 2.22507e-308, got 9.99989e-321 (the smallest normal double)");
   expect_bad_input("distance " + good + " " + good + " --eps 1e400",
                    "--eps: 1e400 is not a finite");
   expect_bad_input("distance " + good + " " + good + " --threads 99999",
-                   "--threads: expected an integer from 0 to 4096, got '99999'");
+                   "--threads: expected an integer from 0 to 1024, got '99999'");
   // A binary PLY declaring 2 vertices but holding 3: refused, not cut to 2.
   std::string ply =
       "ply\nformat binary_little_endian 1.0\nelement vertex 2\n"
@@ -178,6 +186,23 @@ TEST_F(Cli, BadInputGivesExitCode2AndOneLine) {
   const double xyz[9] = {0, 0, 0, 1, 0, 0, 2, 0, 0};
   ply.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
   expect_bad_input("distance " + good + " " + write("three.ply", ply), "three.ply");
+}
+
+// Issue 29: OMP_NUM_THREADS=100000 segfaulted inside GOMP_parallel; the default is clamped to
+// softhd's cap (1024 threads), and the answer is the one-thread answer.
+TEST_F(Cli, AHugeOmpNumThreadsIsClampedNotCrashed) {
+  write_text_cloud(path("x.txt"), random_cloud(3000, 3, 1));
+  write_text_cloud(path("y.txt"), random_cloud(2000, 3, 2, 0.3, 1.2));
+  for (const char* method : {"exact", "tree", "nearest"}) {
+    const std::string args =
+        "distance " + path("x.txt") + " " + path("y.txt") + " --json --method " + method;
+    const Outcome one = run(args + " --threads 1");
+    ASSERT_EQ(one.status, 0) << one.err;
+    const Outcome many = run(args, "OMP_NUM_THREADS=100000");
+    ASSERT_EQ(many.status, 0) << method << ": " << many.err;
+    EXPECT_EQ(nlohmann::json::parse(many.out)["rho"], nlohmann::json::parse(one.out)["rho"])
+        << method;
+  }
 }
 
 TEST_F(Cli, ForwardRefusesMeshesBeyondTheLimits) {

@@ -242,9 +242,9 @@ TEST_F(CloudIo, WriteErrors) {
   const PointCloud c(Eigen::MatrixXd::Zero(2, 3));
   const std::string bad = path("no_such_dir/out.txt");
   expect_error<FileError>([&] { softhd::write_text_cloud(bad, c); },
-                          "cannot open '" + bad + "' for writing");
+                          "cannot write '" + bad + "': No such file or directory");
   expect_error<FileError>([&] { softhd::write_ply_cloud(bad, c); },
-                          "cannot open '" + bad + "' for writing");
+                          "cannot write '" + bad + "': No such file or directory");
 }
 
 // ----------------------------------------------------------------------------

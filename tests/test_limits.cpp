@@ -1,17 +1,24 @@
 // Limits instead of crashes and silent wrong answers: mesh counts beyond int and meshes
 // beyond the memory limit are refused before anything is allocated, coordinates whose
 // squares would overflow are refused, and within the limit ρ̃ scales with the coordinates
-// (ε scaled along) over 300 orders of magnitude.
+// (ε scaled along) over 300 orders of magnitude. Thread counts above softhd's cap are refused,
+// and an OpenMP default above it (OMP_NUM_THREADS=100000) is clamped instead of crashing
+// libgomp; ε below its smallest accepted value is refused with that bound.
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
+#include <climits>
 #include <cmath>
 
 #include "expect_error.hpp"
 #include "hausdorff_reference.hpp"
+#include "softhd/fe/assembly.hpp"
+#include "softhd/fe/materials.hpp"
 #include "softhd/fe/mesh.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/hausdorff.hpp"
+#include "softhd/parallel.hpp"
 
 namespace softhd::test {
 namespace {
@@ -122,7 +129,7 @@ TEST(Coordinates, BeyondTheLimitTheyAreRefusedNotAnsweredWrongly) {
     HausdorffOptions o;
     o.method = method;
     expect_error<InvalidArgument>([&] { hausdorff(PointCloud(far), PointCloud(origin), o); },
-                                  "moving cloud has a coordinate of magnitude 1e+155");
+                                  "moving cloud: point 1 has a coordinate of magnitude 1e+155");
     expect_error<InvalidArgument>([&] { hausdorff(PointCloud(origin), PointCloud(far), o); },
                                   "above the limit of 1e+150");
   }
@@ -138,6 +145,101 @@ TEST(Coordinates, BeyondTheLimitTheyAreRefusedNotAnsweredWrongly) {
   const double rho = hausdorff(PointCloud(a), PointCloud(b), o).rho;
   EXPECT_TRUE(std::isfinite(rho));
   EXPECT_NEAR(rho, 2e150, 1e-12 * 2e150);  // one point each: d̃ = distance exactly
+}
+
+TEST(Threads, CountsAboveTheCapAreRefusedNamingThreadsAndTheCap) {
+  const std::string cap = "threads must be from 0 to 1024";
+  EXPECT_EQ(kMaxThreads, 1024);
+  for (int n : {kMaxThreads + 1, 100000, INT_MAX, -1}) {
+    SCOPED_TRACE(n);
+    expect_error<InvalidArgument>(
+        [&] { set_threads(n); },
+        cap + " (0: OMP_NUM_THREADS, else all cores), got " + std::to_string(n));
+    HausdorffOptions o;
+    o.threads = n;
+    expect_error<InvalidArgument>([&] { o.validate(); }, cap);
+    const PointCloud X = random_cloud(20, 3, 1);
+    expect_error<InvalidArgument>([&] { hausdorff(X, X, o); }, cap);
+  }
+  HausdorffOptions o;
+  o.threads = kMaxThreads;
+  EXPECT_NO_THROW(o.validate());
+}
+
+TEST(Threads, AnOpenMpDefaultAboveTheCapIsClampedNotCrashed) {
+  // OMP_NUM_THREADS=100000 sets this default at start-up; omp_set_num_threads sets the same.
+  const PointCloud X = random_cloud(3000, 3, 3, -1.0, 1.0), Y = random_cloud(2000, 3, 4, -1.0, 1.0);
+  HausdorffRequest req;
+  req.gradient_points = req.gradient_volumes = req.gradient_target = true;
+  HausdorffOptions one;
+  one.threads = 1;
+  const HausdorffResult serial = hausdorff(X, Y, one, req);
+  const fe::Assembler A(fe::make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, 0.6, 0.3),
+                                          Eigen::Vector3i(12, 2, 2), 2),
+                        std::make_shared<fe::MooneyRivlin>(1.0, 0.2, 3.0), Eigen::Vector3d::UnitX(),
+                        {{"x0", {}}});
+  const Eigen::VectorXd u = Eigen::VectorXd::Constant(A.dofs().num_dofs, 1e-3);
+  const double volume = A.deformed_volume(u);
+  const Eigen::MatrixXd m_qp = Eigen::MatrixXd::Constant(A.mesh().num_elements(), 27, -0.1);
+  Eigen::VectorXd R0, R;
+  double e0 = 0.0, e = 0.0;
+  ASSERT_TRUE(A.evaluate(u, m_qp, &e0, &R0, nullptr));
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(100000);
+  EXPECT_EQ(max_threads(), kMaxThreads);
+  EXPECT_EQ(resolve_threads(0), kMaxThreads);
+  for (Method method : {Method::exact, Method::tree}) {
+    HausdorffOptions o;  // threads = 0: the clamped default
+    o.method = method;
+    one.method = method;
+    const HausdorffResult r = hausdorff(X, Y, o, req);
+    const HausdorffResult s = method == Method::exact ? serial : hausdorff(X, Y, one, req);
+    EXPECT_EQ(r.rho, s.rho) << to_string(method);
+    EXPECT_TRUE(r.gradient_points == s.gradient_points) << to_string(method);
+  }
+  HausdorffOptions nn;
+  nn.method = Method::nearest;
+  EXPECT_GT(hausdorff(X, Y, nn).rho, 0.0);
+  // The element loops too (the same bits: each element's terms are its own).
+  EXPECT_EQ(A.deformed_volume(u), volume);
+  ASSERT_TRUE(A.evaluate(u, m_qp, &e, &R, nullptr));
+  EXPECT_EQ(e, e0);
+  EXPECT_TRUE(R == R0);
+  omp_set_num_threads(before);
+}
+
+TEST(Epsilon, BelowTheSmallestAcceptedValueItIsRefusedWithTheBound) {
+  EXPECT_EQ(kMinEpsilon, 1e-300);
+  const PointCloud X = random_cloud(50, 3, 5, -1.0, 1.0);
+  for (double eps : {1e-320, 1e-310, 1e-305, 0.5e-300}) {
+    SCOPED_TRACE(eps);
+    HausdorffOptions o;
+    o.params.epsilon = eps;
+    expect_error<InvalidArgument>([&] { o.params.validate(); },
+                                  "epsilon must be at least 1e-300, got");
+    expect_error<InvalidArgument>([&] { o.validate(); }, "epsilon must be at least 1e-300");
+    expect_error<InvalidArgument>([&] { HausdorffTarget(X, o); },
+                                  "epsilon must be at least 1e-300");
+  }
+  // At the bound every gradient is finite, also for coincident clouds (the kernel at 1/ε).
+  HausdorffRequest req;
+  req.gradient_points = req.gradient_volumes = req.gradient_target = true;
+  for (Method method : {Method::exact, Method::tree}) {
+    for (double alpha : {1.0, 4.0, 1e4}) {
+      SCOPED_TRACE(to_string(method) + " alpha " + std::to_string(alpha));
+      HausdorffOptions o;
+      o.method = method;
+      o.params.alpha = alpha;
+      o.params.epsilon = kMinEpsilon;
+      for (const PointCloud* Y : {&X}) {
+        const HausdorffResult r = hausdorff(X, *Y, o, req);
+        EXPECT_TRUE(std::isfinite(r.rho));
+        EXPECT_TRUE(r.gradient_points.allFinite());
+        EXPECT_TRUE(r.gradient_volumes.allFinite());
+        EXPECT_TRUE(r.gradient_target.allFinite());
+      }
+    }
+  }
 }
 
 }  // namespace

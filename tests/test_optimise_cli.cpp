@@ -239,8 +239,8 @@ TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
   expect_refused(scene() + " --out " + out() + " --resume", "checkpoint.bin");
   expect_refused(scene() + " --max-iter 0", "--max-iter");
   expect_refused(scene() + " --max-iter 4294967297", "--max-iter: expected an integer from 1");
-  expect_refused(scene() + " --threads 99999", "--threads: expected an integer from 0 to 4096");
-  expect_refused(scene() + " --eps 1e-320", "--eps: 1e-320 is below the smallest normal double");
+  expect_refused(scene() + " --threads 99999", "--threads: expected an integer from 0 to 1024");
+  expect_refused(scene() + " --eps 1e-320", "epsilon must be at least 1e-300, got 9.99989e-321");
   expect_refused(scene_with("kind5.json", [](auto& j) { j["target"]["kind"] = 5; }),
                  "target.kind must be");
   expect_refused(scene_with("target5.json", [](auto& j) { j["target"] = 5; }),

@@ -134,7 +134,7 @@ TEST_F(Reliability, SmallInputChecks) {
   expect_refused("forward " + sc + " --control control.csv", "lines 1 and 2 give different values");
   std::ofstream(dir_ / "far.txt") << "0 0 0\n1e151 0 0\n";
   std::ofstream(dir_ / "b.txt") << "0 1 0\n";
-  expect_refused("distance far.txt b.txt", "far.txt:2: coordinate beyond");
+  expect_refused("distance far.txt b.txt", "far.txt cloud: point 2 has a coordinate of magnitude");
 }
 
 }  // namespace

@@ -2,6 +2,9 @@
 
 #include <dlfcn.h>
 
+#include <algorithm>
+#include <string>
+
 #include "softhd/error.hpp"
 
 #ifdef _OPENMP
@@ -10,8 +13,14 @@
 
 namespace softhd {
 
+void check_threads(int threads) {
+  if (threads < 0 || threads > kMaxThreads)
+    throw InvalidArgument("threads must be from 0 to " + std::to_string(kMaxThreads) +
+                          " (0: OMP_NUM_THREADS, else all cores), got " + std::to_string(threads));
+}
+
 void set_threads(int threads) {
-  if (threads < 0) throw InvalidArgument("threads must be >= 0");
+  check_threads(threads);
 #ifdef _OPENMP
   if (threads > 0) omp_set_num_threads(threads);
 #endif
@@ -20,7 +29,16 @@ void set_threads(int threads) {
 
 int max_threads() {
 #ifdef _OPENMP
-  return omp_get_max_threads();
+  return std::min(omp_get_max_threads(), kMaxThreads);
+#else
+  return 1;
+#endif
+}
+
+int resolve_threads(int threads) {
+  check_threads(threads);
+#ifdef _OPENMP
+  return threads > 0 ? threads : max_threads();
 #else
   return 1;
 #endif

@@ -21,7 +21,14 @@ Threads
 -------
 Computations release the GIL. ``threads=0`` uses OpenMP's default (OMP_NUM_THREADS, else all
 cores; note that ``import torch`` may lower it for the whole process); a positive count applies
-to that call only.
+to that call only. At most 1024 threads: a larger ``threads`` raises InvalidArgument, a larger
+OMP_NUM_THREADS is clamped to 1024.
+
+Ctrl-C
+------
+A SIGINT during a long call raises ``KeyboardInterrupt`` (or what the SIGINT handler raises)
+within a fraction of a second: softhd checks for signals between the passes of a distance and
+its blocks of pairs, between Newton iterations and between the evaluations of ``optimise``.
 """
 
 import os as _os

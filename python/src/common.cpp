@@ -44,8 +44,7 @@ py::array_t<double> to_numpy(const RowMatrix& m) {
 }
 
 ThreadScope::ThreadScope(int threads) : previous_(max_threads()) {
-  if (threads < 0)
-    throw InvalidArgument("threads must be >= 0 (0: all cores), got " + std::to_string(threads));
+  check_threads(threads);
   if (threads > 0) {
     set_threads(threads);
     changed_ = true;

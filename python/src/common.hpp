@@ -38,7 +38,7 @@ py::object vector_view(const Eigen::VectorXd& v, py::handle owner);
 py::array_t<double> to_numpy(const RowMatrix& m);
 
 /// Sets the OpenMP threads of the calling thread for its lifetime (0: leave as is) and
-/// restores the previous count. Throws InvalidArgument if threads < 0.
+/// restores the previous count. Throws InvalidArgument as set_threads (0 to kMaxThreads).
 class ThreadScope {
  public:
   explicit ThreadScope(int threads);
@@ -52,6 +52,8 @@ class ThreadScope {
 };
 
 void bind_errors(py::module_& m);
+/// Installs the interrupt check that lets Ctrl-C stop long calls (KeyboardInterrupt).
+void bind_interrupts();
 void bind_hausdorff(py::module_& m);
 void bind_io(py::module_& m);
 void bind_fe(py::module_& m);

@@ -122,3 +122,61 @@ def test_optimise_options_name_the_field(scene_file, kwargs, field):
     scene = softhd.Scene.load(scene_file(SMALL_2D))
     with pytest.raises(softhd.InvalidArgument, match=field):
         softhd.optimise(scene, np.array([[0.0, 0.0], [2.0, 0.4]]), **kwargs)
+
+
+CAP = r"threads must be from 0 to 1024 \(0: OMP_NUM_THREADS, else all cores\), got "
+
+
+@pytest.mark.parametrize("threads", [1025, 100000, 2**31 - 1])
+def test_thread_counts_above_the_cap_are_refused_not_crashed(scene_file, threads):
+    """Issue 29 item 2: these segfaulted inside GOMP_parallel (2**31-1 aborted)."""
+    with pytest.raises(softhd.InvalidArgument, match=CAP + str(threads)):
+        softhd.distance(P, P, threads=threads)
+    with pytest.raises(softhd.InvalidArgument, match=CAP):
+        softhd.Target(P, threads=threads)
+    scene = softhd.Scene.load(scene_file(SMALL_2D))
+    with pytest.raises(softhd.InvalidArgument, match=CAP):
+        scene.forward(0.0, threads=threads)
+    with pytest.raises(softhd.InvalidArgument, match=CAP):
+        softhd.optimise(scene, np.array([[0.0, 0.0], [2.0, 0.4]]), max_iter=1, threads=threads)
+    assert softhd.distance(P, P, threads=1024).rho > 0.0  # the cap itself is allowed
+
+
+def test_a_large_omp_num_threads_is_clamped_not_crashed(scene_file):
+    """OMP_NUM_THREADS=100000 made every call segfault; softhd uses 1024 threads at most."""
+    import os
+    import subprocess
+    import sys
+    code = (
+        "import numpy as np, softhd\n"
+        "P = np.random.default_rng(1).random((3000, 3))\n"
+        "for m in ('exact', 'tree', 'nearest'):\n"
+        "    r = softhd.distance(P, P[::-1] * 1.1, method=m, gradient=m != 'nearest')\n"
+        "    assert np.isfinite(r.rho)\n"
+        f"s = softhd.Scene.load({scene_file(SMALL_2D)!r})\n"
+        "print(s.forward(-1e4).newton_iterations > 0)\n")
+    env = dict(os.environ, OMP_NUM_THREADS="100000")
+    p = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                       timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.strip() == "True"
+
+
+@pytest.mark.parametrize("eps", [1e-320, 1e-310, 1e-305])
+def test_eps_below_the_bound_is_refused_with_the_bound(eps):
+    """Issue 29 item 8: eps=1e-320 gave NaN gradients for coincident clouds."""
+    message = "epsilon must be at least 1e-300, got"
+    with pytest.raises(softhd.InvalidArgument, match=message):
+        softhd.distance(P, P, eps=eps, gradient=True)
+    with pytest.raises(softhd.InvalidArgument, match=message):
+        softhd.Target(P, eps=eps)
+    r = softhd.distance(P, P, eps=1e-300, gradient=True, gradient_volumes=True,
+                        gradient_target=True)
+    assert np.isfinite(r.gradient).all() and np.isfinite(r.gradient_volumes).all()
+    assert np.isfinite(r.gradient_target).all()
+
+
+def test_optimise_refuses_eps_below_the_bound(scene_file):
+    scene = softhd.Scene.load(scene_file(SMALL_2D))
+    with pytest.raises(softhd.InvalidArgument, match="epsilon must be at least 1e-300"):
+        softhd.optimise(scene, np.array([[0.0, 0.0], [2.0, 0.4]]), eps=1e-320)

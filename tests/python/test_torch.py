@@ -92,6 +92,11 @@ def test_misuse():
         st.HausdorffLoss()(X.numpy(), Y)
     with pytest.raises(ValueError, match="eps"):
         st.HausdorffLoss(eps=-1.0)(X, Y)
+    # Issue 29: NaN gradients at eps=1e-320, a segfault at threads=100000.
+    with pytest.raises(ValueError, match="epsilon must be at least 1e-300"):
+        st.HausdorffLoss(eps=1e-320)(X, Y)
+    with pytest.raises(ValueError, match="threads must be from 0 to 1024"):
+        st.HausdorffLoss(threads=100000)(X, Y)
 
 
 def test_threads_default_to_torchs_count(monkeypatch):

@@ -50,4 +50,11 @@ class StateSolveError : public NumericalError {
   using NumericalError::NumericalError;
 };
 
+/// A long call stopped because the interrupt check (softhd/interrupt.hpp) asked it to, e.g.
+/// on Ctrl-C in Python (raised there as KeyboardInterrupt).
+class Interrupted : public Error {
+ public:
+  using Error::Error;
+};
+
 }  // namespace softhd

@@ -27,14 +27,27 @@ namespace softhd {
 /// coordinates when ε is scaled along).
 constexpr double kMaxCoordinate = 1e150;
 
+/// Throws InvalidArgument "<which> cloud: point i has a coordinate of magnitude ..." (i from 1)
+/// if a coordinate of `cloud` exceeds kMaxCoordinate. Every evaluation checks it; callers that
+/// read a cloud from a file call it with the file's name so the message names it.
+void check_coordinates(const PointCloud& cloud, const std::string& which);
+
+/// Smallest ε the distance accepts (HausdorffParams::validate refuses less, naming this bound).
+/// 1/ε is the kernel's value at a coincident pair and the scale of the gradient terms: it
+/// overflows below ε = 1/DBL_MAX ≈ 5.6e-309, where the gradients of coincident clouds turn NaN
+/// (ε = 1e-320, issue 29); at 1e-300 it stays 1e8 below overflow. ε is a length, as the
+/// coordinates: rescaled clouds (down to |x| ~ 1e-150) rescale ε along within the range.
+constexpr double kMinEpsilon = 1e-300;
+
 /// The functional's parameters; defaults are the paper's.
 struct HausdorffParams {
   double alpha = 4.0;     ///< exponent of the kernel mean I (α > 0); larger is closer to min
   double beta = 4.0;      ///< exponent of the means A and B (β > 0); larger is closer to max
   double gamma = 2.0;     ///< exponent combining A and B (γ > 0)
-  double epsilon = 1e-3;  ///< kernel offset ε > 0 (an absolute length)
+  double epsilon = 1e-3;  ///< kernel offset ε ≥ kMinEpsilon (an absolute length)
 
-  /// Throws InvalidArgument naming the first parameter that is not finite and > 0.
+  /// Throws InvalidArgument naming the first parameter that is not finite and > 0, or below the
+  /// smallest normal double, or `epsilon` below kMinEpsilon (the messages give the bound).
   void validate() const;
 };
 
@@ -55,7 +68,7 @@ Method method_from_string(const std::string& name);
 struct HausdorffOptions {
   HausdorffParams params;         ///< α, β, γ, ε (paper defaults)
   Method method = Method::exact;  ///< pair-sum evaluation method
-  int threads = 0;                ///< OpenMP threads; 0 uses OpenMP's default
+  int threads = 0;  ///< OpenMP threads, 0 to kMaxThreads (parallel.hpp); 0: OpenMP's default
   /// Method tree only: guaranteed bound τ ∈ (0, 1) on the relative error of every
   /// kernel sum, |S − S_exact| ≤ τ S_exact (likewise the volume-gradient sums H), and of
   /// every vector gradient sum relative to the sum of its terms' norms,
@@ -74,6 +87,11 @@ struct HausdorffOptions {
   /// (softhd/work_share.hpp; MPI builds: softhd::mpi::work_share(comm)). Every process
   /// gets the whole result, equal to the serial one. Null (default): this process does all.
   std::shared_ptr<const WorkShare> share;
+
+  /// Throws InvalidArgument naming the first invalid field: a parameter
+  /// (HausdorffParams::validate), `threads` (check_threads) or `tolerance`. Called by the
+  /// HausdorffTarget constructor, hence by every front end (CLI, Python, the objective).
+  void validate() const;
 };
 
 /// What to compute beyond ρ̃, A and B. Nothing is computed that is not asked for.

@@ -11,6 +11,7 @@
 #include "../io/keys.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
+#include "softhd/hausdorff.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/samplers.hpp"
 
@@ -71,6 +72,7 @@ SceneTarget cloud_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlo
   const fs::path dir = fs::path(scene.source).parent_path();
   const fs::path f = (dir / t["file"].get<std::string>()).lexically_normal();
   PointCloud cloud = read_cloud(f.string(), scene.dim());
+  check_coordinates(cloud, f.string());
   if (!t.contains("solved_on")) return {cloud, std::nullopt, "cloud file " + f.string()};
   // A manufactured target: the deformed nodes of a state solved on another scene's mesh.
   if (!t["solved_on"].is_string())
@@ -118,6 +120,7 @@ SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh, double me
 
 SceneTarget file_target(const std::string& path, int dim) {
   PointCloud cloud = read_cloud(path, dim);
+  check_coordinates(cloud, path);
   if (dim != 0 && cloud.dim() != dim)
     throw InvalidArgument("the target cloud '" + path + "' is " + std::to_string(cloud.dim()) +
                           "D but the scene's body is " + std::to_string(dim) + "D");

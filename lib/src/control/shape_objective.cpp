@@ -179,7 +179,7 @@ struct ShapeObjective::Impl {
 };
 
 void ShapeObjectiveOptions::validate() const {
-  hausdorff.params.validate();
+  hausdorff.validate();
   if (!(tikhonov_mass >= 0.0))
     throw InvalidArgument("tikhonov_mass (Tikhonov weight M) must be >= 0");
   if (!(tikhonov_gradient >= 0.0))

@@ -1,7 +1,5 @@
 #include "softhd/control/shape_tracking.hpp"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,6 +9,8 @@
 #include <memory>
 
 #include "softhd/error.hpp"
+#include "softhd/interrupt.hpp"
+#include "softhd/parallel.hpp"
 
 namespace softhd {
 
@@ -210,7 +210,7 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
   f["distance"] = "alpha " + exact_text(h.params.alpha) + " beta " + exact_text(h.params.beta) +
                   " gamma " + exact_text(h.params.gamma) + " eps " + exact_text(h.params.epsilon) +
                   " method " + to_string(h.method) + " tol " + exact_text(h.tolerance);
-  f["threads"] = std::to_string(h.threads > 0 ? h.threads : omp_get_max_threads());
+  f["threads"] = std::to_string(resolve_threads(h.threads));
   f["objective"] = "particles " + to_string(so.particles) + " volumes " + to_string(so.volumes) +
                    " tikhonov " + exact_text(so.tikhonov_mass) + " " +
                    exact_text(so.tikhonov_gradient) + " warm starts " +
@@ -277,6 +277,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   const BoundedObjective f = [&](const Eigen::VectorXd& m, double& value, Eigen::VectorXd* g) {
     if (error) return false;
     try {
+      check_interrupt("between optimiser evaluations");
       last_replayed = recorder.replaying();
       last = recorder.evaluate(m, g != nullptr, &best_state);
     } catch (...) {
@@ -322,7 +323,17 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   if (opt.max_seconds > 0.0)  // a total over the resumes
     opt.max_seconds = std::max(1e-9, opt.max_seconds - recorder.logged_seconds());
   const BoundedOptimizerSummary r = minimise(f, m0, lower, upper, opt, on_iteration);
-  if (error) std::rethrow_exception(error);
+  if (error) {
+    try {
+      std::rethrow_exception(error);
+    } catch (const Interrupted& e) {
+      // The checkpoint holds every evaluation finished and the states of the last save, as
+      // when the process is killed: resuming it continues the uninterrupted run.
+      if (options.checkpoint.empty() || !options.write_checkpoint) throw;
+      throw Interrupted(std::string(e.what()) + " after " + std::to_string(r.iterations) +
+                        " iterations (resume from the checkpoint '" + options.checkpoint + "')");
+    }
+  }
   finish(objective, recorder, r, map_displacement, options.checkpoint_every, &best_state, &s);
   if (self_floor && map_displacement) s.floor_self = Y.evaluate(Y.cloud()).rho;
   return s;

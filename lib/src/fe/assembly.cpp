@@ -258,7 +258,7 @@ bool Assembler::evaluate_passes(const Eigen::VectorXd& u, const Eigen::MatrixXd&
   const bool stored = geometry_.stores_gradients();
   for (Eigen::Index start = 0; start < E; start += chunk) {
     const Eigen::Index n = std::min(chunk, E - start);
-#pragma omp parallel for schedule(static) if (n >= 8)
+#pragma omp parallel for schedule(static) num_threads(static_cast <int>(work.size())) if (n >= 8)
     for (Eigen::Index i = 0; i < n; ++i) {
       double* re = want_r ? &rbuf[i * nd] : nullptr;
       double* Ke = want_K ? &kbuf[i * nd * nd] : nullptr;
@@ -325,7 +325,7 @@ bool Assembler::evaluate_elements(const Eigen::VectorXd& u, const Eigen::MatrixX
 Eigen::MatrixXd Assembler::jacobians(const Eigen::VectorXd& u) const {
   const int nq = geometry_.points_per_element();
   Eigen::MatrixXd J(mesh_.num_elements(), nq);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(softhd::max_threads())
   for (Eigen::Index e = 0; e < mesh_.num_elements(); ++e)
     for (int q = 0; q < nq; ++q) J(e, q) = deformation_gradient(u, e, q).determinant();
   return J;
@@ -342,7 +342,7 @@ Eigen::MatrixXd Assembler::fiber_sensitivity(const Eigen::VectorXd& u,
                                              const Eigen::VectorXd& lambda) const {
   const int nq = geometry_.points_per_element();
   Eigen::MatrixXd s(mesh_.num_elements(), nq);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(softhd::max_threads())
   for (Eigen::Index e = 0; e < mesh_.num_elements(); ++e)
     for (int q = 0; q < nq; ++q) {
       const Eigen::Matrix3d F = deformation_gradient(u, e, q);

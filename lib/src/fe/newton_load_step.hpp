@@ -41,6 +41,7 @@
 
 #include "line_search.hpp"
 #include "softhd/fe/newton.hpp"
+#include "softhd/interrupt.hpp"
 
 namespace softhd::fe {
 
@@ -69,6 +70,7 @@ bool newton_load_step(Algebra& la, const NewtonOptions& options, const Eigen::Ma
       final ? options.relative_tolerance
             : std::max(options.relative_tolerance, options.intermediate_tolerance);
   for (int it = 0; it <= options.max_iterations; ++it) {
+    check_interrupt("between Newton iterations");
     // The predictor's first direction uses the path tangent: K at u is not needed then.
     const bool use_path = predictor && it == 0 && la.has_path_tangent();
     if (!la.assemble(*u, m, &Pi, &R, !use_path)) {

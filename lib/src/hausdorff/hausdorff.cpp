@@ -4,6 +4,7 @@
 #include "softhd/hausdorff.hpp"
 
 #include <algorithm>
+#include <cfloat>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -14,15 +15,23 @@
 #include "scaled_means.hpp"
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
+#include "softhd/interrupt.hpp"
+#include "softhd/parallel.hpp"
 
 namespace softhd {
 
 namespace {
 
-void check_positive(double value, const char* name) {
+// Finite and at least `least` (> 0), `why` saying where that bound comes from.
+void check_positive(double value, const char* name, double least, const char* why) {
+  std::ostringstream msg;
+  msg << "Hausdorff parameter " << name;
   if (!std::isfinite(value) || !(value > 0.0)) {
-    std::ostringstream msg;
-    msg << "Hausdorff parameter " << name << " must be finite and > 0, got " << value;
+    msg << " must be finite and > 0, got " << value;
+    throw InvalidArgument(msg.str());
+  }
+  if (value < least) {
+    msg << " must be at least " << least << ", got " << value << " (" << why << ")";
     throw InvalidArgument(msg.str());
   }
 }
@@ -30,33 +39,34 @@ void check_positive(double value, const char* name) {
 }  // namespace
 
 void HausdorffParams::validate() const {
-  check_positive(alpha, "alpha");
-  check_positive(beta, "beta");
-  check_positive(gamma, "gamma");
-  check_positive(epsilon, "epsilon");
+  // Subnormal exponents: their inverses overflow.
+  const char* normal = "the smallest normal double";
+  check_positive(alpha, "alpha", DBL_MIN, normal);
+  check_positive(beta, "beta", DBL_MIN, normal);
+  check_positive(gamma, "gamma", DBL_MIN, normal);
+  check_positive(epsilon, "epsilon", kMinEpsilon, "below it 1/epsilon overflows the gradients");
 }
 
-namespace {
-void validate_options(const HausdorffOptions& options) {
-  options.params.validate();
-  if (options.threads < 0) throw InvalidArgument("threads must be >= 0 (0: OpenMP default)");
-  if (!(options.tolerance > 0.0 && options.tolerance < 1.0)) {
+void HausdorffOptions::validate() const {
+  params.validate();
+  check_threads(threads);
+  if (!(tolerance > 0.0 && tolerance < 1.0)) {
     std::ostringstream msg;
-    msg << "Hausdorff option tolerance must be in (0, 1), got " << options.tolerance;
+    msg << "Hausdorff option tolerance must be in (0, 1), got " << tolerance;
     throw InvalidArgument(msg.str());
   }
 }
-// Refuses coordinates whose squares could overflow (see kMaxCoordinate).
-void check_coordinates(const PointCloud& cloud, const char* which) {
-  const double largest = cloud.points().cwiseAbs().maxCoeff();
+
+void check_coordinates(const PointCloud& cloud, const std::string& which) {
+  Eigen::Index row = 0, col = 0;
+  const double largest = cloud.points().cwiseAbs().maxCoeff(&row, &col);
   if (largest > kMaxCoordinate) {
     std::ostringstream msg;
-    msg << which << " cloud has a coordinate of magnitude " << largest << ", above the limit of "
-        << kMaxCoordinate << " (rescale the clouds and epsilon)";
+    msg << which << " cloud: point " << row + 1 << " has a coordinate of magnitude " << largest
+        << ", above the limit of " << kMaxCoordinate << " (rescale the clouds and epsilon)";
     throw InvalidArgument(msg.str());
   }
 }
-}  // namespace
 
 namespace {
 constexpr EnumNames<Method, 3> kMethodNames{
@@ -100,7 +110,7 @@ struct HausdorffTarget::Impl {
 };
 
 HausdorffTarget::HausdorffTarget(PointCloud target, HausdorffOptions options) {
-  validate_options(options);
+  options.validate();
   check_coordinates(target, "target");
   impl_ = std::make_unique<Impl>(std::move(target), options);
 }
@@ -139,10 +149,12 @@ HausdorffResult HausdorffTarget::evaluate(const PointCloud& moving,
 // Exact Hausdorff distance: A = max_j dist(y_j, X), B = max_i dist(x_i, Y), ρ = max(A, B).
 HausdorffResult HausdorffTarget::Impl::evaluate_nearest(const PointCloud& X,
                                                         const HausdorffRequest& req) const {
-  const int threads = detail::resolve_threads(options.threads);
+  const int threads = resolve_threads(options.threads);
   const WorkShare* share = options.share.get();
   const detail::NearestIndex moving_tree(X.points());
+  check_interrupt("between distance passes");
   Eigen::VectorXd dist_target = moving_tree.distances(cloud.points(), threads, share);
+  check_interrupt("between distance passes");
   Eigen::VectorXd dist_moving = tree->distances(X.points(), threads, share);
   HausdorffResult r;
   r.A = dist_target.maxCoeff();
@@ -197,7 +209,7 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   set.power = &power;
   set.eps = eps;
   set.tau = options.tolerance;
-  set.threads = detail::resolve_threads(options.threads);
+  set.threads = resolve_threads(options.threads);
   set.share = options.share.get();
   const Eigen::VectorXd v = X.volumes() / X.total_volume();  // V_i/|X|
   const Eigen::VectorXd& w = weights;                        // W_j/|Y|

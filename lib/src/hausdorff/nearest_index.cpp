@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "kd_tree.hpp"
+#include "softhd/parallel.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -47,15 +48,6 @@ NearestIndex::NearestIndex(const Eigen::MatrixXd& points) : tree_(std::make_uniq
 NearestIndex::~NearestIndex() = default;
 NearestIndex::NearestIndex(NearestIndex&&) noexcept = default;
 NearestIndex& NearestIndex::operator=(NearestIndex&&) noexcept = default;
-
-int resolve_threads(int threads) {
-#ifdef _OPENMP
-  return threads > 0 ? threads : omp_get_max_threads();
-#else
-  (void)threads;
-  return 1;
-#endif
-}
 
 Eigen::VectorXd NearestIndex::distances(const Eigen::MatrixXd& queries, int threads,
                                         const WorkShare* share) const {

@@ -42,7 +42,4 @@ class KdTree;
 Eigen::VectorXd nearest_distances(const KdTree& sources, const KdTree& queries, int threads,
                                   const WorkShare* share = nullptr);
 
-/// Number of threads to use: `threads` if positive, else OpenMP's default (1 without OpenMP).
-int resolve_threads(int threads);
-
 }  // namespace softhd::detail

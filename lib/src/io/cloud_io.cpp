@@ -13,7 +13,6 @@
 #include <vector>
 
 #include "softhd/error.hpp"
-#include "softhd/hausdorff.hpp"
 #include "softhd/io/atomic_file.hpp"
 
 namespace softhd {
@@ -76,11 +75,6 @@ const char* parse_double(std::string_view token, double& value) {
 const char* check_value(double value, bool volume) {
   if (!std::isfinite(value)) return volume ? "non-finite volume" : "non-finite coordinate";
   if (volume && !(value > 0.0)) return "volume must be > 0";
-  // The distance refuses larger coordinates (their squares could overflow): say so here,
-  // where the file and line are known.
-  if (!volume && std::abs(value) > kMaxCoordinate)
-    return "coordinate beyond +-1e150, which the distance cannot square (rescale the cloud and "
-           "epsilon)";
   return nullptr;
 }
 

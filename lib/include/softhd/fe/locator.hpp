@@ -18,7 +18,9 @@ class PointLocator {
   /// Keeps a reference to `mesh`, which must outlive the locator.
   explicit PointLocator(const Mesh& mesh);
   ~PointLocator();
+  /// Movable (the tree moves with it), not copyable.
   PointLocator(PointLocator&&) noexcept;
+  /// Movable, not copyable.
   PointLocator& operator=(PointLocator&&) noexcept;
 
   /// The element containing X (dim entries) and ξ in it, or -1 if X is outside the mesh

@@ -33,11 +33,11 @@ enum class CellType {
 /// One cell type's constant data. Corner (vertex) nodes are the local nodes in
 /// `vertex_nodes`; the P1/Q1 cell on them is `linear`.
 struct ReferenceElement {
-  CellType type = CellType::kHex8;
-  int dim = 3;    ///< 2 or 3
-  int order = 1;  ///< 1 or 2
-  int nodes = 8;  ///< local nodes
-  bool simplex = false;
+  CellType type = CellType::kHex8;        ///< the cell type of this entry
+  int dim = 3;                            ///< 2 or 3
+  int order = 1;                          ///< 1 or 2
+  int nodes = 8;                          ///< local nodes
+  bool simplex = false;                   ///< triangle or tetrahedron
   CellType linear = CellType::kHex8;      ///< the order-1 cell on the same vertices
   CellType quadratic = CellType::kHex27;  ///< the order-2 cell on the same vertices
   /// Local ids of the corner nodes, in the local order of the `linear` cell.

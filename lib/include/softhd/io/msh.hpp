@@ -40,9 +40,9 @@ int gmsh_element_dim(int gmsh_type);
 
 /// A physical group: its dimension, tag and name ("" if the file gives none).
 struct MshPhysicalGroup {
-  int dim = 0;
-  int tag = 0;
-  std::string name;
+  int dim = 0;       ///< 0 point, 1 curve, 2 surface, 3 volume
+  int tag = 0;       ///< the group's tag
+  std::string name;  ///< its name ("" if none)
 };
 
 /// The elements of one Gmsh type on one geometric entity (MSH 4.1 block; in MSH 2.2 the
@@ -63,9 +63,9 @@ struct MshElementBlock {
 /// A $NodeData or $ElementData block (e.g. a fibre field): its name, components and
 /// values per node or element, in file tag order (tags mapped to indices).
 struct MshDataBlock {
-  std::string name;
+  std::string name;          ///< the block's string tag
   bool per_element = false;  ///< $ElementData (true) or $NodeData (false)
-  int components = 1;
+  int components = 1;        ///< values per node or element
   /// Node indices (compacted) or element tags, one per row of `values`.
   std::vector<std::int64_t> tags;
   Eigen::MatrixXd values;  ///< tags.size() by components
@@ -80,9 +80,9 @@ struct MshFile {
   Eigen::MatrixXd nodes;
   /// Gmsh node tag of each compacted node.
   std::vector<std::int64_t> node_tags;
-  std::vector<MshPhysicalGroup> physical_groups;
-  std::vector<MshElementBlock> blocks;
-  std::vector<MshDataBlock> data;
+  std::vector<MshPhysicalGroup> physical_groups;  ///< $PhysicalNames (and tags in use)
+  std::vector<MshElementBlock> blocks;            ///< the kept elements, by type and entity
+  std::vector<MshDataBlock> data;                 ///< $NodeData and $ElementData blocks
   /// Lines the reader noted and skipped (e.g. point elements, unknown sections).
   std::vector<std::string> notes;
 
