@@ -3,15 +3,23 @@
 #include <Eigen/LU>
 
 #include "softhd/error.hpp"
-#include "softhd/fe/shape.hpp"
 
 namespace softhd::fe {
 
-ReferenceGeometry::ReferenceGeometry(const Mesh& mesh, GradientStorage storage) : dim_(mesh.dim) {
-  Eigen::VectorXd wq;
-  element_quadrature(dim_, mesh.order, &xi_, &wq);
-  nq_ = static_cast<int>(wq.size());
+ReferenceGeometry::ReferenceGeometry(const Mesh& mesh, GradientStorage storage,
+                                     int quadrature_degree)
+    : dim_(mesh.dim) {
+  const ReferenceElement& ref = reference_element(mesh.cell);
   nen_ = mesh.nodes_per_element();
+  if (ref.dim != dim_ || ref.nodes != nen_)
+    throw InvalidArgument("reference geometry: a " + std::to_string(dim_) + "D mesh with " +
+                          std::to_string(nen_) + " nodes per element is not of cell type " +
+                          to_string(mesh.cell));
+  Eigen::VectorXd wq;
+  cell_quadrature(mesh.cell,
+                  quadrature_degree > 0 ? quadrature_degree : ref.default_quadrature_degree, &xi_,
+                  &wq);
+  nq_ = static_cast<int>(wq.size());
   const bool store = storage == GradientStorage::kStored;
   stored_ = store;
   if (!store && nen_ > kMaxNodes)
@@ -19,10 +27,13 @@ ReferenceGeometry::ReferenceGeometry(const Mesh& mesh, GradientStorage storage) 
                           std::to_string(kMaxNodes) + " nodes per element");
   N_.resize(nq_, nen_);
   dN_ref_.resize(nq_);
+  Eigen::VectorXd N(nen_);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> dN(nen_, dim_);
   for (int q = 0; q < nq_; ++q) {
-    Eigen::VectorXd N;
-    lagrange_shape(dim_, mesh.order, xi_.row(q).transpose(), &N, &dN_ref_[q]);
+    const Eigen::VectorXd xi = xi_.row(q).transpose();
+    shape_functions(mesh.cell, xi.data(), N.data(), dN.data());
     N_.row(q) = N.transpose();
+    dN_ref_[q] = dN;
   }
   const Eigen::Index E = mesh.num_elements();
   if (store) dNdX_.resize(dim_, E * nq_ * nen_);

@@ -17,21 +17,27 @@ enum class GradientStorage {
   kOnDemand,  ///< not kept: point_gradients() recomputes them from the element's nodes
 };
 
-/// Full Gauss quadrature ((p+1)^dim points per element) on the reference body.
+/// Quadrature on the reference body, by the reference-element table (fe/reference_element.hpp):
+/// by default reference_element(cell).default_quadrature_degree, for quadrilaterals and
+/// hexahedra the full Gauss rule with (p+1)^d points.
 class ReferenceGeometry {
  public:
-  /// The most nodes per element point_gradients() handles (a Q2 hexahedron).
+  /// The most nodes per element point_gradients() handles (a Q2 hexahedron; a P2
+  /// tetrahedron has 10).
   static constexpr int kMaxNodes = 27;
 
-  /// Throws InvalidArgument if an element is inverted (det(dX/dxi) <= 0), or with
-  /// kOnDemand if an element has more than kMaxNodes nodes.
-  explicit ReferenceGeometry(const Mesh& mesh, GradientStorage storage = GradientStorage::kStored);
+  /// `quadrature_degree` 0 takes the cell type's default. Throws InvalidArgument if an
+  /// element is inverted (det(dX/dxi) <= 0 at a quadrature point), if the degree is out of
+  /// the table's range, or with kOnDemand if an element has more than kMaxNodes nodes.
+  explicit ReferenceGeometry(const Mesh& mesh, GradientStorage storage = GradientStorage::kStored,
+                             int quadrature_degree = 0);
 
   /// The dimension d (2 or 3).
   int dim() const { return dim_; }
-  /// Nodes per element, (p+1)^d.
+  /// Nodes per element.
   int nodes_per_element() const { return nen_; }
-  /// Quadrature points per element, (p+1)^d.
+  /// Quadrature points per element ((p+1)^d for the default rule on quadrilaterals and
+  /// hexahedra).
   int points_per_element() const { return nq_; }
   /// The number of elements E.
   Eigen::Index num_elements() const { return weights_.rows(); }
