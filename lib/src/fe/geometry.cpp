@@ -75,13 +75,61 @@ void ReferenceGeometry::point_gradients(const Mesh& mesh, Eigen::Index e, int q,
     }
 }
 
-Eigen::VectorXd lumped_volumes(const Mesh& mesh, const ReferenceGeometry& g) {
-  // V_i = ∫ N_i dX = Σ_e Σ_q N_i(ξ_q) w_q det J0
-  Eigen::VectorXd V = Eigen::VectorXd::Zero(mesh.num_nodes());
-  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e) {
-    for (int a = 0; a < g.nodes_per_element(); ++a) {
-      V[mesh.elements(e, a)] += g.shape_values().col(a).dot(g.weights().row(e).transpose());
+Lumping lumping(CellType type) {
+  const ReferenceElement& r = reference_element(type);
+  return r.simplex && r.order == 2 ? Lumping::kHRZ : Lumping::kRowSum;
+}
+
+void lumped_element_weights(const ReferenceGeometry& g, Lumping lumping, Eigen::Index e,
+                            const double* J, double* w, double* dw_dJ) {
+  const int nen = g.nodes_per_element(), nq = g.points_per_element();
+  const Eigen::MatrixXd& N = g.shape_values();  // nq by nen
+  if (lumping == Lumping::kRowSum) {  // w_a = Σ_q N_a c_q, ∂w_a/∂J_q = N_a w_q det J0
+    for (int a = 0; a < nen; ++a) w[a] = 0.0;
+    for (int q = 0; q < nq; ++q) {
+      const double c = g.weights()(e, q) * (J ? J[q] : 1.0);
+      for (int a = 0; a < nen; ++a) {
+        w[a] += N(q, a) * c;
+        if (dw_dJ) dw_dJ[a + nen * q] = N(q, a) * g.weights()(e, q);
+      }
     }
+    return;
+  }
+  // HRZ: m_a = Σ_q N_a² c_q, V = Σ_q c_q, S = Σ_a m_a, w_a = V m_a / S;
+  // ∂w_a/∂J_q = w_q det J0 (m_a / S + V N_a² / S − V m_a Σ_b N_b² / S²).
+  double V = 0.0, S = 0.0;
+  for (int a = 0; a < nen; ++a) w[a] = 0.0;  // m_a first
+  for (int q = 0; q < nq; ++q) {
+    const double c = g.weights()(e, q) * (J ? J[q] : 1.0);
+    V += c;
+    for (int a = 0; a < nen; ++a) w[a] += N(q, a) * N(q, a) * c;
+  }
+  for (int a = 0; a < nen; ++a) S += w[a];
+  if (dw_dJ) {
+    for (int q = 0; q < nq; ++q) {
+      const double c0 = g.weights()(e, q);
+      const double n2 = N.row(q).squaredNorm();
+      for (int a = 0; a < nen; ++a)
+        dw_dJ[a + nen * q] = c0 * (w[a] / S + V * N(q, a) * N(q, a) / S - V * w[a] * n2 / (S * S));
+    }
+  }
+  for (int a = 0; a < nen; ++a) w[a] *= V / S;
+}
+
+Eigen::VectorXd lumped_volumes(const Mesh& mesh, const ReferenceGeometry& g) {
+  Eigen::VectorXd V = Eigen::VectorXd::Zero(mesh.num_nodes());
+  const int nen = g.nodes_per_element();
+  if (lumping(mesh.cell) == Lumping::kRowSum) {
+    // V_i = ∫ N_i dX = Σ_e Σ_q N_i(ξ_q) w_q det J0 (summed as before the table, bitwise)
+    for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
+      for (int a = 0; a < nen; ++a)
+        V[mesh.elements(e, a)] += g.shape_values().col(a).dot(g.weights().row(e).transpose());
+    return V;
+  }
+  Eigen::VectorXd w(nen);
+  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e) {
+    lumped_element_weights(g, Lumping::kHRZ, e, nullptr, w.data(), nullptr);
+    for (int a = 0; a < nen; ++a) V[mesh.elements(e, a)] += w[a];
   }
   return V;
 }
