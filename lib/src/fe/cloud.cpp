@@ -18,10 +18,19 @@ PointCloud deformed_cloud(const Assembler& A, const Eigen::VectorXd& u, CloudPoi
   const Eigen::MatrixXd Uv = u.reshaped(dim, mesh.num_nodes()).transpose();  // N by dim
   if (points == CloudPoints::kNodes) {
     Eigen::VectorXd V = Eigen::VectorXd::Zero(mesh.num_nodes());
-    for (Eigen::Index e = 0; e < E; ++e)
-      for (int q = 0; q < nq; ++q)  // V_i = Σ_e Σ_q N_i(ξ_q) w_q det J0 (J_q)
-        for (int a = 0; a < nen; ++a)
-          V[mesh.elements(e, a)] += g.shape_values()(q, a) * g.weights()(e, q) * J(e, q);
+    if (lumping(mesh.cell) == Lumping::kRowSum) {
+      for (Eigen::Index e = 0; e < E; ++e)
+        for (int q = 0; q < nq; ++q)  // V_i = Σ_e Σ_q N_i(ξ_q) w_q det J0 (J_q)
+          for (int a = 0; a < nen; ++a)
+            V[mesh.elements(e, a)] += g.shape_values()(q, a) * g.weights()(e, q) * J(e, q);
+    } else {  // HRZ on P2 simplices (geometry.hpp)
+      Eigen::VectorXd Je(nq), w(nen);
+      for (Eigen::Index e = 0; e < E; ++e) {
+        Je = J.row(e).transpose();
+        lumped_element_weights(g, Lumping::kHRZ, e, Je.data(), w.data(), nullptr);
+        for (int a = 0; a < nen; ++a) V[mesh.elements(e, a)] += w[a];
+      }
+    }
     return PointCloud(mesh.nodes + Uv, V);
   }
   Eigen::MatrixXd X(E * nq, dim);
@@ -53,15 +62,29 @@ Eigen::VectorXd cloud_pullback(const Assembler& A, const Eigen::VectorXd& u, Clo
                           std::to_string(N));
   }
   Eigen::VectorXd grad = Eigen::VectorXd::Zero(A.dofs().num_dofs);
-  for (Eigen::Index e = 0; e < E; ++e)
+  // HRZ nodal volumes (P2 simplices): ∂V_i/∂J_q from lumped_element_weights.
+  const bool hrz = deformed && points == CloudPoints::kNodes && lumping(mesh.cell) == Lumping::kHRZ;
+  const Eigen::MatrixXd J = hrz ? A.jacobians(u) : Eigen::MatrixXd();
+  Eigen::VectorXd Je(nq), w(nen), dw_dJ(hrz ? nen * nq : 0);
+  for (Eigen::Index e = 0; e < E; ++e) {
+    if (hrz) {
+      Je = J.row(e).transpose();
+      lumped_element_weights(g, Lumping::kHRZ, e, Je.data(), w.data(), dw_dJ.data());
+    }
     for (int q = 0; q < nq; ++q) {
-      // Weight of ∂V/∂u at this point: Σ_i dJ/dV_i N_i(ξ_q) (nodes) or dJ/dV_q.
-      double c = 0.0;
+      // cw = Σ_i dJ/dV_i ∂V_i/∂J_q: Σ_i dJ/dV_i N_i(ξ_q) w_q det J0 (row sum), Σ_a dJ/dV_a
+      // ∂w_a/∂J_q (HRZ), or dJ/dV_q w_q det J0 (quadrature points).
+      double c = 0.0, cw = 0.0;
       if (deformed) {
-        if (points == CloudPoints::kNodes) {
-          for (int a = 0; a < nen; ++a) c += dJ_dV[mesh.elements(e, a)] * g.shape_values()(q, a);
+        if (hrz) {
+          for (int a = 0; a < nen; ++a) cw += dJ_dV[mesh.elements(e, a)] * dw_dJ[a + nen * q];
         } else {
-          c = dJ_dV[e * nq + q];
+          if (points == CloudPoints::kNodes) {
+            for (int a = 0; a < nen; ++a) c += dJ_dV[mesh.elements(e, a)] * g.shape_values()(q, a);
+          } else {
+            c = dJ_dV[e * nq + q];
+          }
+          cw = c * g.weights()(e, q);
         }
       }
       const Eigen::Matrix3d H =
@@ -71,14 +94,15 @@ Eigen::VectorXd cloud_pullback(const Assembler& A, const Eigen::VectorXd& u, Clo
         const Eigen::Index n = mesh.elements(e, a);
         for (int k = 0; k < dim; ++k) {
           double v = 0.0;
-          if (deformed)  // ∂(w J)/∂u_ak = w (H ∇N_a)_k
-            for (int L = 0; L < dim; ++L) v += c * g.weights()(e, q) * H(k, L) * G(L, a);
+          if (deformed)  // ∂J_q/∂u_ak = (H ∇N_a)_k
+            for (int L = 0; L < dim; ++L) v += cw * H(k, L) * G(L, a);
           if (points == CloudPoints::kQuadraturePoints)
             v += g.shape_values()(q, a) * dJ_dx(e * nq + q, k);  // ∂x_q/∂u_a = N_a(ξ_q) I
           grad[n * dim + k] += v;
         }
       }
     }
+  }
   if (points == CloudPoints::kNodes) {
     for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n)
       for (int k = 0; k < dim; ++k) grad[n * dim + k] += dJ_dx(n, k);  // ∂x_i/∂u_i = I

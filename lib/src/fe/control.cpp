@@ -5,7 +5,6 @@
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
-#include "softhd/fe/shape.hpp"
 
 namespace softhd::fe {
 
@@ -34,14 +33,19 @@ ControlSpace::ControlSpace(const Mesh& mesh, const ReferenceGeometry& g, Control
   support_ = mesh.element_vertices;
   const int nv = static_cast<int>(support_.cols());
   M_.resize(nq, nv);
+  // The P1/Q1 functions of the linear cell on the element's vertices, at the points.
+  const CellType linear = reference_element(mesh.cell).linear;
   std::vector<Eigen::MatrixXd> dref(nq);
+  Eigen::VectorXd N(nv);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> dN(nv, dim);
   for (int q = 0; q < nq; ++q) {
-    Eigen::VectorXd N;
-    lagrange_shape(dim, 1, g.reference_points().row(q).transpose(), &N, &dref[q]);
+    const Eigen::VectorXd xi = g.reference_points().row(q).transpose();
+    shape_functions(linear, xi.data(), N.data(), dN.data());
     M_.row(q) = N.transpose();
+    dref[q] = dN;
   }
-  // Gradients of the Q1 functions in X: dM/dX = dM/dξ (dX/dξ)^{-1}, the geometry being
-  // interpolated by the element's vertices (exact for the affine box cells).
+  // Gradients of the P1/Q1 functions in X: dM/dX = dM/dξ (dX/dξ)^{-1}, the geometry being
+  // interpolated by the element's vertices (exact for affine cells).
   dM_.resize(E);
   Eigen::MatrixXd Xv(nv, dim);
   for (Eigen::Index e = 0; e < E; ++e) {

@@ -3,15 +3,23 @@
 #include <Eigen/LU>
 
 #include "softhd/error.hpp"
-#include "softhd/fe/shape.hpp"
 
 namespace softhd::fe {
 
-ReferenceGeometry::ReferenceGeometry(const Mesh& mesh, GradientStorage storage) : dim_(mesh.dim) {
-  Eigen::VectorXd wq;
-  element_quadrature(dim_, mesh.order, &xi_, &wq);
-  nq_ = static_cast<int>(wq.size());
+ReferenceGeometry::ReferenceGeometry(const Mesh& mesh, GradientStorage storage,
+                                     int quadrature_degree)
+    : dim_(mesh.dim) {
+  const ReferenceElement& ref = reference_element(mesh.cell);
   nen_ = mesh.nodes_per_element();
+  if (ref.dim != dim_ || ref.nodes != nen_)
+    throw InvalidArgument("reference geometry: a " + std::to_string(dim_) + "D mesh with " +
+                          std::to_string(nen_) + " nodes per element is not of cell type " +
+                          to_string(mesh.cell));
+  Eigen::VectorXd wq;
+  cell_quadrature(mesh.cell,
+                  quadrature_degree > 0 ? quadrature_degree : ref.default_quadrature_degree, &xi_,
+                  &wq);
+  nq_ = static_cast<int>(wq.size());
   const bool store = storage == GradientStorage::kStored;
   stored_ = store;
   if (!store && nen_ > kMaxNodes)
@@ -19,10 +27,13 @@ ReferenceGeometry::ReferenceGeometry(const Mesh& mesh, GradientStorage storage) 
                           std::to_string(kMaxNodes) + " nodes per element");
   N_.resize(nq_, nen_);
   dN_ref_.resize(nq_);
+  Eigen::VectorXd N(nen_);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> dN(nen_, dim_);
   for (int q = 0; q < nq_; ++q) {
-    Eigen::VectorXd N;
-    lagrange_shape(dim_, mesh.order, xi_.row(q).transpose(), &N, &dN_ref_[q]);
+    const Eigen::VectorXd xi = xi_.row(q).transpose();
+    shape_functions(mesh.cell, xi.data(), N.data(), dN.data());
     N_.row(q) = N.transpose();
+    dN_ref_[q] = dN;
   }
   const Eigen::Index E = mesh.num_elements();
   if (store) dNdX_.resize(dim_, E * nq_ * nen_);
@@ -64,13 +75,61 @@ void ReferenceGeometry::point_gradients(const Mesh& mesh, Eigen::Index e, int q,
     }
 }
 
-Eigen::VectorXd lumped_volumes(const Mesh& mesh, const ReferenceGeometry& g) {
-  // V_i = ∫ N_i dX = Σ_e Σ_q N_i(ξ_q) w_q det J0
-  Eigen::VectorXd V = Eigen::VectorXd::Zero(mesh.num_nodes());
-  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e) {
-    for (int a = 0; a < g.nodes_per_element(); ++a) {
-      V[mesh.elements(e, a)] += g.shape_values().col(a).dot(g.weights().row(e).transpose());
+Lumping lumping(CellType type) {
+  const ReferenceElement& r = reference_element(type);
+  return r.simplex && r.order == 2 ? Lumping::kHRZ : Lumping::kRowSum;
+}
+
+void lumped_element_weights(const ReferenceGeometry& g, Lumping lumping, Eigen::Index e,
+                            const double* J, double* w, double* dw_dJ) {
+  const int nen = g.nodes_per_element(), nq = g.points_per_element();
+  const Eigen::MatrixXd& N = g.shape_values();  // nq by nen
+  if (lumping == Lumping::kRowSum) {  // w_a = Σ_q N_a c_q, ∂w_a/∂J_q = N_a w_q det J0
+    for (int a = 0; a < nen; ++a) w[a] = 0.0;
+    for (int q = 0; q < nq; ++q) {
+      const double c = g.weights()(e, q) * (J ? J[q] : 1.0);
+      for (int a = 0; a < nen; ++a) {
+        w[a] += N(q, a) * c;
+        if (dw_dJ) dw_dJ[a + nen * q] = N(q, a) * g.weights()(e, q);
+      }
     }
+    return;
+  }
+  // HRZ: m_a = Σ_q N_a² c_q, V = Σ_q c_q, S = Σ_a m_a, w_a = V m_a / S;
+  // ∂w_a/∂J_q = w_q det J0 (m_a / S + V N_a² / S − V m_a Σ_b N_b² / S²).
+  double V = 0.0, S = 0.0;
+  for (int a = 0; a < nen; ++a) w[a] = 0.0;  // m_a first
+  for (int q = 0; q < nq; ++q) {
+    const double c = g.weights()(e, q) * (J ? J[q] : 1.0);
+    V += c;
+    for (int a = 0; a < nen; ++a) w[a] += N(q, a) * N(q, a) * c;
+  }
+  for (int a = 0; a < nen; ++a) S += w[a];
+  if (dw_dJ) {
+    for (int q = 0; q < nq; ++q) {
+      const double c0 = g.weights()(e, q);
+      const double n2 = N.row(q).squaredNorm();
+      for (int a = 0; a < nen; ++a)
+        dw_dJ[a + nen * q] = c0 * (w[a] / S + V * N(q, a) * N(q, a) / S - V * w[a] * n2 / (S * S));
+    }
+  }
+  for (int a = 0; a < nen; ++a) w[a] *= V / S;
+}
+
+Eigen::VectorXd lumped_volumes(const Mesh& mesh, const ReferenceGeometry& g) {
+  Eigen::VectorXd V = Eigen::VectorXd::Zero(mesh.num_nodes());
+  const int nen = g.nodes_per_element();
+  if (lumping(mesh.cell) == Lumping::kRowSum) {
+    // V_i = ∫ N_i dX = Σ_e Σ_q N_i(ξ_q) w_q det J0 (summed as before the table, bitwise)
+    for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
+      for (int a = 0; a < nen; ++a)
+        V[mesh.elements(e, a)] += g.shape_values().col(a).dot(g.weights().row(e).transpose());
+    return V;
+  }
+  Eigen::VectorXd w(nen);
+  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e) {
+    lumped_element_weights(g, Lumping::kHRZ, e, nullptr, w.data(), nullptr);
+    for (int a = 0; a < nen; ++a) V[mesh.elements(e, a)] += w[a];
   }
   return V;
 }

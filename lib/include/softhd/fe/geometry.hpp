@@ -17,21 +17,27 @@ enum class GradientStorage {
   kOnDemand,  ///< not kept: point_gradients() recomputes them from the element's nodes
 };
 
-/// Full Gauss quadrature ((p+1)^dim points per element) on the reference body.
+/// Quadrature on the reference body, by the reference-element table (fe/reference_element.hpp):
+/// by default reference_element(cell).default_quadrature_degree, for quadrilaterals and
+/// hexahedra the full Gauss rule with (p+1)^d points.
 class ReferenceGeometry {
  public:
-  /// The most nodes per element point_gradients() handles (a Q2 hexahedron).
+  /// The most nodes per element point_gradients() handles (a Q2 hexahedron; a P2
+  /// tetrahedron has 10).
   static constexpr int kMaxNodes = 27;
 
-  /// Throws InvalidArgument if an element is inverted (det(dX/dxi) <= 0), or with
-  /// kOnDemand if an element has more than kMaxNodes nodes.
-  explicit ReferenceGeometry(const Mesh& mesh, GradientStorage storage = GradientStorage::kStored);
+  /// `quadrature_degree` 0 takes the cell type's default. Throws InvalidArgument if an
+  /// element is inverted (det(dX/dxi) <= 0 at a quadrature point), if the degree is out of
+  /// the table's range, or with kOnDemand if an element has more than kMaxNodes nodes.
+  explicit ReferenceGeometry(const Mesh& mesh, GradientStorage storage = GradientStorage::kStored,
+                             int quadrature_degree = 0);
 
   /// The dimension d (2 or 3).
   int dim() const { return dim_; }
-  /// Nodes per element, (p+1)^d.
+  /// Nodes per element.
   int nodes_per_element() const { return nen_; }
-  /// Quadrature points per element, (p+1)^d.
+  /// Quadrature points per element ((p+1)^d for the default rule on quadrilaterals and
+  /// hexahedra).
   int points_per_element() const { return nq_; }
   /// The number of elements E.
   Eigen::Index num_elements() const { return weights_.rows(); }
@@ -60,8 +66,28 @@ class ReferenceGeometry {
   std::vector<Eigen::MatrixXd> dN_ref_;  ///< per point: nen by dim, dN_a/dξ
 };
 
-/// Lumped nodal volumes V_i = ∫ N_i dX (areas in 2D); they sum to |Ω₀| and are positive
-/// for tensor-product Q1 and Q2 elements (1-D weights 1/3, 4/3, 1/3 per unit cell for Q2).
+/// How element volumes are lumped onto nodes (docs/formulation.md §7). The row sum
+/// w_a = ∫ N_a dX is positive on every Q1, Q2 (tensor-product) and P1 element, but on P2
+/// simplices it is −V/20 (tetrahedra) or 0 (triangles) at the vertices; those take HRZ
+/// lumping w_a = V_e M_aa / Σ_b M_bb (M_ab = ∫ N_a N_b dX), which is positive and sums to
+/// V_e (affine P2 tetrahedron: V/36 at vertices, 4V/27 at edges; triangle: A/19, 16A/57).
+enum class Lumping { kRowSum, kHRZ };
+
+/// The lumping of a cell type: HRZ for P2 simplices, the row sum otherwise.
+Lumping lumping(CellType type);
+
+/// The lumped weights w (nen) of element e whose volume is Σ_q c_q, c_q = w_q det J0 J_q
+/// (J = null: J_q = 1, the reference volumes), and if dw_dJ is not null their derivatives
+/// dw_dJ[a + nen q] = ∂w_a/∂J_q:
+///   row sum: w_a = Σ_q N_a(ξ_q) c_q,
+///   HRZ:     w_a = V m_a / S, m_a = Σ_q N_a(ξ_q)² c_q, V = Σ_q c_q, S = Σ_a m_a.
+/// No allocation.
+void lumped_element_weights(const ReferenceGeometry& geometry, Lumping lumping, Eigen::Index e,
+                            const double* J, double* w, double* dw_dJ);
+
+/// Lumped nodal volumes V_i = Σ_e w_a(e) (areas in 2D) by lumping(mesh.cell): positive,
+/// summing to |Ω₀|; the row sum ∫ N_i dX where it is positive (1-D weights 1/3, 4/3, 1/3
+/// per unit cell for Q2).
 Eigen::VectorXd lumped_volumes(const Mesh& mesh, const ReferenceGeometry& geometry);
 
 /// Reference positions of all quadrature points, (E nq) by dim, element-major.
