@@ -30,12 +30,13 @@ Mesh read(const std::string& name, int order = 0) {
   return mesh_from_gmsh(io::read_msh(mesh_path(name)), o);
 }
 
-// The node coordinates of a mesh, rounded to 1e-12 and sorted (independent of numbering).
+// The node coordinates of a mesh, rounded to 1e-9 and sorted (independent of numbering; the
+// meshes' coordinates are multiples of 1/8, so rounding cannot split two equal nodes).
 std::vector<std::vector<double>> sorted_nodes(const Mesh& m) {
   std::vector<std::vector<double>> v;
   for (Eigen::Index n = 0; n < m.num_nodes(); ++n) {
     std::vector<double> p;
-    for (int d = 0; d < m.dim; ++d) p.push_back(std::round(m.nodes(n, d) * 1e12) / 1e12);
+    for (int d = 0; d < m.dim; ++d) p.push_back(std::round(m.nodes(n, d) * 1e9) / 1e9 + 0.0);
     v.push_back(p);
   }
   std::sort(v.begin(), v.end());
@@ -116,10 +117,26 @@ TEST(GmshMesh, Hex27BoxFromGmshIsTheStructuredBox) {
                                Eigen::Vector3i(4, 2, 2), 2);
   ASSERT_EQ(g.cell, CellType::kHex27);
   ASSERT_EQ(sorted_nodes(g), sorted_nodes(b));
+  // Gmsh's transfinite nodes lie up to 2.6e-12 off the grid (measured; its own geometry
+  // round-off), which moves the bent solution by ~1e-13 relative: give the Gmsh mesh the grid's exact coordinates, so
+  // that what is compared is the element numbering and node order alone.
+  Mesh gx = g;
+  double off_grid = 0.0;
+  for (Eigen::Index n = 0; n < gx.num_nodes(); ++n)
+    for (int d = 0; d < 3; ++d) {
+      const double exact = std::round(gx.nodes(n, d) * 4.0) / 4.0;  // grid spacing 1/4
+      off_grid = std::max(off_grid, std::abs(gx.nodes(n, d) - exact));
+      gx.nodes(n, d) = exact;
+    }
+  EXPECT_LT(off_grid, 1e-11);
   auto solve = [](const Mesh& m, const std::string& clamp) {
     const Assembler a(m, std::make_shared<MooneyRivlin>(1.0, 0.2, 3.0), Eigen::Vector3d::UnitX(),
                       {{clamp, {}}});
-    NewtonSolver newton(a);
+    // Converged far below the comparison's 1e-12 (the two numberings round differently, so
+    // the default relative tolerance 1e-9 would leave ~1e-13 between the two solutions).
+    NewtonOptions o;
+    o.relative_tolerance = 1e-12;
+    NewtonSolver newton(a, o);
     State s = rest_state(a);
     const Eigen::MatrixXd m_qp = Eigen::MatrixXd::Constant(m.num_elements(),
                                                            a.geometry().points_per_element(), -0.3);
@@ -133,7 +150,7 @@ TEST(GmshMesh, Hex27BoxFromGmshIsTheStructuredBox) {
     }
     return by_position;
   };
-  const auto ug = solve(g, "x0"), ub = solve(b, "x0");
+  const auto ug = solve(gx, "x0"), ub = solve(b, "x0");
   double scale = 0.0, worst = 0.0;
   for (const auto& [p, u] : ub) {
     scale = std::max(scale, u.cwiseAbs().maxCoeff());
@@ -157,8 +174,7 @@ TEST(GmshMesh, BadMeshesAreRefusedWithOneLine) {
   }
 }
 
-// A scene on the two-part cube: materials per region, a clamp on a physical surface, controls
-// on one region, solved; unknown names refused listing the file's.
+// A scene on the two-part cube: materials per region, a clamp on a physical surface, solved; unknown names refused listing the file's.
 TEST(GmshMesh, ASceneOnAFileMesh) {
   const std::string dir = ::testing::TempDir();
   const std::string scene = R"({
@@ -167,7 +183,7 @@ TEST(GmshMesh, ASceneOnAFileMesh) {
     "materials": {"body": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3},
                   "layer": {"model": "mooney_rivlin", "a": 10, "b": 2, "c": 30}},
     "fibers": [1, 0, 0], "clamp": ["base"],
-    "control": {"space": "vertex", "region": "body", "lower": -1, "upper": 0}})";
+    "control": {"space": "vertex", "lower": -1, "upper": 0}})";
   const Scene s = parse_scene(scene, dir + "/cube.json");
   EXPECT_FALSE(s.is_box());
   EXPECT_NEAR(s.volume, 1.0, 1e-12);
@@ -188,7 +204,6 @@ TEST(GmshMesh, ASceneOnAFileMesh) {
     }
   };
   refused("\"clamp\": [\"base\"]", "\"clamp\": [\"bottom\"]", "base, tip");
-  refused("\"region\": \"body\"", "\"region\": \"muscle\"", "body, layer");
   refused("\"layer\": {", "\"lyer\": {", "unknown region 'lyer'");
   refused("cube_tet10_v41.msh", "missing.msh", "missing.msh");
 }

@@ -48,13 +48,17 @@ Assembler::Assembler(Mesh mesh, std::shared_ptr<const Material> material, const 
 
 Assembler::Assembler(Mesh mesh, std::vector<std::shared_ptr<const Material>> materials,
                      const FiberField& fibers, const std::vector<DirichletConstraint>& constraints,
-                     AssemblerStorage storage)
+                     AssemblerStorage storage, int quadrature_degree)
     : mesh_(std::move(mesh)),
       storage_(storage),
-      geometry_(mesh_, storage == AssemblerStorage::kFull ? GradientStorage::kStored
-                                                          : GradientStorage::kOnDemand),
+      geometry_(mesh_,
+                storage == AssemblerStorage::kFull ? GradientStorage::kStored
+                                                   : GradientStorage::kOnDemand,
+                quadrature_degree),
       materials_(std::move(materials)) {
   if (materials_.empty()) throw InvalidArgument("assembler: no material given");
+  if (materials_.size() == 1)  // one material for the whole body, whatever its regions
+    materials_.resize(std::max<std::size_t>(1, mesh_.region_names.size()), materials_[0]);
   for (const auto& m : materials_)
     if (!m) throw InvalidArgument("assembler: no material given");
   if (mesh_.element_region.size() == 0) mesh_.element_region.setZero(mesh_.num_elements());

@@ -315,7 +315,7 @@ void parse_constraints(const Reader& r, const json& doc, Scene* s) {
 
 void parse_control(const Reader& r, const json& doc, const Mesh& mesh, Scene* s) {
   const json& control = r.object(doc, "control", "control");
-  r.keys(control, "control", {"space", "lower", "upper", "initial", "region"});
+  r.keys(control, "control", {"space", "lower", "upper", "initial"});
   try {
     s->control_kind = parse_control_kind(r.string(control, "space", "control.space"));
   } catch (const InvalidArgument&) {
@@ -331,17 +331,8 @@ void parse_control(const Reader& r, const json& doc, const Mesh& mesh, Scene* s)
     r.fail("control.initial", "must lie within [control.lower, control.upper] = [" +
                                   std::to_string(s->control_lower) + ", " +
                                   std::to_string(s->control_upper) + "]");
-  std::vector<int> regions;  // where the control acts
-  if (control.contains("region")) {
-    s->control_region = r.string(control, "region", "control.region");
-    try {
-      regions.push_back(mesh.region(s->control_region));
-    } catch (const InvalidArgument& e) {
-      r.fail("control.region", e.what());
-    }
-  } else {
-    for (int k = 0; k < static_cast<int>(s->materials.size()); ++k) regions.push_back(k);
-  }
+  std::vector<int> regions;  // where the control acts: the whole body
+  for (int k = 0; k < static_cast<int>(s->materials.size()); ++k) regions.push_back(k);
   for (int k : regions)  // existence needs m < 2a wherever m acts
     if (!(s->control_upper < 2.0 * s->materials[k]->a()))
       r.fail("control.upper", "must be < 2a (docs/formulation.md §3.3: existence needs m < 2a)" +
@@ -414,7 +405,8 @@ Mesh Scene::make_mesh() const {
 }
 
 Assembler Scene::make_assembler() const {
-  return Assembler(make_mesh(), materials, fiber_field, constraints);
+  return Assembler(make_mesh(), materials, fiber_field, constraints, AssemblerStorage::kFull,
+                   quadrature_degree);
 }
 
 double Scene::residual_floor() const {

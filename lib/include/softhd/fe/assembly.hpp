@@ -71,9 +71,10 @@ class Assembler {
   /// (mesh.element_region; one entry per mesh.region_names), and a fibre field. Throws
   /// InvalidArgument on a missing material, a field of the wrong size, or a fibre that is
   /// zero or (in 2D) out of the plane at a quadrature point.
+  /// `quadrature_degree` 0 takes the cell type's default (ReferenceGeometry).
   Assembler(Mesh mesh, std::vector<std::shared_ptr<const Material>> materials,
             const FiberField& fibers, const std::vector<DirichletConstraint>& constraints,
-            AssemblerStorage storage = AssemblerStorage::kFull);
+            AssemblerStorage storage = AssemblerStorage::kFull, int quadrature_degree = 0);
 
   /// The mesh.
   const Mesh& mesh() const { return mesh_; }

@@ -24,7 +24,7 @@
 ///     "materials": { "body": {...}, "layer": {...} },     (or one "material")
 ///     "fibers": [1, 0, 0] | { "data": "fibres" } | { "file": "f.txt", "per": "element" },
 ///     "clamp": ["base"],
-///     "control": { "space": "vertex", "region": "body", "lower": -1e5, "upper": 0 }
+///     "control": { "space": "vertex", "lower": -1e5, "upper": 0 }
 
 #include <Eigen/Core>
 #include <memory>
@@ -61,7 +61,6 @@ struct Scene {
   std::vector<std::shared_ptr<const Material>> materials;
   Eigen::Vector3d fibers = Eigen::Vector3d::UnitX();  ///< "fibers" as a vector, normalised
   FiberField fiber_field;  ///< "fibers": the vector, or a field per element or node
-  std::string control_region;  ///< control.region ("" : the whole body)
   std::vector<DirichletConstraint> constraints;       ///< the clamp, then the extra constraints
   ControlKind control_kind = ControlKind::kVertex;    ///< control.space
   ///@{
