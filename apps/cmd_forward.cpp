@@ -16,6 +16,7 @@
 #include "softhd/fe/cloud.hpp"
 #include "softhd/fe/forward.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
+#include "softhd/fe/locator.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/output.hpp"
 #include "softhd/fe/scene.hpp"
@@ -324,9 +325,10 @@ int forward(const Args& args) {
     return 0;
   }
   check_bounds(scene, positions, m);
+  const softhd::fe::PointLocator locator(mesh);
   for (const Eigen::VectorXd& X : args.probes) {
     Eigen::VectorXd xi;
-    if (X.size() != scene.dim() || locate(mesh, X, &xi) < 0) {
+    if (X.size() != scene.dim() || locator.locate(X, &xi) < 0) {
       std::ostringstream os;
       os << "probe (" << X.transpose() << ") is not a point of the " << scene.dim() << "D body";
       throw softhd::InvalidArgument(os.str());

@@ -9,6 +9,7 @@
 #include "scene.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/forward.hpp"
+#include "softhd/fe/locator.hpp"
 #include "softhd/fe/output.hpp"
 
 namespace softhd::python {
@@ -31,9 +32,10 @@ std::vector<Eigen::VectorXd> probe_points(const PyScene& s, const Eigen::MatrixX
     throw InvalidArgument("probes must be a (P, " + std::to_string(dim) + ") array, got " +
                           std::to_string(probes.cols()) + " columns");
   std::vector<Eigen::VectorXd> points;
+  const fe::PointLocator locator(s.assembler.mesh());
   for (Eigen::Index p = 0; p < probes.rows(); ++p) {
     Eigen::VectorXd xi;
-    if (fe::locate(s.assembler.mesh(), probes.row(p).transpose(), &xi) < 0) {
+    if (locator.locate(probes.row(p).transpose(), &xi) < 0) {
       std::ostringstream os;
       os << "probe (" << probes.row(p) << ") is not a point of the " << dim << "D body";
       throw InvalidArgument(os.str());

@@ -11,37 +11,7 @@
 
 using namespace softhd::fe;
 
-TEST(Shape, PartitionOfUnityKroneckerAndGradient) {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> U(-1.0, 1.0);
-  for (int dim : {2, 3})
-    for (int p : {1, 2}) {
-      Eigen::VectorXd xi(dim), N, Nh;
-      Eigen::MatrixXd dN, dNh;
-      for (int d = 0; d < dim; ++d) xi[d] = U(rng);
-      lagrange_shape(dim, p, xi, &N, &dN);
-      EXPECT_NEAR(N.sum(), 1.0, 1e-14);
-      EXPECT_NEAR(dN.colwise().sum().norm(), 0.0, 1e-13);
-      // Central differences of the values (exact for quadratics up to round-off).
-      for (int g = 0; g < dim; ++g) {
-        Eigen::VectorXd xp = xi, xm = xi, Np, Nm;
-        const double h = 1e-4;
-        xp[g] += h;
-        xm[g] -= h;
-        lagrange_shape(dim, p, xp, &Np, &dNh);
-        lagrange_shape(dim, p, xm, &Nm, &dNh);
-        EXPECT_LT(((Np - Nm) / (2 * h) - dN.col(g)).cwiseAbs().maxCoeff(), 1e-7);
-      }
-      // Kronecker property at the nodes -1 + 2i/p.
-      const int n1 = p + 1, nen = static_cast<int>(N.size());
-      for (int a = 0; a < nen; ++a) {
-        const int idx[3] = {a % n1, (a / n1) % n1, a / (n1 * n1)};
-        for (int d = 0; d < dim; ++d) xi[d] = -1.0 + 2.0 * idx[d] / p;
-        lagrange_shape(dim, p, xi, &Nh, &dNh);
-        EXPECT_NEAR((Nh - Eigen::VectorXd::Unit(nen, a)).norm(), 0.0, 1e-14);
-      }
-    }
-}
+// Shape functions of every cell type: tests/fe/test_reference_element.cpp.
 
 TEST(Shape, GaussRuleIntegratesOddDegreeExactly) {
   for (int n = 1; n <= 12; ++n) {  // closed forms up to 4, Golub-Welsch beyond

@@ -5,7 +5,7 @@
 #include <utility>
 
 #include "softhd/error.hpp"
-#include "softhd/fe/shape.hpp"
+#include "softhd/fe/interpolation.hpp"
 
 namespace softhd {
 
@@ -67,31 +67,29 @@ NodalMap::NodalMap(fe::Mesh source, const PointCloud& deformed) : source_(std::m
 }
 
 Eigen::VectorXd NodalMap::displacement_at(const Eigen::VectorXd& X) const {
-  Eigen::VectorXd xi;
-  const int e = fe::locate(source_, X, &xi);
-  if (e < 0) {
+  const fe::PointLocator locator(source_);
+  return displacements_at(locator, X.transpose()).row(0).transpose();
+}
+
+Eigen::MatrixXd NodalMap::displacements_at(const fe::PointLocator& locator,
+                                           const Eigen::MatrixXd& X) const {
+  // u_T(X) = Σ_a N_a(ξ) (y_a − X_a)
+  std::vector<int> outside;
+  const Eigen::MatrixXd u = fe::interpolate_nodal(source_, locator, u_, X, &outside);
+  if (!outside.empty()) {
     std::ostringstream os;
-    os << "manufactured target: the point (" << X.transpose()
+    os << "manufactured target: the point (" << X.row(outside[0])
        << ") is outside the body the target was solved on";
     throw InvalidArgument(os.str());
   }
-  Eigen::VectorXd N;
-  Eigen::MatrixXd dN;
-  fe::lagrange_shape(source_.dim, source_.order, xi, &N, &dN);
-  // u_T(X) = Σ_a N_a(ξ) (y_a − X_a)
-  Eigen::VectorXd u = Eigen::VectorXd::Zero(source_.dim);
-  for (int a = 0; a < source_.nodes_per_element(); ++a)
-    u += N[a] * u_.row(source_.elements(e, a)).transpose();
   return u;
 }
 
 Eigen::VectorXd NodalMap::displacement(const fe::Mesh& mesh) const {
   if (mesh.dim != source_.dim) throw InvalidArgument("manufactured target: dimensions differ");
-  const int d = mesh.dim;
-  Eigen::VectorXd u(mesh.num_nodes() * d);
-  for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n)
-    u.segment(n * d, d) = displacement_at(mesh.nodes.row(n).transpose());
-  return u;
+  const fe::PointLocator locator(source_);
+  const Eigen::MatrixXd u = displacements_at(locator, mesh.nodes);  // nodes by dim
+  return u.transpose().reshaped();
 }
 
 }  // namespace softhd

@@ -3,7 +3,7 @@
 #include <sstream>
 
 #include "softhd/error.hpp"
-#include "softhd/fe/shape.hpp"
+#include "softhd/fe/interpolation.hpp"
 
 namespace softhd::fe {
 
@@ -66,23 +66,25 @@ int grid_levels(const Scene& scene, const GridSequencingOptions& options) {
 
 Eigen::VectorXd control_at(const Mesh& mesh, ControlKind kind, const Eigen::VectorXd& m,
                            const Eigen::MatrixXd& X) {
-  Eigen::VectorXd values(X.rows()), xi, N;
-  Eigen::MatrixXd dN;
-  for (Eigen::Index p = 0; p < X.rows(); ++p) {
-    const int e = locate(mesh, X.row(p).transpose(), &xi);
-    if (e < 0) {
-      std::ostringstream os;
-      os << "control_at: the point (" << X.row(p) << ") is outside the body";
-      throw InvalidArgument(os.str());
+  const PointLocator locator(mesh);
+  std::vector<int> outside;
+  Eigen::VectorXd values(X.rows());
+  if (kind == ControlKind::kElement) {
+    const Eigen::VectorXi e = locate_points(locator, X);
+    for (Eigen::Index p = 0; p < X.rows(); ++p) {
+      if (e[p] < 0) {
+        outside.push_back(static_cast<int>(p));
+        break;
+      }
+      values[p] = m[e[p]];
     }
-    if (kind == ControlKind::kElement) {
-      values[p] = m[e];
-      continue;
-    }
-    // m(X) = Σ_a M_a(ξ) m_a over the element's vertices (Q1 shape functions)
-    lagrange_shape(mesh.dim, 1, xi, &N, &dN);
-    values[p] = 0.0;
-    for (int a = 0; a < N.size(); ++a) values[p] += N[a] * m[mesh.element_vertices(e, a)];
+  } else {  // m(X) = Σ_a M_a(ξ) m_a over the element's vertices (P1/Q1 shape functions)
+    values = interpolate_vertex(mesh, locator, m, X, &outside);
+  }
+  if (!outside.empty()) {
+    std::ostringstream os;
+    os << "control_at: the point (" << X.row(outside[0]) << ") is outside the body";
+    throw InvalidArgument(os.str());
   }
   return values;
 }
@@ -111,17 +113,14 @@ Eigen::VectorXd prolongate(const Mesh& coarse, const Eigen::VectorXd& u_coarse, 
   if (coarse.dim != fine.dim || u_coarse.size() != coarse.num_nodes() * coarse.dim)
     throw InvalidArgument("prolongate: the coarse field does not match its mesh");
   const int d = fine.dim;
-  Eigen::VectorXd u = Eigen::VectorXd::Zero(fine.num_nodes() * d), xi, N;
-  Eigen::MatrixXd dN;
-  for (Eigen::Index n = 0; n < fine.num_nodes(); ++n) {
-    const int e = locate(coarse, fine.nodes.row(n).transpose(), &xi);
-    if (e < 0) throw InvalidArgument("prolongate: fine node " + std::to_string(n) + " is outside");
-    lagrange_shape(d, coarse.order, xi, &N, &dN);
-    // u(X_n) = Σ_a N_a(ξ) u_a
-    for (int a = 0; a < N.size(); ++a)
-      u.segment(n * d, d) += N[a] * u_coarse.segment(coarse.elements(e, a) * d, d);
-  }
-  return u;
+  // u(X_n) = Σ_a N_a(ξ) u_a in the coarse element containing the fine node X_n
+  const Eigen::MatrixXd U = u_coarse.reshaped(d, coarse.num_nodes()).transpose();
+  std::vector<int> outside;
+  const Eigen::MatrixXd u =
+      interpolate_nodal(coarse, PointLocator(coarse), U, fine.nodes, &outside);
+  if (!outside.empty())
+    throw InvalidArgument("prolongate: fine node " + std::to_string(outside[0]) + " is outside");
+  return u.transpose().reshaped();
 }
 
 bool solve_grid_level(const Scene& scene, const Mesh& fine, ControlKind kind,

@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "softhd/error.hpp"
-#include "softhd/fe/shape.hpp"
+#include "softhd/fe/interpolation.hpp"
 #include "softhd/io/atomic_file.hpp"
 #include "softhd/io/vtu.hpp"
 
@@ -21,20 +21,19 @@ Eigen::VectorXd probe_displacement(const Assembler& assembler, const Eigen::Vect
 
 Eigen::VectorXd probe_displacement(const Mesh& mesh, const Eigen::VectorXd& u,
                                    const Eigen::VectorXd& X) {
-  Eigen::VectorXd xi;
-  const int e = locate(mesh, X, &xi);
-  if (e < 0) {
+  // u(X) = Σ_a N_a(ξ) u_a in the element containing X
+  std::vector<int> outside;
+  const Eigen::MatrixXd v =
+      X.size() != mesh.dim ? Eigen::MatrixXd()
+                           : interpolate_nodal(mesh, PointLocator(mesh),
+                                               u.reshaped(mesh.dim, mesh.num_nodes()).transpose(),
+                                               X.transpose(), &outside);
+  if (X.size() != mesh.dim || !outside.empty()) {
     std::ostringstream os;
     os << "probe (" << X.transpose() << ") is outside the body";
     throw InvalidArgument(os.str());
   }
-  Eigen::VectorXd N;
-  Eigen::MatrixXd dN;
-  lagrange_shape(mesh.dim, mesh.order, xi, &N, &dN);
-  Eigen::VectorXd v = Eigen::VectorXd::Zero(mesh.dim);
-  for (int a = 0; a < mesh.nodes_per_element(); ++a)
-    v += N[a] * u.segment(static_cast<Eigen::Index>(mesh.elements(e, a)) * mesh.dim, mesh.dim);
-  return v;
+  return v.row(0).transpose();
 }
 
 void write_vtu(const std::string& path, const Mesh& mesh, const Eigen::VectorXd& u,

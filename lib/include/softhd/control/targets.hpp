@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include "softhd/fe/locator.hpp"
 #include "softhd/fe/mesh.hpp"
 #include "softhd/point_cloud.hpp"
 
@@ -60,6 +61,9 @@ class NodalMap {
   Eigen::VectorXd displacement(const fe::Mesh& mesh) const;
 
  private:
+  /// u_T at the rows of X (P by dim), located by `locator` (of source_).
+  Eigen::MatrixXd displacements_at(const fe::PointLocator& locator, const Eigen::MatrixXd& X) const;
+
   fe::Mesh source_;
   Eigen::MatrixXd u_;  // source nodes by dim: y_a − X_a
 };

@@ -2,8 +2,10 @@
 /// \file locator.hpp
 /// Point location in any Mesh (docs/formulation.md §7): the element containing a reference
 /// point X and its reference coordinates ξ with X = Σ_a X_a N_a(ξ). Structured boxes by
-/// arithmetic (fe::locate); otherwise a k-d tree over the element bounding boxes and Newton
-/// inversion of the isoparametric map in each candidate element.
+/// arithmetic (fe::locate); otherwise a k-d tree over the centres of the element bounding
+/// boxes (padded by a quarter of their size for curved quadratic elements; candidates within
+/// the largest half-diagonal, lowest element id first) and Newton inversion of the
+/// isoparametric map in each candidate element (lib/src/fe/locator.cpp).
 
 #include <Eigen/Core>
 #include <memory>
