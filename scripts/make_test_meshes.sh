@@ -23,3 +23,10 @@ g plate_2d.geo -2 -format msh22 -o plate_2d_v22.msh
 g sparse.geo -0                       # writes sparse.msh itself (after Coherence Mesh)
 g fields.geo -0 && mv fields_bin_0.msh fields_bin.msh   # fields.msh is hand-written
 rm -f ./*.geo_unrolled
+
+# The example body (docs/guide.md, "A body from Gmsh"): first-order tetrahedra; the target's
+# finer mesh is its uniform refinement (each tetrahedron split in 8, no snapping to the CAD
+# surface), so every node of the scene's P2 mesh is a vertex of the finer one.
+cd ../../../data/meshes
+g finger.geo -3 -format msh41 -o finger.msh
+g finger.msh -refine -format msh41 -o finger_fine.msh
