@@ -88,11 +88,11 @@ TEST(GmshMesh, OrderElevationMatchesGmshsSecondOrderMesh) {
 TEST(GmshMesh, AffineDisplacementGivesAUniformF) {
   Eigen::Matrix3d A;
   A << 0.1, -0.2, 0.05, 0.03, 0.07, -0.11, 0.2, 0.01, -0.04;
-  for (const auto& [name, order] : std::vector<std::pair<std::string, int>>{
-           {"cube_tet4_v41.msh", 0},
-           {"cube_tet10_v41.msh", 0},
-           {"box_hex27_v41.msh", 0},
-           {"box_hex27_v41.msh", 1}}) {
+  for (const auto& [name, order] :
+       std::vector<std::pair<std::string, int>>{{"cube_tet4_v41.msh", 0},
+                                                {"cube_tet10_v41.msh", 0},
+                                                {"box_hex27_v41.msh", 0},
+                                                {"box_hex27_v41.msh", 1}}) {
     SCOPED_TRACE(name + " order " + std::to_string(order));
     const Assembler a(read(name, order), std::make_shared<MooneyRivlin>(1.0, 0.2, 3.0),
                       Eigen::Vector3d::UnitX(), {});
@@ -103,8 +103,9 @@ TEST(GmshMesh, AffineDisplacementGivesAUniformF) {
     double worst = 0.0;
     for (Eigen::Index e = 0; e < m.num_elements(); ++e)
       for (int q = 0; q < a.geometry().points_per_element(); ++q)
-        worst = std::max(worst, (a.deformation_gradient(u, e, q) -
-                                 Eigen::Matrix3d::Identity() - A).cwiseAbs().maxCoeff());
+        worst = std::max(worst, (a.deformation_gradient(u, e, q) - Eigen::Matrix3d::Identity() - A)
+                                    .cwiseAbs()
+                                    .maxCoeff());
     EXPECT_LT(worst, 1e-12);
   }
 }
@@ -113,13 +114,13 @@ TEST(GmshMesh, AffineDisplacementGivesAUniformF) {
 // same nodes, and the same forward solve to 1e-12.
 TEST(GmshMesh, Hex27BoxFromGmshIsTheStructuredBox) {
   const Mesh g = read("box_hex27_v41.msh");
-  const Mesh b = make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d(2, 1, 1),
-                               Eigen::Vector3i(4, 2, 2), 2);
+  const Mesh b =
+      make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d(2, 1, 1), Eigen::Vector3i(4, 2, 2), 2);
   ASSERT_EQ(g.cell, CellType::kHex27);
   ASSERT_EQ(sorted_nodes(g), sorted_nodes(b));
   // Gmsh's transfinite nodes lie up to 2.6e-12 off the grid (measured; its own geometry
-  // round-off), which moves the bent solution by ~1e-13 relative: give the Gmsh mesh the grid's exact coordinates, so
-  // that what is compared is the element numbering and node order alone.
+  // round-off), which moves the bent solution by ~1e-13 relative: give the Gmsh mesh the grid's
+  // exact coordinates, so that what is compared is the element numbering and node order alone.
   Mesh gx = g;
   double off_grid = 0.0;
   for (Eigen::Index n = 0; n < gx.num_nodes(); ++n)
@@ -138,8 +139,8 @@ TEST(GmshMesh, Hex27BoxFromGmshIsTheStructuredBox) {
     o.relative_tolerance = 1e-12;
     NewtonSolver newton(a, o);
     State s = rest_state(a);
-    const Eigen::MatrixXd m_qp = Eigen::MatrixXd::Constant(m.num_elements(),
-                                                           a.geometry().points_per_element(), -0.3);
+    const Eigen::MatrixXd m_qp =
+        Eigen::MatrixXd::Constant(m.num_elements(), a.geometry().points_per_element(), -0.3);
     EXPECT_TRUE(newton.solve(m_qp, &s).converged());
     // displacement by node position
     std::map<std::vector<double>, Eigen::Vector3d> by_position;
@@ -174,12 +175,14 @@ TEST(GmshMesh, BadMeshesAreRefusedWithOneLine) {
   }
 }
 
-// A scene on the two-part cube: materials per region, a clamp on a physical surface, solved; unknown names refused listing the file's.
+// A scene on the two-part cube: materials per region, a clamp on a physical surface, solved;
+// unknown names refused listing the file's.
 TEST(GmshMesh, ASceneOnAFileMesh) {
   const std::string dir = ::testing::TempDir();
   const std::string scene = R"({
     "name": "cube",
-    "mesh": {"type": "gmsh", "file": ")" + mesh_path("cube_tet10_v41.msh") + R"("},
+    "mesh": {"type": "gmsh", "file": ")" +
+                            mesh_path("cube_tet10_v41.msh") + R"("},
     "materials": {"body": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3},
                   "layer": {"model": "mooney_rivlin", "a": 10, "b": 2, "c": 30}},
     "fibers": [1, 0, 0], "clamp": ["base"],

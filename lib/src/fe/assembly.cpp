@@ -133,9 +133,9 @@ void Assembler::set_fibers(const FiberField& field) {
   for (Eigen::Index k = 0; k < fibers_.cols(); ++k) {
     const double n = fibers_.col(k).norm();
     if (!(n > 0.0) || !std::isfinite(n))
-      throw InvalidArgument("assembler: fiber direction must be non-zero" +
-                            (fibers_.cols() > 1 ? " (element " + std::to_string(k / nq) + ")"
-                                                : std::string()));
+      throw InvalidArgument(
+          "assembler: fiber direction must be non-zero" +
+          (fibers_.cols() > 1 ? " (element " + std::to_string(k / nq) + ")" : std::string()));
     fibers_.col(k) /= n;
     if (mesh_.dim == 2 && fibers_(2, k) != 0.0)
       throw InvalidArgument(
@@ -205,9 +205,8 @@ bool Assembler::element_kernel(const Eigen::VectorXd& u, const Eigen::MatrixXd& 
     Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
     F.topLeftCorner(dim, dim).noalias() += w.Ue * G.transpose();
     if (!(F.determinant() > 0.0)) return false;
-    const PointResponse pr =
-        evaluate_point(*materials_[mesh_.element_region[e]], fiber(e, q), m_qp(e, q), F,
-                       tangent != nullptr);
+    const PointResponse pr = evaluate_point(*materials_[mesh_.element_region[e]], fiber(e, q),
+                                            m_qp(e, q), F, tangent != nullptr);
     const double wq = geometry_.weights()(e, q);
     We += wq * pr.W;  // Π_e = Σ_q w_q det J0 (W + W_m)
     // r_e(a, i) = Σ_q w_q Σ_J P_iJ ∂N_a/∂X_J

@@ -321,8 +321,9 @@ FiberField gmsh_fiber_field(const io::MshFile& f, const std::string& name,
   const Eigen::Index base = static_cast<Eigen::Index>(t.file_of.size());
   for (Eigen::Index n = 0; n < base; ++n) {
     const Eigen::Index r = row[static_cast<std::size_t>(t.file_of[n])];
-    if (r < 0) fail("data block '" + name + "' has no value for node " +
-                    std::to_string(f.node_tags[static_cast<std::size_t>(t.file_of[n])]));
+    if (r < 0)
+      fail("data block '" + name + "' has no value for node " +
+           std::to_string(f.node_tags[static_cast<std::size_t>(t.file_of[n])]));
     field.values.col(n) = block->values.row(r).transpose();
   }
   for (std::size_t k = 0; k < t.support_of.size(); ++k) {  // midside nodes: the mean

@@ -129,7 +129,7 @@ void check_scales(const Reader& r, const Scene& s) {
   const char* where = s.is_box() ? "mesh.upper" : "mesh.scale";
   if (!(size >= kMinLength && size <= kMaxLength))
     r.fail(where, "gives a body of size " + std::to_string(size) +
-                             ": softhd solves bodies from 1e-6 to 1e6 in size (change units)");
+                      ": softhd solves bodies from 1e-6 to 1e6 in size (change units)");
   for (int d = 0; d < s.dim(); ++d)
     if (!(std::abs(s.lower[d]) <= 1e3 * kMaxLength))
       r.fail(s.is_box() ? "mesh.lower" : "mesh.scale",
@@ -151,8 +151,7 @@ void parse_box_mesh(const Reader& r, const json& mesh, double memory_limit, Scen
   r.keys(mesh, "mesh", {"type", "lower", "upper", "cells", "order", "quadrature_degree"});
   s->lower = r.numbers(mesh, "lower", "mesh.lower", 2, 3);
   s->upper = r.numbers(mesh, "upper", "mesh.upper", 2, 3);
-  if (s->upper.size() != s->lower.size())
-    r.fail("mesh.upper", "must have the size of mesh.lower");
+  if (s->upper.size() != s->lower.size()) r.fail("mesh.upper", "must have the size of mesh.lower");
   for (int d = 0; d < s->dim(); ++d)
     if (!(s->upper[d] > s->lower[d])) r.fail("mesh.upper", "must be > mesh.lower on every axis");
   const Eigen::VectorXd cells = r.numbers(mesh, "cells", "mesh.cells", s->dim(), s->dim());
@@ -208,8 +207,9 @@ void parse_gmsh_mesh(const Reader& r, const json& mesh, Scene* s) {
 // "material" (the whole body) or "materials" (one per region of the mesh, by name).
 void parse_materials(const Reader& r, const json& doc, const Mesh& mesh, Scene* s) {
   if (doc.contains("material") == doc.contains("materials"))
-    r.fail("material", "give either \"material\" (the whole body) or \"materials\" (one per "
-                       "region of the mesh), not both or neither");
+    r.fail("material",
+           "give either \"material\" (the whole body) or \"materials\" (one per "
+           "region of the mesh), not both or neither");
   if (doc.contains("material")) {
     s->material = read_material(r, r.object(doc, "material", "material"), &s->material_model);
     s->materials.assign(mesh.region_names.size(), s->material);
@@ -230,7 +230,8 @@ void parse_materials(const Reader& r, const json& doc, const Mesh& mesh, Scene* 
     if (!s->material) s->material = s->materials[region], s->material_model = model;
   }
   for (std::size_t k = 0; k < s->materials.size(); ++k)
-    if (!s->materials[k]) r.fail("materials", "has no material for region '" + mesh.region_names[k] + "'");
+    if (!s->materials[k])
+      r.fail("materials", "has no material for region '" + mesh.region_names[k] + "'");
 }
 
 // A fibre field from a text file: rows of 3 numbers (io's cloud reader), one per element or
@@ -274,8 +275,7 @@ void parse_fibers(const Reader& r, const json& doc, const Mesh& mesh, Scene* s) 
   const std::string per = r.string(f, "per", "fibers.per");
   if (per != "element" && per != "node") r.fail("fibers.per", "must be \"element\" or \"node\"");
   const std::filesystem::path dir = std::filesystem::path(s->source).parent_path();
-  const std::string path =
-      (dir / r.string(f, "file", "fibers.file")).lexically_normal().string();
+  const std::string path = (dir / r.string(f, "file", "fibers.file")).lexically_normal().string();
   s->fiber_field = read_fiber_file(path, per == "element", mesh);
 }
 
@@ -287,8 +287,9 @@ namespace {
 // "constraints" ([{"group" or "face": NAME, "components": [...]}]).
 void parse_constraints(const Reader& r, const json& doc, Scene* s) {
   if (!doc.contains("clamp") || !doc["clamp"].is_array() || doc["clamp"].empty())
-    r.fail("clamp", "must be a non-empty array of boundary names (box faces x0, x1, y0, ..., or "
-                    "a mesh file's physical groups)");
+    r.fail("clamp",
+           "must be a non-empty array of boundary names (box faces x0, x1, y0, ..., or "
+           "a mesh file's physical groups)");
   for (const json& face : doc["clamp"]) {
     if (!face.is_string()) r.fail("clamp", "must hold boundary names as strings");
     s->constraints.push_back({face.get<std::string>(), {}});
@@ -325,8 +326,7 @@ void parse_control(const Reader& r, const json& doc, const Mesh& mesh, Scene* s)
   s->control_upper = r.number(control, "upper", "control.upper");
   s->control_initial =
       control.contains("initial") ? r.number(control, "initial", "control.initial") : 0.0;
-  if (!(s->control_lower <= s->control_upper))
-    r.fail("control.upper", "must be >= control.lower");
+  if (!(s->control_lower <= s->control_upper)) r.fail("control.upper", "must be >= control.lower");
   if (!(s->control_initial >= s->control_lower && s->control_initial <= s->control_upper))
     r.fail("control.initial", "must lie within [control.lower, control.upper] = [" +
                                   std::to_string(s->control_lower) + ", " +
@@ -335,10 +335,10 @@ void parse_control(const Reader& r, const json& doc, const Mesh& mesh, Scene* s)
   for (int k = 0; k < static_cast<int>(s->materials.size()); ++k) regions.push_back(k);
   for (int k : regions)  // existence needs m < 2a wherever m acts
     if (!(s->control_upper < 2.0 * s->materials[k]->a()))
-      r.fail("control.upper", "must be < 2a (docs/formulation.md §3.3: existence needs m < 2a)" +
-                                  (s->materials.size() > 1 ? " in region '" +
-                                                                 mesh.region_names[k] + "'"
-                                                           : std::string()));
+      r.fail("control.upper",
+             "must be < 2a (docs/formulation.md §3.3: existence needs m < 2a)" +
+                 (s->materials.size() > 1 ? " in region '" + mesh.region_names[k] + "'"
+                                          : std::string()));
 }
 
 }  // namespace
@@ -352,8 +352,9 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
   }
   const Reader r(source);
   if (!doc.is_object()) r.fail("(top level)", "must be an object");
-  r.keys(doc, "", {"name", "mesh", "material", "materials", "fibers", "clamp", "constraints",
-                   "control", "target"});
+  r.keys(doc, "",
+         {"name", "mesh", "material", "materials", "fibers", "clamp", "constraints", "control",
+          "target"});
   Scene s;
   s.source = source;
   s.name = doc.contains("name") ? r.string(doc, "name", "name") : default_name(source);

@@ -51,8 +51,13 @@ class ElementMatrixSink {
 /// Fibre directions a₀ of a body: one for all, or a field per element or per node
 /// (interpolated to the quadrature points and normalised there).
 struct FiberField {
-  enum class Kind { kUniform, kElement, kNode };
-  Kind kind = Kind::kUniform;
+  /// Where the directions live.
+  enum class Kind {
+    kUniform,  ///< one direction for the whole body
+    kElement,  ///< one per element
+    kNode,     ///< one per node, interpolated
+  };
+  Kind kind = Kind::kUniform;  ///< where `values` live
   /// 3 by 1 (uniform), 3 by E (per element) or 3 by N (per node); non-zero columns.
   Eigen::Matrix3Xd values = Eigen::Vector3d::UnitX();
 };
@@ -92,8 +97,9 @@ class Assembler {
   double stiffness_scale() const;
   /// The unit fiber direction a₀ at quadrature point q of element e.
   Eigen::Vector3d fiber(Eigen::Index e, int q) const {
-    return fibers_.cols() == 1 ? Eigen::Vector3d(fibers_.col(0))
-                               : Eigen::Vector3d(fibers_.col(e * geometry_.points_per_element() + q));
+    return fibers_.cols() == 1
+               ? Eigen::Vector3d(fibers_.col(0))
+               : Eigen::Vector3d(fibers_.col(e * geometry_.points_per_element() + q));
   }
 
   /// An all-zero tangent with the fixed sparsity pattern (free by free, lower triangle).

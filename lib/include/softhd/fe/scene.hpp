@@ -52,17 +52,17 @@ struct Scene {
   /// bounds of a file mesh's nodes.
   Eigen::VectorXd lower, upper;
   ///@}
-  Eigen::VectorXi cells;  ///< mesh.cells: elements per axis (a box; empty for a file mesh)
-  int order = 2;          ///< mesh.order: 1 or 2
-  int quadrature_degree = 0;                ///< mesh.quadrature_degree (0: the cell's default)
-  std::shared_ptr<const Material> material; ///< "material", or the first of "materials"
-  std::string material_model;               ///< its model
+  Eigen::VectorXi cells;      ///< mesh.cells: elements per axis (a box; empty for a file mesh)
+  int order = 2;              ///< mesh.order: 1 or 2
+  int quadrature_degree = 0;  ///< mesh.quadrature_degree (0: the cell's default)
+  std::shared_ptr<const Material> material;  ///< "material", or the first of "materials"
+  std::string material_model;                ///< its model
   /// One material per mesh region (mesh.region_names order): "materials", or `material`.
   std::vector<std::shared_ptr<const Material>> materials;
   Eigen::Vector3d fibers = Eigen::Vector3d::UnitX();  ///< "fibers" as a vector, normalised
   FiberField fiber_field;  ///< "fibers": the vector, or a field per element or node
-  std::vector<DirichletConstraint> constraints;       ///< the clamp, then the extra constraints
-  ControlKind control_kind = ControlKind::kVertex;    ///< control.space
+  std::vector<DirichletConstraint> constraints;     ///< the clamp, then the extra constraints
+  ControlKind control_kind = ControlKind::kVertex;  ///< control.space
   ///@{
   /// control.lower, control.upper and control.initial (default 0).
   double control_lower = 0.0, control_upper = 0.0, control_initial = 0.0;
