@@ -34,7 +34,10 @@ set(heavy "install_and_consume|Plate\\.HardCaseIsReachedFromFlat"
   "Plate\\.TipDisplacementConvergesUnderQ2Refinement"
   "OptimiseCli\\.KilledAndResumedRunsAreTheUninterruptedRun"
   "Newton\\.OptionsChangeThePathNotTheEquilibrium|Newton\\.ZeroControlConvergesAtRest"
-  "ShapeObjective\\.TwoLevelStartsReachTheSameStateWithFewerFineIterations")
+  "ShapeObjective\\.TwoLevelStartsReachTheSameStateWithFewerFineIterations"
+  # clang's libomp leaks its team bookkeeping (2.9 KB, LeakSanitizer) when asked for 100000
+  # threads; the test checks softhd's clamp and runs in the main suite (libgomp).
+  "Threads\\.AnOpenMpDefaultAboveTheCapIsClampedNotCrashed")
 list(JOIN heavy "|" heavy)
 execute_process(COMMAND ${CMAKE_CTEST_COMMAND} --test-dir ${WORK_DIR} -j 2 --output-on-failure
   -E "^(${heavy})$"
