@@ -21,8 +21,8 @@ using Connectivity = Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::R
 /// A Lagrange mesh of one cell type. Element nodes are in the internal local order of
 /// reference_element(cell) (tensor-product for quadrilaterals and hexahedra).
 struct Mesh {
-  int dim = 3;    ///< 2 or 3
-  int order = 1;  ///< 1 or 2: reference_element(cell).order
+  int dim = 3;                      ///< 2 or 3
+  int order = 1;                    ///< 1 or 2: reference_element(cell).order
   CellType cell = CellType::kHex8;  ///< the cell type of every element
   /// N by dim reference coordinates.
   Eigen::MatrixXd nodes;
