@@ -195,24 +195,11 @@ bool parse(int argc, char** argv, Args* a) {
 
 /// The control values (one per control position) from the arguments (file rows matched by
 /// coordinates), checked against the scene's bounds.
-Eigen::VectorXd control_values(const Scene& scene, const Eigen::MatrixXd& positions,
-                               const Args& args) {
-  Eigen::VectorXd m = Eigen::VectorXd::Constant(
-      positions.rows(), args.has_uniform ? args.uniform : scene.control_initial);
-  if (!args.control_file.empty()) m = read_control_file(args.control_file, positions);
-  return m;
-}
-
-void check_bounds(const Scene& scene, const Eigen::MatrixXd& positions, const Eigen::VectorXd& m) {
-  for (Eigen::Index k = 0; k < m.size(); ++k) {
-    if (!(m[k] >= scene.control_lower && m[k] <= scene.control_upper)) {
-      std::ostringstream os;
-      os << "control value " << m[k] << " at node " << k << " (" << positions.row(k)
-         << ") is outside the scene's bounds [" << scene.control_lower << ", "
-         << scene.control_upper << "]";
-      throw softhd::InvalidArgument(os.str());
-    }
-  }
+Eigen::VectorXd control_values(const Scene& scene, const Mesh& mesh,
+                               const Eigen::MatrixXd& positions, const Args& args) {
+  if (!args.control_file.empty()) return read_control_file(args.control_file, positions);
+  return softhd::fe::constant_control(mesh, scene.control_kind, scene.control_regions,
+                                      args.has_uniform ? args.uniform : scene.control_initial);
 }
 
 // The JSON record of each coarse level of a grid-sequenced start.
@@ -296,6 +283,7 @@ void print_json(const Scene& scene, const Args& args, const Mesh& mesh, const So
   j["energy"] = r.energy;
   j["volume"] = r.volume;
   j["min_J"] = r.J.minCoeff();
+  j["quadrature_points_per_element"] = r.J.cols();
   j["newton_iterations"] = summary.newton_iterations;
   j["factorizations"] = summary.factorizations;
   j["krylov_iterations"] = summary.krylov_iterations;
@@ -319,12 +307,12 @@ int forward(const Args& args) {
   const Scene scene = load_scene(args.scene, args.memory_limit * ranks);
   const Mesh mesh = scene.make_mesh();
   const Eigen::MatrixXd positions = control_positions(mesh, scene.control_kind);
-  const Eigen::VectorXd m = control_values(scene, positions, args);
+  const Eigen::VectorXd m = control_values(scene, mesh, positions, args);
   if (!args.write_nodes.empty()) {
     if (writer) write_control_file(args.write_nodes, positions, m);
     return 0;
   }
-  check_bounds(scene, positions, m);
+  softhd::fe::check_control_bounds(scene, mesh, m);
   const softhd::fe::PointLocator locator(mesh);
   for (const Eigen::VectorXd& X : args.probes) {
     Eigen::VectorXd xi;

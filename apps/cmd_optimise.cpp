@@ -377,7 +377,7 @@ int run_optimise(const std::vector<std::string>& tokens) {
   const fe::Scene scene = fe::load_scene(a.scene_file, a.memory_limit);
   const fe::Assembler assembler = scene.make_assembler();
   const fe::Mesh& mesh = assembler.mesh();
-  const fe::ControlSpace space(mesh, assembler.geometry(), scene.control_kind);
+  const fe::ControlSpace space = scene.make_control_space(assembler);
   if (!a.target_file && scene.target_json.empty())
     throw InvalidArgument(scene.source + ": the scene has no \"target\"; give --target FILE");
   const SceneTarget target = a.target_file ? file_target(*a.target_file, scene.dim())
@@ -409,9 +409,9 @@ int run_optimise(const std::vector<std::string>& tokens) {
     coarse.emplace(fe::coarsened(scene).make_assembler());
     objective.use_coarse_level(*coarse);
   }
-  const Eigen::VectorXd m0 = Eigen::VectorXd::Constant(space.size(), scene.control_initial);
-  const Eigen::VectorXd lower = Eigen::VectorXd::Constant(space.size(), scene.control_lower);
-  const Eigen::VectorXd upper = Eigen::VectorXd::Constant(space.size(), scene.control_upper);
+  const Eigen::VectorXd m0 = space.constant(scene.control_initial);
+  const Eigen::VectorXd lower = space.constant(scene.control_lower);
+  const Eigen::VectorXd upper = space.constant(scene.control_upper);
   RunFiles files(out, objective, space, writer);
   nlohmann::json sum;
   sum["scene"] = a.scene_file;

@@ -25,8 +25,7 @@ Body make_body(fe::Scene scene, const Eigen::Vector3i& cells, const Eigen::Vecto
   Body b;
   b.scene = std::move(scene);
   b.assembler = std::make_unique<fe::Assembler>(b.scene.make_assembler());
-  b.space = std::make_unique<fe::ControlSpace>(b.assembler->mesh(), b.assembler->geometry(),
-                                               b.scene.control_kind);
+  b.space = std::make_unique<fe::ControlSpace>(b.scene.make_control_space(*b.assembler));
   return b;
 }
 
@@ -190,10 +189,9 @@ Run run_tracking(std::vector<std::pair<std::string, std::string>> params, Body& 
       coarse.emplace(fe::coarsened(body.scene).make_assembler());
       objective.use_coarse_level(*coarse);
     }
-    const auto n = body.space->size();
-    const Eigen::VectorXd lower = Eigen::VectorXd::Constant(n, body.scene.control_lower);
-    const Eigen::VectorXd upper = Eigen::VectorXd::Constant(n, body.scene.control_upper);
-    const Eigen::VectorXd m0 = Eigen::VectorXd::Constant(n, body.scene.control_initial);
+    const Eigen::VectorXd lower = body.space->constant(body.scene.control_lower);
+    const Eigen::VectorXd upper = body.space->constant(body.scene.control_upper);
+    const Eigen::VectorXd m0 = body.space->constant(body.scene.control_initial);
     ShapeTrackingCallbacks cb;
     if (settings.progress)
       cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd&) {

@@ -50,8 +50,7 @@ PyForward forward(const PyScene& s, const py::object& control, const Eigen::Matr
   // control: None (the scene's initial value), a number (uniform) or one value per control.
   Eigen::VectorXd m;
   if (control.is_none() || py::isinstance<py::float_>(control) || py::isinstance<py::int_>(control))
-    m = Eigen::VectorXd::Constant(
-        s.control.size(), control.is_none() ? s.scene.control_initial : control.cast<double>());
+    m = s.control.constant(control.is_none() ? s.scene.control_initial : control.cast<double>());
   else
     m = control.cast<Eigen::VectorXd>();
   const std::vector<Eigen::VectorXd> points = probe_points(s, probes);

@@ -92,10 +92,9 @@ PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
     coarse.emplace(fe::coarsened(s.scene).make_assembler());
     objective.use_coarse_level(*coarse);
   }
-  const Eigen::Index n = s.control.size();
-  const Eigen::VectorXd m0 = Eigen::VectorXd::Constant(n, s.scene.control_initial);
-  const Eigen::VectorXd lower = Eigen::VectorXd::Constant(n, s.scene.control_lower);
-  const Eigen::VectorXd upper = Eigen::VectorXd::Constant(n, s.scene.control_upper);
+  const Eigen::VectorXd m0 = s.control.constant(s.scene.control_initial);
+  const Eigen::VectorXd lower = s.control.constant(s.scene.control_lower);
+  const Eigen::VectorXd upper = s.control.constant(s.scene.control_upper);
   PyOptimise out;
   out.summary = track_shape(objective, lower, upper, m0, target.map_displacement, to, cb);
   out.dim = s.scene.dim();

@@ -13,7 +13,7 @@ struct PyScene {
   explicit PyScene(fe::Scene s)
       : scene(std::move(s)),
         assembler(scene.make_assembler()),
-        control(assembler.mesh(), assembler.geometry(), scene.control_kind) {}
+        control(scene.make_control_space(assembler)) {}
   PyScene(const PyScene&) = delete;
   PyScene& operator=(const PyScene&) = delete;
 

@@ -211,5 +211,80 @@ TEST(GmshMesh, ASceneOnAFileMesh) {
   refused("cube_tet10_v41.msh", "missing.msh", "missing.msh");
 }
 
+// control.region: the control acts on the named volume only. On the two-part cube the
+// layer is z > 0.6, so a vertex control acts exactly at the vertices with z >= 0.6 (checked
+// from the coordinates, not from the element lists), m = 0 at the quadrature points of the
+// body, the transpose map is the adjoint of the forward one, and values outside are refused.
+TEST(GmshMesh, AControlRestrictedToARegionActsThereOnly) {
+  const std::string dir = ::testing::TempDir();
+  const std::string scene = R"({
+    "mesh": {"type": "gmsh", "file": ")" +
+                            mesh_path("cube_tet10_v41.msh") + R"("},
+    "materials": {"body": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3},
+                  "layer": {"model": "mooney_rivlin", "a": 10, "b": 2, "c": 30}},
+    "fibers": [1, 0, 0], "clamp": ["base"],
+    "control": {"space": "vertex", "region": "layer", "lower": -1, "upper": 0}})";
+  const Scene s = parse_scene(scene, dir + "/cube.json");
+  ASSERT_EQ(s.control_regions, std::vector<int>{1});
+  const Assembler a = s.make_assembler();
+  const Mesh& mesh = a.mesh();
+  const ControlSpace c = s.make_control_space(a);
+  const Eigen::VectorXd ones = c.constant(1.0);
+  int acting = 0;
+  for (Eigen::Index k = 0; k < c.size(); ++k) {
+    const double z = mesh.nodes(mesh.vertex_nodes[k], 2);
+    EXPECT_EQ(ones[k], z >= 0.6 - 1e-12 ? 1.0 : 0.0) << "vertex " << k << " z " << z;
+    acting += ones[k] == 1.0;
+  }
+  EXPECT_GT(acting, 0);
+  EXPECT_LT(acting, c.size());
+  // m = 1 on the layer's vertices: m_q = 1 in the layer (the P1 functions sum to 1), 0 in
+  // the body, whatever the values at body-only vertices.
+  const Eigen::VectorXd m = ones + (Eigen::VectorXd::Ones(c.size()) - ones) * 7.0;
+  const Eigen::MatrixXd mq = c.to_quadrature(m);
+  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
+    for (Eigen::Index q = 0; q < mq.cols(); ++q)
+      EXPECT_NEAR(mq(e, q), mesh.element_region[e] == 1 ? 1.0 : 0.0, 1e-14) << e;
+  // <v, T m> = <T' v, m> for random v and m.
+  const Eigen::MatrixXd v = Eigen::MatrixXd::Random(mq.rows(), mq.cols());
+  const Eigen::VectorXd r = Eigen::VectorXd::Random(c.size());
+  EXPECT_NEAR((v.array() * c.to_quadrature(r).array()).sum(), c.from_quadrature(v).dot(r), 1e-11);
+  // The regularisation integrates over the layer only: (M/2) ∫ 1² = M · 0.4 / 2.
+  EXPECT_NEAR(c.regularisation(ones, 2.0, 0.0, nullptr), 0.4, 1e-12);
+  // Bounds: [0, 0] outside the layer; a nonzero value there is refused, naming the region.
+  EXPECT_NO_THROW(check_control_bounds(s, c, mesh, c.constant(-0.5)));
+  try {
+    check_control_bounds(s, c, mesh, Eigen::VectorXd::Constant(c.size(), -0.5));
+    ADD_FAILURE() << "a control outside the region was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("outside control.region"), std::string::npos) << e.what();
+  }
+  // The layer alone bends less than the whole body, and the solve converges.
+  const ForwardResult layer = solve_forward(s, a, c, c.constant(-0.3));
+  Scene whole = s;
+  whole.control_regions.clear();
+  const ControlSpace cw = whole.make_control_space(a);
+  const ForwardResult all = solve_forward(whole, a, cw, cw.constant(-0.3));
+  ASSERT_TRUE(layer.summary.converged());
+  ASSERT_TRUE(all.summary.converged());
+  EXPECT_GT(layer.state.u.norm(), 0.0);
+  EXPECT_LT(layer.state.u.norm(), all.state.u.norm());
+  // Unknown names are refused listing the mesh's regions; a list of names is accepted.
+  auto region = [&](const std::string& value) {
+    std::string t = scene;
+    const std::string from = "\"region\": \"layer\"";
+    t.replace(t.find(from), from.size(), "\"region\": " + value);
+    return parse_scene(t, dir + "/cube.json");
+  };
+  EXPECT_EQ(region("[\"layer\", \"body\"]").control_regions, (std::vector<int>{0, 1}));
+  try {
+    region("\"muscle\"");
+    ADD_FAILURE() << "an unknown region was accepted";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("body, layer"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("control.region"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace softhd::fe

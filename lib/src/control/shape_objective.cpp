@@ -75,7 +75,8 @@ struct ShapeObjective::Impl {
   std::deque<WarmStart> coarse_cache;  // coarse equilibria by control, most recent first
 
   Eigen::MatrixXd coarse_control(const Eigen::VectorXd& m) const {
-    return fe::control_on_quadrature(*coarse, assembler.mesh(), control.kind(), m);
+    return fe::control_on_quadrature(*coarse, assembler.mesh(), control.kind(), m,
+                                     control.regions());
   }
   /// The fine start u + P(u_c(m) − u_c(m_old)): the coarse equilibria at the warm start's
   /// control m_old (kept from an earlier evaluation, else solved from the restricted warm

@@ -17,10 +17,55 @@ ControlKind parse_control_kind(const std::string& name) {
   return enum_from_name(kControlKinds, name, "control space");
 }
 
-ControlSpace::ControlSpace(const Mesh& mesh, const ReferenceGeometry& g, ControlKind kind)
-    : kind_(kind), weights_(g.weights()) {
+bool in_regions(const Mesh& mesh, const std::vector<int>& regions, Eigen::Index e) {
+  if (regions.empty()) return true;
+  const int r = mesh.element_region.size() > e ? mesh.element_region[e] : 0;
+  for (int k : regions)
+    if (k == r) return true;
+  return false;
+}
+
+std::vector<char> acting_controls(const Mesh& mesh, ControlKind kind,
+                                  const std::vector<int>& regions) {
+  const Eigen::Index E = mesh.num_elements();
+  if (kind == ControlKind::kElement) {
+    std::vector<char> acts(E);
+    for (Eigen::Index e = 0; e < E; ++e) acts[e] = in_regions(mesh, regions, e);
+    return acts;
+  }
+  std::vector<char> acts(mesh.num_vertices(), regions.empty() ? 1 : 0);
+  if (regions.empty()) return acts;
+  for (Eigen::Index e = 0; e < E; ++e)
+    if (in_regions(mesh, regions, e))
+      for (Eigen::Index a = 0; a < mesh.element_vertices.cols(); ++a)
+        acts[mesh.element_vertices(e, a)] = 1;
+  return acts;
+}
+
+namespace {
+Eigen::VectorXd constant_where(const std::vector<char>& acts, double value) {
+  Eigen::VectorXd m(static_cast<Eigen::Index>(acts.size()));
+  for (Eigen::Index k = 0; k < m.size(); ++k) m[k] = acts[k] ? value : 0.0;
+  return m;
+}
+}  // namespace
+
+Eigen::VectorXd constant_control(const Mesh& mesh, ControlKind kind,
+                                 const std::vector<int>& regions, double value) {
+  return constant_where(acting_controls(mesh, kind, regions), value);
+}
+
+ControlSpace::ControlSpace(const Mesh& mesh, const ReferenceGeometry& g, ControlKind kind,
+                           std::vector<int> regions)
+    : kind_(kind), regions_(std::move(regions)), weights_(g.weights()) {
   const int nq = g.points_per_element(), dim = mesh.dim;
   const Eigen::Index E = mesh.num_elements();
+  for (int r : regions_)
+    if (r < 0 || r >= static_cast<int>(mesh.region_names.size()))
+      throw InvalidArgument("control space: region id " + std::to_string(r) + " is not a region");
+  acts_in_.resize(E);
+  for (Eigen::Index e = 0; e < E; ++e) acts_in_[e] = in_regions(mesh, regions_, e);
+  active_ = acting_controls(mesh, kind, regions_);
   if (kind == ControlKind::kElement) {
     size_ = E;
     support_.resize(E, 1);
@@ -67,6 +112,10 @@ Eigen::MatrixXd ControlSpace::to_quadrature(const Eigen::VectorXd& m) const {
   Eigen::MatrixXd mq(E, M_.rows());
   Eigen::VectorXd me(support_.cols());
   for (Eigen::Index e = 0; e < E; ++e) {
+    if (!acts_in_[e]) {  // m = 0 outside the control's regions
+      mq.row(e).setZero();
+      continue;
+    }
     for (Eigen::Index a = 0; a < support_.cols(); ++a) me[a] = m[support_(e, a)];
     mq.row(e) = (M_ * me).transpose();
   }
@@ -76,10 +125,15 @@ Eigen::MatrixXd ControlSpace::to_quadrature(const Eigen::VectorXd& m) const {
 Eigen::VectorXd ControlSpace::from_quadrature(const Eigen::MatrixXd& v) const {
   Eigen::VectorXd g = Eigen::VectorXd::Zero(size_);
   for (Eigen::Index e = 0; e < support_.rows(); ++e) {
+    if (!acts_in_[e]) continue;
     const Eigen::VectorXd ge = M_.transpose() * v.row(e).transpose();
     for (Eigen::Index a = 0; a < support_.cols(); ++a) g[support_(e, a)] += ge[a];
   }
   return g;
+}
+
+Eigen::VectorXd ControlSpace::constant(double value) const {
+  return constant_where(active_, value);
 }
 
 Eigen::MatrixXd control_positions(const Mesh& mesh, ControlKind kind) {
@@ -106,6 +160,7 @@ double ControlSpace::regularisation(const Eigen::VectorXd& m, double Mreg, doubl
   double value = 0.0;
   Eigen::VectorXd me(nc);
   for (Eigen::Index e = 0; e < E; ++e) {
+    if (!acts_in_[e]) continue;  // m = 0 there: no contribution
     for (int a = 0; a < nc; ++a) me[a] = m[support_(e, a)];
     for (int q = 0; q < nq; ++q) {
       const double w = weights_(e, q);
@@ -129,7 +184,24 @@ double ControlSpace::regularisation(const Eigen::VectorXd& m, double Mreg, doubl
 Eigen::VectorXd control_at_nodes(const Mesh& mesh, const ControlSpace& space,
                                  const Eigen::VectorXd& m) {
   if (space.kind() != ControlKind::kVertex) return Eigen::VectorXd::Zero(mesh.num_nodes());
-  return control_at(mesh, ControlKind::kVertex, m, mesh.nodes);
+  if (space.regions().empty()) return control_at(mesh, ControlKind::kVertex, m, mesh.nodes);
+  // With regions, a node on a region's boundary takes the value of the region side:
+  // m(X_a) = Σ_b M_b(ξ_a) m_b over the vertices b of an element of the regions.
+  const CellType linear = reference_element(mesh.cell).linear;
+  const ReferenceElement& ref = reference_element(mesh.cell);
+  const int nv = static_cast<int>(mesh.element_vertices.cols());
+  Eigen::VectorXd values = Eigen::VectorXd::Zero(mesh.num_nodes()), N(nv), dN(nv * mesh.dim);
+  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e) {
+    if (!in_regions(mesh, space.regions(), e)) continue;
+    for (int a = 0; a < mesh.nodes_per_element(); ++a) {
+      const Eigen::VectorXd xi = ref.node_coordinates.row(a).transpose();
+      shape_functions(linear, xi.data(), N.data(), dN.data());
+      double v = 0.0;
+      for (int b = 0; b < nv; ++b) v += N[b] * m[mesh.element_vertices(e, b)];
+      values[mesh.elements(e, a)] = v;
+    }
+  }
+  return values;
 }
 
 }  // namespace softhd::fe

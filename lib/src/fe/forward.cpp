@@ -13,21 +13,31 @@ void ForwardOptions::validate() const {
   grid.validate();
 }
 
-void check_control_bounds(const Scene& scene, const ControlSpace& control, const Mesh& mesh,
-                          const Eigen::VectorXd& m) {
-  if (m.size() != control.size())
+void check_control_bounds(const Scene& scene, const Mesh& mesh, const Eigen::VectorXd& m) {
+  const std::vector<char> acts = acting_controls(mesh, scene.control_kind, scene.control_regions);
+  if (m.size() != static_cast<Eigen::Index>(acts.size()))
     throw InvalidArgument("the control has " + std::to_string(m.size()) +
-                          " values but the scene has " + std::to_string(control.size()) +
-                          " controls");
+                          " values but the scene has " + std::to_string(acts.size()) + " controls");
   for (Eigen::Index k = 0; k < m.size(); ++k) {
-    if (!(m[k] >= scene.control_lower && m[k] <= scene.control_upper)) {
+    // [lower, upper] where the control acts, [0, 0] outside control.region
+    const double lower = acts[k] ? scene.control_lower : 0.0;
+    const double upper = acts[k] ? scene.control_upper : 0.0;
+    if (!(m[k] >= lower && m[k] <= upper)) {
       std::ostringstream os;
-      os << "control value " << m[k] << " at node " << k << " (" << control.positions(mesh).row(k)
-         << ") is outside the scene's bounds [" << scene.control_lower << ", "
-         << scene.control_upper << "]";
+      os << "control value " << m[k] << " at node " << k << " ("
+         << control_positions(mesh, scene.control_kind).row(k)
+         << ") is outside the scene's bounds [" << lower << ", " << upper << "]"
+         << (acts[k] ? "" : " (outside control.region)");
       throw InvalidArgument(os.str());
     }
   }
+}
+
+void check_control_bounds(const Scene& scene, const ControlSpace& control, const Mesh& mesh,
+                          const Eigen::VectorXd& m) {
+  if (control.kind() != scene.control_kind || control.regions() != scene.control_regions)
+    throw InvalidArgument("check_control_bounds: the control space is not the scene's");
+  check_control_bounds(scene, mesh, m);
 }
 
 ForwardResult solve_forward(const Scene& scene, const Assembler& assembler,

@@ -65,7 +65,7 @@ int grid_levels(const Scene& scene, const GridSequencingOptions& options) {
 }
 
 Eigen::VectorXd control_at(const Mesh& mesh, ControlKind kind, const Eigen::VectorXd& m,
-                           const Eigen::MatrixXd& X) {
+                           const Eigen::MatrixXd& X, const std::vector<int>& regions) {
   const PointLocator locator(mesh);
   std::vector<int> outside;
   Eigen::VectorXd values(X.rows());
@@ -86,6 +86,11 @@ Eigen::VectorXd control_at(const Mesh& mesh, ControlKind kind, const Eigen::Vect
     os << "control_at: the point (" << X.row(outside[0]) << ") is outside the body";
     throw InvalidArgument(os.str());
   }
+  if (!regions.empty()) {  // m = 0 outside the control's regions
+    const Eigen::VectorXi e = locate_points(locator, X);
+    for (Eigen::Index p = 0; p < X.rows(); ++p)
+      if (!in_regions(mesh, regions, e[p])) values[p] = 0.0;
+  }
   return values;
 }
 
@@ -101,9 +106,10 @@ Eigen::MatrixXd quadrature_positions(const Mesh& mesh, const ReferenceGeometry& 
 }
 
 Eigen::MatrixXd control_on_quadrature(const Assembler& assembler, const Mesh& mesh,
-                                      ControlKind kind, const Eigen::VectorXd& m) {
-  const Eigen::VectorXd v =
-      control_at(mesh, kind, m, quadrature_positions(assembler.mesh(), assembler.geometry()));
+                                      ControlKind kind, const Eigen::VectorXd& m,
+                                      const std::vector<int>& regions) {
+  const Eigen::VectorXd v = control_at(
+      mesh, kind, m, quadrature_positions(assembler.mesh(), assembler.geometry()), regions);
   const int nq = assembler.geometry().points_per_element();
   return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
       v.data(), assembler.mesh().num_elements(), nq);
@@ -127,7 +133,8 @@ bool solve_grid_level(const Scene& scene, const Mesh& fine, ControlKind kind,
                       const Eigen::VectorXd& m, int levels, const NewtonOptions& newton,
                       GridSequencingReport* report, Mesh* mesh, State* state) {
   const Assembler assembler = scene.make_assembler();
-  const Eigen::MatrixXd m_qp = control_on_quadrature(assembler, fine, kind, m);
+  const Eigen::MatrixXd m_qp =
+      control_on_quadrature(assembler, fine, kind, m, scene.control_regions);
   *state = rest_state(assembler);
   if (levels > 0) {
     Mesh coarse_mesh;
@@ -151,7 +158,7 @@ State grid_sequenced_start(const Scene& scene, const Assembler& fine, const Eige
   if (!report) report = &local;
   *report = GridSequencingReport{};
   const int levels = grid_levels(scene, options);
-  const ControlSpace control(fine.mesh(), fine.geometry(), scene.control_kind);
+  const ControlSpace control = scene.make_control_space(fine);
   if (m.size() != control.size())
     throw InvalidArgument("grid sequencing: m must have one value per control");
   State state = rest_state(fine);

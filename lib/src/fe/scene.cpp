@@ -1,5 +1,6 @@
 #include "softhd/fe/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -314,9 +315,38 @@ void parse_constraints(const Reader& r, const json& doc, Scene* s) {
   }
 }
 
+/// control.region: one region name or a list of them, each a region of the mesh (a physical
+/// volume of a Gmsh file; a box has the one region "body").
+std::vector<int> parse_control_regions(const Reader& r, const json& control, const Mesh& mesh) {
+  const json& value = control["region"];
+  std::vector<std::string> names;
+  if (value.is_string()) {
+    names.push_back(value.get<std::string>());
+  } else if (value.is_array() && !value.empty()) {
+    for (const json& v : value) {
+      if (!v.is_string()) r.fail("control.region", "must be a region name or a list of names");
+      names.push_back(v.get<std::string>());
+    }
+  } else {
+    r.fail("control.region", "must be a region name or a non-empty list of names");
+  }
+  std::vector<int> regions;
+  for (const std::string& name : names) {
+    int id = -1;
+    try {
+      id = mesh.region(name);
+    } catch (const InvalidArgument& e) {
+      r.fail("control.region", e.what());
+    }
+    if (std::find(regions.begin(), regions.end(), id) == regions.end()) regions.push_back(id);
+  }
+  std::sort(regions.begin(), regions.end());
+  return regions;
+}
+
 void parse_control(const Reader& r, const json& doc, const Mesh& mesh, Scene* s) {
   const json& control = r.object(doc, "control", "control");
-  r.keys(control, "control", {"space", "lower", "upper", "initial"});
+  r.keys(control, "control", {"space", "region", "lower", "upper", "initial"});
   try {
     s->control_kind = parse_control_kind(r.string(control, "space", "control.space"));
   } catch (const InvalidArgument&) {
@@ -331,8 +361,10 @@ void parse_control(const Reader& r, const json& doc, const Mesh& mesh, Scene* s)
     r.fail("control.initial", "must lie within [control.lower, control.upper] = [" +
                                   std::to_string(s->control_lower) + ", " +
                                   std::to_string(s->control_upper) + "]");
-  std::vector<int> regions;  // where the control acts: the whole body
-  for (int k = 0; k < static_cast<int>(s->materials.size()); ++k) regions.push_back(k);
+  if (control.contains("region")) s->control_regions = parse_control_regions(r, control, mesh);
+  std::vector<int> regions = s->control_regions;  // where the control acts
+  if (regions.empty())
+    for (int k = 0; k < static_cast<int>(s->materials.size()); ++k) regions.push_back(k);
   for (int k : regions)  // existence needs m < 2a wherever m acts
     if (!(s->control_upper < 2.0 * s->materials[k]->a()))
       r.fail("control.upper",

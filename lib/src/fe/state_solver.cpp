@@ -9,18 +9,19 @@ namespace softhd::fe {
 
 StateEquation::~StateEquation() = default;
 
-StateSolver::StateSolver(Assembler assembler, ControlKind control, NewtonOptions options)
+StateSolver::StateSolver(Assembler assembler, ControlKind control, NewtonOptions options,
+                         std::vector<int> control_regions)
     : own_assembler_(std::make_unique<const Assembler>(std::move(assembler))),
       assembler_(own_assembler_.get()),
       own_control_(std::make_unique<const ControlSpace>(assembler_->mesh(), assembler_->geometry(),
-                                                        control)),
+                                                        control, std::move(control_regions))),
       control_(own_control_.get()),
       options_(options),
       newton_(std::in_place, *assembler_, options),
       state_(rest_state(*assembler_)) {}
 
 StateSolver::StateSolver(const Scene& scene, NewtonOptions options)
-    : StateSolver(scene.make_assembler(), scene.control_kind, options) {}
+    : StateSolver(scene.make_assembler(), scene.control_kind, options, scene.control_regions) {}
 
 StateSolver::StateSolver(const Assembler& assembler, const ControlSpace& control,
                          NewtonOptions options)

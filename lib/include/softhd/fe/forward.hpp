@@ -43,6 +43,8 @@ struct ForwardResult {
 /// its position), or if m does not have control.size() entries.
 void check_control_bounds(const Scene& scene, const ControlSpace& control, const Mesh& mesh,
                           const Eigen::VectorXd& m);
+/// The same for the scene's control space (control.space, control.region) on `mesh`.
+void check_control_bounds(const Scene& scene, const Mesh& mesh, const Eigen::VectorXd& m);
 
 /// Solves the state of `assembler` (the scene's body) for the control m on `control`
 /// (checked against the bounds), started by grid sequencing. Throws InvalidArgument for bad

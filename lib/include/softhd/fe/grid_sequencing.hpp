@@ -51,18 +51,21 @@ Scene coarsened(const Scene& scene);
 int grid_levels(const Scene& scene, const GridSequencingOptions& options);
 
 /// Values at the reference points X (rows) of the control field m of `kind` on `mesh`:
-/// Q1 interpolation of the vertex values, or the value of the containing element. Throws
-/// InvalidArgument naming the first point outside the body.
+/// Q1 interpolation of the vertex values, or the value of the containing element; 0 in the
+/// elements outside `regions` (empty: the whole body). Throws InvalidArgument naming the
+/// first point outside the body.
 Eigen::VectorXd control_at(const Mesh& mesh, ControlKind kind, const Eigen::VectorXd& m,
-                           const Eigen::MatrixXd& X);
+                           const Eigen::MatrixXd& X, const std::vector<int>& regions = {});
 
 /// Reference positions of the quadrature points of `mesh`: row e·nq + q is point q of e.
 Eigen::MatrixXd quadrature_positions(const Mesh& mesh, const ReferenceGeometry& geometry);
 
-/// The control field m of `kind` on `mesh` at the quadrature points of `assembler`'s mesh
-/// (E by nq, the layout of ControlSpace::to_quadrature): control_at those points.
+/// The control field m of `kind` on `mesh`, acting on `regions`, at the quadrature points of
+/// `assembler`'s mesh (E by nq, the layout of ControlSpace::to_quadrature): control_at those
+/// points.
 Eigen::MatrixXd control_on_quadrature(const Assembler& assembler, const Mesh& mesh,
-                                      ControlKind kind, const Eigen::VectorXd& m);
+                                      ControlKind kind, const Eigen::VectorXd& m,
+                                      const std::vector<int>& regions = {});
 
 /// Nodal displacements on `fine` of the coarse field u(X) = Σ_a N_a(ξ) u_a (the coarse
 /// element containing each fine node). Throws InvalidArgument if a node is outside.

@@ -24,7 +24,7 @@
 ///     "materials": { "body": {...}, "layer": {...} },     (or one "material")
 ///     "fibers": [1, 0, 0] | { "data": "fibres" } | { "file": "f.txt", "per": "element" },
 ///     "clamp": ["base"],
-///     "control": { "space": "vertex", "lower": -1e5, "upper": 0 }
+///     "control": { "space": "vertex", "region": "muscle", "lower": -1e5, "upper": 0 }
 
 #include <Eigen/Core>
 #include <memory>
@@ -63,6 +63,9 @@ struct Scene {
   FiberField fiber_field;  ///< "fibers": the vector, or a field per element or node
   std::vector<DirichletConstraint> constraints;     ///< the clamp, then the extra constraints
   ControlKind control_kind = ControlKind::kVertex;  ///< control.space
+  /// control.region: the regions (ids into the mesh's region_names) the control acts on;
+  /// empty: the whole body.
+  std::vector<int> control_regions;
   ///@{
   /// control.lower, control.upper and control.initial (default 0).
   double control_lower = 0.0, control_upper = 0.0, control_initial = 0.0;
@@ -78,6 +81,10 @@ struct Scene {
   Mesh make_mesh() const;
   /// The assembler of the body: mesh, material, fibers and constraints.
   Assembler make_assembler() const;
+  /// The control space (control.space, control.region) on `assembler`'s mesh and quadrature.
+  ControlSpace make_control_space(const Assembler& assembler) const {
+    return ControlSpace(assembler.mesh(), assembler.geometry(), control_kind, control_regions);
+  }
   /// residual_floor() (fe/newton.hpp) of this body: its stiffest material and its volume.
   /// The Newton tolerance the solvers use when none is given.
   double residual_floor() const;

@@ -20,8 +20,10 @@ namespace softhd::fe {
 /// by the serial Newton (StateBackend::kCholmod).
 class StateSolver final : public StateEquation {
  public:
-  /// A solver for `assembler`'s body with controls of kind `control` (both kept).
-  StateSolver(Assembler assembler, ControlKind control, NewtonOptions options = {});
+  /// A solver for `assembler`'s body with controls of kind `control` acting on
+  /// `control_regions` (empty: the whole body); the assembler and control space are kept.
+  StateSolver(Assembler assembler, ControlKind control, NewtonOptions options = {},
+              std::vector<int> control_regions = {});
   /// The scene's body, material, clamp and control space.
   explicit StateSolver(const Scene& scene, NewtonOptions options = {});
   /// A solver on an assembler and control space the caller keeps; both must outlive it.

@@ -34,7 +34,8 @@ struct PetscStateSolver::Impl {
   Impl(const Scene& scene, const PetscStateOptions& options)
       : options(validated(options)),
         system(scene, options.backend, options.max_krylov_iterations),
-        control(system.assembler().mesh(), system.assembler().geometry(), scene.control_kind),
+        control(system.assembler().mesh(), system.assembler().geometry(), scene.control_kind,
+                scene.control_regions),
         global_controls(scene.control_kind == ControlKind::kVertex
                             ? system.slab().num_global_vertices
                             : system.slab().num_global_elements),
