@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <string>
@@ -255,4 +256,71 @@ TEST(Control, InterpolationTransposeAndRegularisation) {
     }
   }
   EXPECT_THROW(parse_control_kind("nodal"), softhd::InvalidArgument);
+}
+
+namespace {
+
+// One element of `cell`, its reference nodes moved by the affine map X = A ξ + b (det A > 0).
+Mesh one_element(CellType cell) {
+  const ReferenceElement& r = reference_element(cell);
+  Mesh m;
+  m.dim = r.dim;
+  m.order = r.order;
+  m.cell = cell;
+  Eigen::MatrixXd A(r.dim, r.dim);
+  if (r.dim == 3)
+    A << 1.0, 0.2, 0.1, -0.1, 0.8, 0.3, 0.05, -0.2, 1.3;
+  else
+    A << 1.0, 0.3, -0.2, 0.9;
+  m.nodes = r.node_coordinates * A.transpose();
+  m.nodes.rowwise() += Eigen::RowVectorXd::LinSpaced(r.dim, 0.5, 1.5);
+  m.elements.resize(1, r.nodes);
+  for (int a = 0; a < r.nodes; ++a) m.elements(0, a) = a;
+  const int nv = static_cast<int>(r.vertex_nodes.size());
+  m.element_vertices.resize(1, nv);
+  m.vertex_nodes.resize(nv);
+  for (int v = 0; v < nv; ++v) {
+    m.element_vertices(0, v) = v;
+    m.vertex_nodes[v] = r.vertex_nodes[v];
+  }
+  m.element_region = Eigen::VectorXi::Zero(1);
+  return m;
+}
+
+// Zero eigenvalues of the free element's tangent at rest (the linearised stiffness): the
+// rigid motions (6 in 3D, 3 in 2D) and, if the quadrature is too weak, spurious modes.
+int zero_modes(CellType cell, int degree) {
+  const Mesh mesh = one_element(cell);
+  const Assembler A(mesh, {fe_test::mooney_rivlin()}, FiberField{}, {}, AssemblerStorage::kFull,
+                    degree);
+  SparseMatrix K = A.tangent_pattern();
+  double Pi = 0.0;
+  Eigen::VectorXd R;
+  const Eigen::VectorXd u = Eigen::VectorXd::Zero(mesh.num_nodes() * mesh.dim);
+  const Eigen::MatrixXd m = Eigen::MatrixXd::Zero(1, A.geometry().points_per_element());
+  EXPECT_TRUE(A.evaluate(u, m, &Pi, &R, &K));
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(K.rows(), K.cols());
+  const Eigen::MatrixXd Kd = K.selfadjointView<Eigen::Lower>() * I;
+  const Eigen::VectorXd lambda = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Kd).eigenvalues();
+  int zeros = 0;
+  for (Eigen::Index k = 0; k < lambda.size(); ++k)
+    zeros += std::abs(lambda[k]) < 1e-9 * lambda.maxCoeff();
+  return zeros;
+}
+
+}  // namespace
+
+// The default quadrature of every cell type has no spurious zero-energy modes: an
+// unconstrained element's stiffness at rest has exactly the rigid motions as its kernel.
+// A one-point rule on the quadratic cells has many, so the count can fail.
+TEST(Quadrature, TheDefaultRuleHasNoSpuriousModes) {
+  const CellType all[] = {CellType::kQuad4, CellType::kQuad9, CellType::kTri3, CellType::kTri6,
+                          CellType::kHex8,  CellType::kHex27, CellType::kTet4, CellType::kTet10};
+  for (CellType cell : all) {
+    const int rigid = reference_element(cell).dim == 3 ? 6 : 3;
+    EXPECT_EQ(zero_modes(cell, 0), rigid) << to_string(cell);
+  }
+  EXPECT_GT(zero_modes(CellType::kTet10, 1), 6);
+  EXPECT_GT(zero_modes(CellType::kTri6, 1), 3);
+  EXPECT_GT(zero_modes(CellType::kHex27, 1), 6);
 }
