@@ -80,24 +80,28 @@ ControlSpace::ControlSpace(const Mesh& mesh, const ReferenceGeometry& g, Control
   M_.resize(nq, nv);
   // The P1/Q1 functions of the linear cell on the element's vertices, at the points.
   const CellType linear = reference_element(mesh.cell).linear;
-  std::vector<Eigen::MatrixXd> dref(nq);
-  Eigen::VectorXd N(nv);
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> dN(nv, dim);
+  const int nen = mesh.nodes_per_element();
+  std::vector<Eigen::MatrixXd> dref(nq), dgeo(nq);
+  Eigen::VectorXd N(nv), Ng(nen);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> dN(nv, dim), dG(nen, dim);
   for (int q = 0; q < nq; ++q) {
     const Eigen::VectorXd xi = g.reference_points().row(q).transpose();
     shape_functions(linear, xi.data(), N.data(), dN.data());
     M_.row(q) = N.transpose();
     dref[q] = dN;
+    shape_functions(mesh.cell, xi.data(), Ng.data(), dG.data());
+    dgeo[q] = dG;
   }
-  // Gradients of the P1/Q1 functions in X: dM/dX = dM/dξ (dX/dξ)^{-1}, the geometry being
-  // interpolated by the element's vertices (exact for affine cells).
+  // Gradients of the P1/Q1 functions in X: dM/dX = dM/dξ (dX/dξ)^{-1}, with dX/dξ the
+  // element's own (isoparametric) map, Σ_a X_a ⊗ dN_a/dξ over all its nodes, so that ∇m is
+  // exact on curved P2/Q2 elements too, where the map is not the vertices' one.
   dM_.resize(E);
-  Eigen::MatrixXd Xv(nv, dim);
+  Eigen::MatrixXd Xe(nen, dim);
   for (Eigen::Index e = 0; e < E; ++e) {
-    for (int a = 0; a < nv; ++a) Xv.row(a) = mesh.nodes.row(mesh.vertex_nodes[support_(e, a)]);
+    for (int a = 0; a < nen; ++a) Xe.row(a) = mesh.nodes.row(mesh.elements(e, a));
     dM_[e].resize(dim, nq * nv);
     for (int q = 0; q < nq; ++q) {
-      const Eigen::MatrixXd J0 = Xv.transpose() * dref[q];
+      const Eigen::MatrixXd J0 = Xe.transpose() * dgeo[q];
       dM_[e].middleCols(q * nv, nv) = (dref[q] * J0.inverse()).transpose();
     }
   }
