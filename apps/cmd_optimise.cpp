@@ -294,7 +294,7 @@ void add_final(const ShapeTrackingSummary& s, nlohmann::json& sum) {
   sum["replayed_evaluations"] = s.replayed_evaluations;
   sum["failed_evaluations"] = s.failed_evaluations;
   sum["termination"] = s.termination;
-  sum["converged"] = s.converged;
+  sum["converged"] = s.converged();
   sum["shape_error_max"] = optional_json(s.shape_error_max);
   sum["shape_error_rms"] = optional_json(s.shape_error_rms);
   sum["seconds"] = s.seconds;

@@ -261,7 +261,7 @@ void write_csv(const std::string& path, const std::vector<Run>& runs) {
       out << ',' << (hit ? std::to_string(hit->iteration) : "") << ','
           << (hit ? fmt(hit->seconds, 6) : "");
     }
-    out << ',' << (r.error.empty() && r.finite() ? 1 : 0) << ',' << (s.converged ? 1 : 0) << ','
+    out << ',' << (r.error.empty() && r.finite() ? 1 : 0) << ',' << (s.converged() ? 1 : 0) << ','
         << csv_quote(s.termination) << '\n';
   }
   if (!out) throw FileError("error while writing " + path);

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "expect_error.hpp"
 #include "softhd/control/bounded_optimizer.hpp"
 #include "softhd/error.hpp"
 
@@ -151,12 +152,12 @@ TEST(BoundedOptimizer, StopsOnIterationsTargetAndFailedStart) {
   EXPECT_EQ(s.iterations, 2);
   EXPECT_EQ(s.termination, "the iteration limit was reached");
   EXPECT_EQ(s.status, OptimizerStatus::iteration_limit);
-  EXPECT_FALSE(s.converged);
+  EXPECT_FALSE(s.converged());
   o.max_iterations = 100;
   o.target_value = 1.001;
   s = minimise(f, x0, lo, hi, o);
   EXPECT_LE(s.final_value, 1.001);
-  EXPECT_TRUE(s.converged);
+  EXPECT_TRUE(s.converged());
   EXPECT_EQ(s.termination, "J reached the target value");
   EXPECT_EQ(s.status, OptimizerStatus::target_value);
   const BoundedObjective broken = [](const Eigen::VectorXd&, double&, Eigen::VectorXd*) {
@@ -166,7 +167,7 @@ TEST(BoundedOptimizer, StopsOnIterationsTargetAndFailedStart) {
   EXPECT_EQ(s.termination, "the evaluation at the starting point failed");
   EXPECT_EQ(s.status, OptimizerStatus::start_failed);
   EXPECT_EQ(to_string(s.status), "start_failed");
-  EXPECT_FALSE(s.converged);
+  EXPECT_FALSE(s.converged());
 }
 
 // An iteration observer that throws StopRequest ends the run after that iteration, with
@@ -195,7 +196,7 @@ TEST(BoundedOptimizer, ObserverCanStopTheRun) {
   EXPECT_EQ(s.status, OptimizerStatus::stopped);
   EXPECT_EQ(s.BriefReport().rfind("stopped (stopped by the caller): 3 iterations", 0), 0u)
       << s.BriefReport();
-  EXPECT_FALSE(s.converged);
+  EXPECT_FALSE(s.converged());
   EXPECT_EQ(s.x, seen);
 }
 
@@ -219,6 +220,67 @@ TEST(BoundedOptimizer, RejectsInconsistentInput) {
     EXPECT_NE(std::string(e.what()).find("start of variable 1 (2) is outside its bounds"),
               std::string::npos)
         << e.what();
+  }
+}
+
+// The optimiser owns its objective's exceptions: one thrown inside NLopt (which would turn it
+// into "nlopt failure") ends minimise() with that exception, whatever its type, for every
+// algorithm and with or without move limits; the objective is not called again after it,
+// and an exception of the iteration observer is rethrown the same way.
+TEST(BoundedOptimizer, RethrowsTheObjectivesExceptions) {
+  struct Custom {
+    int evaluation;
+  };
+  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(3, -1), hi = Eigen::VectorXd::Constant(3, 1);
+  const Eigen::VectorXd x0 = Eigen::VectorXd::Constant(3, 0.9);
+  for (Algorithm a : kAll) {
+    for (double move_limit : {0.0, 0.1}) {
+      SCOPED_TRACE(to_string(a) + " move limit " + std::to_string(move_limit));
+      BoundedOptimizerOptions o;
+      o.algorithm = a;
+      o.move_limit = move_limit;
+      o.relative_change = 0.0;
+      int calls = 0;
+      const auto throwing_at = [&](int k, bool custom) {
+        return [&calls, k, custom](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+          if (++calls == k) {
+            if (custom) throw Custom{k};
+            throw NumericalError("evaluation " + std::to_string(k) + " failed");
+          }
+          v = (x.array() - 0.25).pow(4).sum() + 1.0;
+          if (g) *g = 4 * (x.array() - 0.25).cube().matrix();
+          return true;
+        };
+      };
+      calls = 0;
+      test::expect_error<NumericalError>([&] { minimise(throwing_at(4, false), x0, lo, hi, o); },
+                                         "evaluation 4 failed");
+      EXPECT_EQ(calls, 4);
+      calls = 0;
+      try {
+        minimise(throwing_at(3, true), x0, lo, hi, o);
+        ADD_FAILURE() << "no exception";
+      } catch (const Custom& c) {
+        EXPECT_EQ(c.evaluation, 3);
+      }
+      EXPECT_EQ(calls, 3);
+      // The first evaluation (outside NLopt) throws through as well.
+      calls = 0;
+      test::expect_error<NumericalError>([&] { minimise(throwing_at(1, false), x0, lo, hi, o); },
+                                         "evaluation 1 failed");
+      calls = 0;
+      int observed = 0;
+      test::expect_error<FileError>(
+          [&] {
+            minimise(throwing_at(0, false), x0, lo, hi, o,
+                     [&](const IterationRecord& rec, const Eigen::VectorXd&) {
+                       ++observed;
+                       if (rec.iteration == 2) throw FileError("cannot write iteration 2");
+                     });
+          },
+          "cannot write iteration 2");
+      EXPECT_EQ(observed, 2);
+    }
   }
 }
 

@@ -204,10 +204,10 @@ std::string small_log(const std::string& path) {
     LoggedEvaluation e;
     e.x = Eigen::VectorXd::Constant(4, 0.1 * k + 1e-17);
     e.gradient = k != 1;
-    e.result.ok = k != 2;
+    e.result.status = k != 2 ? EvaluationStatus::ok : EvaluationStatus::state_failed;
     e.result.J = 1.0 / 3.0 + k;
     e.result.gradient =
-        e.gradient && e.result.ok ? Eigen::VectorXd::Constant(4, -1.0 / 7.0) : Eigen::VectorXd();
+        e.gradient && k != 2 ? Eigen::VectorXd::Constant(4, -1.0 / 7.0) : Eigen::VectorXd();
     e.result.failure = k == 2 ? "newton failed" : "";
     e.seconds = 0.5 * k;
     w.append(e);
@@ -236,7 +236,7 @@ TEST(RunLog, RoundTripsBitwise) {
     EXPECT_EQ(e.x, Eigen::VectorXd::Constant(4, 0.1 * k + 1e-17));
     EXPECT_EQ(e.result.J, 1.0 / 3.0 + k);
     EXPECT_EQ(e.gradient, k != 1);
-    EXPECT_EQ(e.result.ok, k != 2);
+    EXPECT_EQ(e.result.status, k != 2 ? EvaluationStatus::ok : EvaluationStatus::state_failed);
     EXPECT_EQ(e.seconds, 0.5 * k);
   }
   EXPECT_EQ(log.evaluations[0].result.gradient, Eigen::VectorXd::Constant(4, -1.0 / 7.0));

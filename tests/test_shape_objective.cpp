@@ -71,13 +71,13 @@ TEST_P(ShapeGradient, TaylorRemainderIsSecondOrder) {
   dm *= 0.2;
 
   const ShapeEvaluation e0 = J.evaluate(m0, true);
-  ASSERT_TRUE(e0.ok) << e0.failure;
+  ASSERT_EQ(e0.status, EvaluationStatus::ok) << e0.failure;
   ASSERT_TRUE(e0.gradient.allFinite());
   const double slope = e0.gradient.dot(dm);
   std::vector<double> remainder;
   for (double h = 0.2; h > 0.2 / 32; h /= 2) {
     const ShapeEvaluation e = J.evaluate(m0 + h * dm, false);
-    ASSERT_TRUE(e.ok) << e.failure;
+    ASSERT_EQ(e.status, EvaluationStatus::ok) << e.failure;
     remainder.push_back(std::fabs(e.J - e0.J - h * slope));
   }
   for (size_t k = 0; k + 1 < remainder.size(); ++k) {
@@ -113,7 +113,7 @@ TEST(ShapeObjective, FailedStateSolveIsReportedNotThrown) {
   ShapeObjective J(A, space, HausdorffTarget(random_cloud(10, 2, 3)), o);
   // m far beyond the existence limit m < 2a (a = 1): no equilibrium to find.
   const ShapeEvaluation e = J.evaluate(Eigen::VectorXd::Constant(space.size(), 50.0), true);
-  EXPECT_FALSE(e.ok);
+  EXPECT_EQ(e.status, EvaluationStatus::state_failed);
   EXPECT_FALSE(e.failure.empty());
 }
 
@@ -139,7 +139,8 @@ TEST(ShapeObjective, TwoLevelStartsReachTheSameStateWithFewerFineIterations) {
   EXPECT_EQ(plain.coarse_level(), nullptr);
   EXPECT_EQ(two_level.coarse_level(), &coarse);
   const ShapeEvaluation a = plain.evaluate(m, true), b = two_level.evaluate(m, true);
-  ASSERT_TRUE(a.ok && b.ok) << a.failure << b.failure;
+  ASSERT_TRUE(a.status == EvaluationStatus::ok && b.status == EvaluationStatus::ok)
+      << a.failure << b.failure;
   const Eigen::VectorXd& ua = plain.last_state().u;
   EXPECT_LT((two_level.last_state().u - ua).lpNorm<Eigen::Infinity>(),
             1e-9 * ua.lpNorm<Eigen::Infinity>());
@@ -148,7 +149,8 @@ TEST(ShapeObjective, TwoLevelStartsReachTheSameStateWithFewerFineIterations) {
   EXPECT_LT(b.newton_iterations, a.newton_iterations);
   // A second step starts from the first one's state, whose coarse equilibrium is kept.
   const ShapeEvaluation c = plain.evaluate(1.4 * m, false), d = two_level.evaluate(1.4 * m, false);
-  ASSERT_TRUE(c.ok && d.ok) << c.failure << d.failure;
+  ASSERT_TRUE(c.status == EvaluationStatus::ok && d.status == EvaluationStatus::ok)
+      << c.failure << d.failure;
   const Eigen::VectorXd& uc = plain.last_state().u;
   EXPECT_LT((two_level.last_state().u - uc).lpNorm<Eigen::Infinity>(),
             1e-9 * uc.lpNorm<Eigen::Infinity>());

@@ -152,7 +152,7 @@ void bind_optimise(py::module_& m) {
       .def_property_readonly(
           "status", [](const PyOptimise& r) { return to_string(r.summary.status); },
           "why it stopped: iteration_limit, relative_change, stopped, ... (converged or not)")
-      .def_property_readonly("converged", [](const PyOptimise& r) { return r.summary.converged; })
+      .def_property_readonly("converged", [](const PyOptimise& r) { return r.summary.converged(); })
       .def_property_readonly(
           "shape_error_max",
           [](const PyOptimise& r) { return optional(r.summary.shape_error_max); })

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <nlopt.hpp>
 #include <sstream>
 
@@ -132,6 +133,23 @@ struct Driver {
   double mma_gradient = kMmaGradient;  // see round_scale
   int round_new_evaluations = 0;       // evaluations made in the current round
   bool round_first_improved = false;   // the round's first new evaluation improved f
+  // An exception of the objective or of on_iteration: NLopt would swallow it (its C++
+  // wrapper turns exceptions into result codes), so it is kept, NLopt is stopped, and
+  // minimise() rethrows it once NLopt has returned.
+  std::exception_ptr error;
+
+  /// Keeps the exception being handled and stops NLopt; the value NLopt gets is that of a
+  /// failed evaluation (it is never used).
+  double stop_on_error(std::vector<double>& grad, nlopt::opt& opt) {
+    if (!error) error = std::current_exception();
+    opt.force_stop();
+    return failed(grad);
+  }
+  /// The value and zero gradient reported for a failed evaluation.
+  double failed(std::vector<double>& grad) const {
+    for (double& g : grad) g = 0.0;
+    return options.failure_penalty * largest_abs / fscale;
+  }
 
   /// After a round: more conservative after a rejected first step, less after an accepted one.
   void adapt_mma_gradient() {
@@ -145,6 +163,7 @@ struct Driver {
   }
 
   double evaluate(const std::vector<double>& zv, std::vector<double>& grad, nlopt::opt& opt) {
+    if (error) return failed(grad);  // asked again before NLopt saw the forced stop
     const Eigen::Map<const Eigen::VectorXd> z(zv.data(), static_cast<Eigen::Index>(zv.size()));
     const bool want_grad = !grad.empty();
     double f = 0.0;
@@ -157,14 +176,17 @@ struct Driver {
     } else {
       ++summary.evaluations;
       const Eigen::VectorXd x = scale.cwiseProduct(z);
-      ok = objective(x, f, want_grad ? &gx : nullptr) && std::isfinite(f) &&
-           (!want_grad || (gx.size() == z.size() && gx.allFinite()));
+      try {
+        ok = objective(x, f, want_grad ? &gx : nullptr) && std::isfinite(f) &&
+             (!want_grad || (gx.size() == z.size() && gx.allFinite()));
+      } catch (...) {
+        return stop_on_error(grad, opt);
+      }
       if (round_new_evaluations++ == 0) round_first_improved = ok && f < summary.final_value;
     }
     if (!ok) {
       ++summary.failed_evaluations;
-      for (double& g : grad) g = 0.0;
-      return options.failure_penalty * largest_abs / fscale;
+      return failed(grad);
     }
     largest_abs = std::max(largest_abs, std::fabs(f));
     const Eigen::VectorXd gz =
@@ -202,6 +224,10 @@ struct Driver {
       if (on_iteration) on_iteration(rec, summary.x);
     } catch (const StopRequest&) {
       s = Stop::requested;
+    } catch (...) {
+      error = std::current_exception();
+      opt.force_stop();
+      return;
     }
     if (std::fabs(previous - f) > options.relative_change * std::fabs(f)) small_changes = 0;
     if (s == Stop::requested) {
@@ -304,7 +330,6 @@ BoundedOptimizerSummary minimise(
   d.summary.x = x0;
   if (f <= options.target_value) {
     d.summary.status = OptimizerStatus::target_value;
-    d.summary.converged = true;
     d.summary.termination = "the starting value already reaches the target value";
     d.summary.seconds = d.seconds();
     return d.summary;
@@ -376,6 +401,7 @@ BoundedOptimizerSummary minimise(
         nlopt_status = OptimizerStatus::nlopt_failure;
       }
     }
+    if (d.error) std::rethrow_exception(d.error);
     if (d.stop != Stop::none || delta <= 0.0) break;
     d.adapt_mma_gradient();
     if (d.recentre) continue;  // progress up to the box's side: same move limit, new centre
@@ -412,7 +438,6 @@ BoundedOptimizerSummary minimise(
       d.summary.status = nlopt_status;
       d.summary.termination = nlopt_reason;
   }
-  d.summary.converged = is_converged(d.summary.status);
   d.summary.seconds = d.seconds();
   return d.summary;
 }

@@ -100,7 +100,8 @@ std::string encode_fingerprint(const RunFingerprint& f) {
 std::string encode_evaluation(const LoggedEvaluation& ev) {
   const ShapeEvaluation& r = ev.result;
   Encoder e;
-  e.put<std::uint8_t>((ev.gradient ? 1 : 0) | (r.ok ? 2 : 0));
+  // Bit 1: the evaluation's status is ok (else state_failed).
+  e.put<std::uint8_t>((ev.gradient ? 1 : 0) | (r.status == EvaluationStatus::ok ? 2 : 0));
   e.put<double>(ev.seconds);
   e.put<std::int32_t>(r.newton_iterations);
   e.put<std::int32_t>(r.factorizations);
@@ -119,7 +120,7 @@ LoggedEvaluation decode_evaluation(Decoder& d) {
   const auto flags = d.get<std::uint8_t>();
   if (flags > 3) d.fail("unknown evaluation flags");
   ev.gradient = flags & 1;
-  r.ok = flags & 2;
+  r.status = flags & 2 ? EvaluationStatus::ok : EvaluationStatus::state_failed;
   ev.seconds = d.get<double>();
   r.newton_iterations = d.get<std::int32_t>();
   r.factorizations = d.get<std::int32_t>();
@@ -133,7 +134,7 @@ LoggedEvaluation decode_evaluation(Decoder& d) {
       r.factorizations < 0)
     d.fail("an evaluation holds non-finite or negative values");
   if (ev.x.size() == 0) d.fail("an evaluation without a control");
-  if (r.ok && ev.gradient && r.gradient.size() != ev.x.size())
+  if (r.status == EvaluationStatus::ok && ev.gradient && r.gradient.size() != ev.x.size())
     d.fail("an evaluation's gradient has the wrong size");
   return ev;
 }

@@ -20,7 +20,11 @@ constexpr EnumNames<Particles, 2> kParticles{
     {{Particles::nodes, "nodes"}, {Particles::quadrature, "quadrature"}}};
 constexpr EnumNames<ParticleVolumes, 2> kVolumes{
     {{ParticleVolumes::reference, "reference"}, {ParticleVolumes::deformed, "deformed"}}};
+constexpr EnumNames<EvaluationStatus, 2> kEvaluationStatus{
+    {{EvaluationStatus::ok, "ok"}, {EvaluationStatus::state_failed, "state_failed"}}};
 }  // namespace
+
+std::string to_string(EvaluationStatus s) { return enum_name(kEvaluationStatus, s); }
 
 std::string to_string(Particles p) { return enum_name(kParticles, p); }
 std::string to_string(ParticleVolumes v) { return enum_name(kVolumes, v); }
@@ -312,7 +316,7 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
     ev.factorizations += d.solver->adjoint_factorizations();
     ev.seconds_adjoint = seconds_since(t0);
   }
-  ev.ok = true;
+  ev.status = EvaluationStatus::ok;
   return ev;
 }
 

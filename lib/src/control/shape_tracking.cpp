@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <exception>
 #include <limits>
 #include <memory>
 
@@ -167,7 +166,7 @@ void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimize
   // there, so the final ρ̃ is the one the optimiser saw).
   objective.remember_state(r.x, *best_state);
   const ShapeEvaluation final_eval = objective.evaluate(r.x, false);
-  if (!final_eval.ok)
+  if (final_eval.status != EvaluationStatus::ok)
     throw StateSolveError("the state solve at the best control failed: " + final_eval.failure);
   s->control = r.x;
   s->displacement = objective.last_state().u;
@@ -178,7 +177,6 @@ void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimize
   s->failed_evaluations = r.failed_evaluations;
   s->status = r.status;
   s->termination = r.termination;
-  s->converged = r.converged;
   s->replayed_evaluations = static_cast<int>(recorder.replayed());
   if (map_displacement) {
     const auto [mx, rms] =
@@ -263,33 +261,26 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   const std::optional<double> floor = s.floor();
 
   const ShapeEvaluation start = objective.evaluate(m0, false);
-  if (!start.ok)
+  if (start.status != EvaluationStatus::ok)
     throw StateSolveError("the state solve at the starting control failed: " + start.failure);
   s.rho_start = start.rho;
   if (callbacks.on_start) callbacks.on_start(s);
 
-  // The objective for the optimiser, remembering the last evaluation for the records. An
-  // exception inside it would be swallowed by NLopt: kept and rethrown after minimise.
+  // The objective for the optimiser, remembering the last evaluation for the records. Its
+  // exceptions (and on_iteration's) end minimise(), which rethrows them.
   ShapeEvaluation last;
   fe::State best_state = objective.last_state();  // the state of the best control so far
   bool last_replayed = false;
-  std::exception_ptr error;
   const BoundedObjective f = [&](const Eigen::VectorXd& m, double& value, Eigen::VectorXd* g) {
-    if (error) return false;
-    try {
-      check_interrupt("between optimiser evaluations");
-      last_replayed = recorder.replaying();
-      last = recorder.evaluate(m, g != nullptr, &best_state);
-    } catch (...) {
-      error = std::current_exception();
-      return false;
-    }
+    check_interrupt("between optimiser evaluations");
+    last_replayed = recorder.replaying();
+    last = recorder.evaluate(m, g != nullptr, &best_state);
     s.seconds_state += last.seconds_state;
     s.seconds_distance += last.seconds_distance;
     s.seconds_adjoint += last.seconds_adjoint;
     s.newton_iterations += last.newton_iterations;
     s.factorizations += last.factorizations;
-    if (!last.ok) {
+    if (last.status != EvaluationStatus::ok) {
       if (callbacks.on_failure && !last_replayed) callbacks.on_failure(last.failure);
       return false;
     }
@@ -297,8 +288,9 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     if (g) *g = last.gradient;
     return true;
   };
+  int iterations = 0;  // accepted so far (for the message of an interrupt)
   const auto on_iteration = [&](const IterationRecord& rec, const Eigen::VectorXd& m) {
-    if (error) return;
+    iterations = rec.iteration;
     if (!last_replayed) best_state = objective.last_state();  // else restored from the log
     TrackingIteration it = record(rec, last, floor);
     it.seconds = recorder.seconds();
@@ -306,33 +298,26 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     s.history.push_back(it);
     bool stop = false;
     try {
-      // The snapshot after the callback: an iteration in the log had its outputs written.
-      try {
-        if (callbacks.on_iteration) callbacks.on_iteration(it, m);
-      } catch (const StopRequest&) {
-        stop = true;  // minimise() ends the run after this iteration
-      }
-      if (rec.iteration % options.checkpoint_every == 0)
-        recorder.snapshot(rec.iteration, best_state);
-    } catch (...) {
-      error = std::current_exception();
+      if (callbacks.on_iteration) callbacks.on_iteration(it, m);
+    } catch (const StopRequest&) {
+      stop = true;  // minimise() ends the run after this iteration
     }
+    // The snapshot after the callback: an iteration in the log had its outputs written.
+    if (rec.iteration % options.checkpoint_every == 0) recorder.snapshot(rec.iteration, best_state);
     if (stop) throw StopRequest{};
   };
   BoundedOptimizerOptions opt = options.optimizer;
   if (opt.max_seconds > 0.0)  // a total over the resumes
     opt.max_seconds = std::max(1e-9, opt.max_seconds - recorder.logged_seconds());
-  const BoundedOptimizerSummary r = minimise(f, m0, lower, upper, opt, on_iteration);
-  if (error) {
-    try {
-      std::rethrow_exception(error);
-    } catch (const Interrupted& e) {
-      // The checkpoint holds every evaluation finished and the states of the last save, as
-      // when the process is killed: resuming it continues the uninterrupted run.
-      if (options.checkpoint.empty() || !options.write_checkpoint) throw;
-      throw Interrupted(std::string(e.what()) + " after " + std::to_string(r.iterations) +
-                        " iterations (resume from the checkpoint '" + options.checkpoint + "')");
-    }
+  BoundedOptimizerSummary r;
+  try {
+    r = minimise(f, m0, lower, upper, opt, on_iteration);
+  } catch (const Interrupted& e) {
+    // The checkpoint holds every evaluation finished and the states of the last save, as
+    // when the process is killed: resuming it continues the uninterrupted run.
+    if (options.checkpoint.empty() || !options.write_checkpoint) throw;
+    throw Interrupted(std::string(e.what()) + " after " + std::to_string(iterations) +
+                      " iterations (resume from the checkpoint '" + options.checkpoint + "')");
   }
   finish(objective, recorder, r, map_displacement, options.checkpoint_every, &best_state, &s);
   if (self_floor && map_displacement) s.floor_self = Y.evaluate(Y.cloud()).rho;

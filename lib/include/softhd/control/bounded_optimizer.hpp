@@ -24,7 +24,8 @@ Algorithm algorithm_from_string(const std::string& name);
 
 /// One evaluation of the objective. `gradient` is null when only the value is needed.
 /// Returns false if the evaluation failed (e.g. the state solve did not converge): the
-/// point is then rejected and the optimiser steered back.
+/// point is then rejected and the optimiser steered back. An exception ends minimise(),
+/// which rethrows it (NLopt in between never sees it).
 using BoundedObjective =
     std::function<bool(const Eigen::VectorXd& x, double& value, Eigen::VectorXd* gradient)>;
 
@@ -85,7 +86,6 @@ bool is_converged(OptimizerStatus status);
 struct BoundedOptimizerSummary {
   OptimizerStatus status = OptimizerStatus::nlopt_failure;  ///< why it stopped
   std::string termination;                                  ///< why it stopped, one line
-  bool converged = false;                                   ///< is_converged(status)
   double initial_value = 0.0;            ///< f at the start (NaN if that evaluation failed)
   double final_value = 0.0;              ///< f at the best point
   Eigen::VectorXd x;                     ///< the best point found
@@ -95,6 +95,8 @@ struct BoundedOptimizerSummary {
   double seconds = 0.0;                  ///< wall time of minimise()
   std::vector<IterationRecord> history;  ///< one record per accepted iteration
 
+  /// Stopped on a tolerance or the target value, not on a limit: is_converged(status).
+  bool converged() const { return is_converged(status); }
   /// One line: status, iterations, evaluations, J from start to end, time.
   std::string BriefReport() const;
 };
@@ -110,7 +112,9 @@ struct StopRequest {};
 /// component (so z is O(1)), and f is divided by |f(x0)| (or 1 if it is 0).
 /// `on_iteration` (optional) is called after each accepted iteration with its record
 /// and the current best x; it may write a checkpoint, and throw StopRequest to end the run. Throws
-/// InvalidArgument for inconsistent bounds or a start outside them (naming the component).
+/// InvalidArgument for inconsistent bounds or a start outside them (naming the component), and
+/// rethrows any other exception of the objective or of `on_iteration` once NLopt has stopped
+/// (NLopt would turn it into a result code).
 BoundedOptimizerSummary minimise(
     const BoundedObjective& objective, const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
     const Eigen::VectorXd& upper, const BoundedOptimizerOptions& options = {},

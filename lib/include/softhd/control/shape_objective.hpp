@@ -58,10 +58,18 @@ struct ShapeObjectiveOptions {
   void validate() const;
 };
 
+/// How an evaluation of J(m) ended.
+enum class EvaluationStatus {
+  ok,            ///< J (and the gradient, if asked for) computed
+  state_failed,  ///< the state solve did not converge: no J (ShapeEvaluation::failure says why)
+};
+/// "ok" or "state_failed".
+std::string to_string(EvaluationStatus status);
+
 /// One evaluation of J(m).
 struct ShapeEvaluation {
-  bool ok = false;  ///< false: the state solve failed (see failure)
-  double J = 0.0;   ///< ρ̃ + regularisation
+  EvaluationStatus status = EvaluationStatus::state_failed;  ///< set to ok once J is computed
+  double J = 0.0;                                            ///< ρ̃ + regularisation
   ///@{
   /// ρ̃, A and B of the deformed body against the target (docs/formulation.md §2.1).
   double rho = 0.0, A = 0.0, B = 0.0;
@@ -74,7 +82,7 @@ struct ShapeEvaluation {
   /// Wall time (seconds) of the state solve, the distance and the adjoint.
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
   ///@}
-  std::string failure;  ///< the Newton report of a failed solve
+  std::string failure;  ///< for people: Newton's one-line report of a failed state solve
 };
 
 /// A converged state kept for warm starts, with its control (empty for the rest state).

@@ -91,7 +91,6 @@ struct ShapeTrackingSummary {
   ///@}
   OptimizerStatus status = OptimizerStatus::nlopt_failure;  ///< why the optimiser stopped
   std::string termination;                                  ///< why the optimiser stopped, one line
-  bool converged = false;  ///< stopped on a tolerance, not on a limit (is_converged(status))
   ///@{
   /// Max and RMS of |x_i − T(X_i)| over the nodes (with a known map only).
   std::optional<double> shape_error_max, shape_error_rms;
@@ -109,6 +108,8 @@ struct ShapeTrackingSummary {
   std::vector<TrackingIteration> history;  ///< accepted iterations (replayed ones included)
   int replayed_evaluations = 0;            ///< served from the checkpoint
 
+  /// Stopped on a tolerance, not on a limit: is_converged(status).
+  bool converged() const { return is_converged(status); }
   /// One line: status, iterations, evaluations, ρ̃ from start to end (and over the floor), time.
   std::string BriefReport() const;
 };
@@ -135,7 +136,9 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
 
 /// Minimises J(m) over lower ≤ m ≤ upper from m0 (clamped into the bounds).
 /// `map_displacement` (optional) is u_T = T(X) − X at the nodes, for the matched floor and
-/// the shape error. Throws Error if the state solve fails at m0 or at the best control.
+/// the shape error. Throws StateSolveError if the state solve fails at m0 or at the best
+/// control; the callbacks' exceptions (other than StopRequest) and Interrupted end the run and
+/// propagate (through minimise(), which owns them while NLopt runs).
 ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorXd& lower,
                                  const Eigen::VectorXd& upper, const Eigen::VectorXd& m0,
                                  const std::optional<Eigen::VectorXd>& map_displacement,
