@@ -9,7 +9,6 @@
 
 #include "softhd/control/scene_target.hpp"
 #include "softhd/error.hpp"
-#include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/samplers.hpp"
 
 namespace softhd::bench {
@@ -151,9 +150,9 @@ PointCloud arc_surface(const fe::Scene& box, const ArcMap& T, double spacing, in
 }
 
 RunSettings::RunSettings() {
-  optimizer.move_limit = 0.1;
-  optimizer.max_iterations = 60;
-  optimizer.max_evaluations = 5 * optimizer.max_iterations + 20;
+  run.max_iterations = 60;
+  run.method = Method::exact;
+  run.tolerance = 1e-6;
 }
 
 bool Run::finite() const {
@@ -180,28 +179,16 @@ Run run_tracking(std::vector<std::pair<std::string, std::string>> params, Body& 
   std::string label;
   for (const auto& [k, v] : run.params) label += k + "=" + v + " ";
   try {
-    ShapeObjective objective(*body.assembler, *body.space,
-                             HausdorffTarget(target, settings.objective.hausdorff),
-                             settings.objective);
-    // Two-level starts as `softhd optimise` uses them by default (docs/formulation.md §4.7).
-    std::optional<fe::Assembler> coarse;
-    if (fe::grid_levels(body.scene, fe::GridSequencingOptions{}) > 0) {
-      coarse.emplace(fe::coarsened(body.scene).make_assembler());
-      objective.use_coarse_level(*coarse);
-    }
-    const Eigen::VectorXd lower = body.space->constant(body.scene.control_lower);
-    const Eigen::VectorXd upper = body.space->constant(body.scene.control_upper);
-    const Eigen::VectorXd m0 = body.space->constant(body.scene.control_initial);
-    ShapeTrackingCallbacks cb;
+    TrackingRunCallbacks cb;
     if (settings.progress)
       cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd&) {
         if (it.iteration % 10 == 0)
           std::fprintf(stderr, "    %s it %d rho/floor %.4g  %.0f s\n", label.c_str(), it.iteration,
                        it.rho_over_floor, it.seconds);
       };
-    ShapeTrackingOptions options;
-    options.optimizer = settings.optimizer;
-    run.summary = track_shape(objective, lower, upper, m0, map, options, cb);
+    TrackingRun tracking(body.scene, *body.assembler, *body.space,
+                         SceneTarget{target, map, "the benchmark's target"}, settings.run);
+    run.summary = tracking.run(cb);
   } catch (const std::exception& e) {
     run.error = e.what();
     run.summary.termination = std::string("error: ") + e.what();

@@ -13,6 +13,7 @@
 
 #include "softhd/control/shape_tracking.hpp"
 #include "softhd/control/targets.hpp"
+#include "softhd/control/tracking_run.hpp"
 #include "softhd/fe/scene.hpp"
 
 namespace softhd::bench {
@@ -60,24 +61,25 @@ PointCloud arc_surface(const fe::Scene& box, const ArcMap& T, double spacing, in
 
 /// What one benchmark run is asked to do.
 struct RunSettings {
-  ShapeObjectiveOptions objective;
-  BoundedOptimizerOptions optimizer;
+  /// The run as `softhd optimise` makes it (no folder), with the benchmarks' defaults: 60
+  /// iterations and exact pair sums (the benchmarks compare methods explicitly).
+  TrackingRunOptions run;
   bool progress = true;  ///< a line per run (and every 10 iterations) on stderr
-  RunSettings();         ///< move limit 0.1, 5·iterations + 20 evaluations, as the CLI
+  RunSettings();
 };
 
 /// One run's measured results with the benchmark's own parameter columns.
 struct Run {
   std::vector<std::pair<std::string, std::string>> params;  ///< first CSV columns
   long nodes = 0, controls = 0, target_points = 0;
-  ShapeTrackingSummary summary;
+  TrackingRunSummary summary;
   std::string error;  ///< non-empty if the run threw (summary then holds what is known)
   /// Every reported number is finite (errors excluded).
   bool finite() const;
 };
 
-/// Runs track_shape from the scene's initial control; never throws for a failed run
-/// (the message goes into Run::error).
+/// The library's TrackingRun on the body against `target` (with the known map `map`); never
+/// throws for a failed run (the message goes into Run::error).
 Run run_tracking(std::vector<std::pair<std::string, std::string>> params, Body& body,
                  const PointCloud& target, const std::optional<Eigen::VectorXd>& map,
                  const RunSettings& settings);

@@ -1,0 +1,157 @@
+#pragma once
+/// \file tracking_run.hpp
+/// One shape-tracking run as `softhd optimise`, the Python `softhd.optimise` and the benchmarks
+/// make it (docs/guide.md §5, docs/formulation.md §4): the body and its control space from a
+/// scene, the target (a cloud file, the scene's own "target", or a given cloud), the objective
+/// and its options, the bounds and the start from the scene, two-level starts, and — with an
+/// output folder — the checkpoint (its fingerprint, resume) and the run's files (history.csv,
+/// summary.json, body VTUs, control.csv, the clouds). The front ends parse their arguments into
+/// TrackingRunOptions and print from the callbacks; the defaults below are theirs.
+
+#include <Eigen/Core>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "softhd/control/bounded_optimizer.hpp"
+#include "softhd/control/scene_target.hpp"
+#include "softhd/control/shape_objective.hpp"
+#include "softhd/control/shape_tracking.hpp"
+#include "softhd/fe/assembly.hpp"
+#include "softhd/fe/control.hpp"
+#include "softhd/fe/scene.hpp"
+#include "softhd/fe/state_backend.hpp"
+#include "softhd/hausdorff.hpp"
+#include "softhd/work_share.hpp"
+
+namespace softhd {
+
+/// Two-level starts (docs/formulation.md §4.7): a large control step is solved first on the
+/// mesh with half the cells along the even axes.
+enum class CoarseLevel {
+  automatic,  ///< "auto": when that mesh exists and has >= 32 elements (fe::grid_levels)
+  off,        ///< "off": every state solve on the user's mesh alone
+};
+/// "auto" or "off".
+std::string to_string(CoarseLevel level);
+/// The CoarseLevel named by to_string; throws InvalidArgument naming `coarse_level`.
+CoarseLevel coarse_level_from_string(const std::string& name);
+
+/// Settings of one tracking run. The defaults are those of `softhd optimise` and of Python's
+/// `softhd.optimise` (written here only).
+struct TrackingRunOptions {
+  ///@{
+  /// The optimiser (BoundedOptimizerOptions).
+  Algorithm algorithm = Algorithm::mma;
+  int max_iterations = 200;       ///< accepted iterations, over all resumes
+  int max_evaluations = 0;        ///< objective evaluations; 0: 5 × max_iterations + 20
+  double max_seconds = 0.0;       ///< wall-clock limit over all resumes; 0: none
+  double relative_change = 1e-6;  ///< stop when J changes by ≤ this relative, 3 times in a row
+  double move_limit = 0.1;  ///< rounds of ≤ 10 evaluations move m by ≤ this × bound range
+  ///@}
+  ///@{
+  /// The objective (ShapeObjectiveOptions): the moving cloud, the distance and the Tikhonov
+  /// weights.
+  Particles particles = Particles::nodes;
+  ParticleVolumes volumes = ParticleVolumes::reference;
+  HausdorffParams params;  ///< α, β, γ, ε (4, 4, 2, 1e-3)
+  /// The distance's pair sums: the tree sums exactly wherever its far field would not be
+  /// cheaper.
+  Method method = Method::tree;
+  /// The tree's relative error bound on every kernel sum: 1e-2 ends the bending and torsion
+  /// runs at the exact method's ρ̃/floor (docs/guide.md §5).
+  double tolerance = 1e-2;
+  double tikhonov_mass = 0.0;      ///< M of (M/2) ∫ m²
+  double tikhonov_gradient = 0.0;  ///< ε_m of (ε_m/2) ∫ |∇m|²
+  ///@}
+  /// OpenMP threads of the pair sums, 0 to kMaxThreads (0: OpenMP's default). The FE
+  /// assembly's are the caller's (set_threads); the CLI and Python set both.
+  int threads = 0;
+  /// The processes sharing each evaluation's pair sums (HausdorffOptions::share; the CLI:
+  /// world_share()). Null: this process alone.
+  std::shared_ptr<const WorkShare> share;
+  CoarseLevel coarse_level = CoarseLevel::automatic;            ///< two-level starts
+  fe::StateBackend state_backend = fe::StateBackend::kCholmod;  ///< the state solver
+  /// A target cloud file (text or PLY) instead of the scene's "target"; empty: the scene's.
+  std::string target_file;
+  /// Refuse an arc target grid whose estimated memory exceeds this many bytes.
+  double memory_limit = fe::kDefaultMemoryLimit;
+  ///@{
+  /// The run's folder (created if missing; locked while the run lasts): history.csv,
+  /// summary.json, checkpoint.bin, body_NNNN.vtu, body.pvd, target.vtu, target.ply,
+  /// body_final.ply and control.csv, each kept up to date as the run goes. Empty: no files
+  /// and no checkpoint. The checkpoint's fingerprint holds a content hash of the scene file
+  /// (fe::Scene::source), so a resume needs the scene's file unchanged.
+  std::string out;
+  /// Continue the run recorded in out/checkpoint.bin (ShapeTrackingOptions::resume): the
+  /// same run as an uninterrupted one.
+  bool resume = false;
+  int checkpoint_every = 5;  ///< warm-start states saved every this many iterations
+  int vtu_every = 10;        ///< body_NNNN.vtu every this many iterations (0: start, end)
+  ///@}
+
+  /// Throws InvalidArgument naming the first invalid field (those of the objective and the
+  /// optimiser included).
+  void validate() const;
+  /// The objective's options these settings give.
+  ShapeObjectiveOptions objective() const;
+  /// track_shape's options these settings give: the optimiser's, the checkpoint schedule, and
+  /// with `out` the checkpoint file and resume (TrackingRun::run adds the fingerprint).
+  ShapeTrackingOptions tracking() const;
+};
+
+/// The result of a run: track_shape's summary (status, BriefReport) and what was tracked.
+struct TrackingRunSummary : ShapeTrackingSummary {
+  std::string target;      ///< the target's description (one line)
+  long target_points = 0;  ///< points of the target cloud
+  long nodes = 0;          ///< nodes of the body's mesh
+  long controls = 0;       ///< control values
+};
+
+/// Observers of a run: track_shape's (on_start, on_iteration — which may throw StopRequest —
+/// and on_failure), each called after the run's files for that moment are written, and
+/// on_begin.
+struct TrackingRunCallbacks : ShapeTrackingCallbacks {
+  /// The run is set up and its folder ready (locked, a resume's checkpoint checked), before
+  /// the first state solve: the sizes and the target's description (the rest still empty).
+  std::function<void(const TrackingRunSummary&)> on_begin;
+};
+
+/// The target of a run on the body `mesh` of `scene`: the cloud file options.target_file (no
+/// known map), else the scene's "target" (scene_target, options.memory_limit). Throws as those.
+SceneTarget tracking_target(const fe::Scene& scene, const fe::Mesh& mesh,
+                            const TrackingRunOptions& options);
+
+/// One tracking run, set up at construction (no file touched) and made by run().
+class TrackingRun {
+ public:
+  /// The body of `scene` (its mesh, control space, bounds and initial control) against the
+  /// target of options.target_file, else the scene's "target". `scene` must outlive the run.
+  /// Throws InvalidArgument (invalid options, a missing or malformed target, dimensions that
+  /// differ), FileError or ResourceError.
+  TrackingRun(const fe::Scene& scene, const TrackingRunOptions& options);
+  /// The same on a body already built from `scene` (assembler and control space outlive the
+  /// run) against `target` (options.target_file is ignored).
+  TrackingRun(const fe::Scene& scene, const fe::Assembler& assembler,
+              const fe::ControlSpace& control, SceneTarget target,
+              const TrackingRunOptions& options);
+  ~TrackingRun();
+  TrackingRun(const TrackingRun&) = delete;
+  TrackingRun& operator=(const TrackingRun&) = delete;
+
+  /// Makes the run (once). With options.out: creates and locks the folder, refuses a resume
+  /// without a checkpoint or of another run, and writes the files as the run goes. Throws as
+  /// track_shape (StateSolveError for a failed solve at the start or the best control,
+  /// Interrupted, the callbacks' exceptions), ResourceError for a folder in use, FileError.
+  TrackingRunSummary run(const TrackingRunCallbacks& callbacks = {});
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// TrackingRun(scene, options).run(callbacks).
+TrackingRunSummary run_tracking(const fe::Scene& scene, const TrackingRunOptions& options,
+                                const TrackingRunCallbacks& callbacks = {});
+
+}  // namespace softhd
