@@ -40,8 +40,8 @@ from ._core import (DistanceResult, Error, FileError, ForwardResult, InvalidArgu
                     NumericalError, OptimiseResult, ResourceError, Scene)
 
 __all__ = ["distance", "hausdorff_nearest", "Target", "read_cloud", "write_cloud", "Scene",
-           "optimise", "DistanceResult", "ForwardResult", "OptimiseResult", "Iteration", "Error",
-           "InvalidArgument", "FileError", "ResourceError", "NumericalError"]
+           "optimise", "optimise_defaults", "DistanceResult", "ForwardResult", "OptimiseResult",
+           "Iteration", "Error", "InvalidArgument", "FileError", "ResourceError", "NumericalError"]
 
 
 def _as_float64(a, name):
@@ -129,13 +129,15 @@ def write_cloud(path, points, volumes=None):
     _core.write_cloud(_os.fspath(path), _as_float64(points, "points"), _volumes(volumes, "volumes"))
 
 
-def optimise(scene, target=None, *, max_iter=200, max_seconds=0.0, rel_tol=1e-6, algorithm="mma",
-             move_limit=0.1, particles="nodes", volumes="reference", alpha=4.0, beta=4.0,
-             gamma=2.0, eps=1e-3, method="exact", tol=1e-6, tikhonov_mass=0.0,
-             tikhonov_grad=0.0, coarse_level="auto", callback=None, threads=0):
+def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=None,
+             algorithm=None, move_limit=None, particles=None, volumes=None, alpha=None,
+             beta=None, gamma=None, eps=None, method=None, tol=None, tikhonov_mass=None,
+             tikhonov_grad=None, coarse_level=None, callback=None, threads=0):
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
-    target (``softhd optimise``; defaults as there, e.g. coarse_level "auto": two-level starts
-    on the mesh with half the cells, or "off"). Returns an :class:`OptimiseResult`.
+    target: the run ``softhd optimise`` makes (the library's TrackingRun), with its options and
+    its defaults for every option left None (:func:`optimise_defaults` lists them, e.g. method
+    "tree" with tol 1e-2, move_limit 0.1, coarse_level "auto": two-level starts on the mesh with
+    half the cells). Returns an :class:`OptimiseResult`.
 
     target: None (the scene's own "target"), a cloud file path, an (M, d) array, or a tuple
     (points, volumes). callback(record): called after every accepted iteration with an
@@ -156,3 +158,9 @@ def optimise(scene, target=None, *, max_iter=200, max_seconds=0.0, rel_tol=1e-6,
                           gamma=gamma, eps=eps, method=method, tol=tol,
                           tikhonov_mass=tikhonov_mass, tikhonov_grad=tikhonov_grad,
                           coarse_level=coarse_level, callback=callback, threads=threads)
+
+
+def optimise_defaults():
+    """The defaults of :func:`optimise`'s options as a dict (name: value): those of
+    ``softhd optimise``, written once in the library (TrackingRunOptions)."""
+    return _core.optimise_defaults()

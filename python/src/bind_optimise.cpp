@@ -1,15 +1,13 @@
-// softhd._core.optimise: a shape-tracking run (track_shape) on a loaded scene, with a Python
-// callback after every accepted iteration that can end the run.
+// softhd._core.optimise: a tracking run (TrackingRun, the one `softhd optimise` makes) on a loaded
+// scene, with a Python callback after every accepted iteration that can end the run.
 
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
 #include "scene.hpp"
 #include "softhd/control/scene_target.hpp"
-#include "softhd/control/shape_objective.hpp"
-#include "softhd/control/shape_tracking.hpp"
+#include "softhd/control/tracking_run.hpp"
 #include "softhd/error.hpp"
-#include "softhd/fe/grid_sequencing.hpp"
 
 namespace softhd::python {
 
@@ -23,26 +21,15 @@ struct PyIteration {
 
 /// What optimise returns: the summary, with displacements as (num_nodes, dim) rows.
 struct PyOptimise {
-  ShapeTrackingSummary summary;
+  TrackingRunSummary summary;
   int dim = 3;
-  std::string target;  // the target's description
 };
 
-struct OptimiseArgs {
-  int max_iter = 200;
-  double max_seconds = 0.0, rel_tol = 1e-6, move_limit = 0.1;
-  std::string algorithm = "mma", particles = "nodes", volumes = "reference";
-  double tikhonov_mass = 0.0, tikhonov_grad = 0.0;
-  std::string coarse_level = "auto";  // two-level starts, as softhd optimise --coarse-level
-};
-
-SceneTarget make_target(const PyScene& s, const std::optional<Array>& points,
-                        const std::optional<Array>& volumes,
-                        const std::optional<std::string>& file) {
-  if (file) return file_target(*file, s.scene.dim());
-  if (!points) return scene_target(s.scene, s.assembler.mesh());
-  check_cloud(*points, volumes, "target");
-  PointCloud cloud = make_cloud(*points, volumes);
+/// The target given as arrays, checked against the scene's dimension.
+SceneTarget array_target(const PyScene& s, const Array& points,
+                         const std::optional<Array>& volumes) {
+  check_cloud(points, volumes, "target");
+  PointCloud cloud = make_cloud(points, volumes);
   if (cloud.dim() != s.scene.dim())
     throw InvalidArgument("the target cloud is " + std::to_string(cloud.dim()) +
                           "D but the scene's body is " + std::to_string(s.scene.dim()) + "D");
@@ -51,30 +38,11 @@ SceneTarget make_target(const PyScene& s, const std::optional<Array>& points,
 
 PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
                     const std::optional<Array>& volumes, const std::optional<std::string>& file,
-                    const OptimiseArgs& a, const HausdorffOptions& hausdorff,
-                    const py::object& callback, int threads) {
-  if (a.max_iter < 1) throw InvalidArgument("max_iter must be >= 1");
-  if (a.coarse_level != "auto" && a.coarse_level != "off")
-    throw InvalidArgument("coarse_level must be \"auto\" or \"off\", got \"" + a.coarse_level +
-                          "\"");
-  ShapeTrackingOptions to;
-  BoundedOptimizerOptions& opt = to.optimizer;
-  opt.max_iterations = a.max_iter;
-  opt.max_evaluations = 5 * a.max_iter + 20;  // as softhd optimise
-  opt.max_seconds = a.max_seconds;
-  opt.relative_change = a.rel_tol;
-  opt.algorithm = algorithm_from_string(a.algorithm);
-  opt.move_limit = a.move_limit;
-  to.validate();
-  ShapeObjectiveOptions so;
-  so.hausdorff = hausdorff;
-  so.particles = particles_from_string(a.particles);
-  so.volumes = particle_volumes_from_string(a.volumes);
-  so.tikhonov_mass = a.tikhonov_mass;
-  so.tikhonov_gradient = a.tikhonov_grad;
-  so.validate();
-  ThreadScope scope(threads);
-  ShapeTrackingCallbacks cb;
+                    TrackingRunOptions o, const py::object& callback) {
+  if (file) o.target_file = *file;
+  o.validate();
+  ThreadScope scope(o.threads);  // the FE assembly's threads too
+  TrackingRunCallbacks cb;
   if (!callback.is_none()) {
     // Returning False (the object itself, not any false value) ends the run; an exception
     // raised by the callback ends it too and propagates out of optimise.
@@ -85,20 +53,36 @@ PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
     };
   }
   py::gil_scoped_release release;
-  const SceneTarget target = make_target(s, points, volumes, file);
-  ShapeObjective objective(s.assembler, s.control, HausdorffTarget(target.cloud, so.hausdorff), so);
-  std::optional<fe::Assembler> coarse;  // as softhd optimise: a coarser mesh if there is one
-  if (a.coarse_level == "auto" && fe::grid_levels(s.scene, fe::GridSequencingOptions{}) > 0) {
-    coarse.emplace(fe::coarsened(s.scene).make_assembler());
-    objective.use_coarse_level(*coarse);
-  }
-  const Eigen::VectorXd m0 = s.control.constant(s.scene.control_initial);
-  const Eigen::VectorXd lower = s.control.constant(s.scene.control_lower);
-  const Eigen::VectorXd upper = s.control.constant(s.scene.control_upper);
+  SceneTarget target =
+      points ? array_target(s, *points, volumes) : tracking_target(s.scene, s.assembler.mesh(), o);
+  TrackingRun run(s.scene, s.assembler, s.control, std::move(target), o);
   PyOptimise out;
-  out.summary = track_shape(objective, lower, upper, m0, target.map_displacement, to, cb);
+  out.summary = run.run(cb);
   out.dim = s.scene.dim();
-  out.target = target.description;
+  return out;
+}
+
+/// The defaults of optimise's keyword arguments: TrackingRunOptions'.
+py::dict optimise_defaults() {
+  const TrackingRunOptions d;
+  py::dict out;
+  out["max_iter"] = d.max_iterations;
+  out["max_seconds"] = d.max_seconds;
+  out["rel_tol"] = d.relative_change;
+  out["algorithm"] = to_string(d.algorithm);
+  out["move_limit"] = d.move_limit;
+  out["particles"] = to_string(d.particles);
+  out["volumes"] = to_string(d.volumes);
+  out["alpha"] = d.params.alpha;
+  out["beta"] = d.params.beta;
+  out["gamma"] = d.params.gamma;
+  out["eps"] = d.params.epsilon;
+  out["method"] = to_string(d.method);
+  out["tol"] = d.tolerance;
+  out["tikhonov_mass"] = d.tikhonov_mass;
+  out["tikhonov_grad"] = d.tikhonov_gradient;
+  out["coarse_level"] = to_string(d.coarse_level);
+  out["threads"] = d.threads;
   return out;
 }
 
@@ -120,6 +104,14 @@ void bind_records(py::module_& m) {
                              [](const PyIteration& i) { return i.record.projected_gradient_norm; })
       .def_property_readonly("newton_iterations",
                              [](const PyIteration& i) { return i.record.newton_iterations; })
+      .def_property_readonly("factorizations",
+                             [](const PyIteration& i) { return i.record.factorizations; })
+      .def_property_readonly("seconds_state",
+                             [](const PyIteration& i) { return i.record.seconds_state; })
+      .def_property_readonly("seconds_distance",
+                             [](const PyIteration& i) { return i.record.seconds_distance; })
+      .def_property_readonly("seconds_adjoint",
+                             [](const PyIteration& i) { return i.record.seconds_adjoint; })
       .def_property_readonly("seconds", [](const PyIteration& i) { return i.record.seconds; })
       .def_property_readonly(
           "control", [](const PyIteration& i) { return i.control; },
@@ -171,26 +163,42 @@ void bind_optimise(py::module_& m) {
                                  h.push_back({it, Eigen::VectorXd()});
                                return h;
                              })
-      .def_property_readonly("target", [](const PyOptimise& r) { return r.target; })
+      .def_property_readonly("target", [](const PyOptimise& r) { return r.summary.target; })
       .def("__repr__",
            [](const PyOptimise& r) { return "OptimiseResult(" + r.summary.BriefReport() + ")"; });
 
+  // Every option None keeps TrackingRunOptions' default (softhd optimise's).
   m.def(
       "optimise",
       [](const PyScene& s, const std::optional<Array>& points, const std::optional<Array>& volumes,
-         const std::optional<std::string>& file, int max_iter, double max_seconds, double rel_tol,
-         const std::string& algorithm, double move_limit, const std::string& particles,
-         const std::string& volumes_kind, double alpha, double beta, double gamma, double eps,
-         const std::string& method, double tol, double tikhonov_mass, double tikhonov_grad,
-         const std::string& coarse_level, const py::object& callback, int threads) {
-        OptimiseArgs a{max_iter,  max_seconds,  rel_tol,       move_limit,    algorithm,
-                       particles, volumes_kind, tikhonov_mass, tikhonov_grad, coarse_level};
-        HausdorffOptions h;
-        h.params = {alpha, beta, gamma, eps};
-        h.method = method_from_string(method);
-        h.tolerance = tol;
-        h.threads = threads;
-        return optimise(s, points, volumes, file, a, h, callback, threads);
+         const std::optional<std::string>& file, std::optional<int> max_iter,
+         std::optional<double> max_seconds, std::optional<double> rel_tol,
+         const std::optional<std::string>& algorithm, std::optional<double> move_limit,
+         const std::optional<std::string>& particles,
+         const std::optional<std::string>& volumes_kind, std::optional<double> alpha,
+         std::optional<double> beta, std::optional<double> gamma, std::optional<double> eps,
+         const std::optional<std::string>& method, std::optional<double> tol,
+         std::optional<double> tikhonov_mass, std::optional<double> tikhonov_grad,
+         const std::optional<std::string>& coarse_level, const py::object& callback, int threads) {
+        TrackingRunOptions o;
+        if (max_iter) o.max_iterations = *max_iter;
+        if (max_seconds) o.max_seconds = *max_seconds;
+        if (rel_tol) o.relative_change = *rel_tol;
+        if (algorithm) o.algorithm = algorithm_from_string(*algorithm);
+        if (move_limit) o.move_limit = *move_limit;
+        if (particles) o.particles = particles_from_string(*particles);
+        if (volumes_kind) o.volumes = particle_volumes_from_string(*volumes_kind);
+        if (alpha) o.params.alpha = *alpha;
+        if (beta) o.params.beta = *beta;
+        if (gamma) o.params.gamma = *gamma;
+        if (eps) o.params.epsilon = *eps;
+        if (method) o.method = method_from_string(*method);
+        if (tol) o.tolerance = *tol;
+        if (tikhonov_mass) o.tikhonov_mass = *tikhonov_mass;
+        if (tikhonov_grad) o.tikhonov_gradient = *tikhonov_grad;
+        if (coarse_level) o.coarse_level = coarse_level_from_string(*coarse_level);
+        o.threads = threads;
+        return optimise(s, points, volumes, file, o, callback);
       },
       py::arg("scene"), py::arg("points").noconvert(), py::arg("volumes").noconvert(),
       py::arg("file"), py::kw_only(), py::arg("max_iter"), py::arg("max_seconds"),
@@ -198,6 +206,8 @@ void bind_optimise(py::module_& m) {
       py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("eps"),
       py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"), py::arg("tikhonov_grad"),
       py::arg("coarse_level"), py::arg("callback"), py::arg("threads"));
+  m.def("optimise_defaults", &optimise_defaults,
+        "The defaults of optimise's options (softhd optimise's: TrackingRunOptions).");
 }
 
 }  // namespace softhd::python

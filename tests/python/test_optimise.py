@@ -1,7 +1,13 @@
 """softhd.optimise: the callback sees every iteration and can end the run; results equal the
 command-line tool's."""
 
+import csv
+import inspect
 import json
+import math
+import os
+import re
+import subprocess
 
 import numpy as np
 import pytest
@@ -88,3 +94,88 @@ def test_arc_target_has_a_known_map(scene_file):
     assert r.floor_matched is not None and r.floor_matched > 0.0
     assert r.shape_error_max is not None and r.shape_error_rms <= r.shape_error_max
     assert "arc" in r.target
+
+
+SMALL_PLATE = {
+    "name": "small_plate",
+    "mesh": {"type": "box", "lower": [0, 0, 0], "upper": [2, 0.4, 0.2], "cells": [8, 2, 2],
+             "order": 1},
+    "material": {"model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5},
+    "fibers": [1, 0, 0], "clamp": ["x0"],
+    "control": {"space": "vertex", "lower": -1e5, "upper": 0, "initial": 0},
+    "target": {"kind": "arc", "angle": 1.2, "cells": [16, 4, 4]},
+}
+
+HISTORY_COLUMNS = ["iteration", "evaluation", "J", "rho", "A", "B", "rho_over_floor",
+                   "projected_gradient_norm", "newton_iterations", "factorizations"]
+
+
+def as_in_the_csv(value):
+    """A number as history.csv writes it: 10 significant digits (C++ precision 10, %.10g), a
+    non-finite one (a ratio without a floor) empty."""
+    return format(value, ".10g") if math.isfinite(value) else ""
+
+
+@pytest.mark.parametrize("cli_options, py_options", [
+    ([], {}),  # the defaults on both sides
+    (["--alpha", 5, "--eps", 2e-3, "--move-limit", 0.2, "--volumes", "deformed",
+      "--tikhonov-mass", 1e-12, "--rel-tol", 0, "--coarse-level", "off"],
+     dict(alpha=5, eps=2e-3, move_limit=0.2, volumes="deformed", tikhonov_mass=1e-12,
+          rel_tol=0, coarse_level="off")),
+])
+def test_history_equals_the_command_line_tools(scene_file, cli, tmp_path, cli_options,
+                                               py_options):
+    """The same scene and options through softhd optimise and softhd.optimise: history.csv
+    holds Python's iterations, number for number as written there (the timings aside)."""
+    path = scene_file(SMALL_PLATE)
+    cli("optimise", path, "--max-iter", 5, "--threads", 1, "--out", tmp_path / "run",
+        "--vtu-every", 0, "--quiet", *cli_options)
+    with open(tmp_path / "run" / "history.csv") as f:
+        rows = list(csv.DictReader(f))
+    r = softhd.optimise(softhd.Scene.load(path), max_iter=5, threads=1, **py_options)
+    assert len(rows) == len(r.history) == 5
+    for row, it in zip(rows, r.history):
+        for column in HISTORY_COLUMNS:
+            assert row[column] == as_in_the_csv(getattr(it, column)), (column, row, it)
+
+
+@pytest.fixture
+def cli_help():
+    """The help text of a softhd command."""
+    def run(command):
+        p = subprocess.run([os.environ["SOFTHD_CLI"], command, "--help"], capture_output=True,
+                           text=True)
+        assert p.returncode == 0, p.stderr
+        return p.stdout
+
+    return run
+
+
+def test_defaults_are_the_command_line_tools(cli_help):
+    """optimise_defaults() names every option of optimise, and each default is the one
+    softhd optimise --help states."""
+    defaults = softhd.optimise_defaults()
+    keywords = [p.name for p in inspect.signature(softhd.optimise).parameters.values()
+                if p.kind == p.KEYWORD_ONLY and p.name != "callback"]
+    assert sorted(defaults) == sorted(keywords)
+    text = " ".join(cli_help("optimise").split())
+    flags = {"max_iter": "--max-iter N iterations", "rel_tol": "--rel-tol R stop when J changes "
+             "by less than R relative", "algorithm": "--algorithm A mma | ccsaq | lbfgs | slsqp",
+             "move_limit": "bound range", "particles": "--particles P nodes | quadrature: the "
+             "moving cloud", "volumes": "--volumes V reference | deformed particle volumes",
+             "method": "--method M exact | tree: the distance's pair sums",
+             "tol": "relative error bound on every kernel sum", "tikhonov_mass":
+             "--tikhonov-mass M (M/2) int m^2", "tikhonov_grad": "--tikhonov-grad E (E/2) int "
+             "|grad m|^2", "coarse_level": "mesh with half the cells along the even axes"}
+    for name, before in flags.items():
+        m = re.search(re.escape(before) + r" \(default ([^;,:)]+)", text)
+        assert m, name
+        given = m.group(1).strip()
+        expected = defaults[name]
+        if isinstance(expected, str):
+            assert given == expected, name
+        else:
+            assert float(given) == expected, name
+    m = re.search(r"functional parameters \(default (\S+) (\S+) (\S+) (\S+)\)", text)
+    assert [float(v) for v in m.groups()] == [defaults[k] for k in ("alpha", "beta", "gamma",
+                                                                   "eps")]
