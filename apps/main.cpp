@@ -56,6 +56,9 @@ commands:
   optimise   fiber tension that makes a body match a target cloud
 
 Run 'softhd COMMAND --help' for the options of a command.
+
+exit status: 0 done; 1 a numerical failure on valid input (a state solve that does not
+converge); 2 bad input or refused, with one line on stderr naming the file, key or flag.
 )";
 
 /// A stream that drops what it is given (the error lines of ranks other than 0).
