@@ -37,10 +37,11 @@ import numpy as _np
 
 from . import _core
 from ._core import (DistanceResult, Error, FileError, ForwardResult, InvalidArgument, Iteration,
-                    NumericalError, OptimiseResult, ResourceError, Scene)
+                    Mesh, NumericalError, OptimiseResult, ResourceError, Scene)
 
-__all__ = ["distance", "hausdorff_nearest", "Target", "read_cloud", "write_cloud", "Scene",
-           "optimise", "optimise_defaults", "DistanceResult", "ForwardResult", "OptimiseResult",
+__all__ = ["distance", "hausdorff_nearest", "Target", "read_cloud", "write_cloud", "read_mesh",
+           "Scene", "Mesh", "optimise", "optimise_defaults", "DistanceResult", "ForwardResult",
+           "OptimiseResult",
            "Iteration", "Error", "InvalidArgument", "FileError", "ResourceError", "NumericalError"]
 
 
@@ -127,6 +128,34 @@ def write_cloud(path, points, volumes=None):
     """Writes a cloud: binary PLY if the name ends in .ply, text otherwise (both round-trip
     bit-exactly). volumes None: all 1."""
     _core.write_cloud(_os.fspath(path), _as_float64(points, "points"), _volumes(volumes, "volumes"))
+
+
+def read_mesh(path, order=None, scale=1.0):
+    """The :class:`Mesh` of a Gmsh file (MSH 4.1 ASCII or binary, MSH 2.2 ASCII), read as a
+    scene's ``"mesh": {"type": "gmsh", ...}`` reads it (docs/guide.md, "A body from Gmsh").
+
+    order: None (the file's), 1 (the elements' vertices only: P1/Q1 on a second-order file)
+    or 2 (second order; straight-sided midside nodes added to a first-order file, a
+    second-order file kept isoparametric). scale: multiplies the coordinates (1e-3 for a file
+    in mm and a body in m).
+
+    The result has ``nodes`` (N, dim) float64, ``elements`` (E, nodes per element) int64 in
+    softhd's local node order, ``cell_type`` ("tet4", "tet10", "hex8", "hex27", "tri3",
+    "tri6", "quad4", "quad9"), ``region_names`` (the physical volumes; physical surfaces in
+    2D) with ``element_region`` (E,) indices into them, ``boundary`` (a dict: physical group
+    one dimension below the body's -> sorted node ids), ``vertex_nodes``,
+    ``element_vertices`` and ``volume`` (softhd's quadrature). Nodes no element uses are
+    dropped; the others keep the file's order.
+
+    Raises FileError naming the file (and line or block) for a file that cannot be read or
+    solved on (malformed, unknown element type, mixed orders, no volume elements, inverted
+    elements), InvalidArgument for an order other than None, 1, 2 or a scale <= 0.
+    """
+    if order is None:
+        order = 0
+    elif order not in (1, 2) or isinstance(order, bool):
+        raise InvalidArgument(f"read_mesh: order must be None, 1 or 2, got {order!r}")
+    return _core.read_mesh(_os.fspath(path), order, float(scale))
 
 
 def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=None,

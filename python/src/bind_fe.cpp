@@ -6,6 +6,7 @@
 
 #include <sstream>
 
+#include "mesh.hpp"
 #include "scene.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/forward.hpp"
@@ -121,6 +122,9 @@ void bind_fe(py::module_& m) {
       .def_property_readonly("dim", [](const PyScene& s) { return s.scene.dim(); })
       .def_property_readonly("nodes",
                              [](const PyScene& s) { return to_numpy(s.assembler.mesh().nodes); })
+      .def_property_readonly(
+          "mesh", [](const PyScene& s) { return mesh_of(s.assembler); },
+          "The body's Mesh (a copy): the generated box, or the scene's Gmsh file as read")
       .def_property_readonly("num_controls", [](const PyScene& s) { return s.control.size(); })
       .def_property_readonly(
           "control_positions",

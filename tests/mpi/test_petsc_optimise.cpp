@@ -21,6 +21,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -174,6 +176,53 @@ TEST(PetscOptimise, DISABLED_BendingHistoryEqualsSerial) {
   EXPECT_LE(worst_m, 1e-8);
   EXPECT_LE(final_m, 1e-8);
   EXPECT_LE(final_rho, 1e-8);
+  EXPECT_EQ(petsc.summary.evaluations, serial.summary.evaluations);
+}
+
+// The finger of data/scenes/finger.json (a Gmsh mesh of tetrahedra, two materials, its
+// target solved on a finer mesh) on the scene's mesh read at order 1 (P1: 778 nodes, 2 300
+// free dofs, for the suite's time; the P2 scene's states are compared in
+// tests/fe/test_petsc_state.cpp).
+fe::Scene small_finger() {
+  const std::string path = std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/finger.json";
+  std::ifstream in(path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string p2 = R"("order": 2)";
+  EXPECT_NE(text.find(p2), std::string::npos);
+  text.replace(text.find(p2), p2.size(), R"("order": 1)");
+  return fe::parse_scene(text, path);
+}
+
+// Three MMA iterations on the finger, PETSc (MUMPS) against the serial run, iteration by
+// iteration, each rank summing the distance alone as the serial run does (what is tested is
+// the state backend on an unstructured partition). Measured on 2 ranks: J to 3.1e-13 and m
+// to 1.4e-10 here (the same with the pair sums shared over the ranks); on the P2 finger J to
+// 3.6e-11 and m to 1.7e-9, but with the pair sums shared (world_share()) 1.7e-7 in J at the
+// second iteration while the controls still agreed to 1.3e-9: the shared distance, not the
+// state, differs there (measured twice, not analysed; docs/scaling.md §5).
+TEST(PetscOptimise, FingerHistoryEqualsSerial) {
+  const Problem p(small_finger());
+  const std::string r = std::to_string(rank());
+  const RunRecord serial =
+      optimise(p, {StateBackend::kCholmod, nullptr, 3, scratch("finger_serial" + r), false});
+  ASSERT_EQ(serial.J.size(), 3u) << serial.summary.termination;
+  const RunRecord petsc =
+      optimise(p, {StateBackend::kPetscMumps, nullptr, 3, scratch("finger_petsc" + r), false});
+  ASSERT_EQ(petsc.J.size(), serial.J.size()) << petsc.summary.termination;
+  double worst_J = 0.0, worst_m = 0.0;
+  for (size_t k = 0; k < serial.J.size(); ++k) {
+    worst_J = std::max(worst_J, std::abs(petsc.J[k] - serial.J[k]) / std::abs(serial.J[k]));
+    worst_m = std::max(worst_m, relative(petsc.m[k], serial.m[k]));
+  }
+  if (rank() == 0)
+    std::printf(
+        "finger (P1), %zu iterations (%d / %d evaluations), %d ranks: rho %.6e -> J %.6e, max "
+        "rel |dJ| %.3e, max |dm|/|m| %.3e\n",
+        serial.J.size(), serial.summary.evaluations, petsc.summary.evaluations, world_size(),
+        serial.summary.rho_start, serial.J.back(), worst_J, worst_m);
+  EXPECT_LT(petsc.J.back(), 0.8 * petsc.summary.rho_start);  // it optimises
+  EXPECT_LE(worst_J, 1e-8);
+  EXPECT_LE(worst_m, 1e-8);
   EXPECT_EQ(petsc.summary.evaluations, serial.summary.evaluations);
 }
 

@@ -334,4 +334,17 @@ FiberField gmsh_fiber_field(const io::MshFile& f, const std::string& name,
   return field;
 }
 
+Mesh read_gmsh_mesh(const std::string& path, const GmshMeshOptions& options, double* volume) {
+  options.validate();
+  const io::MshFile file = io::read_msh(path);  // FileError names the file
+  try {
+    Mesh m = mesh_from_gmsh(file, options);
+    const ReferenceGeometry g(m, GradientStorage::kOnDemand);  // checks det dX/dξ > 0
+    if (volume) *volume = g.weights().sum();
+    return m;
+  } catch (const InvalidArgument& e) {
+    throw FileError(path + ": " + e.what());
+  }
+}
+
 }  // namespace softhd::fe

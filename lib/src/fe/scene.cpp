@@ -185,24 +185,12 @@ void parse_gmsh_mesh(const Reader& r, const json& mesh, Scene* s) {
   }
   const std::filesystem::path dir = std::filesystem::path(s->source).parent_path();
   s->mesh_file = (dir / r.string(mesh, "file", "mesh.file")).lexically_normal().string();
-  const io::MshFile file = io::read_msh(s->mesh_file);  // FileError names the file
-  try {
-    s->gmsh_options = o;
-    auto m = std::make_shared<Mesh>(mesh_from_gmsh(file, o));
-    s->file_mesh = m;
-  } catch (const InvalidArgument& e) {
-    throw FileError(s->mesh_file + ": " + e.what());
-  }
+  s->gmsh_options = o;
+  s->file_mesh = std::make_shared<Mesh>(read_gmsh_mesh(s->mesh_file, o, &s->volume));
   const Mesh& m = *s->file_mesh;
   s->order = m.order;
   s->lower = m.nodes.colwise().minCoeff().transpose();
   s->upper = m.nodes.colwise().maxCoeff().transpose();
-  try {
-    const ReferenceGeometry g(m, GradientStorage::kOnDemand);  // checks det dX/dξ > 0
-    s->volume = g.weights().sum();
-  } catch (const InvalidArgument& e) {
-    throw FileError(s->mesh_file + ": " + e.what());
-  }
 }
 
 // "material" (the whole body) or "materials" (one per region of the mesh, by name).

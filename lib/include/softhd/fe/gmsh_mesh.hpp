@@ -34,6 +34,13 @@ struct GmshMeshOptions {
 /// Unused nodes (e.g. geometry points) are dropped; nodes are numbered in file order.
 Mesh mesh_from_gmsh(const io::MshFile& file, const GmshMeshOptions& options = {});
 
+/// The mesh of the Gmsh file at `path` (io::read_msh, then mesh_from_gmsh), with
+/// det(dX/dξ) > 0 checked at the cell type's default quadrature points; `volume`, if not
+/// null, gets |Ω₀| = Σ w_q det J0 there. Throws InvalidArgument for invalid options, and
+/// FileError with one line naming the file (and line or block) for anything wrong with it.
+Mesh read_gmsh_mesh(const std::string& path, const GmshMeshOptions& options = {},
+                    double* volume = nullptr);
+
 /// The fibre field of the file's $ElementData or $NodeData block `name` (3 components) on
 /// mesh_from_gmsh(file, options): per element, or per node (a new midside node gets the mean
 /// of its support's). Throws InvalidArgument naming the block and what is wrong (missing,

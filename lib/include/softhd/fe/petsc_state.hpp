@@ -3,11 +3,13 @@
 /// The state equation on PETSc, distributed over the ranks of PETSC_COMM_WORLD (built only
 /// with SOFTHD_WITH_MPI=ON; docs/scaling.md §4-§8).
 ///
-/// Partition: the box mesh is cut into slabs of cells along its axis with the most cells,
-/// one per rank; each rank builds only its slab (mesh, quadrature data, element maps) and
-/// assembles its elements into a distributed MATAIJ matrix (block size dim when every
-/// node is free or wholly fixed), rows numbered plane by plane along the slab axis so that
-/// each rank owns one contiguous range.
+/// Partition (any body: a box or a Gmsh file's mesh): the elements are cut among the ranks by
+/// recursive coordinate bisection of their centroids (on a box, between cell planes: slabs
+/// on 2 ranks); each rank builds the assembler of its elements only (mesh, quadrature data,
+/// materials and fibres of its regions) and assembles them into a distributed MATAIJ matrix
+/// (block size dim when every node is free or wholly fixed). A node shared by several ranks
+/// belongs to the lowest; rows are numbered rank by rank, each rank's nodes in coordinate
+/// order along the first cut's axis, so that each rank owns one contiguous range.
 ///
 /// Newton: the serial method of fe/newton.hpp (docs/formulation.md §3.6) on distributed
 /// vectors: the same energy line search (the same EnergyLineSearch code, on each rank's
@@ -58,8 +60,8 @@ struct PetscStateOptions {
 struct PetscStateLayout {
   int rank = 0;                     ///< this rank
   int size = 1;                     ///< the number of ranks
-  int slab_axis = 0;                ///< the axis the slabs cut
-  Eigen::Index local_elements = 0;  ///< elements of this rank's slab
+  int cut_axis = 0;                 ///< the first cut's axis (0 on one rank)
+  Eigen::Index local_elements = 0;  ///< elements of this rank's part
   Eigen::Index owned_rows = 0;      ///< free dofs owned by this rank
   Eigen::Index global_rows = 0;     ///< free dofs of the whole mesh
   int block_size = 1;               ///< block size of the matrix
@@ -71,7 +73,7 @@ struct PetscStateLayout {
 class PetscStateSolver final : public StateEquation {
  public:
   /// Throws InvalidArgument for invalid options, a backend other than the PETSc ones, a mesh
-  /// with fewer cells along its longest axis than ranks, or if PETSc is not initialised.
+  /// with fewer elements than ranks, or if PETSc is not initialised.
   explicit PetscStateSolver(const Scene& scene, PetscStateOptions options = {});
   ~PetscStateSolver() override;
 
@@ -97,7 +99,7 @@ class PetscStateSolver final : public StateEquation {
   /// The current state over the whole mesh, on every rank (gathered).
   State state() const override;
   /// Makes the whole-mesh `state` (the same on every rank) the start of the next solve:
-  /// each rank takes its owned rows and its slab's control.
+  /// each rank takes its owned rows and its part's control.
   void set_state(const State& state) override;
   /// Forgets the path tangent and the last shift (the matrix and KSP objects are kept).
   void reset() override;

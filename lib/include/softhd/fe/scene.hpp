@@ -74,8 +74,7 @@ struct Scene {
 
   /// The body's dimension (2 or 3).
   int dim() const { return static_cast<int>(lower.size()); }
-  /// True for a structured box (grid sequencing, arc targets and the PETSc slab partition
-  /// need one).
+  /// True for a structured box (grid sequencing and arc targets need one).
   bool is_box() const { return file_mesh == nullptr; }
   /// The body's mesh: the structured box mesh, or a copy of the file's.
   Mesh make_mesh() const;

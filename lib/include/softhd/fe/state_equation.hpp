@@ -92,9 +92,9 @@ struct StateSolverOptions {
 
 /// The state solver of `options.backend` for the body of `scene` (which must outlive it).
 /// The serial one uses `assembler` and `control` (the scene's, whole mesh) if given — they
-/// must then outlive it — and else makes its own; the PETSc ones build their slab from
-/// the scene and ignore them. Throws InvalidArgument for invalid options, and for a PETSc
-/// backend in a build without SOFTHD_WITH_MPI or before PETSc is initialised. A zero
+/// must then outlive it — and else makes its own; the PETSc ones build their part of
+/// the body from the scene and ignore them. Throws InvalidArgument for invalid options, and for a
+/// PETSc backend in a build without SOFTHD_WITH_MPI or before PETSc is initialised. A zero
 /// options.newton.absolute_tolerance is replaced by residual_floor() of the scene's body, so
 /// that a zero or tiny control converges at once instead of chasing round-off.
 std::unique_ptr<StateEquation> make_state_solver(const Scene& scene,

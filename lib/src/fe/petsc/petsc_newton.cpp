@@ -78,7 +78,7 @@ struct DistributedNewton::Algebra {
     if (!tangent_is_current) n.assemble(u, m, nullptr, nullptr, true, summary);
     n.path_tangent_ = true;
   }
-  bool speaks() const { return n.system_.slab().rank == 0; }
+  bool speaks() const { return n.system_.part().rank == 0; }
   const char* name() const { return "newton(petsc)"; }
   bool assemble_path_tangent(const Eigen::VectorXd& u, const Eigen::MatrixXd& m) {
     if (n.assemble(u, m, nullptr, nullptr, true, summary)) n.path_tangent_ = true;

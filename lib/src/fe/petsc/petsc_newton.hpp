@@ -15,7 +15,7 @@ class DistributedNewton {
  public:
   DistributedNewton(DistributedSystem& system, const NewtonOptions& options);
 
-  /// Moves (*u, *m_state) (owned rows; the slab's control at its quadrature points) to
+  /// Moves (*u, *m_state) (owned rows; the part's control at its quadrature points) to
   /// equilibrium with m_qp, ramping from *m_state. On failure they stay at the last
   /// converged load step.
   NewtonSummary solve(const Eigen::MatrixXd& m_qp, Eigen::VectorXd* u, Eigen::MatrixXd* m_state);

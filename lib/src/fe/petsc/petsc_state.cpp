@@ -37,23 +37,23 @@ struct PetscStateSolver::Impl {
         control(system.assembler().mesh(), system.assembler().geometry(), scene.control_kind,
                 scene.control_regions),
         global_controls(scene.control_kind == ControlKind::kVertex
-                            ? system.slab().num_global_vertices
-                            : system.slab().num_global_elements),
+                            ? system.part().num_global_vertices
+                            : system.part().num_global_elements),
         newton(system, options.newton),
         u(Eigen::VectorXd::Zero(system.owned())),
         m_qp(Eigen::MatrixXd::Zero(system.assembler().mesh().num_elements(),
                                    system.assembler().geometry().points_per_element())) {}
 
-  /// The slab's ids of the global controls (vertices or elements).
+  /// The part's ids of the global controls (vertices or elements).
   const std::vector<int>& control_ids() const {
-    return control.kind() == ControlKind::kVertex ? system.slab().global_vertex
-                                                  : system.slab().global_element;
+    return control.kind() == ControlKind::kVertex ? system.part().global_vertex
+                                                  : system.part().global_element;
   }
-  /// Sums per-slab E by nq values into the whole mesh's (global element order).
+  /// Sums per-part E by nq values into the whole mesh's (global element order).
   Eigen::MatrixXd gather_elements(const Eigen::MatrixXd& local) const {
-    Eigen::MatrixXd all = Eigen::MatrixXd::Zero(system.slab().num_global_elements, local.cols());
+    Eigen::MatrixXd all = Eigen::MatrixXd::Zero(system.part().num_global_elements, local.cols());
     for (Eigen::Index e = 0; e < local.rows(); ++e)
-      all.row(system.slab().global_element[e]) = local.row(e);
+      all.row(system.part().global_element[e]) = local.row(e);
     MPI_Allreduce(MPI_IN_PLACE, all.data(), static_cast<int>(all.size()), MPI_DOUBLE, MPI_SUM,
                   PETSC_COMM_WORLD);
     return all;
@@ -61,11 +61,11 @@ struct PetscStateSolver::Impl {
 
   PetscStateOptions options;
   DistributedSystem system;
-  ControlSpace control;  ///< the slab's
+  ControlSpace control;  ///< the part's
   Eigen::Index global_controls;
   DistributedNewton newton;
   Eigen::VectorXd u;     ///< owned rows
-  Eigen::MatrixXd m_qp;  ///< the slab's control at its quadrature points
+  Eigen::MatrixXd m_qp;  ///< the part's control at its quadrature points
   bool solved = false;   ///< the state is the last solve's (not set since)
 };
 
@@ -127,14 +127,14 @@ State PetscStateSolver::state() const { return {displacement(), control_at_quadr
 
 void PetscStateSolver::set_state(const State& state) {
   Impl& s = *impl_;
-  const petsc_detail::SlabPartition& slab = s.system.slab();
-  if (state.u.size() != slab.num_global_nodes * slab.mesh.dim ||
-      state.m_qp.rows() != slab.num_global_elements || state.m_qp.cols() != s.m_qp.cols())
+  const petsc_detail::Partition& part = s.system.part();
+  if (state.u.size() != part.num_global_nodes * part.mesh.dim ||
+      state.m_qp.rows() != part.num_global_elements || state.m_qp.cols() != s.m_qp.cols())
     throw InvalidArgument("PETSc state: set_state with a state of another problem");
   const std::vector<std::int64_t>& dofs = s.system.numbering().owned_global_dof;
   for (Eigen::Index i = 0; i < s.u.size(); ++i) s.u[i] = state.u[dofs[i]];
   for (Eigen::Index e = 0; e < s.m_qp.rows(); ++e)
-    s.m_qp.row(e) = state.m_qp.row(slab.global_element[e]);
+    s.m_qp.row(e) = state.m_qp.row(part.global_element[e]);
   s.solved = false;  // the kept tangent is not this state's
 }
 
@@ -147,8 +147,8 @@ int PetscStateSolver::adjoint_factorizations() const { return impl_->newton.adjo
 
 Eigen::VectorXd PetscStateSolver::displacement() const {
   const Impl& s = *impl_;
-  const int dim = s.system.slab().mesh.dim;
-  Eigen::VectorXd all = Eigen::VectorXd::Zero(s.system.slab().num_global_nodes * dim);
+  const int dim = s.system.part().mesh.dim;
+  Eigen::VectorXd all = Eigen::VectorXd::Zero(s.system.part().num_global_nodes * dim);
   const std::vector<std::int64_t>& dofs = s.system.numbering().owned_global_dof;
   for (size_t i = 0; i < dofs.size(); ++i) all[dofs[i]] = s.u[static_cast<Eigen::Index>(i)];
   MPI_Allreduce(MPI_IN_PLACE, all.data(), static_cast<int>(all.size()), MPI_DOUBLE, MPI_SUM,
@@ -158,7 +158,7 @@ Eigen::VectorXd PetscStateSolver::displacement() const {
 
 Eigen::VectorXd PetscStateSolver::gradient(const Eigen::VectorXd& g) {
   Impl& s = *impl_;
-  const Eigen::Index num_dofs = s.system.slab().num_global_nodes * s.system.slab().mesh.dim;
+  const Eigen::Index num_dofs = s.system.part().num_global_nodes * s.system.part().mesh.dim;
   if (g.size() != num_dofs)
     throw InvalidArgument("PETSc state: g must have " + std::to_string(num_dofs) + " entries");
   if (!converged()) throw InvalidArgument("PETSc state: gradient() needs a converged solve");
@@ -167,7 +167,7 @@ Eigen::VectorXd PetscStateSolver::gradient(const Eigen::VectorXd& g) {
   for (Eigen::Index i = 0; i < b.size(); ++i) b[i] = g[dofs[i]];
   const Eigen::VectorXd lambda = s.newton.solve_converged_tangent(b);
   const Eigen::VectorXd local = control_gradient(
-      s.system.assembler(), s.control, s.system.slab_vector(s.u), s.system.slab_vector(lambda));
+      s.system.assembler(), s.control, s.system.local_vector(s.u), s.system.local_vector(lambda));
   Eigen::VectorXd all = Eigen::VectorXd::Zero(s.global_controls);
   const std::vector<int>& ids = s.control_ids();
   for (Eigen::Index k = 0; k < local.size(); ++k) all[ids[k]] += local[k];
@@ -179,18 +179,18 @@ Eigen::VectorXd PetscStateSolver::gradient(const Eigen::VectorXd& g) {
 double PetscStateSolver::energy() const {
   const Impl& s = *impl_;
   double e = 0.0;
-  s.system.assembler().evaluate(s.system.slab_vector(s.u), s.m_qp, &e, nullptr, nullptr);
+  s.system.assembler().evaluate(s.system.local_vector(s.u), s.m_qp, &e, nullptr, nullptr);
   return s.system.sum(e);
 }
 
 double PetscStateSolver::deformed_volume() const {
   const Impl& s = *impl_;
-  return s.system.sum(s.system.assembler().deformed_volume(s.system.slab_vector(s.u)));
+  return s.system.sum(s.system.assembler().deformed_volume(s.system.local_vector(s.u)));
 }
 
 double PetscStateSolver::min_jacobian() const {
   const Impl& s = *impl_;
-  return s.system.min(s.system.assembler().min_jacobian(s.system.slab_vector(s.u)));
+  return s.system.min(s.system.assembler().min_jacobian(s.system.local_vector(s.u)));
 }
 
 Eigen::MatrixXd PetscStateSolver::control_at_quadrature() const {
@@ -199,15 +199,15 @@ Eigen::MatrixXd PetscStateSolver::control_at_quadrature() const {
 
 Eigen::MatrixXd PetscStateSolver::jacobians() const {
   const Impl& s = *impl_;
-  return s.gather_elements(s.system.assembler().jacobians(s.system.slab_vector(s.u)));
+  return s.gather_elements(s.system.assembler().jacobians(s.system.local_vector(s.u)));
 }
 
 PetscStateLayout PetscStateSolver::layout() const {
   const DistributedSystem& sys = impl_->system;
   PetscStateLayout l;
-  l.rank = sys.slab().rank;
-  l.size = sys.slab().size;
-  l.slab_axis = sys.slab().axis;
+  l.rank = sys.part().rank;
+  l.size = sys.part().size;
+  l.cut_axis = sys.part().axis;
   l.local_elements = sys.assembler().mesh().num_elements();
   l.owned_rows = sys.owned();
   l.global_rows = sys.numbering().num_global;

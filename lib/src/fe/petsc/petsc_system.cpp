@@ -32,30 +32,32 @@ int comm_size() {
   return s;
 }
 
-SlabPartition checked_partition(const Scene& scene) {
+Partition checked_partition(const Scene& scene) {
   PetscBool initialised = PETSC_FALSE;
   PetscInitialized(&initialised);
   if (!initialised)
     throw InvalidArgument("PETSc state: PETSc is not initialised (call PetscInitialize first)");
-  return make_slab_partition(scene, comm_rank(), comm_size());
+  return make_partition(scene, comm_rank(), comm_size());
 }
 
 }  // namespace
 
 DistributedSystem::DistributedSystem(const Scene& scene, StateBackend backend,
                                      int max_krylov_iterations)
-    : slab_(checked_partition(scene)),
-      assembler_(std::make_unique<Assembler>(slab_.mesh, scene.material, scene.fibers,
-                                             slab_.constraints, AssemblerStorage::kLean)),
-      numbering_(number_free_dofs(scene, slab_, assembler_->dofs())),
+    : part_(checked_partition(scene)),
+      assembler_(std::make_unique<Assembler>(part_.mesh, scene.materials, part_.fibers,
+                                             scene.constraints, AssemblerStorage::kLean,
+                                             scene.quadrature_degree)),
       backend_(backend),
       max_krylov_iterations_(max_krylov_iterations),
-      local_rows_(numbering_.local_to_global.begin(), numbering_.local_to_global.end()) {
-  int whole = numbering_.whole_nodes ? 1 : 0, all_whole = 0;
+      local_rows_(part_.numbering.local_to_global.begin(), part_.numbering.local_to_global.end()) {
+  if (assembler_->dofs().num_free != static_cast<Eigen::Index>(local_rows_.size()))
+    throw Error("PETSc state: the assembler's free dofs differ from the partition's (a bug)");
+  int whole = numbering().whole_nodes ? 1 : 0, all_whole = 0;
   MPI_Allreduce(&whole, &all_whole, 1, MPI_INT, MPI_MIN, comm());
   block_size_ = all_whole ? scene.dim() : 1;
   const auto n = static_cast<PetscInt>(owned());
-  const auto N = static_cast<PetscInt>(numbering_.num_global);
+  const auto N = static_cast<PetscInt>(numbering().num_global);
   SOFTHD_PETSC(VecCreate(comm(), &global_));
   SOFTHD_PETSC(VecSetSizes(global_, n, N));
   SOFTHD_PETSC(VecSetBlockSize(global_, block_size_));
@@ -80,44 +82,6 @@ DistributedSystem::~DistributedSystem() {
   VecDestroy(&global_);
 }
 
-namespace {
-
-// Calls visit(i, j) once for every pair of slab free dofs (i, j) that share an element:
-// the nonzeros of the slab's tangent, both triangles. Node by node through a node-to-element
-// incidence, so it needs O(nodes + elements) memory, not a pattern.
-template <class Visit>
-void for_each_coupling(const Mesh& mesh, const DofMap& dofs, Visit&& visit) {
-  const int dim = mesh.dim, nen = mesh.nodes_per_element();
-  const Eigen::Index nn = mesh.num_nodes(), E = mesh.num_elements();
-  std::vector<Eigen::Index> first(nn + 1, 0);
-  for (Eigen::Index e = 0; e < E; ++e)
-    for (int a = 0; a < nen; ++a) ++first[mesh.elements(e, a) + 1];
-  for (Eigen::Index n = 0; n < nn; ++n) first[n + 1] += first[n];
-  std::vector<Eigen::Index> incident(first[nn]), next(first.begin(), first.end() - 1);
-  for (Eigen::Index e = 0; e < E; ++e)
-    for (int a = 0; a < nen; ++a) incident[next[mesh.elements(e, a)]++] = e;
-  std::vector<Eigen::Index> seen(nn, -1);
-  std::vector<int> columns;
-  for (Eigen::Index n = 0; n < nn; ++n) {
-    columns.clear();
-    for (Eigen::Index k = first[n]; k < first[n + 1]; ++k)
-      for (int a = 0; a < nen; ++a) {
-        const Eigen::Index m = mesh.elements(incident[k], a);
-        if (seen[m] == n) continue;
-        seen[m] = n;
-        for (int l = 0; l < dim; ++l)
-          if (dofs.free_index[m * dim + l] >= 0) columns.push_back(dofs.free_index[m * dim + l]);
-      }
-    for (int c = 0; c < dim; ++c) {
-      const int i = dofs.free_index[n * dim + c];
-      if (i >= 0)
-        for (int j : columns) visit(i, j);
-    }
-  }
-}
-
-}  // namespace
-
 void DistributedSystem::add_to_global(const double* local) {
   PetscInt n = 0;
   SOFTHD_PETSC(VecGetLocalSize(local_, &n));
@@ -131,36 +95,13 @@ void DistributedSystem::add_to_global(const double* local) {
 }
 
 void DistributedSystem::create_matrix() {
-  // Nonzeros per row of the slab's tangent, split into the diagonal and off-diagonal blocks
-  // of the row's owner, summed over the ranks that share the row. A pair of dofs that both
-  // lie on an interface plane couples through the elements on either side; it is counted
-  // only by the plane's owner, so the counts are exact.
-  const PetscInt* ranges = nullptr;
-  SOFTHD_PETSC(VecGetOwnershipRanges(global_, &ranges));
-  const int size = comm_size(), rank = comm_rank();
-  auto owner = [&](PetscInt row) {
-    return static_cast<int>(std::upper_bound(ranges, ranges + size + 1, row) - ranges) - 1;
-  };
-  std::vector<double> d(local_rows_.size(), 0.0), o(local_rows_.size(), 0.0);
-  for_each_coupling(assembler_->mesh(), assembler_->dofs(), [&](int i, int j) {
-    const int w = owner(local_rows_[i]);
-    if (w != rank && owner(local_rows_[j]) != rank) return;
-    const bool diag = local_rows_[j] >= ranges[w] && local_rows_[j] < ranges[w + 1];
-    (diag ? d : o)[i] += 1.0;
-  });
+  // Exact nonzero counts per owned row, from the whole mesh (make_partition).
   const auto n = static_cast<PetscInt>(owned());
-  const auto N = static_cast<PetscInt>(numbering_.num_global);
-  std::vector<PetscInt> dnz(n), onz(n);
-  for (int pass = 0; pass < 2; ++pass) {
-    add_to_global(pass == 0 ? d.data() : o.data());
-    const PetscScalar* g = nullptr;
-    SOFTHD_PETSC(VecGetArrayRead(global_, &g));
-    for (PetscInt i = 0; i < n; ++i) {
-      const auto v = static_cast<PetscInt>(std::lround(g[i]));
-      (pass == 0 ? dnz : onz)[i] = std::min(v, pass == 0 ? n : N - n);
-    }
-    SOFTHD_PETSC(VecRestoreArrayRead(global_, &g));
-  }
+  const auto N = static_cast<PetscInt>(numbering().num_global);
+  const std::vector<PetscInt> dnz(numbering().diagonal_nonzeros.begin(),
+                                  numbering().diagonal_nonzeros.end());
+  const std::vector<PetscInt> onz(numbering().off_diagonal_nonzeros.begin(),
+                                  numbering().off_diagonal_nonzeros.end());
   SOFTHD_PETSC(MatCreate(comm(), &K_));
   SOFTHD_PETSC(MatSetSizes(K_, n, n, N, N));
   SOFTHD_PETSC(MatSetBlockSize(K_, block_size_));
@@ -178,13 +119,13 @@ namespace {
 // coordinates when every node is wholly free or fixed (block size dim), else built here
 // (translations and rotations restricted to the free dofs) and orthonormalised.
 MatNullSpace rigid_body_modes(const DistributedSystem& s, Vec layout) {
-  const int dim = s.slab().mesh.dim;
+  const int dim = s.part().mesh.dim;
   const DofMap& dofs = s.assembler().dofs();
   const std::vector<int>& owned = s.numbering().owned_local;
   auto coordinate = [&](size_t i, int* comp) {
     const Eigen::Index dof = dofs.free_dofs[owned[i]];
     *comp = static_cast<int>(dof % dim);
-    return s.slab().mesh.nodes.row(dof / dim);
+    return s.part().mesh.nodes.row(dof / dim);
   };
   MatNullSpace space = nullptr;
   if (s.block_size() == dim) {
@@ -249,7 +190,7 @@ void DistributedSystem::create_solver() {
   SOFTHD_PETSC(KSPSetFromOptions(ksp_));
 }
 
-Eigen::VectorXd DistributedSystem::slab_vector(const Eigen::VectorXd& u) const {
+Eigen::VectorXd DistributedSystem::local_vector(const Eigen::VectorXd& u) const {
   PetscScalar* g = nullptr;
   SOFTHD_PETSC(VecGetArray(global_, &g));
   std::copy(u.data(), u.data() + u.size(), g);
@@ -323,7 +264,7 @@ class MatrixSink final : public ElementMatrixSink {
 
 bool DistributedSystem::evaluate(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp,
                                  double* energy, Eigen::VectorXd* residual, bool tangent) {
-  const Eigen::VectorXd ul = slab_vector(u);
+  const Eigen::VectorXd ul = local_vector(u);
   double e = 0.0;
   Eigen::VectorXd r;
   MatrixSink sink(K_, *assembler_, local_rows_);

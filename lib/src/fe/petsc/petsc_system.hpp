@@ -1,5 +1,5 @@
 #pragma once
-// The distributed discrete system of the PETSc state backend (internal): one rank's slab
+// The distributed discrete system of the PETSc state backend (internal): one rank's part's
 // assembler (built without a serial sparsity pattern: element tangents go straight into the
 // distributed matrix), the global free-dof numbering, the distributed tangent (MATAIJ), and
 // the KSP that solves with it. Vectors cross this interface as Eigen vectors of the rank's owned
@@ -11,7 +11,7 @@
 #include <memory>
 #include <vector>
 
-#include "slab_partition.hpp"
+#include "partition.hpp"
 #include "softhd/fe/assembly.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/fe/state_backend.hpp"
@@ -39,16 +39,18 @@ class DistributedSystem {
   DistributedSystem(const DistributedSystem&) = delete;
   DistributedSystem& operator=(const DistributedSystem&) = delete;
 
-  const SlabPartition& slab() const { return slab_; }
+  const Partition& part() const { return part_; }
   const Assembler& assembler() const { return *assembler_; }
-  const FreeNumbering& numbering() const { return numbering_; }
-  Eigen::Index owned() const { return static_cast<Eigen::Index>(numbering_.owned_local.size()); }
+  const FreeNumbering& numbering() const { return part_.numbering; }
+  Eigen::Index owned() const {
+    return static_cast<Eigen::Index>(part_.numbering.owned_local.size());
+  }
   int block_size() const { return block_size_; }
   /// True for the iterative backend (CG + GAMG).
   bool iterative() const { return backend_ == StateBackend::kPetscGamg; }
 
   /// Π, R (owned rows) and/or the tangent (kept in the matrix) at the owned displacement
-  /// u and the slab's control m_qp; null outputs are skipped. Returns false (on every rank)
+  /// u and the part's control m_qp; null outputs are skipped. Returns false (on every rank)
   /// if det F <= 0 at a quadrature point of any rank; *energy is then +inf.
   bool evaluate(const Eigen::VectorXd& u, const Eigen::MatrixXd& m_qp, double* energy,
                 Eigen::VectorXd* residual, bool tangent);
@@ -58,8 +60,8 @@ class DistributedSystem {
   LinearSolveReport solve(const Eigen::VectorXd& b, double rtol, bool allow_shift,
                           Eigen::VectorXd* x);
 
-  /// The slab's full displacement (slab num_dofs, fixed entries zero) of owned values u.
-  Eigen::VectorXd slab_vector(const Eigen::VectorXd& u) const;
+  /// The part's full displacement (its num_dofs, fixed entries zero) of owned values u.
+  Eigen::VectorXd local_vector(const Eigen::VectorXd& u) const;
   ///@{
   /// Reductions over ranks.
   double dot(const Eigen::VectorXd& a, const Eigen::VectorXd& b) const;
@@ -80,13 +82,12 @@ class DistributedSystem {
   /// One attempt at K x = b (K possibly shifted); true if it succeeded.
   bool attempt(Vec b, Vec x, double rtol, LinearSolveReport* report);
 
-  SlabPartition slab_;
+  Partition part_;
   std::unique_ptr<Assembler> assembler_;
-  FreeNumbering numbering_;
   StateBackend backend_;
   int max_krylov_iterations_;
   int block_size_ = 1;
-  std::vector<PetscInt> local_rows_;  // global row of each slab free dof
+  std::vector<PetscInt> local_rows_;  // global row of each local free dof
   Mat K_ = nullptr;
   Vec global_ = nullptr, global2_ = nullptr, local_ = nullptr;
   VecScatter to_local_ = nullptr;
