@@ -94,8 +94,9 @@ TEST(Assembly, RigidRotationIsStressFree) {
   }
 }
 
-// 160 Q2 elements: two parallel passes (128 and 32 elements, both above the serial cut-off
-// of 8), so the two-thread evaluation really splits elements between threads.
+// 160 Q2 elements: two passes (157 elements in 8 MB of element matrices, then 3), the first
+// above the serial cut-off of 8, so the two-thread evaluation really splits elements
+// between threads.
 TEST(Assembly, SameResultForOneAndTwoThreads) {
   const Assembler A(fe_test::box(3, 2, {2.0, 1.0, 0.5}, {10, 4, 4}), fe_test::mooney_rivlin(),
                     Eigen::Vector3d(1, 0.5, 0.2), {{"x0", {}}});
@@ -177,6 +178,47 @@ TEST(Assembly, ElementSinkSumsToTheAssembledTangent) {
   const Eigen::MatrixXd KA = Eigen::MatrixXd(K);  // lower triangle
   EXPECT_EQ((KA - Eigen::MatrixXd(D.triangularView<Eigen::Lower>())).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_GT(KA.cwiseAbs().maxCoeff(), 0.0);
+}
+
+namespace {
+
+class PassCounter final : public ElementMatrixSink {
+ public:
+  void add(Eigen::Index, Eigen::Index count, const double*) override { ++passes, seen += count; }
+  int passes = 0;
+  Eigen::Index seen = 0;
+};
+
+}  // namespace
+
+// 1536 P2 tetrahedra: a P2 tetrahedron's matrix is 1/7 of a Q2 hexahedron's, so a pass holds
+// 1127 of them (8 MB), not 157: two passes, both split between two threads, and the result
+// is the one-thread result bit for bit.
+TEST(Assembly, TetrahedraInTwoPassesSameResultForOneAndTwoThreads) {
+  const Assembler A(fe_test::tet_box(2, {8, 8, 4}, {8.0, 8.0, 4.0}), fe_test::mooney_rivlin(),
+                    Eigen::Vector3d(1, 0.5, 0.2), {});
+  ASSERT_EQ(A.mesh().num_elements(), 1536);
+  const Eigen::MatrixXd m =
+      Eigen::MatrixXd::Constant(A.mesh().num_elements(), A.geometry().points_per_element(), -0.3);
+  const Eigen::VectorXd u = admissible_u(A, 8);
+  double P1, P2, P3;
+  Eigen::VectorXd R1, R2, R3;
+  SparseMatrix K1 = A.tangent_pattern(), K2 = A.tangent_pattern();
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  ASSERT_TRUE(A.evaluate(u, m, &P1, &R1, &K1));
+  omp_set_num_threads(2);
+  ASSERT_TRUE(A.evaluate(u, m, &P2, &R2, &K2));
+  PassCounter sink;
+  ASSERT_TRUE(A.evaluate_elements(u, m, &P3, &R3, &sink));
+  omp_set_num_threads(saved);
+  EXPECT_EQ(sink.passes, 2);
+  EXPECT_EQ(sink.seen, 1536);
+  EXPECT_EQ(P1, P2);
+  EXPECT_EQ(P1, P3);
+  EXPECT_EQ((R1 - R2).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((K1 - K2).cwiseAbs().sum(), 0.0);
+  EXPECT_GT(K1.cwiseAbs().sum(), 0.0);
 }
 
 // A lean assembler (no pattern, dN/dX recomputed per point) evaluates the same energy,

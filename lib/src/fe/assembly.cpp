@@ -24,9 +24,19 @@ int thread_id() {
 #endif
 }
 
-// Elements per parallel pass; the element matrices of one pass are buffered, then added
-// to K serially in element order (bounded memory, deterministic for any thread count).
-constexpr Eigen::Index kChunk = 128;
+// Elements per parallel pass: the element results of one pass are buffered (about
+// kPassBytes of them), then added to R and K serially in element order (bounded memory,
+// deterministic for any thread count). Every pass is one fork and join of the threads, and
+// on a loaded machine a join may wait a scheduler time slice for a thread that lost its
+// core: small elements (a P2 tetrahedron's matrix is 1/7 of a Q2 hexahedron's) therefore
+// get proportionally more elements per pass, and the elements are handed out dynamically.
+constexpr std::size_t kPassBytes = std::size_t(8) << 20;
+constexpr Eigen::Index kMinPass = 128;
+
+Eigen::Index pass_elements(int nd, bool want_r, bool want_K) {
+  const std::size_t per_element = sizeof(double) * (want_K ? nd * nd + nd : want_r ? nd : 1);
+  return std::max<Eigen::Index>(kMinPass, static_cast<Eigen::Index>(kPassBytes / per_element));
+}
 
 }  // namespace
 
@@ -254,14 +264,15 @@ bool Assembler::evaluate_passes(const Eigen::VectorXd& u, const Eigen::MatrixXd&
   if (want_r) residual->setZero(dofs_.num_free);
   std::vector<double> element_energy(E, 0.0);
   std::vector<char> element_ok(E, 1);
-  const Eigen::Index chunk = std::min(kChunk, E);
+  const Eigen::Index chunk = std::min(pass_elements(nd, want_r, want_K), E);
   std::vector<double> rbuf(want_r ? chunk * nd : 0);
   std::vector<double> kbuf(want_K ? chunk * nd * nd : 0);
   std::vector<ElementWork> work(softhd::max_threads(), ElementWork(dim, nen, nq));
   const bool stored = geometry_.stores_gradients();
   for (Eigen::Index start = 0; start < E; start += chunk) {
     const Eigen::Index n = std::min(chunk, E - start);
-#pragma omp parallel for schedule(static) num_threads(static_cast <int>(work.size())) if (n >= 8)
+#pragma omp parallel for schedule(dynamic, 8) \
+    num_threads(static_cast <int>(work.size())) if (n >= 8)
     for (Eigen::Index i = 0; i < n; ++i) {
       double* re = want_r ? &rbuf[i * nd] : nullptr;
       double* Ke = want_K ? &kbuf[i * nd * nd] : nullptr;
