@@ -9,17 +9,25 @@
 //                                  (SOFTHD_BENCH_REPORT=1: the warm solve's iteration
 //                                  table, with PCG iterations and factorisations)
 //   bench_state assembly SCENE     assembly times, 1 and 2 threads (minimum of 7)
+//   bench_state qp-cost SCENE...   one thread: energy + residual + tangent assembly (with
+//                                  the merge into K) and the element kernels alone, per
+//                                  element and per quadrature point (minimum of 7, wall
+//                                  and CPU), and each scene's per-point time over the first's
+//   (SCENE: a name in data/scenes, or a path ending in .json)
 //   bench_state refine             bending plate, m = -1e4 X3/0.1: tip displacement for Q2
 //                                  and Q1 at refinements
 //   bench_state hard [cells_x]     m = -5e4 on the upper half of the plate thickness
 //                                  (element controls): more than a full turn
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "softhd/fe/adjoint.hpp"
 #include "softhd/fe/newton.hpp"
@@ -48,8 +56,11 @@ int threads() {
 #endif
 }
 
+// A scene of data/scenes by name, or a scene file by path (anything ending in .json).
 Scene scene_file(const std::string& name) {
-  return load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/" + name + ".json");
+  const bool path = name.size() > 5 && name.compare(name.size() - 5, 5, ".json") == 0;
+  return load_scene(path ? name
+                         : std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/" + name + ".json");
 }
 
 // m = -1e4 X3 / 0.1 at the vertices (the issue's quarter-turn-order bend).
@@ -217,6 +228,60 @@ int assembly(const std::string& name) {
   return 0;
 }
 
+// Minimum over 7 repetitions of f's wall and CPU seconds.
+template <class F>
+std::pair<double, double> min_time(F&& f) {
+  double wall = 1e300, cpu = 1e300;
+  for (int rep = 0; rep < 7; ++rep) {
+    const auto t0 = Clock::now();
+    const std::clock_t c0 = std::clock();
+    f();
+    cpu = std::min(cpu, static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC);
+    wall = std::min(wall, since(t0));
+  }
+  return {wall, cpu};
+}
+
+// Assembly cost per element and per quadrature point, one thread (issue 30: the P2
+// tetrahedron against the Q2 hexahedron). u = 0 and m = -1e-3 a: the kernels have no
+// data-dependent branches, so the state does not change the cost.
+int qp_cost(const std::vector<std::string>& names) {
+#ifdef _OPENMP
+  omp_set_num_threads(1);
+#endif
+  std::printf(
+      "scene,cell_nodes,quadrature_points,elements,dofs,assembly_s,assembly_cpu_s,kernels_s,"
+      "kernels_cpu_s,cpu_us_per_element,cpu_us_per_point,kernel_cpu_us_per_point,"
+      "per_point_over_first,kernel_per_point_over_first\n");
+  double first = 0.0, first_kernel = 0.0;
+  for (const std::string& name : names) {
+    const Scene s = scene_file(name);
+    const Assembler A = s.make_assembler();
+    const ControlSpace c(A.mesh(), A.geometry(), s.control_kind);
+    const double a = s.material->stiffness_scale();
+    const Eigen::MatrixXd m = c.to_quadrature(Eigen::VectorXd::Constant(c.size(), -1e-3 * a));
+    const Eigen::VectorXd u = Eigen::VectorXd::Zero(A.dofs().num_dofs);
+    SparseMatrix K = A.tangent_pattern();
+    Eigen::VectorXd R;
+    double Pi = 0.0;
+    CountingSink sink;
+    const auto full = min_time([&] { A.evaluate(u, m, &Pi, &R, &K); });
+    const auto kernels = min_time([&] { A.evaluate_elements(u, m, &Pi, &R, &sink); });
+    // Per element and point from the CPU time: one thread, so it is the work done, without
+    // the waits for other processes that the wall time of a shared machine mixes in.
+    const double E = static_cast<double>(A.mesh().num_elements());
+    const int nq = A.geometry().points_per_element();
+    const double per_point = full.second / (E * nq), kernel_per_point = kernels.second / (E * nq);
+    if (first == 0.0) first = per_point, first_kernel = kernel_per_point;
+    std::printf("%s,%d,%d,%ld,%ld,%.5f,%.5f,%.5f,%.5f,%.3f,%.4f,%.4f,%.3f,%.3f\n", s.name.c_str(),
+                A.mesh().nodes_per_element(), nq, static_cast<long>(E),
+                static_cast<long>(A.dofs().num_dofs), full.first, full.second, kernels.first,
+                kernels.second, 1e6 * full.second / E, 1e6 * per_point, 1e6 * kernel_per_point,
+                per_point / first, kernel_per_point / first_kernel);
+  }
+  return 0;
+}
+
 int refine() {
   std::printf("order,cells,tip_u3,newton_iterations,seconds\n");
   const int base[3] = {10, 1, 1};
@@ -277,9 +342,11 @@ int main(int argc, char** argv) {
   if (mode == "newton" && argc > 2) return newton(argv[2], argc > 3 ? argv[3] : "");
   if (mode == "refine") return refine();
   if (mode == "assembly" && argc > 2) return assembly(argv[2]);
+  if (mode == "qp-cost" && argc > 2)
+    return qp_cost(std::vector<std::string>(argv + 2, argv + argc));
   if (mode == "hard") return hard(argc > 2 ? std::atoi(argv[2]) : 50);
   std::fprintf(stderr,
                "usage: bench_state solvers [scale] | newton bending|torsion [solver] | "
-               "assembly SCENE | refine | hard [cells_x]\n");
+               "assembly SCENE | qp-cost SCENE... | refine | hard [cells_x]\n");
   return 2;
 }
