@@ -3,15 +3,16 @@
 #
 #   scripts/run_benchmarks.sh [--quick] [--only a,b,...] BUILD_DIR OUT_DIR REPORT
 #
-# Benchmarks: kernel, hausdorff, resolution, control, stability, forward_fenics, python (--only picks some; the
-# report then also uses the CSVs already in OUT_DIR for the others). Each writes
+# Benchmarks: kernel, hausdorff, resolution, control, stability, forward_fenics, finger,
+# python (--only picks some; the report then also uses the CSVs already in OUT_DIR for the
+# others; finger has no smoke variant and runs only without --quick). Each writes
 # OUT_DIR/<name>.csv, its log OUT_DIR/<name>.log and OUT_DIR/<name>.meta (command, date,
 # commit, machine, load before and after); then bench/make_report.py writes REPORT and the
 # PNG plots into OUT_DIR. --quick runs the smoke variants (a couple of minutes; the test
 # suite runs it). Exit code: non-zero if any benchmark or the report failed.
 set -euo pipefail
 quick=0
-only="kernel,hausdorff,resolution,control,stability,forward_fenics,python"
+only="kernel,hausdorff,resolution,control,stability,forward_fenics,finger,python"
 # The goal cases of issue 13 (value + gradient, methods interleaved, medians of 3): the
 # exact sums of the large cases are timed on a sample of target points and scaled.
 goals() {  # bench_dir csv
@@ -93,6 +94,11 @@ else
   # softhd forward against FEniCS (skipped, with a line, without python3-dolfin).
   run forward_fenics /usr/bin/python3 "$here/bench/bench_forward_fenics.py" "$build" \
     --repeats 3 --csv "$out/forward_fenics.csv"
+  # The Gmsh finger against FEniCS on the same tetrahedra, and its optimisation (issue 30;
+  # FEniCS skipped, with a line, without python3-dolfin).
+  run finger /usr/bin/python3 "$here/bench/bench_finger.py" "$build" --repeats 1 \
+    --csv "$out/finger.csv" --optimise --optimise-max-iter 30 \
+    --optimise-csv "$out/finger_optimise.csv"
   # The Python module: overhead over C++ and HausdorffLoss against plain PyTorch (issue 14).
   python_bench --n 10000 --torch-n 10000 --repeats 5
 fi
