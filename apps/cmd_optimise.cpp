@@ -63,6 +63,12 @@ options:
   --coarse-level C   auto | off: two-level starts, a large control step solved first on
                      the mesh with half the cells along the even axes (default {coarse_level}: when
                      that mesh has >= 32 elements)
+  --levels N         multilevel optimisation: solve first on the box halved N-1 times with a
+                     coarse target and tree tolerance max(--tol, {coarse_tol}), at most
+                     --coarse-iterations K (default {coarse_iterations}) iterations per coarse
+                     level, ending earlier once rho decreased by less than {switch_decrease}
+                     (relative) twice in a row; then the next finer level from its control
+                     (default {levels}: the user's mesh alone; docs/guide.md section 5)
   --threads T        OpenMP threads (default: all)
   --max-memory GIB   refuse meshes whose estimated memory exceeds this (default {max_memory})
   --state-backend B  cholmod | petsc-mumps | petsc-gamg: the state solver (default
@@ -150,6 +156,10 @@ std::string usage() {
       {"vtu_every", std::to_string(d.vtu_every)},
       {"checkpoint_every", std::to_string(d.checkpoint_every)},
       {"coarse_level", to_string(d.coarse_level)},
+      {"levels", std::to_string(d.levels)},
+      {"coarse_iterations", std::to_string(d.coarse_iterations)},
+      {"switch_decrease", number_text(d.switch_decrease)},
+      {"coarse_tol", number_text(d.coarse_tolerance)},
       {"max_memory", number_text(d.memory_limit / (1u << 30))},
       {"state_backend", to_string(d.state_backend)}};
   std::string text = kUsage;
@@ -205,6 +215,9 @@ OptimiseArgs parse_optimise(Args& args) {
   if (coarse != "auto" && coarse != "off")
     throw UsageError("--coarse-level: expected auto or off, got '" + coarse + "'");
   o.coarse_level = coarse_level_from_string(coarse);
+  o.levels = static_cast<int>(args.integer("--levels", d.levels, 1, 16));
+  o.coarse_iterations =
+      static_cast<int>(args.integer("--coarse-iterations", d.coarse_iterations, 1, 1000000));
   const double gib = args.number("--max-memory", d.memory_limit / (1u << 30));
   if (!(gib > 0.0 && gib <= 1e6)) throw UsageError("--max-memory: expected GiB in (0, 1e6]");
   o.memory_limit = gib * (1u << 30);
@@ -261,9 +274,11 @@ TrackingRunCallbacks progress(const fe::Scene& scene, bool quiet) {
     std::fprintf(stderr, "  state solve failed (step rejected): %s\n", report.c_str());
   };
   cb.on_iteration = [](const TrackingIteration& it, const Eigen::VectorXd&) {
-    std::fprintf(stderr, "  %5d %12.6g %12.6g %10.4g %10.3g %7d %8.1f%s\n", it.iteration, it.J,
+    char level[32] = "";
+    if (it.level > 0) std::snprintf(level, sizeof level, " (level %d)", it.level);
+    std::fprintf(stderr, "  %5d %12.6g %12.6g %10.4g %10.3g %7d %8.1f%s%s\n", it.iteration, it.J,
                  it.rho, it.rho_over_floor, it.projected_gradient_norm, it.newton_iterations,
-                 it.seconds, it.replayed ? " (from the checkpoint)" : "");
+                 it.seconds, level, it.replayed ? " (from the checkpoint)" : "");
   };
   return cb;
 }
@@ -336,7 +351,10 @@ int run_optimise(const std::vector<std::string>& tokens) {
                  : status == -1 ? "cannot run /usr/bin/python3"
                                 : "scripts/plot_convergence.py failed");
 #endif
-  if (!a.quiet) print_end(s, out);
+  if (!a.quiet) {
+    for (const LevelReport& l : s.levels) std::fprintf(stderr, "  %s\n", l.BriefReport().c_str());
+    print_end(s, out);
+  }
   if (a.json) std::cout << read_text(out / "summary.json");
   return 0;
 }

@@ -95,13 +95,17 @@ std::string read_text(const fs::path& p) {
   return s.str();
 }
 
-// history.csv without the timing columns (the last four).
+// history.csv without the timing columns (seconds_state, seconds_distance, seconds_adjoint,
+// seconds: the 11th to the 14th; the level column after them is kept).
 std::string history_without_timings(const fs::path& dir) {
   std::istringstream in(read_text(dir / "history.csv"));
   std::string line, out;
   while (std::getline(in, line)) {
-    for (int k = 0; k < 4; ++k) line = line.substr(0, line.rfind(','));
-    out += line + "\n";
+    std::istringstream fields(line);
+    std::string field, kept;
+    for (int k = 0; std::getline(fields, field, ','); ++k)
+      if (k < 10 || k > 13) kept += (kept.empty() ? "" : ",") + field;
+    out += kept + "\n";
   }
   return out;
 }
@@ -178,6 +182,69 @@ TEST_F(OptimiseCli, ContinuingAFinishedRunIsTheUninterruptedRun) {
   ASSERT_EQ(run(scene() + " --out " + out() + " --max-iter 30 --resume" + common), 0);
   EXPECT_EQ(history_without_timings(out()), history_without_timings(ref));
   EXPECT_EQ(read_text(fs::path(out()) / "control.csv"), read_text(ref / "control.csv"));
+}
+
+// Multilevel runs (--levels 2, docs/guide.md section 5): the coarse level's rows come first in
+// history.csv with level 1, and a run killed at random moments, on either level, and resumed
+// until it finishes is the uninterrupted one.
+TEST_F(OptimiseCli, MultilevelKilledAndResumedRunsAreTheUninterruptedRun) {
+  const std::string common =
+      " --levels 2 --max-iter 12 --rel-tol 0 --threads 1 --vtu-every 4 --quiet";
+  const fs::path ref = dir_ / "ref";
+  ASSERT_EQ(run(scene() + " --out " + ref.string() + common), 0);
+  const nlohmann::json s = nlohmann::json::parse(read_text(ref / "summary.json"));
+  ASSERT_EQ(s["levels"].size(), 2u);
+  EXPECT_EQ(s["levels"][0]["level"], 1);
+  EXPECT_EQ(s["levels"][1]["level"], 0);
+  EXPECT_EQ(s["levels"][1]["iterations"], 12);
+  // history.csv: level 1 rows, then the 12 of the user's mesh.
+  std::istringstream h(read_text(ref / "history.csv"));
+  std::string line;
+  std::getline(h, line);
+  EXPECT_EQ(line.substr(line.rfind(',') + 1), "level");
+  std::string levels;
+  while (std::getline(h, line)) levels += line.substr(line.rfind(',') + 1);
+  const int coarse = s["levels"][0]["iterations"].get<int>();
+  ASSERT_GE(coarse, 1);
+  EXPECT_EQ(levels, std::string(coarse, '1') + std::string(12, '0'));
+
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> delay(0.02, 0.4);
+  int kills_total = 0, coarse_resumes = 0;
+  for (int trial = 0; trial < 6; ++trial) {
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    const fs::path out = dir_ / ("trial" + std::to_string(trial));
+    int rc = -1, kills = 0;
+    for (int attempt = 0; attempt < 40 && rc != 0; ++attempt) {
+      const bool resume = fs::exists(out / "checkpoint_level1.bin");
+      // Killed on the coarse level: the user's mesh has no checkpoint yet.
+      if (resume && !fs::exists(out / "checkpoint.bin")) ++coarse_resumes;
+      const std::string limit =
+          attempt < 4 ? "timeout -s KILL " + std::to_string(delay(rng)) + " " : "";
+      const std::string cmd = limit + SOFTHD_CLI + " optimise " + scene() + " --out " +
+                              out.string() + common + (resume ? " --resume" : "") +
+                              " >/dev/null 2>" + (dir_ / "stderr").string();
+      const int raw = std::system(cmd.c_str());
+      rc = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+      if (rc == 137 || rc == -1) ++kills;
+      ASSERT_TRUE(rc == 0 || rc == 137 || rc == -1) << read_text(dir_ / "stderr");
+    }
+    ASSERT_EQ(rc, 0);
+    kills_total += kills;
+    EXPECT_EQ(history_without_timings(out), history_without_timings(ref));
+    EXPECT_EQ(read_text(out / "body_final.ply"), read_text(ref / "body_final.ply"));
+    EXPECT_EQ(read_text(out / "control.csv"), read_text(ref / "control.csv"));
+  }
+  EXPECT_GE(kills_total, 6);     // the trials did interrupt runs
+  EXPECT_GE(coarse_resumes, 1);  // ... and one on the coarse level
+}
+
+// --levels asks for more halvings than the box allows ((6, 1, 2) -> (3, 1, 1) -> none): bad
+// input naming the option.
+TEST_F(OptimiseCli, TooManyLevelsIsBadInput) {
+  std::string err;
+  EXPECT_EQ(run(scene() + " --out " + out() + " --levels 3 --quiet", &err), 2);
+  EXPECT_NE(err.find("levels"), std::string::npos) << err;
 }
 
 // A manufactured target (forward --write-cloud) solved on the body's own mesh: the known map

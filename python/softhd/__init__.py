@@ -161,17 +161,19 @@ def read_mesh(path, order=None, scale=1.0):
 def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=None,
              algorithm=None, move_limit=None, particles=None, volumes=None, alpha=None,
              beta=None, gamma=None, eps=None, method=None, tol=None, tikhonov_mass=None,
-             tikhonov_grad=None, coarse_level=None, callback=None, threads=0):
+             tikhonov_grad=None, coarse_level=None, levels=None, callback=None, threads=0):
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
     target: the run ``softhd optimise`` makes (the library's TrackingRun), with its options and
     its defaults for every option left None (:func:`optimise_defaults` lists them, e.g. method
     "tree" with tol 1e-2, move_limit 0.1, coarse_level "auto": two-level starts on the mesh with
-    half the cells). Returns an :class:`OptimiseResult`.
+    half the cells, levels 1: the user's mesh alone; levels N > 1 solves first on the box halved
+    N - 1 times, as ``--levels N``). Returns an :class:`OptimiseResult`.
 
     target: None (the scene's own "target"), a cloud file path, an (M, d) array, or a tuple
     (points, volumes). callback(record): called after every accepted iteration with an
     :class:`Iteration` (J, rho, A, B, ..., control); **returning False ends the run** after
-    that iteration (termination "stopped by the caller"); any other return value continues;
+    that iteration (termination "stopped by the caller"; on a coarse level, after the first
+    iteration on the user's mesh, whose result it returns); any other return value continues;
     an exception raised by the callback ends the run and propagates.
     """
     points = vols = file = None
@@ -186,7 +188,8 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
                           particles=particles, volumes_kind=volumes, alpha=alpha, beta=beta,
                           gamma=gamma, eps=eps, method=method, tol=tol,
                           tikhonov_mass=tikhonov_mass, tikhonov_grad=tikhonov_grad,
-                          coarse_level=coarse_level, callback=callback, threads=threads)
+                          coarse_level=coarse_level, levels=levels, callback=callback,
+                          threads=threads)
 
 
 def optimise_defaults():

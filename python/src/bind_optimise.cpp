@@ -82,6 +82,7 @@ py::dict optimise_defaults() {
   out["tikhonov_mass"] = d.tikhonov_mass;
   out["tikhonov_grad"] = d.tikhonov_gradient;
   out["coarse_level"] = to_string(d.coarse_level);
+  out["levels"] = d.levels;
   out["threads"] = d.threads;
   return out;
 }
@@ -113,6 +114,9 @@ void bind_records(py::module_& m) {
       .def_property_readonly("seconds_adjoint",
                              [](const PyIteration& i) { return i.record.seconds_adjoint; })
       .def_property_readonly("seconds", [](const PyIteration& i) { return i.record.seconds; })
+      .def_property_readonly(
+          "level", [](const PyIteration& i) { return i.record.level; },
+          "the multilevel level: times the user's mesh was halved for it (0: the user's mesh)")
       .def_property_readonly(
           "control", [](const PyIteration& i) { return i.control; },
           "the best control so far (a copy)")
@@ -179,7 +183,8 @@ void bind_optimise(py::module_& m) {
          std::optional<double> beta, std::optional<double> gamma, std::optional<double> eps,
          const std::optional<std::string>& method, std::optional<double> tol,
          std::optional<double> tikhonov_mass, std::optional<double> tikhonov_grad,
-         const std::optional<std::string>& coarse_level, const py::object& callback, int threads) {
+         const std::optional<std::string>& coarse_level, std::optional<int> levels,
+         const py::object& callback, int threads) {
         TrackingRunOptions o;
         if (max_iter) o.max_iterations = *max_iter;
         if (max_seconds) o.max_seconds = *max_seconds;
@@ -197,6 +202,7 @@ void bind_optimise(py::module_& m) {
         if (tikhonov_mass) o.tikhonov_mass = *tikhonov_mass;
         if (tikhonov_grad) o.tikhonov_gradient = *tikhonov_grad;
         if (coarse_level) o.coarse_level = coarse_level_from_string(*coarse_level);
+        if (levels) o.levels = *levels;
         o.threads = threads;
         return optimise(s, points, volumes, file, o, callback);
       },
@@ -205,7 +211,7 @@ void bind_optimise(py::module_& m) {
       py::arg("rel_tol"), py::arg("algorithm"), py::arg("move_limit"), py::arg("particles"),
       py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("eps"),
       py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"), py::arg("tikhonov_grad"),
-      py::arg("coarse_level"), py::arg("callback"), py::arg("threads"));
+      py::arg("coarse_level"), py::arg("levels"), py::arg("callback"), py::arg("threads"));
   m.def("optimise_defaults", &optimise_defaults,
         "The defaults of optimise's options (softhd optimise's: TrackingRunOptions).");
 }

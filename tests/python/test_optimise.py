@@ -122,6 +122,7 @@ def as_in_the_csv(value):
       "--tikhonov-mass", 1e-12, "--rel-tol", 0, "--coarse-level", "off"],
      dict(alpha=5, eps=2e-3, move_limit=0.2, volumes="deformed", tikhonov_mass=1e-12,
           rel_tol=0, coarse_level="off")),
+    (["--levels", 2], dict(levels=2)),  # a coarse level's rows first, then 5 on the mesh
 ])
 def test_history_equals_the_command_line_tools(scene_file, cli, tmp_path, cli_options,
                                                py_options):
@@ -133,9 +134,11 @@ def test_history_equals_the_command_line_tools(scene_file, cli, tmp_path, cli_op
     with open(tmp_path / "run" / "history.csv") as f:
         rows = list(csv.DictReader(f))
     r = softhd.optimise(softhd.Scene.load(path), max_iter=5, threads=1, **py_options)
-    assert len(rows) == len(r.history) == 5
+    assert len(rows) == len(r.history)
+    assert [it.level for it in r.history].count(0) == 5
+    assert ("levels" in py_options) == (r.history[0].level == 1)
     for row, it in zip(rows, r.history):
-        for column in HISTORY_COLUMNS:
+        for column in HISTORY_COLUMNS + ["level"]:
             assert row[column] == as_in_the_csv(getattr(it, column)), (column, row, it)
 
 
@@ -166,7 +169,8 @@ def test_defaults_are_the_command_line_tools(cli_help):
              "method": "--method M exact | tree: the distance's pair sums",
              "tol": "relative error bound on every kernel sum", "tikhonov_mass":
              "--tikhonov-mass M (M/2) int m^2", "tikhonov_grad": "--tikhonov-grad E (E/2) int "
-             "|grad m|^2", "coarse_level": "mesh with half the cells along the even axes"}
+             "|grad m|^2", "coarse_level": "mesh with half the cells along the even axes",
+             "levels": "then the next finer level from its control"}
     for name, before in flags.items():
         m = re.search(re.escape(before) + r" \(default ([^;,:)]+)", text)
         assert m, name

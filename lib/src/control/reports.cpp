@@ -4,6 +4,7 @@
 
 #include "softhd/control/bounded_optimizer.hpp"
 #include "softhd/control/shape_tracking.hpp"
+#include "softhd/control/tracking_run.hpp"
 
 namespace softhd {
 
@@ -24,6 +25,18 @@ std::string ShapeTrackingSummary::BriefReport() const {
                 "%s (%s): %d iterations, %d evaluations (%d failed), rho %.6g -> %.6g%s, %.3g s",
                 to_string(status).c_str(), termination.c_str(), iterations, evaluations,
                 failed_evaluations, rho_start, rho_final, over, seconds);
+  return line;
+}
+
+std::string LevelReport::BriefReport() const {
+  char over[64] = "";
+  if (floor)
+    std::snprintf(over, sizeof over, ", rho %.6g (%.3g x its floor)", rho_final,
+                  rho_final / *floor);
+  char line[384];
+  std::snprintf(line, sizeof line,
+                "level %d (%ld nodes, %ld target points): %d iterations, %.3g s%s; %s", level,
+                nodes, target_points, iterations, seconds, over, termination.c_str());
   return line;
 }
 

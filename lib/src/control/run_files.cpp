@@ -18,7 +18,7 @@ namespace {
 
 const char* kHistoryHeader =
     "iteration,evaluation,J,rho,A,B,rho_over_floor,projected_gradient_norm,newton_iterations,"
-    "factorizations,seconds_state,seconds_distance,seconds_adjoint,seconds";
+    "factorizations,seconds_state,seconds_distance,seconds_adjoint,seconds,level";
 
 nlohmann::json optional_json(const std::optional<double>& v) {
   return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
@@ -71,7 +71,8 @@ std::string history_row(const TrackingIteration& it) {
                               it.seconds_state,
                               it.seconds_distance,
                               it.seconds_adjoint,
-                              it.seconds};
+                              it.seconds,
+                              double(it.level)};
   std::ostringstream s;
   s.precision(10);
   for (size_t k = 0; k < v.size(); ++k) {
@@ -125,6 +126,11 @@ void RunFiles::iteration(const TrackingIteration& it, const Eigen::VectorXd& m,
   now["rho"] = it.rho;
   now["seconds"] = it.seconds;
   write_summary(now);
+}
+
+void RunFiles::level_iteration(const TrackingIteration& it) {
+  rows_.push_back(history_row(it));
+  if (!it.replayed) write_history();
 }
 
 void RunFiles::finish(const ShapeTrackingSummary& s, const PointCloud& target) {

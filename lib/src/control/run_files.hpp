@@ -36,6 +36,10 @@ class RunFiles {
              const Eigen::VectorXd& u0);
   /// After an accepted iteration (u: the state of the best control m, unless replayed).
   void iteration(const TrackingIteration& it, const Eigen::VectorXd& m, const Eigen::VectorXd& u);
+  /// After an accepted iteration of a coarse level (TrackingRunOptions::levels): its row.
+  void level_iteration(const TrackingIteration& it);
+  /// summary.json's entries of the set-up and the end (e.g. the levels), kept from now on.
+  nlohmann::json& summary() { return summary_; }
   /// At the end: the final body and clouds, history.csv, control.csv and summary.json.
   void finish(const ShapeTrackingSummary& s, const PointCloud& target);
 

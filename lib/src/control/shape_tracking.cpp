@@ -29,8 +29,8 @@ std::pair<double, double> shape_error(const fe::Mesh& mesh, const Eigen::VectorX
 
 std::optional<TrackingIteration> first_below(const std::vector<TrackingIteration>& history,
                                              double k) {
-  for (const TrackingIteration& it : history)
-    if (it.rho_over_floor <= k) return it;
+  for (const TrackingIteration& it : history)  // on the user's mesh (a coarse level's floor is
+    if (it.level == 0 && it.rho_over_floor <= k) return it;  // its own)
   return std::nullopt;
 }
 

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <optional>
 #include <sstream>
 #include <system_error>
 
+#include "multilevel.hpp"
 #include "run_files.hpp"
 #include "softhd/control/run_log.hpp"
 #include "softhd/enum_names.hpp"
@@ -52,6 +54,14 @@ void TrackingRunOptions::validate() const {
     throw InvalidArgument("method: nearest has no gradient; expected exact or tree");
   if (vtu_every < 0) throw InvalidArgument("vtu_every must be >= 0");
   if (!(memory_limit > 0.0)) throw InvalidArgument("memory_limit must be > 0");
+  if (levels < 1) throw InvalidArgument("levels must be >= 1, got " + std::to_string(levels));
+  if (coarse_iterations < 1)
+    throw InvalidArgument("coarse_iterations must be >= 1, got " +
+                          std::to_string(coarse_iterations));
+  if (!(switch_decrease >= 0.0 && switch_decrease < 1.0))
+    throw InvalidArgument("switch_decrease must be in [0, 1)");
+  if (!(coarse_tolerance > 0.0 && coarse_tolerance < 1.0))
+    throw InvalidArgument("coarse_tolerance must be in (0, 1)");
   if (resume && out.empty())
     throw InvalidArgument("resume needs the run's folder (the out field is empty)");
   objective().validate();
@@ -112,6 +122,7 @@ struct TrackingRun::Impl {
       coarse.emplace(fe::coarsened(scene).make_assembler());
       objective->use_coarse_level(*coarse);
     }
+    if (options.levels > 1) levels = detail::coarse_problems(scene, target, options);
     setup.target = target.description;
     setup.target_points = static_cast<long>(target.cloud.size());
     setup.nodes = static_cast<long>(a.mesh().num_nodes());
@@ -154,11 +165,29 @@ struct TrackingRun::Impl {
     if (options.state_backend != fe::StateBackend::kCholmod)
       to.fingerprint["state"] = to_string(options.state_backend);
     if (ranks > 1) to.fingerprint["ranks"] = std::to_string(ranks);
-    if (options.resume && !fs::exists(to.checkpoint))
-      throw FileError("resume: no checkpoint '" + to.checkpoint + "'");
-    if (options.resume) read_run_log(to.checkpoint);  // a malformed one refused before output
+    if (options.levels > 1) {
+      to.fingerprint["levels"] = std::to_string(options.levels);
+      if (!options.resume) {  // a fresh run: no finer level's checkpoint of an earlier run
+        fs::remove(to.checkpoint, ec);
+        for (const auto& p : levels) fs::remove(level_checkpoint(p->level), ec);
+      }
+    }
+    // A multilevel run starts on its coarsest level, whose checkpoint a resume needs.
+    const std::string first = levels.empty() ? to.checkpoint : level_checkpoint(levels[0]->level);
+    if (options.resume && !fs::exists(first))
+      throw FileError("resume: no checkpoint '" + first + "'");
+    if (options.resume) read_run_log(first);  // a malformed one refused before output
     files.emplace(dir, *objective, control, options.vtu_every, writer, summary_entries(ranks));
   }
+
+  /// The checkpoint of coarse level `level` in the run's folder.
+  std::string level_checkpoint(int level) const {
+    return (fs::path(options.out) / ("checkpoint_level" + std::to_string(level) + ".bin")).string();
+  }
+
+  Eigen::VectorXd run_coarse_levels(const ShapeTrackingOptions& fine,
+                                    const TrackingRunCallbacks& callbacks, TrackingRunSummary* s);
+  bool caller_stopped = false;  // a StopRequest of the caller on a coarse level
 
   const fe::Scene& scene;
   const fe::Assembler& assembler;
@@ -169,11 +198,122 @@ struct TrackingRun::Impl {
   SceneTarget target;
   std::unique_ptr<ShapeObjective> objective;
   std::optional<fe::Assembler> coarse;
+  std::vector<std::unique_ptr<detail::CoarseProblem>> levels;  // coarsest first
   TrackingRunSummary setup;
   std::optional<FolderLock> lock;
   std::optional<detail::RunFiles> files;
   bool ran = false;
 };
+
+namespace {
+
+// The switch rule of a coarse level (docs/formulation.md §4.8): it ends once ρ̃ decreased by
+// less than `decrease` relative, (ρ̃_{k−1} − ρ̃_k) / ρ̃_{k−1} < decrease, in two iterations
+// in a row.
+class SwitchRule {
+ public:
+  explicit SwitchRule(double decrease) : decrease_(decrease) {}
+  /// After an accepted iteration with ρ̃ = rho: true if the level ends here.
+  bool ends(double rho) {
+    if (previous_ > 0.0) small_ = (previous_ - rho) / previous_ < decrease_ ? small_ + 1 : 0;
+    previous_ = rho;
+    return small_ >= 2;
+  }
+
+ private:
+  double decrease_;
+  double previous_ = 0.0;
+  int small_ = 0;
+};
+
+}  // namespace
+
+// Each coarse level from the control of the level below (the scene's start on the coarsest),
+// with its own checkpoint, its rows in history.csv; returns the start of the user's mesh.
+Eigen::VectorXd TrackingRun::Impl::run_coarse_levels(const ShapeTrackingOptions& fine,
+                                                     const TrackingRunCallbacks& callbacks,
+                                                     TrackingRunSummary* s) {
+  Eigen::VectorXd m;
+  double seconds = 0.0;  // of the levels so far
+  for (std::size_t k = 0; k < levels.size(); ++k) {
+    const detail::CoarseProblem& p = *levels[k];
+    const Eigen::VectorXd lower = p.control->constant(p.scene.control_lower);
+    const Eigen::VectorXd upper = p.control->constant(p.scene.control_upper);
+    if (k == 0) m = p.control->constant(p.scene.control_initial);
+    ShapeTrackingOptions to = fine;
+    to.optimizer.max_iterations = options.coarse_iterations;
+    to.optimizer.max_evaluations = 5 * options.coarse_iterations + 20;
+    if (options.max_seconds > 0.0)
+      to.optimizer.max_seconds = std::max(1e-9, options.max_seconds - seconds);
+    to.fingerprint["level"] = std::to_string(p.level) + ", at most " +
+                              std::to_string(options.coarse_iterations) + " iterations, switch " +
+                              exact_text(options.switch_decrease);
+    if (!to.checkpoint.empty()) {
+      to.checkpoint = level_checkpoint(p.level);
+      to.resume = options.resume && fs::exists(to.checkpoint);
+    }
+    SwitchRule rule(options.switch_decrease);
+    bool switched = false;
+    ShapeTrackingCallbacks cb;
+    cb.on_failure = callbacks.on_failure;
+    cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd& mc) {
+      TrackingIteration shown = it;
+      shown.level = p.level;
+      shown.seconds += seconds;
+      if (files) files->level_iteration(shown);
+      // The caller's StopRequest ends this level, and each later one after its first iteration.
+      if (caller_stopped) throw StopRequest{};
+      try {
+        if (callbacks.on_iteration) callbacks.on_iteration(shown, mc);
+      } catch (const StopRequest&) {
+        caller_stopped = true;
+        throw;
+      }
+      if (rule.ends(it.rho)) {
+        switched = true;
+        throw StopRequest{};
+      }
+    };
+    ShapeTrackingSummary r =
+        track_shape(*p.objective, lower, upper, m, p.target->map_displacement, to, cb);
+    for (TrackingIteration it : r.history) {
+      it.level = p.level;
+      it.seconds += seconds;
+      s->history.push_back(it);
+    }
+    LevelReport lr;
+    lr.level = p.level;
+    lr.nodes = static_cast<long>(p.assembler->mesh().num_nodes());
+    lr.target_points = static_cast<long>(p.target->cloud.size());
+    lr.iterations = r.iterations;
+    lr.seconds = r.seconds;
+    lr.rho_final = r.rho_final;
+    lr.floor = r.floor();
+    char rule_text[96];
+    std::snprintf(rule_text, sizeof rule_text,
+                  "switched: rho decreased by less than %g twice in a row",
+                  options.switch_decrease);
+    lr.termination = switched ? rule_text : r.termination;
+    s->levels.push_back(lr);
+    seconds += r.seconds;
+    // The next level's start: this level's best control at its controls.
+    const bool last = k + 1 == levels.size();
+    const fe::Mesh& finer = last ? assembler.mesh() : levels[k + 1]->assembler->mesh();
+    const fe::ControlSpace& finer_control = last ? control : *levels[k + 1]->control;
+    const std::vector<int>& regions =
+        last ? scene.control_regions : levels[k + 1]->scene.control_regions;
+    m = detail::prolongate(p.assembler->mesh(), *p.control, r.control, finer, finer_control,
+                           regions);
+    // ... and its state, the next level's first warm start (as the two-level starts do). The
+    // level's state is bitwise the uninterrupted run's after any resume (track_shape), so the
+    // next level's start is too.
+    fe::State warm;
+    warm.u = fe::prolongate(p.assembler->mesh(), r.displacement, finer);
+    warm.m_qp = finer_control.to_quadrature(m);
+    (last ? *objective : *levels[k + 1]->objective).remember_state(m, warm);
+  }
+  return m;
+}
 
 TrackingRun::TrackingRun(const fe::Scene& scene, const TrackingRunOptions& options) {
   options.validate();
@@ -201,8 +341,17 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
   if (callbacks.on_begin) callbacks.on_begin(d.setup);
   if (d.files) d.files->begin(d.options.resume);
 
-  // The scene's bounds and start where a control acts (0 where it touches none of its regions).
-  const Eigen::VectorXd m0 = d.control.constant(d.scene.control_initial);
+  TrackingRunSummary s = d.setup;
+  // The scene's bounds and start where a control acts (0 where it touches none of its
+  // regions); a multilevel run starts from its coarse levels' control.
+  const Eigen::VectorXd m0 = d.levels.empty() ? d.control.constant(d.scene.control_initial)
+                                              : d.run_coarse_levels(to, callbacks, &s);
+  double offset = 0.0;  // the coarse levels' time
+  for (const LevelReport& l : s.levels) offset += l.seconds;
+  if (!d.levels.empty() && d.options.max_seconds > 0.0)
+    to.optimizer.max_seconds = std::max(1e-9, d.options.max_seconds - offset);
+  // A multilevel run killed on a coarse level has no checkpoint of this level yet.
+  if (!d.levels.empty() && to.resume) to.resume = fs::exists(to.checkpoint);
   const Eigen::VectorXd lower = d.control.constant(d.scene.control_lower);
   const Eigen::VectorXd upper = d.control.constant(d.scene.control_upper);
   ShapeTrackingCallbacks cb;
@@ -213,12 +362,44 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
   };
   cb.on_failure = callbacks.on_failure;
   cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd& m) {
-    if (d.files) d.files->iteration(it, m, d.objective->last_state().u);
-    if (callbacks.on_iteration) callbacks.on_iteration(it, m);
+    TrackingIteration shown = it;
+    shown.seconds += offset;
+    if (d.files) d.files->iteration(shown, m, d.objective->last_state().u);
+    if (callbacks.on_iteration) callbacks.on_iteration(shown, m);
+    if (d.caller_stopped) throw StopRequest{};  // asked for on a coarse level
   };
-  TrackingRunSummary s = d.setup;
-  static_cast<ShapeTrackingSummary&>(s) =
+  ShapeTrackingSummary fine =
       track_shape(*d.objective, lower, upper, m0, d.target.map_displacement, to, cb);
+  if (!d.levels.empty()) {
+    LevelReport lr;
+    lr.nodes = s.nodes;
+    lr.target_points = s.target_points;
+    lr.iterations = fine.iterations;
+    lr.seconds = fine.seconds;
+    lr.rho_final = fine.rho_final;
+    lr.floor = fine.floor();
+    lr.termination = fine.termination;
+    s.levels.push_back(lr);
+    fine.seconds += offset;
+    for (TrackingIteration& it : fine.history) it.seconds += offset;
+    fine.history.insert(fine.history.begin(), s.history.begin(), s.history.end());
+  }
+  const std::vector<LevelReport> reports = s.levels;
+  static_cast<ShapeTrackingSummary&>(s) = std::move(fine);
+  if (d.files && !reports.empty()) {
+    nlohmann::json& j = d.files->summary()["levels"];
+    j = nlohmann::json::array();
+    for (const LevelReport& l : reports)
+      j.push_back({{"level", l.level},
+                   {"nodes", l.nodes},
+                   {"target_points", l.target_points},
+                   {"iterations", l.iterations},
+                   {"seconds", l.seconds},
+                   {"rho_final", l.rho_final},
+                   {"rho_final_over_floor",
+                    l.floor ? nlohmann::json(l.rho_final / *l.floor) : nlohmann::json(nullptr)},
+                   {"termination", l.termination}});
+  }
   if (d.files) d.files->finish(s, d.target.cloud);
   d.lock.reset();
   return s;

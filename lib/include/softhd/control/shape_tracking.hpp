@@ -40,6 +40,9 @@ struct TrackingIteration {
   ///@}
   double seconds = 0.0;   ///< wall time of the run (over all resumes)
   bool replayed = false;  ///< served from the checkpoint of a resumed run (no state at hand)
+  /// The multilevel level (TrackingRunOptions::levels): how many times the user's mesh was
+  /// halved for it, 0 on the user's mesh.
+  int level = 0;
 };
 
 /// Settings of track_shape(); defaults per field.
@@ -145,8 +148,8 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
                                  const ShapeTrackingOptions& options = {},
                                  const ShapeTrackingCallbacks& callbacks = {});
 
-/// Time (seconds of the history) and iteration at which ρ̃ first fell to k × floor, or
-/// nullopt if it never did.
+/// Time (seconds of the history) and iteration at which ρ̃ first fell to k × floor on the
+/// user's mesh (level 0), or nullopt if it never did.
 std::optional<TrackingIteration> first_below(const std::vector<TrackingIteration>& history,
                                              double k);
 

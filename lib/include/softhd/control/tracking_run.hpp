@@ -11,7 +11,9 @@
 #include <Eigen/Core>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "softhd/control/bounded_optimizer.hpp"
 #include "softhd/control/scene_target.hpp"
@@ -70,7 +72,23 @@ struct TrackingRunOptions {
   /// The processes sharing each evaluation's pair sums (HausdorffOptions::share; the CLI:
   /// world_share()). Null: this process alone.
   std::shared_ptr<const WorkShare> share;
-  CoarseLevel coarse_level = CoarseLevel::automatic;            ///< two-level starts
+  CoarseLevel coarse_level = CoarseLevel::automatic;  ///< two-level starts
+  ///@{
+  /// Multilevel optimisation (docs/formulation.md §4.8): with levels = N > 1 the control
+  /// problem is solved first on the box halved N − 1 times (fe::coarsened), then on each finer
+  /// box in turn, each from the control of the level below prolongated (vertex controls
+  /// interpolated, element controls the containing coarse element's), finishing on the user's
+  /// mesh, target and tolerance with max_iterations. A coarse level has the scene's target for
+  /// its body (an arc grid twice as fine as its nodes), or, for a target with as many points as
+  /// the finer level's, every 2^d-th point with the volumes scaled to keep their total; the
+  /// tree tolerance max(tolerance, coarse_tolerance); at most coarse_iterations iterations,
+  /// and it ends earlier once ρ̃ decreased by less than switch_decrease (relative) in two
+  /// iterations in a row. 1: today's single-level run.
+  int levels = 1;
+  int coarse_iterations = 30;
+  double switch_decrease = 0.01;
+  double coarse_tolerance = 5e-2;
+  ///@}
   fe::StateBackend state_backend = fe::StateBackend::kCholmod;  ///< the state solver
   /// A target cloud file (text or PLY) instead of the scene's "target"; empty: the scene's.
   std::string target_file;
@@ -100,8 +118,26 @@ struct TrackingRunOptions {
   ShapeTrackingOptions tracking() const;
 };
 
+/// One level of a multilevel run (TrackingRunOptions::levels).
+struct LevelReport {
+  int level = 0;                ///< halvings of the user's mesh (0: the user's mesh)
+  long nodes = 0;               ///< of its mesh
+  long target_points = 0;       ///< of its target
+  int iterations = 0;           ///< accepted on this level
+  double seconds = 0.0;         ///< wall time of this level (over all resumes)
+  double rho_final = 0.0;       ///< ρ̃ at the level's best control
+  std::optional<double> floor;  ///< its own floor (matched, else self)
+  std::string termination;      ///< why the level ended
+  /// One line: level, iterations, time, ρ̃/floor at its end.
+  std::string BriefReport() const;
+};
+
 /// The result of a run: track_shape's summary (status, BriefReport) and what was tracked.
 struct TrackingRunSummary : ShapeTrackingSummary {
+  /// The coarse levels, coarsest first, then the user's mesh (levels > 1; else empty). The
+  /// summary's own fields are the user's mesh's level, with seconds and history over all
+  /// levels (history: the coarse levels' iterations first, each with its level).
+  std::vector<LevelReport> levels;
   std::string target;      ///< the target's description (one line)
   long target_points = 0;  ///< points of the target cloud
   long nodes = 0;          ///< nodes of the body's mesh

@@ -1,0 +1,88 @@
+#include "multilevel.hpp"
+
+#include <algorithm>
+#include <string>
+
+#include "softhd/error.hpp"
+#include "softhd/fe/grid_sequencing.hpp"
+#include "softhd/fe/state_equation.hpp"
+
+namespace softhd::detail {
+
+PointCloud subsampled(const PointCloud& cloud, int stride) {
+  if (stride < 1) throw InvalidArgument("subsampled: stride must be >= 1");
+  const Eigen::Index n = (static_cast<Eigen::Index>(cloud.size()) + stride - 1) / stride;
+  Eigen::MatrixXd points(n, cloud.dim());
+  Eigen::VectorXd volumes(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    points.row(i) = cloud.points().row(i * stride);
+    volumes[i] = cloud.volumes()[i * stride];
+  }
+  // Σ v kept: v_i ← v_i · (Σ_all v) / (Σ_kept v).
+  volumes *= cloud.volumes().sum() / volumes.sum();
+  return PointCloud(std::move(points), std::move(volumes));
+}
+
+namespace {
+
+// The target of a coarse level: the scene's for its body (an arc grid follows the mesh), or
+// the finer level's target subsampled where that gives no fewer points.
+SceneTarget coarse_target(const fe::Scene& coarse, const fe::Mesh& mesh, const SceneTarget& finer,
+                          const TrackingRunOptions& options) {
+  SceneTarget t = tracking_target(coarse, mesh, options);
+  if (t.cloud.size() >= finer.cloud.size()) {
+    const int stride = 1 << coarse.dim();  // 2^d: as a grid halved along every axis
+    t.cloud = subsampled(finer.cloud, stride);
+    t.description = finer.description + ", every " + std::to_string(stride) + "th point";
+  }
+  return t;
+}
+
+}  // namespace
+
+std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& scene,
+                                                            const SceneTarget& target,
+                                                            const TrackingRunOptions& options) {
+  std::vector<std::unique_ptr<CoarseProblem>> levels;  // finest first while built
+  TrackingRunOptions o = options;
+  if (o.method == Method::tree) o.tolerance = std::max(options.tolerance, options.coarse_tolerance);
+  const ShapeObjectiveOptions so = o.objective();
+  const fe::Scene* finer = &scene;
+  const SceneTarget* finer_target = &target;
+  for (int level = 1; level < options.levels; ++level) {
+    auto p = std::make_unique<CoarseProblem>();
+    p->level = level;
+    try {
+      p->scene = fe::coarsened(*finer);
+    } catch (const InvalidArgument& e) {
+      throw InvalidArgument("levels: " + std::to_string(options.levels) +
+                            " asks to halve the body " + std::to_string(options.levels - 1) +
+                            " times, but " + e.what());
+    }
+    p->assembler = std::make_unique<fe::Assembler>(p->scene.make_assembler());
+    p->control = std::make_unique<fe::ControlSpace>(p->scene.make_control_space(*p->assembler));
+    p->target.emplace(coarse_target(p->scene, p->assembler->mesh(), *finer_target, options));
+    p->objective = std::make_unique<ShapeObjective>(
+        *p->assembler, *p->control, HausdorffTarget(p->target->cloud, so.hausdorff), so,
+        fe::state_solver_factory(p->scene, options.state_backend, p->assembler.get(),
+                                 p->control.get()));
+    if (options.coarse_level == CoarseLevel::automatic &&
+        fe::grid_levels(p->scene, fe::GridSequencingOptions{}) > 0) {
+      p->two_level.emplace(fe::coarsened(p->scene).make_assembler());
+      p->objective->use_coarse_level(*p->two_level);
+    }
+    levels.push_back(std::move(p));
+    finer = &levels.back()->scene;
+    finer_target = &*levels.back()->target;
+  }
+  std::reverse(levels.begin(), levels.end());
+  return levels;
+}
+
+Eigen::VectorXd prolongate(const fe::Mesh& coarse, const fe::ControlSpace& coarse_control,
+                           const Eigen::VectorXd& m, const fe::Mesh& fine,
+                           const fe::ControlSpace& fine_control, const std::vector<int>& regions) {
+  return fe::control_at(coarse, coarse_control.kind(), m, fine_control.positions(fine), regions);
+}
+
+}  // namespace softhd::detail

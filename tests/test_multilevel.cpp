@@ -1,0 +1,143 @@
+// Multilevel tracking runs (TrackingRunOptions::levels, lib/src/control/multilevel.cpp): the
+// coarse target keeps the total volume, the prolongation reproduces what Q1 interpolation and
+// piecewise constants reproduce exactly, and a run's levels, history and caller stop.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "control/multilevel.hpp"
+#include "expect_error.hpp"
+#include "softhd/control/tracking_run.hpp"
+#include "softhd/fe/materials.hpp"
+#include "softhd/fe/mesh.hpp"
+
+namespace softhd::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+fe::Assembler box(const Eigen::Vector3i& cells, int order) {
+  return fe::Assembler(
+      fe::make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, 0.6, 0.3), cells, order),
+      std::make_shared<fe::MooneyRivlin>(1.0, 0.2, 3.0), Eigen::Vector3d::UnitX(), {{"x0", {}}});
+}
+
+TEST(Multilevel, SubsamplingKeepsEveryStrideThPointAndTheTotalVolume) {
+  Eigen::MatrixXd p(10, 2);
+  Eigen::VectorXd v(10);
+  for (int i = 0; i < 10; ++i) {
+    p.row(i) << i, -i;
+    v[i] = i + 1.0;  // total 55
+  }
+  const PointCloud c = detail::subsampled(PointCloud(p, v), 3);
+  ASSERT_EQ(c.size(), 4);  // points 0, 3, 6, 9
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_EQ(c.points()(k, 0), 3.0 * k);
+    // volumes 1, 4, 7, 10 (sum 22) scaled by 55 / 22
+    EXPECT_NEAR(c.volumes()[k], (3.0 * k + 1.0) * 55.0 / 22.0, 1e-12);
+  }
+  EXPECT_NEAR(c.volumes().sum(), 55.0, 1e-12);
+}
+
+TEST(Multilevel, ProlongationReproducesAffineVertexFieldsAndCoarseElementValues) {
+  const fe::Assembler coarse = box(Eigen::Vector3i(2, 1, 1), 1);
+  const fe::Assembler fine = box(Eigen::Vector3i(4, 2, 2), 2);
+  {
+    const fe::ControlSpace cs(coarse.mesh(), coarse.geometry(), fe::ControlKind::kVertex);
+    const fe::ControlSpace fs_(fine.mesh(), fine.geometry(), fe::ControlKind::kVertex);
+    // m = 1 + 2 X1 − 3 X2 + 5 X3: trilinear interpolation reproduces it.
+    const auto affine = [](const Eigen::MatrixXd& X) -> Eigen::VectorXd {
+      return (1.0 + 2.0 * X.col(0).array() - 3.0 * X.col(1).array() + 5.0 * X.col(2).array())
+          .matrix();
+    };
+    const Eigen::VectorXd m = detail::prolongate(
+        coarse.mesh(), cs, affine(cs.positions(coarse.mesh())), fine.mesh(), fs_, {});
+    const Eigen::VectorXd expected = affine(fs_.positions(fine.mesh()));
+    ASSERT_EQ(m.size(), expected.size());
+    EXPECT_LT((m - expected).cwiseAbs().maxCoeff(), 1e-12);
+  }
+  {
+    const fe::ControlSpace cs(coarse.mesh(), coarse.geometry(), fe::ControlKind::kElement);
+    const fe::ControlSpace fs_(fine.mesh(), fine.geometry(), fe::ControlKind::kElement);
+    const Eigen::VectorXd m =
+        detail::prolongate(coarse.mesh(), cs, Eigen::Vector2d(1.0, 2.0), fine.mesh(), fs_, {});
+    const Eigen::MatrixXd centres = fs_.positions(fine.mesh());
+    ASSERT_EQ(m.size(), 16);
+    for (Eigen::Index e = 0; e < m.size(); ++e)  // coarse element 0 holds X1 < 1.5
+      EXPECT_EQ(m[e], centres(e, 0) < 1.5 ? 1.0 : 2.0) << e;
+  }
+}
+
+class MultilevelRun : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    file_ = fs::path(::testing::TempDir()) / "softhd_multilevel_scene.json";
+    std::ofstream(file_) << R"({
+      "name": "small_bend",
+      "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [2, 0.4, 0.2], "cells": [6, 1, 2],
+                "order": 1 },
+      "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
+      "fibers": [1, 0, 0],
+      "clamp": ["x0"],
+      "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
+      "target": { "kind": "arc", "angle": 0.6 }
+    })";
+    scene_ = fe::load_scene(file_.string());
+    options_.max_iterations = 5;
+    options_.relative_change = 0.0;
+    options_.threads = 1;
+  }
+  fs::path file_;
+  fe::Scene scene_;
+  TrackingRunOptions options_;
+};
+
+TEST_F(MultilevelRun, CoarseLevelFirstThenTheUsersMeshFromItsControl) {
+  const TrackingRunSummary one = run_tracking(scene_, options_);
+  EXPECT_TRUE(one.levels.empty());
+  for (const TrackingIteration& it : one.history) EXPECT_EQ(it.level, 0);
+
+  options_.levels = 2;
+  const TrackingRunSummary two = run_tracking(scene_, options_);
+  ASSERT_EQ(two.levels.size(), 2u);
+  EXPECT_EQ(two.levels[0].level, 1);
+  EXPECT_EQ(two.levels[1].level, 0);
+  EXPECT_EQ(two.levels[1].nodes, one.nodes);
+  EXPECT_LT(two.levels[0].nodes, one.nodes);
+  // The scene's arc grid for the coarse body: twice as fine as its nodes, (6, 2, 2) cells.
+  EXPECT_EQ(two.levels[0].target_points, 6 * 2 * 2);
+  EXPECT_EQ(two.iterations, 5);
+  const int coarse = two.levels[0].iterations;
+  ASSERT_GE(coarse, 1);
+  ASSERT_EQ(two.history.size(), static_cast<std::size_t>(coarse + 5));
+  for (int k = 0; k < coarse + 5; ++k) EXPECT_EQ(two.history[k].level, k < coarse ? 1 : 0) << k;
+  // The user's mesh starts from the coarse level's control, not the scene's m = 0: near the
+  // coarse level's end (a 0.6 rad arc: ρ̃ at rest is far above, about 1.8 × the floor).
+  EXPECT_LT(two.rho_start, 0.7 * one.rho_start) << two.rho_start << " vs " << one.rho_start;
+  EXPECT_GT(two.control.cwiseAbs().maxCoeff(), 0.0);
+}
+
+TEST_F(MultilevelRun, ACallerStopOnACoarseLevelEndsTheRunAfterOneIterationOnTheUsersMesh) {
+  options_.levels = 2;
+  TrackingRunCallbacks cb;
+  cb.on_iteration = [](const TrackingIteration& it, const Eigen::VectorXd&) {
+    if (it.level == 1) throw StopRequest{};
+  };
+  const TrackingRunSummary s = run_tracking(scene_, options_, cb);
+  ASSERT_EQ(s.levels.size(), 2u);
+  EXPECT_EQ(s.levels[0].iterations, 1);
+  EXPECT_EQ(s.iterations, 1);
+  EXPECT_EQ(s.status, OptimizerStatus::stopped);
+}
+
+TEST_F(MultilevelRun, MoreLevelsThanHalvingsAreRefusedNamingLevels) {
+  options_.levels = 3;  // (6, 1, 2) -> (3, 1, 1) -> no even count
+  expect_error<InvalidArgument>([&] { run_tracking(scene_, options_); }, "levels");
+  options_.levels = 0;
+  expect_error<InvalidArgument>([&] { options_.validate(); }, "levels");
+}
+
+}  // namespace
+}  // namespace softhd::test
