@@ -33,6 +33,7 @@ endif()
 set(heavy "install_and_consume|Plate\\.HardCaseIsReachedFromFlat"
   "Plate\\.TipDisplacementConvergesUnderQ2Refinement"
   "OptimiseCli\\.KilledAndResumedRunsAreTheUninterruptedRun"
+  "OptimiseCli\\.MultilevelKilledAndResumedRunsAreTheUninterruptedRun"
   "Newton\\.OptionsChangeThePathNotTheEquilibrium|Newton\\.ZeroControlConvergesAtRest"
   "ShapeObjective\\.TwoLevelStartsReachTheSameStateWithFewerFineIterations"
   # 17 s in the main suite (six Newton solves up to 15 000 P2 dofs), 20x that under ASan;
