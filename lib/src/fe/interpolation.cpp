@@ -71,6 +71,45 @@ Eigen::MatrixXd interpolate_vertex(const Mesh& mesh, const PointLocator& locator
                      vertex_field, points, false, outside);
 }
 
+bool same_cells(const Mesh& a, const Mesh& b) {
+  if (a.dim != b.dim || a.num_elements() != b.num_elements() ||
+      a.num_vertices() != b.num_vertices() ||
+      reference_element(a.cell).linear != reference_element(b.cell).linear ||
+      a.element_vertices.cols() != b.element_vertices.cols() ||
+      a.element_vertices != b.element_vertices)
+    return false;
+  for (Eigen::Index k = 0; k < a.num_vertices(); ++k)
+    if (a.nodes.row(a.vertex_nodes[k]) != b.nodes.row(b.vertex_nodes[k])) return false;
+  return true;
+}
+
+Eigen::MatrixXd transfer_nodal(const Mesh& from, const Eigen::MatrixXd& field, const Mesh& to) {
+  if (!same_cells(from, to))
+    throw InvalidArgument("transfer_nodal: the two meshes are not the same cells");
+  if (field.rows() != from.num_nodes())
+    throw InvalidArgument("transfer_nodal: the nodal field has " + std::to_string(field.rows()) +
+                          " rows for " + std::to_string(from.num_nodes()) + " nodes");
+  const ReferenceElement& rf = reference_element(from.cell);
+  const ReferenceElement& rt = reference_element(to.cell);
+  // N_b(ξ_a) for every local node a of `to`: the same reference cell, corners in the same
+  // order, so ξ_a is the same point of element e in both meshes.
+  Eigen::MatrixXd T(rt.nodes, rf.nodes);
+  Eigen::VectorXd N(rf.nodes), dN(rf.nodes * rf.dim);
+  for (int a = 0; a < rt.nodes; ++a) {
+    const Eigen::VectorXd xi = rt.node_coordinates.row(a).transpose();
+    shape_functions(from.cell, xi.data(), N.data(), dN.data());
+    T.row(a) = N.transpose();
+  }
+  Eigen::MatrixXd values(to.num_nodes(), field.cols());
+  Eigen::MatrixXd fe(rf.nodes, field.cols());
+  for (Eigen::Index e = 0; e < to.num_elements(); ++e) {
+    for (int b = 0; b < rf.nodes; ++b) fe.row(b) = field.row(from.elements(e, b));
+    const Eigen::MatrixXd ve = T * fe;  // f(ξ_a) = Σ_b N_b(ξ_a) f_b
+    for (int a = 0; a < rt.nodes; ++a) values.row(to.elements(e, a)) = ve.row(a);
+  }
+  return values;
+}
+
 Eigen::VectorXi locate_points(const PointLocator& locator, const Eigen::MatrixXd& points) {
   Eigen::VectorXi e(points.rows());
   Eigen::VectorXd xi;

@@ -151,6 +151,37 @@ Mesh make_box_mesh(const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
   return m;
 }
 
+Mesh linear_mesh(const Mesh& mesh) {
+  if (mesh.order == 1) return mesh;
+  Mesh m;
+  m.dim = mesh.dim;
+  m.order = 1;
+  m.cell = reference_element(mesh.cell).linear;
+  const Eigen::Index nv = mesh.num_vertices();
+  m.nodes.resize(nv, mesh.dim);
+  std::vector<int> vertex_of(static_cast<std::size_t>(mesh.num_nodes()), -1);
+  for (Eigen::Index k = 0; k < nv; ++k) {
+    m.nodes.row(k) = mesh.nodes.row(mesh.vertex_nodes[k]);
+    vertex_of[static_cast<std::size_t>(mesh.vertex_nodes[k])] = static_cast<int>(k);
+  }
+  m.elements = mesh.element_vertices;  // in the linear cell's local order
+  m.element_vertices = mesh.element_vertices;
+  m.vertex_nodes = Eigen::VectorXi::LinSpaced(nv, 0, static_cast<int>(nv) - 1);
+  for (const auto& [name, nodes] : mesh.boundary_nodes) {
+    std::vector<int>& set = m.boundary_nodes[name];
+    for (int n : nodes)
+      if (vertex_of[static_cast<std::size_t>(n)] >= 0)
+        set.push_back(vertex_of[static_cast<std::size_t>(n)]);
+    std::sort(set.begin(), set.end());
+  }
+  m.element_region = mesh.element_region;
+  m.region_names = mesh.region_names;
+  m.box_lo = mesh.box_lo;
+  m.box_hi = mesh.box_hi;
+  m.cells = mesh.cells;
+  return m;
+}
+
 int locate(const Mesh& mesh, const Eigen::VectorXd& X, Eigen::VectorXd* xi) {
   const int dim = mesh.dim;
   if (X.size() != dim) return -1;

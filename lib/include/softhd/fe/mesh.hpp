@@ -97,6 +97,12 @@ void check_mesh_size(const MeshSize& size, double memory_limit, const std::strin
 Mesh make_box_mesh(const Eigen::VectorXd& lo, const Eigen::VectorXd& hi,
                    const Eigen::VectorXi& cells, int order);
 
+/// The P1/Q1 mesh on the vertices of `mesh` (the coarse level of p-sequencing,
+/// docs/formulation.md §3.7): the same cells with only their corners, node k at vertex k,
+/// so elements = element_vertices, the same regions and box data, and every boundary set
+/// restricted to its vertices. A mesh of order 1 is returned as it is.
+Mesh linear_mesh(const Mesh& mesh);
+
 /// Element containing the reference point X of a structured box mesh and the
 /// element's reference coordinates xi in [-1, 1]^dim. Returns -1 if X is outside
 /// the box (tolerance 1e-10 relative to the box size). Any mesh: fe/locator.hpp.
