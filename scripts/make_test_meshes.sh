@@ -18,6 +18,7 @@ for order in 1 2; do
   g ${name}_v41.msh -save -format msh22 -o ${name}_v22.msh
 done
 g box_hex27.geo -3 -format msh41 -o box_hex27_v41.msh
+g cylinder_tet.geo -3 -order 2 -format msh41 -o cylinder_tet10_v41.msh  # curved tet10
 g plate_2d.geo -2 -format msh41 -o plate_2d_v41.msh
 g plate_2d.geo -2 -format msh22 -o plate_2d_v22.msh
 g sparse.geo -0                       # writes sparse.msh itself (after Coherence Mesh)

@@ -1,13 +1,17 @@
 // Grid sequencing (lib/src/fe/grid_sequencing.cpp): the transfers are exact on the fields
 // their shape functions reproduce, the level count follows the documented rule, and the
-// sequenced start leads Newton to the state it reaches from rest.
+// sequenced start leads Newton to the state it reaches from rest; for box halving and for
+// p-sequencing of file meshes (P1 on the vertices of curved P2 cells).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "softhd/error.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
+#include "softhd/fe/interpolation.hpp"
 
 using namespace softhd::fe;
 
@@ -110,4 +114,211 @@ TEST(GridSequencing, SequencedStartReachesTheStateNewtonReachesFromRest) {
   ASSERT_TRUE(from_start.converged() && from_rest.converged());
   EXPECT_LT(from_start.newton_iterations, from_rest.newton_iterations);
   EXPECT_LT((start.u - rest.u).lpNorm<Eigen::Infinity>(), 1e-9 * rest.u.lpNorm<Eigen::Infinity>());
+}
+
+// p-sequencing (a file mesh of order 2: P1/Q1 on its vertices first, docs/formulation.md
+// §3.7).
+namespace {
+
+std::string mesh_path(const std::string& name) {
+  return std::string(SOFTHD_SOURCE_DIR) + "/tests/data/meshes/" + name;
+}
+
+// The curved tet10 cylinder (radius 0.5, length 2 along x; midside nodes on the mantle lie
+// on the circle), clamped at x = 0.
+const std::string kCylinder = mesh_path("cylinder_tet10_v41.msh");
+
+// A scene on a mesh file: `mesh_keys` after "file", the control space, the materials.
+Scene file_scene(const std::string& file, const std::string& mesh_keys, const std::string& space,
+                 const std::string& materials) {
+  const std::string text = R"({"name": "p", "mesh": {"type": "gmsh", "file": ")" + file + "\"" +
+                           mesh_keys + R"(}, "materials": )" + materials +
+                           R"(, "fibers": [1, 0, 0], "clamp": ["base"],
+      "control": {"space": ")" +
+                           space + R"(", "lower": -1, "upper": 0}})";
+  return parse_scene(text, ::testing::TempDir() + "/p.json");
+}
+
+const std::string kOneMaterial =
+    R"({"body": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3}})";
+const std::string kTwoMaterials =
+    R"({"body": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3},
+        "layer": {"model": "mooney_rivlin", "a": 10, "b": 2, "c": 30}})";
+
+// A linear field per component, X ↦ A X + b.
+Eigen::MatrixXd linear_field(const Eigen::MatrixXd& X) {
+  Eigen::Matrix3d A;
+  A << 0.3, -0.2, 0.5, 0.1, 0.7, -0.4, -0.6, 0.25, 0.15;
+  return (X * A.transpose()).rowwise() + Eigen::RowVector3d(0.1, -0.2, 0.3);
+}
+
+}  // namespace
+
+TEST(PSequencing, TheLinearMeshIsTheVerticesOfTheSameCurvedCells) {
+  const Scene s = file_scene(kCylinder, "", "vertex", kOneMaterial);
+  const Mesh& p2 = *s.file_mesh;
+  ASSERT_EQ(p2.cell, CellType::kTet10);
+  const Mesh p1 = linear_mesh(p2);
+  EXPECT_EQ(p1.cell, CellType::kTet4);
+  EXPECT_EQ(p1.num_nodes(), p2.num_vertices());
+  EXPECT_TRUE(same_cells(p1, p2));
+  EXPECT_TRUE(same_cells(p2, p1));
+  EXPECT_FALSE(same_cells(p2, make_box_mesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1),
+                                            Eigen::Vector3i(1, 1, 1), 2)));
+  // Boundary sets: the vertices among each set's nodes.
+  for (const char* name : {"base", "tip"}) {
+    std::vector<int> expected;
+    for (Eigen::Index k = 0; k < p2.num_vertices(); ++k) {
+      const std::vector<int>& set = p2.face(name);
+      if (std::binary_search(set.begin(), set.end(), p2.vertex_nodes[k]))
+        expected.push_back(static_cast<int>(k));
+    }
+    EXPECT_FALSE(expected.empty());
+    EXPECT_EQ(p1.face(name), expected) << name;
+  }
+  // The mesh is curved: some P2 nodes lie outside the straight-sided P1 mesh, where a point
+  // search would fail.
+  const PointLocator locator(p1);
+  Eigen::VectorXd xi;
+  int outside = 0;
+  for (Eigen::Index n = 0; n < p2.num_nodes(); ++n)
+    outside += locator.locate(p2.nodes.row(n).transpose(), &xi) < 0;
+  EXPECT_GT(outside, 10);
+  EXPECT_THROW(interpolate_nodal(p1, locator, linear_field(p1.nodes), p2.nodes, nullptr),
+               softhd::InvalidArgument);
+}
+
+TEST(PSequencing, VertexFieldsAreInterpolatedExactlyThroughTheReferenceCoordinates) {
+  const Scene s = file_scene(kCylinder, "", "vertex", kOneMaterial);
+  const Mesh& p2 = *s.file_mesh;
+  const Mesh p1 = linear_mesh(p2);
+  const Eigen::MatrixXd f = linear_field(p1.nodes);
+  const Eigen::MatrixXd u = transfer_nodal(p1, f, p2);
+  // Vertices keep their values; an edge node gets the mean of its edge's two vertices (the
+  // P1 field is linear along the edge in reference coordinates; tet10 edges 4:(0,1) 5:(1,2)
+  // 6:(2,0) 7:(3,0) 8:(3,2) 9:(3,1)), wherever the curved edge put the node.
+  const int edges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}};
+  double moved = 0.0;  // the largest distance of an edge node from its chord's midpoint
+  for (Eigen::Index e = 0; e < p2.num_elements(); ++e) {
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(u.row(p2.elements(e, k)), f.row(p1.elements(e, k))) << e;
+    for (int k = 0; k < 6; ++k) {
+      const int a = p1.elements(e, edges[k][0]), b = p1.elements(e, edges[k][1]);
+      const Eigen::RowVector3d mean = 0.5 * (f.row(a) + f.row(b));
+      EXPECT_LT((u.row(p2.elements(e, 4 + k)) - mean).norm(), 1e-15 * (1 + mean.norm()));
+      moved = std::max(
+          moved,
+          (p2.nodes.row(p2.elements(e, 4 + k)) - 0.5 * (p1.nodes.row(a) + p1.nodes.row(b))).norm());
+    }
+  }
+  EXPECT_GT(moved, 1e-3);  // curved: the nodes are off the chords
+  // The P2 field equals the P1 field at any reference point of every element.
+  double N2[10], dN2[30], N1[4], dN1[12];
+  for (Eigen::Index e = 0; e < p2.num_elements(); ++e) {
+    const double xi[3] = {0.1 + 0.003 * (e % 50), 0.2, 0.15 + 0.002 * (e % 40)};
+    shape_functions(CellType::kTet10, xi, N2, dN2);
+    shape_functions(CellType::kTet4, xi, N1, dN1);
+    Eigen::RowVector3d v2 = Eigen::RowVector3d::Zero(), v1 = Eigen::RowVector3d::Zero();
+    for (int a = 0; a < 10; ++a) v2 += N2[a] * u.row(p2.elements(e, a));
+    for (int b = 0; b < 4; ++b) v1 += N1[b] * f.row(p1.elements(e, b));
+    EXPECT_LT((v2 - v1).norm(), 1e-14 * (1 + v1.norm())) << e;
+  }
+  // Back onto the vertices: the P2 field's vertex values, exactly.
+  EXPECT_EQ(transfer_nodal(p2, u, p1), f);
+  // prolongate (the grid-sequencing transfer) takes this path: no point search.
+  const Eigen::VectorXd uf = prolongate(p1, f.transpose().reshaped(), p2);
+  EXPECT_EQ(uf, Eigen::VectorXd(u.transpose().reshaped()));
+}
+
+TEST(PSequencing, StraightSidedP2ReproducesALinearFieldAtEveryNode) {
+  // A first-order file with "order": 2: straight-sided P2, midside nodes on the chords.
+  const Scene s =
+      file_scene(mesh_path("cube_tet4_v41.msh"), R"(, "order": 2)", "vertex", kTwoMaterials);
+  const Mesh& p2 = *s.file_mesh;
+  ASSERT_EQ(p2.cell, CellType::kTet10);
+  const Mesh p1 = linear_mesh(p2);
+  const Eigen::MatrixXd u = transfer_nodal(p1, linear_field(p1.nodes), p2);
+  const Eigen::MatrixXd expected = linear_field(p2.nodes);
+  EXPECT_LT((u - expected).lpNorm<Eigen::Infinity>(), 1e-14);
+}
+
+TEST(PSequencing, FileMeshesOfOrderTwoGetOneLinearLevel) {
+  Scene s = file_scene(kCylinder, "", "vertex", kOneMaterial);
+  GridSequencingOptions automatic, one, two;
+  one.levels = 1;
+  two.levels = 2;
+  EXPECT_EQ(grid_levels(s, automatic), 1);
+  EXPECT_EQ(grid_levels(s, one), 1);
+  EXPECT_THROW(grid_levels(s, two), softhd::InvalidArgument);  // P1 has no coarser level
+  automatic.min_elements = static_cast<int>(s.file_mesh->num_elements()) + 1;
+  EXPECT_EQ(grid_levels(s, automatic), 0);
+  // Fibres per node are restricted to the vertices.
+  s.fiber_field.kind = FiberField::Kind::kNode;
+  s.fiber_field.values.resize(3, s.file_mesh->num_nodes());
+  for (Eigen::Index n = 0; n < s.file_mesh->num_nodes(); ++n)
+    s.fiber_field.values.col(n) = Eigen::Vector3d(1.0, 0.2 * s.file_mesh->nodes(n, 1), 0.1);
+  const Scene c = coarsened(s);
+  EXPECT_EQ(c.order, 1);
+  EXPECT_FALSE(c.is_box());
+  ASSERT_EQ(c.fiber_field.values.cols(), s.file_mesh->num_vertices());
+  for (Eigen::Index k = 0; k < s.file_mesh->num_vertices(); ++k)
+    EXPECT_EQ(c.fiber_field.values.col(k), s.fiber_field.values.col(s.file_mesh->vertex_nodes[k]));
+  EXPECT_EQ(c.make_assembler().mesh().cell, CellType::kTet4);
+  // A first-order file has no coarser level.
+  const Scene p1 = file_scene(mesh_path("cube_tet4_v41.msh"), "", "vertex", kTwoMaterials);
+  EXPECT_EQ(grid_levels(p1, GridSequencingOptions{}), 0);
+  EXPECT_THROW(grid_levels(p1, one), softhd::InvalidArgument);
+  try {
+    coarsened(p1);
+    ADD_FAILURE();
+  } catch (const softhd::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("of order 1"), std::string::npos) << e.what();
+  }
+}
+
+namespace {
+
+// The p-sequenced start and the start from rest reach the same state (Newton's tolerance).
+void expect_p_sequencing_reaches_the_state_from_rest(const Scene& s, const Eigen::VectorXd& m) {
+  const Assembler a = s.make_assembler();
+  const ControlSpace c(a.mesh(), a.geometry(), s.control_kind);
+  ASSERT_EQ(m.size(), c.size());
+  NewtonOptions options;
+  options.displacement_tolerance = 1e-10;
+  options.absolute_tolerance = s.residual_floor();
+  GridSequencingReport report;
+  State start = grid_sequenced_start(s, a, m, options, GridSequencingOptions{}, &report);
+  ASSERT_EQ(report.levels.size(), 1u);
+  EXPECT_EQ(report.levels[0].cell, CellType::kTet4);
+  EXPECT_EQ(report.levels[0].nodes, a.mesh().num_vertices());
+  EXPECT_TRUE(report.levels[0].newton.converged());
+  EXPECT_FALSE(report.fell_back_to_rest);
+  EXPECT_NE(report.BriefReport().find("coarse level (P1 on the vertices: tet4"), std::string::npos)
+      << report.BriefReport();
+  EXPECT_GT(start.u.norm(), 0.0);
+  State rest = rest_state(a);
+  NewtonSolver n1(a, options), n2(a, options);
+  const Eigen::MatrixXd m_qp = c.to_quadrature(m);
+  const NewtonSummary from_start = n1.solve(m_qp, &start);
+  const NewtonSummary from_rest = n2.solve(m_qp, &rest);
+  ASSERT_TRUE(from_start.converged() && from_rest.converged());
+  EXPECT_LT((start.u - rest.u).lpNorm<Eigen::Infinity>(), 1e-9 * rest.u.lpNorm<Eigen::Infinity>());
+}
+
+}  // namespace
+
+TEST(PSequencing, CurvedP2WithVertexControlsReachesTheStateFromRest) {
+  const Scene s = file_scene(kCylinder, "", "vertex", kOneMaterial);
+  Eigen::VectorXd m(s.file_mesh->num_vertices());
+  for (Eigen::Index k = 0; k < m.size(); ++k)  // stronger towards the top: bends and stretches
+    m[k] = -0.3 - 0.4 * (s.file_mesh->nodes(s.file_mesh->vertex_nodes[k], 2) + 0.5);
+  expect_p_sequencing_reaches_the_state_from_rest(s, m);
+}
+
+TEST(PSequencing, TwoMaterialsWithElementControlsReachTheStateFromRest) {
+  const Scene s =
+      file_scene(mesh_path("cube_tet4_v41.msh"), R"(, "order": 2)", "element", kTwoMaterials);
+  Eigen::VectorXd m(s.file_mesh->num_elements());
+  for (Eigen::Index e = 0; e < m.size(); ++e)
+    m[e] = -0.2 - 0.5 * s.file_mesh->nodes(s.file_mesh->elements(e, 0), 1);
+  expect_p_sequencing_reaches_the_state_from_rest(s, m);
 }

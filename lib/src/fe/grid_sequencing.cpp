@@ -1,5 +1,6 @@
 #include "softhd/fe/grid_sequencing.hpp"
 
+#include <memory>
 #include <sstream>
 
 #include "softhd/error.hpp"
@@ -7,24 +8,10 @@
 
 namespace softhd::fe {
 
-void GridSequencingOptions::validate() const {
-  if (levels < -1) throw InvalidArgument("grid sequencing: levels must be >= -1");
-  if (min_elements < 1) throw InvalidArgument("grid sequencing: min_elements must be >= 1");
-}
+namespace {
 
-std::string GridSequencingReport::BriefReport() const {
-  std::ostringstream os;
-  for (const GridLevelReport& level : levels)
-    os << "coarse level (cells " << level.cells.transpose() << "): " << level.newton.BriefReport()
-       << "\n";
-  if (fell_back_to_rest) os << "coarse level did not converge: the fine solve starts from rest\n";
-  return os.str();
-}
-
-Scene coarsened(const Scene& scene) {
-  if (!scene.is_box())
-    throw InvalidArgument("grid sequencing: the body's mesh comes from a file (" + scene.mesh_file +
-                          "), which cannot be halved");
+// The box with half the cells along every even axis.
+Scene halved(const Scene& scene) {
   Scene coarse = scene;
   bool halved = false;
   for (Eigen::Index k = 0; k < coarse.cells.size(); ++k) {
@@ -41,16 +28,75 @@ Scene coarsened(const Scene& scene) {
   return coarse;
 }
 
+// A file mesh of order 2 as P1/Q1 on its vertices: the mesh's vertex nodes, fibres per node
+// restricted to them (per element and uniform ones as they are), the linear cell's default
+// quadrature; materials by region and constraints by name carry over.
+Scene order_dropped(const Scene& scene) {
+  if (scene.order != 2)
+    throw InvalidArgument("grid sequencing: the body's mesh comes from a file (" + scene.mesh_file +
+                          ") and is of order 1: it has no coarser level (no grid to halve, no "
+                          "order to drop)");
+  const Mesh& fine = *scene.file_mesh;
+  Scene coarse = scene;
+  coarse.file_mesh = std::make_shared<const Mesh>(linear_mesh(fine));
+  coarse.order = 1;
+  coarse.gmsh_options.order = 1;
+  coarse.quadrature_degree = 0;
+  if (scene.fiber_field.kind == FiberField::Kind::kNode) {
+    Eigen::Matrix3Xd a(3, fine.num_vertices());
+    for (Eigen::Index k = 0; k < a.cols(); ++k)
+      a.col(k) = scene.fiber_field.values.col(fine.vertex_nodes[k]);
+    coarse.fiber_field.values = a;
+  }
+  return coarse;
+}
+
+}  // namespace
+
+void GridSequencingOptions::validate() const {
+  if (levels < -1) throw InvalidArgument("grid sequencing: levels must be >= -1");
+  if (min_elements < 1) throw InvalidArgument("grid sequencing: min_elements must be >= 1");
+}
+
+std::string GridSequencingReport::BriefReport() const {
+  std::ostringstream os;
+  for (const GridLevelReport& level : levels)
+    os << "coarse level (" << level.mesh << "): " << level.newton.BriefReport() << "\n";
+  if (fell_back_to_rest) os << "coarse level did not converge: the fine solve starts from rest\n";
+  return os.str();
+}
+
+std::string describe_level(const Scene& scene) {
+  std::ostringstream os;
+  if (scene.is_box()) {
+    os << "cells " << scene.cells.transpose();
+    return os.str();
+  }
+  const Mesh& mesh = *scene.file_mesh;
+  const ReferenceElement& ref = reference_element(mesh.cell);
+  if (scene.gmsh_options.order == 1)  // the vertices only (order_dropped, or "order": 1)
+    os << (ref.simplex ? "P1" : "Q1") << " on the vertices: ";
+  os << to_string(mesh.cell) << ", " << mesh.num_nodes() << " nodes";
+  return os.str();
+}
+
+Scene coarsened(const Scene& scene) {
+  // The one choice of the coarse level: halving needs a structured grid, which only a box
+  // has; a file mesh drops its order on the same cells instead.
+  return scene.is_box() ? halved(scene) : order_dropped(scene);
+}
+
 int grid_levels(const Scene& scene, const GridSequencingOptions& options) {
   options.validate();
-  // A mesh from a file has no structured grid to halve: automatic levels are 0, and asking
-  // for levels is refused by coarsened().
-  if (!scene.is_box() && options.levels < 0) return 0;
   if (options.levels >= 0) {
     Scene s = scene;
     for (int l = 0; l < options.levels; ++l) s = coarsened(s);  // throws if it cannot
     return options.levels;
   }
+  // A file mesh of order 2: its P1/Q1 level (as many elements as the mesh), measured faster
+  // than the start from rest on the finger (bench/bench_p_sequencing.py).
+  if (!scene.is_box())
+    return scene.order == 2 && scene.file_mesh->num_elements() >= options.min_elements ? 1 : 0;
   int levels = 0;
   Scene s = scene;
   while (true) {
@@ -108,6 +154,10 @@ Eigen::MatrixXd quadrature_positions(const Mesh& mesh, const ReferenceGeometry& 
 Eigen::MatrixXd control_on_quadrature(const Assembler& assembler, const Mesh& mesh,
                                       ControlKind kind, const Eigen::VectorXd& m,
                                       const std::vector<int>& regions) {
+  // The same cells and vertices (and regions): m(ξ_q) = Σ_k M_k(ξ_q) m_k in each element of
+  // the control's regions, no point search.
+  if (same_cells(assembler.mesh(), mesh))
+    return ControlSpace(assembler.mesh(), assembler.geometry(), kind, regions).to_quadrature(m);
   const Eigen::VectorXd v = control_at(
       mesh, kind, m, quadrature_positions(assembler.mesh(), assembler.geometry()), regions);
   const int nq = assembler.geometry().points_per_element();
@@ -119,8 +169,10 @@ Eigen::VectorXd prolongate(const Mesh& coarse, const Eigen::VectorXd& u_coarse, 
   if (coarse.dim != fine.dim || u_coarse.size() != coarse.num_nodes() * coarse.dim)
     throw InvalidArgument("prolongate: the coarse field does not match its mesh");
   const int d = fine.dim;
-  // u(X_n) = Σ_a N_a(ξ) u_a in the coarse element containing the fine node X_n
   const Eigen::MatrixXd U = u_coarse.reshaped(d, coarse.num_nodes()).transpose();
+  // The same cells: u(ξ_a) = Σ_b N_b(ξ_a) u_b element by element (p-sequencing).
+  if (same_cells(coarse, fine)) return transfer_nodal(coarse, U, fine).transpose().reshaped();
+  // u(X_n) = Σ_a N_a(ξ) u_a in the coarse element containing the fine node X_n
   std::vector<int> outside;
   const Eigen::MatrixXd u =
       interpolate_nodal(coarse, PointLocator(coarse), U, fine.nodes, &outside);
@@ -146,7 +198,8 @@ bool solve_grid_level(const Scene& scene, const Mesh& fine, ControlKind kind,
   }
   NewtonSolver solver(assembler, newton);
   const NewtonSummary summary = solver.solve(m_qp, state);
-  report->levels.push_back({scene.cells, summary});
+  report->levels.push_back({scene.cells, summary, describe_level(scene), assembler.mesh().cell,
+                            assembler.mesh().num_nodes()});
   *mesh = assembler.mesh();
   return summary.converged();
 }

@@ -1,10 +1,13 @@
 #pragma once
 /// \file grid_sequencing.hpp
-/// Grid sequencing (docs/formulation.md §3.7): the equilibrium is first solved on meshes with
-/// half the cells, coarsest first, and each finer Newton solve starts from the coarser
-/// state interpolated by the coarse shape functions. A coarse Newton iteration costs about
-/// an eighth of a fine one, and the fine solve then starts near its solution, so the
-/// indefinite tangents met far from equilibrium are met on the cheap mesh.
+/// Grid sequencing (docs/formulation.md §3.7): the equilibrium is first solved on coarser
+/// levels, coarsest first, and each finer Newton solve starts from the coarser state
+/// interpolated by the coarse shape functions. A structured box is coarsened by halving its
+/// cells; a mesh from a file, which has no grid to halve, by dropping its order (p-sequencing:
+/// P1/Q1 on the vertices of the same P2/Q2 cells). coarsened() is the one place that chooses;
+/// the transfers between levels (prolongate, control_on_quadrature) work for both. A coarse
+/// Newton iteration is cheap, and the fine solve then starts near its solution, so the
+/// indefinite tangents met far from equilibrium are met on the cheap level.
 
 #include <Eigen/Core>
 #include <string>
@@ -18,8 +21,9 @@ namespace softhd::fe {
 
 /// How many coarser levels to solve first.
 struct GridSequencingOptions {
-  /// Coarser meshes solved first: 0 none, −1 automatic (halve while some axis has an
-  /// even cell count and the coarser mesh keeps at least `min_elements` elements).
+  /// Coarser levels solved first: 0 none, −1 automatic (a box: halve while some axis has
+  /// an even cell count and the coarser mesh keeps at least `min_elements` elements; a file
+  /// mesh of order 2 with at least `min_elements` elements: its P1/Q1 level; else none).
   int levels = -1;
   /// The smallest coarse mesh (elements) the automatic choice accepts.
   int min_elements = 32;
@@ -29,8 +33,13 @@ struct GridSequencingOptions {
 
 /// One coarse solve of a grid sequence.
 struct GridLevelReport {
-  Eigen::VectorXi cells;  ///< the coarse mesh's cells per axis
+  Eigen::VectorXi cells;  ///< a halved box's cells per axis (empty for a P1/Q1 level)
   NewtonSummary newton;   ///< its Newton solve
+  /// What the level is, for reports: "cells 25 2 1", or "P1 on the vertices: tet4, 812
+  /// nodes".
+  std::string mesh;
+  CellType cell = CellType::kHex8;  ///< its cell type
+  Eigen::Index nodes = 0;           ///< its node count
 };
 
 /// What grid_sequenced_start did.
@@ -42,12 +51,19 @@ struct GridSequencingReport {
   std::string BriefReport() const;
 };
 
-/// The scene with half the cells along every axis whose cell count is even. Throws
-/// InvalidArgument if no axis can be halved.
+/// The next coarser level of `scene`: a box with half the cells along every axis whose cell
+/// count is even; a file mesh of order 2 as P1/Q1 on its vertices (linear_mesh: the same
+/// materials per region, constraints by name on the vertex nodes of their sets, fibre
+/// fields per node restricted to the vertices, the linear cell's default quadrature).
+/// Throws InvalidArgument if there is none (no even axis; a file mesh of order 1).
 Scene coarsened(const Scene& scene);
 
+/// What the level `scene` is, for reports: "cells 25 2 1" (a box), or "P1 on the vertices:
+/// tet4, 812 nodes" (a file mesh's P1/Q1 level), or "tet10, 4849 nodes" (any other).
+std::string describe_level(const Scene& scene);
+
 /// The number of coarser levels `options` asks for on `scene` (−1 resolved). Throws
-/// InvalidArgument if an explicit count cannot be halved that often.
+/// InvalidArgument if an explicit count cannot be coarsened that often.
 int grid_levels(const Scene& scene, const GridSequencingOptions& options);
 
 /// Values at the reference points X (rows) of the control field m of `kind` on `mesh`:
@@ -62,13 +78,16 @@ Eigen::MatrixXd quadrature_positions(const Mesh& mesh, const ReferenceGeometry& 
 
 /// The control field m of `kind` on `mesh`, acting on `regions`, at the quadrature points of
 /// `assembler`'s mesh (E by nq, the layout of ControlSpace::to_quadrature): control_at those
-/// points.
+/// points; on the same cells (same_cells, fe/interpolation.hpp: a P1/Q1 level) m is the
+/// assembler's own control, taken at the same reference points.
 Eigen::MatrixXd control_on_quadrature(const Assembler& assembler, const Mesh& mesh,
                                       ControlKind kind, const Eigen::VectorXd& m,
                                       const std::vector<int>& regions = {});
 
-/// Nodal displacements on `fine` of the coarse field u(X) = Σ_a N_a(ξ) u_a (the coarse
-/// element containing each fine node). Throws InvalidArgument if a node is outside.
+/// Nodal displacements on `fine` of the field u(X) = Σ_a N_a(ξ) u_a on `coarse` (the coarse
+/// element containing each fine node); on the same cells (same_cells) element by element
+/// through the reference coordinates (transfer_nodal), either way round. Throws
+/// InvalidArgument if a node is outside.
 Eigen::VectorXd prolongate(const Mesh& coarse, const Eigen::VectorXd& u_coarse, const Mesh& fine);
 
 /// The equilibrium on `scene`'s mesh (*mesh, *state) under the control values m of `kind`
