@@ -47,12 +47,14 @@ constexpr const char* kUsage =
     "  --write-cloud FILE     also write the deformed nodes with their deformed volumes\n"
     "                         V_i = int N_i J dX as a point cloud (.ply binary, else text), in\n"
     "                         node order: a target for softhd optimise\n"
-    "  --coarse-levels K      grid sequencing: first solve on the mesh with half the cells\n"
-    "                         along every even axis (K times, coarsest first) and start each\n"
-    "                         finer Newton solve from the coarser state interpolated onto its\n"
-    "                         nodes; 0 starts from rest (default auto: halve while an axis is\n"
-    "                         even and the coarse mesh keeps >= 32 elements; a coarse solve\n"
-    "                         that fails makes the start the rest state)\n"
+    "  --coarse-levels K      grid sequencing: first solve on coarser levels (K, coarsest\n"
+    "                         first) and start each finer Newton solve from the coarser state\n"
+    "                         interpolated onto its nodes; 0 starts from rest. A box halves\n"
+    "                         its cells along every even axis per level; a mesh file of order\n"
+    "                         2 has one level, P1/Q1 on its vertices (p-sequencing). Default\n"
+    "                         auto: halve while an axis is even and the coarse mesh keeps >= 32\n"
+    "                         elements, a file mesh of order 2 its P1/Q1 level; a coarse solve\n"
+    "                         that fails makes the start the rest state\n"
     "  --json                 print a JSON summary (probes, energy, volume, iterations, ...)\n"
     "  --linear-solver NAME   eigen-llt, eigen-ldlt or cholmod (default cholmod)\n"
     "  --step-tol T           converged also needs the last Newton correction\n"
@@ -208,6 +210,9 @@ nlohmann::json coarse_levels_json(const GridSequencingReport& grid) {
   for (const GridLevelReport& level : grid.levels) {
     levels.push_back(
         {{"cells", std::vector<int>(level.cells.data(), level.cells.data() + level.cells.size())},
+         {"mesh", level.mesh},
+         {"cell", to_string(level.cell)},
+         {"nodes", level.nodes},
          {"newton_iterations", level.newton.newton_iterations},
          {"factorizations", level.newton.factorizations},
          {"seconds", level.newton.seconds_total}});

@@ -61,9 +61,11 @@ options:
   --checkpoint-every K  save the warm-start states every K iterations (default {checkpoint_every}): a
                      resume recomputes at most the K-1 iterations after the last save
   --coarse-level C   auto | off: two-level starts, a large control step solved first on
-                     the mesh with half the cells along the even axes (default {coarse_level}: when
-                     that mesh has >= 32 elements)
-  --levels N         multilevel optimisation: solve first on the box halved N-1 times with a
+                     the mesh with half the cells along the even axes, or for a mesh file
+                     of order 2 as P1/Q1 on its vertices (default {coarse_level}: when that
+                     mesh has >= 32 elements)
+  --levels N         multilevel optimisation: solve first on the box halved N-1 times (a
+                     mesh file of order 2: N = 2, its P1/Q1 level first) with a
                      coarse target and tree tolerance max(--tol, {coarse_tol}), at most
                      --coarse-iterations K (default {coarse_iterations}) iterations per coarse
                      level, ending earlier once rho decreased by less than {switch_decrease}
@@ -268,6 +270,8 @@ TrackingRunCallbacks progress(const fe::Scene& scene, bool quiet) {
   cb.on_begin = [&scene](const TrackingRunSummary& s) {
     std::fprintf(stderr, "softhd optimise %s: %ld nodes, %ld controls, target %ld points (%s)\n",
                  scene.name.c_str(), s.nodes, s.controls, s.target_points, s.target.c_str());
+    if (!s.coarse_level.empty())
+      std::fprintf(stderr, "  two-level starts on the coarse level (%s)\n", s.coarse_level.c_str());
   };
   cb.on_start = print_start;
   cb.on_failure = [](const std::string& report) {

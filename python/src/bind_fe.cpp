@@ -153,8 +153,10 @@ void bind_fe(py::module_& m) {
            py::arg("threads") = 0,
            "The equilibrium for the control m: None (the scene's control.initial), a number "
            "(uniform) or an array of num_controls values within the scene's bounds. probes: "
-           "(P, dim) reference points where u is interpolated. coarse_levels: grid sequencing, "
-           "-1 automatic (as softhd forward), 0 none, K levels. Same solve as `softhd forward`. A "
+           "(P, dim) reference points where u is interpolated. coarse_levels: grid sequencing "
+           "(a box halved K times; a file mesh of order 2 solved as P1/Q1 on its vertices "
+           "first), -1 automatic (as softhd forward), 0 none, K levels. Same solve as `softhd "
+           "forward`. A "
            "Newton failure is "
            "reported in the result (converged, status, report), not raised.");
 }

@@ -119,6 +119,35 @@ TEST(CliForward, CoarseLevelsReachTheSameStateAndTheCloudHasTheDeformedVolume) {
   std::remove(cloud.c_str());
 }
 
+// A curved P2 file mesh is p-sequenced by default (P1 on its vertices first, the progress
+// line says so), to the state of the start from rest; it has no second coarse level.
+TEST(CliForward, FileMeshesOfOrderTwoStartFromTheirVertices) {
+  const std::string scene = kDir + "_cylinder.json";
+  std::ofstream(scene) << R"({"name": "cylinder", "mesh": {"type": "gmsh", "file": ")"
+                       << SOFTHD_SOURCE_DIR << R"(/tests/data/meshes/cylinder_tet10_v41.msh"},
+    "material": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3}, "fibers": [1, 0, 0],
+    "clamp": ["base"], "control": {"space": "vertex", "lower": -1, "upper": 0}})";
+  std::string cold, sequenced, err;
+  const std::vector<std::string> args = {
+      scene, "--control-uniform", "-0.4", "--probe", "2,0,0", "--json", "--out", kDir};
+  std::vector<std::string> rest = args;
+  rest.insert(rest.end(), {"--coarse-levels", "0"});
+  ASSERT_EQ(run(rest, &cold), 0);
+  ASSERT_EQ(run(args, &sequenced, &err), 0);
+  EXPECT_NE(err.find("coarse level (P1 on the vertices: tet4, 50 nodes)"), std::string::npos)
+      << err;
+  const nlohmann::json a = nlohmann::json::parse(cold), b = nlohmann::json::parse(sequenced);
+  EXPECT_TRUE(a["coarse_levels"].empty());
+  ASSERT_EQ(b["coarse_levels"].size(), 1u);
+  EXPECT_EQ(b["coarse_levels"][0]["cell"], "tet4");
+  EXPECT_EQ(b["coarse_levels"][0]["nodes"], 50);
+  for (int k = 0; k < 3; ++k)
+    EXPECT_NEAR(a["probes"][0]["u"][k].get<double>(), b["probes"][0]["u"][k].get<double>(), 1e-8);
+  EXPECT_EQ(run({scene, "--coarse-levels", "2", "--out", kDir}, nullptr, &err), 2);
+  EXPECT_NE(err.find("of order 1: it has no coarser level"), std::string::npos) << err;
+  std::remove(scene.c_str());
+}
+
 TEST(CliForward, BadInputExitsWithTwoAndOneLine) {
   const std::string scene = small_scene();
   std::string err;

@@ -5,6 +5,7 @@
 
 #include "softhd/error.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
+#include "softhd/fe/interpolation.hpp"
 #include "softhd/fe/state_equation.hpp"
 
 namespace softhd::detail {
@@ -55,9 +56,9 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
     try {
       p->scene = fe::coarsened(*finer);
     } catch (const InvalidArgument& e) {
-      throw InvalidArgument("levels: " + std::to_string(options.levels) +
-                            " asks to halve the body " + std::to_string(options.levels - 1) +
-                            " times, but " + e.what());
+      throw InvalidArgument("levels: " + std::to_string(options.levels) + " asks for " +
+                            std::to_string(options.levels - 1) +
+                            " coarser levels of the body, but " + e.what());
     }
     p->assembler = std::make_unique<fe::Assembler>(p->scene.make_assembler());
     p->control = std::make_unique<fe::ControlSpace>(p->scene.make_control_space(*p->assembler));
@@ -82,6 +83,8 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
 Eigen::VectorXd prolongate(const fe::Mesh& coarse, const fe::ControlSpace& coarse_control,
                            const Eigen::VectorXd& m, const fe::Mesh& fine,
                            const fe::ControlSpace& fine_control, const std::vector<int>& regions) {
+  // The same cells (a P1/Q1 level): the same vertices and elements carry the same controls.
+  if (fe::same_cells(coarse, fine) && coarse_control.kind() == fine_control.kind()) return m;
   return fe::control_at(coarse, coarse_control.kind(), m, fine_control.positions(fine), regions);
 }
 

@@ -42,7 +42,8 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
 
 /// The control m of `coarse` at the controls of `fine` (the same body, a finer mesh): vertex
 /// controls Q1-interpolated at the fine vertices, element controls the containing coarse
-/// element's value at each fine element's centre (fe::control_at); 0 outside `regions`.
+/// element's value at each fine element's centre (fe::control_at); 0 outside `regions`. On
+/// the same cells (fe::same_cells: a P1/Q1 level and its P2/Q2 mesh) m itself.
 Eigen::VectorXd prolongate(const fe::Mesh& coarse, const fe::ControlSpace& coarse_control,
                            const Eigen::VectorXd& m, const fe::Mesh& fine,
                            const fe::ControlSpace& fine_control, const std::vector<int>& regions);

@@ -119,8 +119,10 @@ struct TrackingRun::Impl {
         fe::state_solver_factory(scene, options.state_backend, &a, &c));
     if (options.coarse_level == CoarseLevel::automatic &&
         fe::grid_levels(scene, fe::GridSequencingOptions{}) > 0) {
-      coarse.emplace(fe::coarsened(scene).make_assembler());
+      const fe::Scene level = fe::coarsened(scene);
+      coarse.emplace(level.make_assembler());
       objective->use_coarse_level(*coarse);
+      setup.coarse_level = fe::describe_level(level);
     }
     if (options.levels > 1) levels = detail::coarse_problems(scene, target, options);
     setup.target = target.description;

@@ -142,6 +142,9 @@ struct TrackingRunSummary : ShapeTrackingSummary {
   long target_points = 0;  ///< points of the target cloud
   long nodes = 0;          ///< nodes of the body's mesh
   long controls = 0;       ///< control values
+  /// The coarse level of the two-level starts (fe::describe_level: "cells 25 5 1", "P1 on
+  /// the vertices: tet4, 778 nodes"); empty without one.
+  std::string coarse_level;
 };
 
 /// Observers of a run: track_shape's (on_start, on_iteration — which may throw StopRequest —
