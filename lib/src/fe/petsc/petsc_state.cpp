@@ -99,17 +99,19 @@ GridSequencingReport PetscStateSolver::grid_sequenced_start(const Scene& scene,
   s.m_qp.setZero();
   s.solved = false;
   if (levels == 0) return report;
+  const Mesh body = scene.make_mesh();
   Mesh coarse_mesh;
   State coarse;
-  if (!solve_grid_level(coarsened(scene), scene.make_mesh(), scene.control_kind, m, levels - 1,
-                        s.options.newton, &report, &coarse_mesh, &coarse)) {
+  if (!solve_grid_level(coarsened(scene), body, scene.control_kind, m, levels - 1, s.options.newton,
+                        &report, &coarse_mesh, &coarse)) {
     report.fell_back_to_rest = true;
     return report;
   }
-  const Eigen::VectorXd u = prolongate(coarse_mesh, coarse.u, s.system.assembler().mesh());
-  const DofMap& dofs = s.system.assembler().dofs();
-  const std::vector<int>& owned = s.system.numbering().owned_local;
-  for (Eigen::Index i = 0; i < s.u.size(); ++i) s.u[i] = u[dofs.free_dofs[owned[i]]];
+  // Onto the whole body's nodes (a P1/Q1 level transfers to the mesh of its own cells, not
+  // to a slab of it), then this rank's rows.
+  const Eigen::VectorXd u = prolongate(coarse_mesh, coarse.u, body);
+  const std::vector<std::int64_t>& dofs = s.system.numbering().owned_global_dof;
+  for (Eigen::Index i = 0; i < s.u.size(); ++i) s.u[i] = u[dofs[i]];
   const std::vector<int>& ids = s.control_ids();
   Eigen::VectorXd local(s.control.size());
   for (Eigen::Index k = 0; k < local.size(); ++k) local[k] = m[ids[k]];
