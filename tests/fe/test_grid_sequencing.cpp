@@ -128,14 +128,14 @@ std::string mesh_path(const std::string& name) {
 // on the circle), clamped at x = 0.
 const std::string kCylinder = mesh_path("cylinder_tet10_v41.msh");
 
-// A scene on a mesh file: `mesh_keys` after "file", the control space, the materials.
+// A scene on a mesh file: `mesh_keys` after "file", the control space, the materials, the
+// clamped group.
 Scene file_scene(const std::string& file, const std::string& mesh_keys, const std::string& space,
-                 const std::string& materials) {
-  const std::string text = R"({"name": "p", "mesh": {"type": "gmsh", "file": ")" + file + "\"" +
-                           mesh_keys + R"(}, "materials": )" + materials +
-                           R"(, "fibers": [1, 0, 0], "clamp": ["base"],
-      "control": {"space": ")" +
-                           space + R"(", "lower": -1, "upper": 0}})";
+                 const std::string& materials, const std::string& clamp = "base") {
+  const std::string text =
+      R"({"name": "p", "mesh": {"type": "gmsh", "file": ")" + file + "\"" + mesh_keys +
+      R"(}, "materials": )" + materials + R"(, "fibers": [1, 0, 0], "clamp": [")" + clamp +
+      R"("], "control": {"space": ")" + space + R"(", "lower": -1, "upper": 0}})";
   return parse_scene(text, ::testing::TempDir() + "/p.json");
 }
 
@@ -278,7 +278,8 @@ TEST(PSequencing, FileMeshesOfOrderTwoGetOneLinearLevel) {
 namespace {
 
 // The p-sequenced start and the start from rest reach the same state (Newton's tolerance).
-void expect_p_sequencing_reaches_the_state_from_rest(const Scene& s, const Eigen::VectorXd& m) {
+void expect_p_sequencing_reaches_the_state_from_rest(const Scene& s, const Eigen::VectorXd& m,
+                                                     const GridSequencingOptions& grid = {}) {
   const Assembler a = s.make_assembler();
   const ControlSpace c(a.mesh(), a.geometry(), s.control_kind);
   ASSERT_EQ(m.size(), c.size());
@@ -286,14 +287,17 @@ void expect_p_sequencing_reaches_the_state_from_rest(const Scene& s, const Eigen
   options.displacement_tolerance = 1e-10;
   options.absolute_tolerance = s.residual_floor();
   GridSequencingReport report;
-  State start = grid_sequenced_start(s, a, m, options, GridSequencingOptions{}, &report);
+  State start = grid_sequenced_start(s, a, m, options, grid, &report);
   ASSERT_EQ(report.levels.size(), 1u);
-  EXPECT_EQ(report.levels[0].cell, CellType::kTet4);
+  const CellType linear = reference_element(a.mesh().cell).linear;
+  EXPECT_EQ(report.levels[0].cell, linear);
   EXPECT_EQ(report.levels[0].nodes, a.mesh().num_vertices());
   EXPECT_TRUE(report.levels[0].newton.converged());
   EXPECT_FALSE(report.fell_back_to_rest);
-  EXPECT_NE(report.BriefReport().find("coarse level (P1 on the vertices: tet4"), std::string::npos)
-      << report.BriefReport();
+  const std::string line = std::string("coarse level (") +
+                           (linear == CellType::kTet4 ? "P1" : "Q1") +
+                           " on the vertices: " + to_string(linear);
+  EXPECT_NE(report.BriefReport().find(line), std::string::npos) << report.BriefReport();
   EXPECT_GT(start.u.norm(), 0.0);
   State rest = rest_state(a);
   NewtonSolver n1(a, options), n2(a, options);
@@ -321,4 +325,17 @@ TEST(PSequencing, TwoMaterialsWithElementControlsReachTheStateFromRest) {
   for (Eigen::Index e = 0; e < m.size(); ++e)
     m[e] = -0.2 - 0.5 * s.file_mesh->nodes(s.file_mesh->elements(e, 0), 1);
   expect_p_sequencing_reaches_the_state_from_rest(s, m);
+}
+
+TEST(PSequencing, Hex27FromGmshStartsFromItsQ1Level) {
+  // 4 x 2 x 2 hexahedra: fewer than the automatic choice's 32 elements, so asked for.
+  const Scene s = file_scene(mesh_path("box_hex27_v41.msh"), "", "vertex", kOneMaterial, "x0");
+  ASSERT_EQ(s.file_mesh->cell, CellType::kHex27);
+  EXPECT_EQ(grid_levels(s, GridSequencingOptions{}), 0);
+  GridSequencingOptions one;
+  one.levels = 1;
+  Eigen::VectorXd m(s.file_mesh->num_vertices());
+  for (Eigen::Index k = 0; k < m.size(); ++k)
+    m[k] = -0.2 - 0.4 * s.file_mesh->nodes(s.file_mesh->vertex_nodes[k], 2);
+  expect_p_sequencing_reaches_the_state_from_rest(s, m, one);
 }
