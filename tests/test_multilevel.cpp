@@ -4,12 +4,14 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
 #include "control/multilevel.hpp"
 #include "expect_error.hpp"
 #include "softhd/control/tracking_run.hpp"
+#include "softhd/fe/gmsh_mesh.hpp"
 #include "softhd/fe/materials.hpp"
 #include "softhd/fe/mesh.hpp"
 
@@ -67,6 +69,22 @@ TEST(Multilevel, ProlongationReproducesAffineVertexFieldsAndCoarseElementValues)
     ASSERT_EQ(m.size(), 16);
     for (Eigen::Index e = 0; e < m.size(); ++e)  // coarse element 0 holds X1 < 1.5
       EXPECT_EQ(m[e], centres(e, 0) < 1.5 ? 1.0 : 2.0) << e;
+  }
+}
+
+// A mesh file's P1 level (p-sequencing, fe::coarsened) has the mesh's own vertices and
+// elements: its controls pass to the curved P2 mesh unchanged, bit for bit.
+TEST(Multilevel, ALinearLevelPassesItsControlsUnchanged) {
+  const fe::Mesh p2 = fe::read_gmsh_mesh(std::string(SOFTHD_SOURCE_DIR) +
+                                         "/tests/data/meshes/cylinder_tet10_v41.msh");
+  const fe::Mesh p1 = fe::linear_mesh(p2);
+  const fe::ReferenceGeometry g1(p1), g2(p2);
+  for (fe::ControlKind kind : {fe::ControlKind::kVertex, fe::ControlKind::kElement}) {
+    const fe::ControlSpace c1(p1, g1, kind), c2(p2, g2, kind);
+    ASSERT_EQ(c1.size(), c2.size());
+    Eigen::VectorXd m(c1.size());
+    for (Eigen::Index k = 0; k < m.size(); ++k) m[k] = -0.1 - 0.37 * std::sin(0.3 * k);
+    EXPECT_EQ(detail::prolongate(p1, c1, m, p2, c2, {}), m);
   }
 }
 
