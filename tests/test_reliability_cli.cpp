@@ -107,10 +107,14 @@ TEST_F(Reliability, TwoRunsCannotShareAFolder) {
          std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60))
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   ASSERT_TRUE(fs::exists(out / "history.csv"));
+  // Frozen while it holds the lock (this small run ends by itself within seconds, and a
+  // loaded machine could let it end before the second run tries the folder).
+  int status = 0;
+  ASSERT_EQ(waitpid(first, &status, WNOHANG), 0) << "the first run ended before the check";
+  kill(first, SIGSTOP);
   expect_refused("optimise " + sc + " --out " + out.string() + " --max-iter 2 --quiet",
                  "is in use by another softhd run (process " + std::to_string(first) + ")");
   kill(first, SIGKILL);
-  int status = 0;
   waitpid(first, &status, 0);
   // The kernel released the lock with the process: the killed run resumes.
   std::string err;

@@ -169,7 +169,7 @@ def test_defaults_are_the_command_line_tools(cli_help):
              "method": "--method M exact | tree: the distance's pair sums",
              "tol": "relative error bound on every kernel sum", "tikhonov_mass":
              "--tikhonov-mass M (M/2) int m^2", "tikhonov_grad": "--tikhonov-grad E (E/2) int "
-             "|grad m|^2", "coarse_level": "mesh with half the cells along the even axes",
+             "|grad m|^2", "coarse_level": "or for a mesh file of order 2 as P1/Q1 on its vertices",
              "levels": "then the next finer level from its control"}
     for name, before in flags.items():
         m = re.search(re.escape(before) + r" \(default ([^;,:)]+)", text)
