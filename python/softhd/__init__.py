@@ -165,9 +165,9 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
     target: the run ``softhd optimise`` makes (the library's TrackingRun), with its options and
     its defaults for every option left None (:func:`optimise_defaults` lists them, e.g. method
-    "tree" with tol 1e-2, move_limit 0.1, coarse_level "auto": two-level starts on the mesh with
-    half the cells, levels 1: the user's mesh alone; levels N > 1 solves first on the box halved
-    N - 1 times, as ``--levels N``). Returns an :class:`OptimiseResult`.
+    "tree" with tol 1e-2, move_limit 0.1, coarse_level "auto": two-level starts on the coarse level
+    (a box with half the cells, a mesh file of order 2 as P1/Q1 on its vertices), levels 1: the
+    user's mesh alone; levels N > 1 solves first on the N - 1 coarser levels, as ``--levels N``). Returns an :class:`OptimiseResult`.
 
     target: None (the scene's own "target"), a cloud file path, an (M, d) array, or a tuple
     (points, volumes). callback(record): called after every accepted iteration with an

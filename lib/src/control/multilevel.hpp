@@ -35,7 +35,7 @@ PointCloud subsampled(const PointCloud& cloud, int stride);
 
 /// The options.levels − 1 coarse levels of `scene`, coarsest first, against coarse versions
 /// of `target` (the target of the user's mesh). Throws InvalidArgument naming `levels` if the
-/// box cannot be halved that often, and as scene_target.
+/// body has fewer coarser levels (fe::coarsened), and as scene_target.
 std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& scene,
                                                             const SceneTarget& target,
                                                             const TrackingRunOptions& options);

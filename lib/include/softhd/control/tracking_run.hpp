@@ -29,7 +29,8 @@
 namespace softhd {
 
 /// Two-level starts (docs/formulation.md §4.7): a large control step is solved first on the
-/// mesh with half the cells along the even axes.
+/// coarse level of fe::coarsened (a box with half the cells along the even axes, a mesh file
+/// of order 2 as P1/Q1 on its vertices).
 enum class CoarseLevel {
   automatic,  ///< "auto": when that mesh exists and has >= 32 elements (fe::grid_levels)
   off,        ///< "off": every state solve on the user's mesh alone
@@ -75,15 +76,16 @@ struct TrackingRunOptions {
   CoarseLevel coarse_level = CoarseLevel::automatic;  ///< two-level starts
   ///@{
   /// Multilevel optimisation (docs/formulation.md §4.8): with levels = N > 1 the control
-  /// problem is solved first on the box halved N − 1 times (fe::coarsened), then on each finer
-  /// box in turn, each from the control of the level below prolongated (vertex controls
-  /// interpolated, element controls the containing coarse element's), finishing on the user's
-  /// mesh, target and tolerance with max_iterations. A coarse level has the scene's target for
-  /// its body (an arc grid twice as fine as its nodes), or, for a target with as many points as
-  /// the finer level's, every 2^d-th point with the volumes scaled to keep their total; the
-  /// tree tolerance max(tolerance, coarse_tolerance); at most coarse_iterations iterations,
-  /// and it ends earlier once ρ̃ decreased by less than switch_decrease (relative) in two
-  /// iterations in a row. 1: today's single-level run.
+  /// problem is solved first on the N − 1 coarser levels of fe::coarsened (the box halved
+  /// N − 1 times; a mesh file of order 2 its P1/Q1 level), then on each finer level in turn,
+  /// each from the control of the level below prolongated (vertex controls interpolated,
+  /// element controls the containing coarse element's; unchanged from a P1/Q1 level),
+  /// finishing on the user's mesh, target and tolerance with max_iterations. A coarse level
+  /// has the scene's target for its body (an arc grid twice as fine as its nodes), or, for a target
+  /// with as many points as the finer level's, every 2^d-th point with the volumes scaled to keep
+  /// their total; the tree tolerance max(tolerance, coarse_tolerance); at most coarse_iterations
+  /// iterations, and it ends earlier once ρ̃ decreased by less than switch_decrease (relative) in
+  /// two iterations in a row. 1: today's single-level run.
   int levels = 1;
   int coarse_iterations = 30;
   double switch_decrease = 0.01;
