@@ -94,8 +94,48 @@ struct HausdorffOptions {
   void validate() const;
 };
 
+/// Which directed terms make ρ̃ (docs/formulation.md §8). The moving cloud X is the body,
+/// the target Y the scan: A (the mean over Y of d̃_X) is scan → body, B body → scan.
+enum class Sides {
+  symmetric,     ///< ρ̃ = ((A^γ + B^γ)/2)^(1/γ) (§2; the default)
+  scan_to_body,  ///< ρ̃ = A: a partial scan does not punish the body's hidden parts
+  visible,  ///< ρ̃ = ((A^γ + B_V^γ)/2)^(1/γ), B_V the β-mean over the moving points marked
+            ///< in DistanceForm::visible, their weights renormalised over them
+};
+
+/// "symmetric" / "scan_to_body" / "visible"; sides_from_string throws InvalidArgument for
+/// other names (naming `distance`, the key and flag that select it).
+std::string to_string(Sides sides);
+/// The Sides named "symmetric", "scan_to_body" or "visible".
+Sides sides_from_string(const std::string& name);
+
+/// The robust soft cap applied to every field value d̃ before its β-mean (docs/formulation.md
+/// §8): ψ_c(d) = (d^(−q) + c^(−q))^(−1/q), ψ_c'(d) = (ψ_c(d)/d)^(q+1); ψ_c(d) → d for d ≪ c
+/// and → c for d ≫ c, so one outlier moves A^β by at most about c^β/M.
+struct SoftCap {
+  double c = 0.0;  ///< the cap (a length); 0: no cap (ψ = identity). Else finite and > 0.
+  double q = 4.0;  ///< sharpness q > 0 (finite)
+};
+
+/// The form of the functional one evaluation computes: the sides, the cap and, for
+/// Sides::visible, the moving points that enter B. Set per evaluation (the target's trees
+/// do not depend on it), so a caller can tighten the cap or renew the visible set between
+/// evaluations. Held fixed in the gradient (the visible set is piecewise constant).
+struct DistanceForm {
+  Sides sides = Sides::symmetric;
+  SoftCap cap;
+  /// Sides::visible only: N entries, true for the moving points in B_V (at least one).
+  Eigen::Array<bool, Eigen::Dynamic, 1> visible;
+
+  /// Throws InvalidArgument naming `cap.c`, `cap.q` or `visible` (its size against N, none
+  /// marked, or a mask given for other sides).
+  void validate(Eigen::Index moving_points) const;
+};
+
 /// What to compute beyond ρ̃, A and B. Nothing is computed that is not asked for.
 struct HausdorffRequest {
+  /// The functional's form (default: the symmetric ρ̃ of §2 without a cap).
+  DistanceForm form;
   bool fields = false;            ///< per-point fields d̃_X(y_j) and d̃_Y(x_i)
   bool gradient_points = false;   ///< ∂ρ̃/∂x_i (N by d)
   bool gradient_volumes = false;  ///< ∂ρ̃/∂V_i (N)

@@ -79,6 +79,39 @@ Method method_from_string(const std::string& name) {
   return enum_from_name(kMethodNames, name, "method");
 }
 
+namespace {
+constexpr EnumNames<Sides, 3> kSidesNames{{{Sides::symmetric, "symmetric"},
+                                           {Sides::scan_to_body, "scan_to_body"},
+                                           {Sides::visible, "visible"}}};
+}  // namespace
+
+std::string to_string(Sides sides) { return enum_name(kSidesNames, sides); }
+
+Sides sides_from_string(const std::string& name) {
+  return enum_from_name(kSidesNames, name, "distance");
+}
+
+void DistanceForm::validate(Eigen::Index moving_points) const {
+  if (!(cap.c == 0.0 || (std::isfinite(cap.c) && cap.c > 0.0))) {
+    throw InvalidArgument("distance cap.c must be 0 (no cap) or finite and > 0, got " +
+                          std::to_string(cap.c));
+  }
+  if (!(std::isfinite(cap.q) && cap.q > 0.0)) {
+    throw InvalidArgument("distance cap.q must be finite and > 0, got " + std::to_string(cap.q));
+  }
+  if (sides != Sides::visible) {
+    if (visible.size() != 0)
+      throw InvalidArgument("distance visible: a mask is given but the distance is " +
+                            to_string(sides));
+    return;
+  }
+  if (visible.size() != moving_points) {
+    throw InvalidArgument("distance visible: the mask has " + std::to_string(visible.size()) +
+                          " entries for " + std::to_string(moving_points) + " moving points");
+  }
+  if (!visible.any()) throw InvalidArgument("distance visible: no moving point is marked visible");
+}
+
 struct HausdorffTarget::Impl {
   Impl(PointCloud c, HausdorffOptions o) : cloud(std::move(c)), options(o) {
     weights = cloud.volumes() / cloud.total_volume();  // W_j/|Y|
@@ -132,6 +165,13 @@ HausdorffResult HausdorffTarget::evaluate(const PointCloud& moving,
   if (request.differentiate.size() != 0 && request.differentiate.size() != moving.size()) {
     throw InvalidArgument("differentiate mask has " + std::to_string(request.differentiate.size()) +
                           " entries for " + std::to_string(moving.size()) + " moving points");
+  }
+  request.form.validate(moving.size());
+  // The seam of issue 32: the forms beyond the symmetric, uncapped ρ̃ are not evaluated yet.
+  if (request.form.sides != Sides::symmetric || request.form.cap.c != 0.0) {
+    throw InvalidArgument("distance " + to_string(request.form.sides) +
+                          (request.form.cap.c != 0.0 ? " with a cap" : "") +
+                          " is not implemented yet");
   }
   HausdorffResult result;
   if (impl_->options.method == Method::nearest) {

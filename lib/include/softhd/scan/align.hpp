@@ -1,0 +1,61 @@
+#pragma once
+/// \file align.hpp
+/// Finding a scan's pose by the distance itself (docs/formulation.md §8): minimise ρ̃ (in the
+/// chosen form: symmetric, scan_to_body, visible; with or without the soft cap) over a twist
+/// about the moved scan's centroid, with the exact gradient from ∂ρ̃/∂y_j, after a global
+/// start over a grid of rotations (and the principal-axis variants) evaluated cheaply on
+/// subsampled clouds with a larger ε.
+
+#include <string>
+
+#include "softhd/hausdorff.hpp"
+#include "softhd/scan/pose.hpp"
+
+namespace softhd::scan {
+
+/// What align() may change.
+enum class PoseKind { rigid, similarity };
+/// "rigid" / "similarity"; pose_kind_from_string throws InvalidArgument naming `align`.
+std::string to_string(PoseKind kind);
+PoseKind pose_kind_from_string(const std::string& name);
+
+/// Settings of align(); defaults documented per field and validated by validate().
+struct AlignOptions {
+  PoseKind kind = PoseKind::rigid;
+  double scale_min = 0.5;  ///< similarity only: bounds on s, 0 < scale_min ≤ 1 ≤ scale_max
+  double scale_max = 2.0;
+  HausdorffOptions distance;  ///< the functional's parameters and method for the refinement
+  DistanceForm form;          ///< sides and cap (visible: recomputed from the pose each step)
+  Pose initial;               ///< the starting pose (used as is when global_start is false)
+  bool global_start = true;   ///< search rotations first (else start at `initial`)
+  int max_iterations = 200;   ///< refinement iterations
+  double tolerance = 1e-10;   ///< stop when the twist step is below this (radians / body size)
+  int threads = 0;            ///< as HausdorffOptions::threads
+  /// Throws InvalidArgument naming the first invalid field.
+  void validate() const;
+};
+
+/// Why align() stopped.
+enum class AlignStatus { converged, iteration_limit, failed };
+std::string to_string(AlignStatus status);
+
+/// What align() found.
+struct AlignSummary {
+  AlignStatus status = AlignStatus::failed;
+  Pose pose;                     ///< scan frame → body frame
+  double rho = 0.0;              ///< ρ̃ at the pose (the chosen form)
+  double overlap = 0.0;          ///< fraction of scan points within `inlier_distance` of the body
+  double inlier_distance = 0.0;  ///< the overlap's threshold (a length)
+  double rmse = 0.0;             ///< RMS true nearest-neighbour distance of the overlapping points
+  Eigen::VectorXd residuals;     ///< true nearest-neighbour distance of each moved scan point
+  int iterations = 0;
+  double seconds = 0.0;
+  /// One line: status, rotation and translation of the pose, ρ̃, overlap, rmse, time.
+  std::string BriefReport() const;
+};
+
+/// The pose that takes `scan` (camera frame) onto `body` (body frame). Throws InvalidArgument
+/// for invalid options, non-3D or empty clouds.
+AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOptions& options);
+
+}  // namespace softhd::scan
