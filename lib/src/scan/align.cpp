@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <exception>
 #include <numeric>
 
@@ -121,14 +120,6 @@ std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& sc
   const int n = static_cast<int>(starts.size());
   parallel_each(n, o.threads,
                 [&](size_t i) { found[i] = detail::minimise_pose(coarse, starts[i], st); });
-  if (std::getenv("SOFTHD_ALIGN_DEBUG")) {
-    int it = 0, ev = 0;
-    for (auto& f : found) {
-      it += f.iterations;
-      ev += f.evaluations;
-    }
-    std::fprintf(stderr, "global: %d starts, %d iterations, %d evaluations\n", n, it, ev);
-  }
   std::vector<size_t> order(found.size());
   std::iota(order.begin(), order.end(), size_t{0});
   std::stable_sort(order.begin(), order.end(),
