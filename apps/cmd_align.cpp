@@ -1,4 +1,4 @@
-// softhd align: the pose of a scan found by the distance (docs/formulation.md §8.2–§8.4).
+// softhd align: the pose of a scan found by the distance (docs/formulation.md §8.5).
 
 #include <cmath>
 #include <cstdio>

@@ -1,4 +1,4 @@
-// align(): the pose of a scan found by the distance itself (docs/formulation.md §8.2–§8.4).
+// align(): the pose of a scan found by the distance itself (docs/formulation.md §8.5).
 
 #include "softhd/scan/align.hpp"
 
@@ -165,6 +165,7 @@ void AlignOptions::validate() const {
   require(std::isfinite(coarse_epsilon) && coarse_epsilon > 0.0, "coarse_epsilon must be > 0");
   require(keep >= 1, "keep must be >= 1");
   require(refine_points == 0 || refine_points >= 10, "refine_points must be 0 or >= 10");
+  require(candidate_points >= 10, "candidate_points must be >= 10");
   require(max_iterations >= 0, "max_iterations must be >= 0");
   require(std::isfinite(tolerance) && tolerance > 0.0, "tolerance must be > 0");
   require(nearest_iterations >= 0, "nearest_iterations must be >= 0");
@@ -220,8 +221,12 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
         local_settings(options, L, options.max_iterations, options.tolerance);
     std::vector<detail::LocalResult> refined(candidates.size());
     {
+      // Several candidates are compared on smaller clouds (candidate_points each).
+      const Eigen::Index points = spread && options.refine_points != 0
+                                      ? std::min(options.candidate_points, options.refine_points)
+                                      : options.refine_points;
       const detail::PoseObjective first =
-          make_level(body, scan, options.refine_points, eps[0], spread ? 1 : eval_threads, options);
+          make_level(body, scan, points, eps[0], spread ? 1 : eval_threads, options);
       parallel_each(
           static_cast<int>(candidates.size()), spread ? options.threads : 1,
           [&](size_t k) { refined[k] = detail::minimise_pose(first, candidates[k], st); });
@@ -230,7 +235,9 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
     for (size_t k = 1; k < refined.size(); ++k)
       if (refined[k].rho < refined[best].rho) best = k;
     out.iterations = refined[best].iterations;
-    for (size_t l = 1; l < eps.size(); ++l) {
+    // The best on the refinement clouds: at the first ε again if it was compared on
+    // smaller clouds, then at the others.
+    for (size_t l = spread && eps.size() == 1 ? 0 : 1; l < eps.size(); ++l) {
       const detail::PoseObjective level =
           make_level(body, scan, options.refine_points, eps[l], eval_threads, options);
       refined[best] = detail::minimise_pose(level, refined[best].pose, st);

@@ -1,7 +1,7 @@
 #pragma once
 // Pieces of align() (internal): the objective on one level of detail, its local minimiser
 // over a twist, the rotation grid of the global start, and the nearest-point refinement
-// (docs/formulation.md §8.2–§8.4).
+// (docs/formulation.md §8.5).
 
 #include <Eigen/Core>
 #include <memory>

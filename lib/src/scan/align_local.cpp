@@ -1,5 +1,5 @@
 // The objective of align() on one level and its local minimiser over a twist
-// (docs/formulation.md §8.2).
+// (docs/formulation.md §8.5).
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // The global start of align() (a grid of rotations, principal axes, subsampled clouds) and
-// its nearest-point finish (docs/formulation.md §8.3, §8.4).
+// its nearest-point finish (docs/formulation.md §8.5).
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>

@@ -1,4 +1,4 @@
-// The pose of a scan: y' = s R y + t, its 4×4 matrix and its twist (docs/formulation.md §8.1).
+// The pose of a scan: y' = s R y + t, its 4×4 matrix and its twist (docs/formulation.md §8.4).
 
 #include "softhd/scan/pose.hpp"
 

@@ -1,6 +1,6 @@
 #pragma once
 /// \file pose_io.hpp
-/// Reading and writing a scan's pose (docs/formulation.md §8.1) as a text file of its 4×4
+/// Reading and writing a scan's pose (docs/formulation.md §8.4) as a text file of its 4×4
 /// matrix: four lines of four numbers (whitespace or single commas between them), `#`
 /// comments and blank lines skipped. Problems throw softhd::FileError naming the file and line.
 

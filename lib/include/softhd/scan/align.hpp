@@ -33,6 +33,7 @@ struct AlignOptions {
   int coarse_points = 150;    ///< global start: points of each subsampled cloud
   double coarse_epsilon = 0.05;   ///< global start: ε as a fraction of the body's size L
   int keep = 4;                   ///< global start: best distinct poses refined further
+  int candidate_points = 400;     ///< points of each cloud when the kept poses are compared
   int refine_points = 1000;       ///< points of each cloud in the refinement (0: all)
   int max_iterations = 200;       ///< refinement iterations (per level)
   double tolerance = 1e-10;       ///< stop when a step moves no point more than this × L
