@@ -69,9 +69,13 @@ detail::PoseObjective make_level(const PointCloud& body, const PointCloud& scan,
   HausdorffOptions d = o.distance;
   d.params.epsilon = epsilon;
   d.threads = threads;
+  // A cap is never below 3ε of the level: an inlier's field value is about ε there, and a cap
+  // below it would flatten the coarse levels.
+  DistanceForm form = o.form;
+  if (form.cap.c > 0.0) form.cap.c = std::max(form.cap.c, 3.0 * epsilon);
   return detail::PoseObjective(
       rows_of(body.points(), ib), entries_of(body.volumes(), ib),
-      PointCloud(rows_of(scan.points(), is), entries_of(scan.volumes(), is)), d, o.form);
+      PointCloud(rows_of(scan.points(), is), entries_of(scan.volumes(), is)), d, form);
 }
 
 detail::LocalSettings local_settings(const AlignOptions& o, double L, int iterations,
