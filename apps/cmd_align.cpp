@@ -48,6 +48,7 @@ options:
   --no-global       no global start: refine from --initial (default the identity)
   --initial FILE    starting pose, a 4x4 matrix file as pose.txt (with --no-global)
   --rotations K     global start: grid rotations (default 48, plus 4 principal-axis ones)
+  --refine-points N points of each cloud in the refinement, 0: all (default 1000)
   --inlier F        overlap threshold as a fraction of L (default 0.01)
   --threads T       OpenMP threads (default: all)
   --json            print pose.json's object instead of the one-line summary
@@ -136,6 +137,7 @@ int run_align(const std::vector<std::string>& tokens) {
   o.global_start = !args.flag("--no-global");
   const std::optional<std::string> initial = args.value("--initial");
   o.rotations = static_cast<int>(args.integer("--rotations", o.rotations, 0, 100000));
+  o.refine_points = static_cast<int>(args.integer("--refine-points", o.refine_points, 0, 1L << 30));
   o.inlier_distance = args.number("--inlier", o.inlier_distance);
   o.threads = static_cast<int>(args.integer("--threads", 0, 0, kMaxThreads));
   const bool json = args.flag("--json");

@@ -12,8 +12,8 @@ py::dict align_clouds(const Array& body, const std::optional<Array>& body_volume
                       const Array& scan, bool similarity, double scale_min, double scale_max,
                       const std::string& distance, double cap, std::optional<double> eps,
                       double alpha, double beta, double gamma, bool global_start,
-                      const std::optional<Array>& initial, int rotations, double inlier,
-                      int threads) {
+                      const std::optional<Array>& initial, int rotations, int refine_points,
+                      double inlier, int threads) {
   check_cloud(body, body_volumes, "body");
   check_cloud(scan, std::nullopt, "scan");
   scan::AlignOptions o;
@@ -27,6 +27,7 @@ py::dict align_clouds(const Array& body, const std::optional<Array>& body_volume
   o.distance.params.gamma = gamma;
   o.global_start = global_start;
   o.rotations = rotations;
+  o.refine_points = refine_points;
   o.inlier_distance = inlier;
   o.threads = threads;
   if (initial) {
