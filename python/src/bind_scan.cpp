@@ -66,7 +66,7 @@ void bind_scan(py::module_& m) {
         py::arg("scan").noconvert(), py::kw_only(), py::arg("similarity"), py::arg("scale_min"),
         py::arg("scale_max"), py::arg("distance"), py::arg("cap"), py::arg("eps"), py::arg("alpha"),
         py::arg("beta"), py::arg("gamma"), py::arg("global_start"), py::arg("initial"),
-        py::arg("rotations"), py::arg("inlier"), py::arg("threads"));
+        py::arg("rotations"), py::arg("refine_points"), py::arg("inlier"), py::arg("threads"));
 }
 
 }  // namespace softhd::python
