@@ -93,7 +93,7 @@ detail::LocalSettings local_settings(const AlignOptions& o, double L, int iterat
 /// The starting poses Q (body → scan frame) of the global search: each rotation of the grid
 /// and the 4 principal-axis matches, the body's centroid put on the scan's.
 std::vector<Pose> starting_poses(const Eigen::MatrixXd& body, const Eigen::MatrixXd& scan,
-                                 int rotations, double shift) {
+                                 int rotations) {
   std::vector<Eigen::Matrix3d> Rs = detail::rotation_grid(rotations);
   const Eigen::Matrix3d Ab = detail::principal_axes(body), As = detail::principal_axes(scan);
   for (int k = 0; k < 4; ++k) {  // proper sign flips of the axes
@@ -102,21 +102,13 @@ std::vector<Pose> starting_poses(const Eigen::MatrixXd& body, const Eigen::Matri
   }
   const Eigen::Vector3d cb = body.colwise().mean().transpose(),
                         cs = scan.colwise().mean().transpose();
-  // A partial view's centroid is not the body's: each rotation also with the body's centroid
-  // shifted by ±shift along its longest axis (a1, of length ~ its extent).
-  const Eigen::Vector3d a1 = Ab.col(0);
-  const Eigen::VectorXd along = (body.rowwise() - cb.transpose()) * a1;
-  const double extent = along.maxCoeff() - along.minCoeff();
-  std::vector<double> offsets{0.0};
-  if (shift > 0.0) offsets = {0.0, -shift * extent, shift * extent};
   std::vector<Pose> out;
-  for (double off : offsets)
-    for (const Eigen::Matrix3d& R : Rs) {
-      Pose Q;
-      Q.R = R;
-      Q.t = cs - R * (cb + off * a1);
-      out.push_back(Q);
-    }
+  for (const Eigen::Matrix3d& R : Rs) {
+    Pose Q;
+    Q.R = R;
+    Q.t = cs - R * cb;
+    out.push_back(Q);
+  }
   return out;
 }
 
@@ -126,8 +118,7 @@ std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& sc
                                     const AlignOptions& o) {
   const detail::PoseObjective coarse =
       make_level(body, scan, o.coarse_points, o.coarse_epsilon * L, 1, o);
-  const std::vector<Pose> starts =
-      starting_poses(body.points(), scan.points(), o.rotations, o.shift);
+  const std::vector<Pose> starts = starting_poses(body.points(), scan.points(), o.rotations);
   const detail::LocalSettings st = local_settings(o, L, 20, 1e-4);
   std::vector<detail::LocalResult> found(starts.size());
   const int n = static_cast<int>(starts.size());
@@ -177,7 +168,6 @@ void AlignOptions::validate() const {
   require(coarse_points >= 10, "coarse_points must be >= 10");
   require(std::isfinite(coarse_epsilon) && coarse_epsilon > 0.0, "coarse_epsilon must be > 0");
   require(keep >= 1, "keep must be >= 1");
-  require(std::isfinite(shift) && shift >= 0.0 && shift < 1.0, "shift must be in [0, 1)");
   require(refine_points == 0 || refine_points >= 10, "refine_points must be 0 or >= 10");
   require(candidate_points >= 10, "candidate_points must be >= 10");
   require(max_iterations >= 0, "max_iterations must be >= 0");

@@ -31,11 +31,8 @@ struct AlignOptions {
   bool global_start = true;   ///< search rotations first (else start at `initial`)
   int rotations = 48;         ///< global start: grid rotations tried (plus 4 principal-axis ones)
   int coarse_points = 150;    ///< global start: points of each subsampled cloud
-  double coarse_epsilon = 0.05;  ///< global start: ε as a fraction of the body's size L
-  /// global start: each rotation also with the body's centroid shifted by ±shift × its extent
-  /// along its longest axis (a partial view's centroid is not the body's); 0: not shifted
-  double shift = 0.25;
-  int keep = 6;                   ///< global start: best distinct poses refined further
+  double coarse_epsilon = 0.05;   ///< global start: ε as a fraction of the body's size L
+  int keep = 4;                   ///< global start: best distinct poses refined further
   int candidate_points = 400;     ///< points of each cloud when the kept poses are compared
   int refine_points = 1000;       ///< points of each cloud in the refinement (0: all)
   int max_iterations = 200;       ///< refinement iterations (per level)
