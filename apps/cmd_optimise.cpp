@@ -95,6 +95,12 @@ scene targets ("target" in the scene file):
   {"kind": "cloud", "file": PATH [, "solved_on": SCENE]}  a cloud file; with solved_on
       it holds the deformed nodes of a state solved on SCENE's mesh ('softhd forward
       --write-cloud'), which gives the known map for the matched floor and shape error
+  either kind also takes the distance's form (docs/formulation.md section 8):
+      "distance": "symmetric" | "scan_to_body"   (scan_to_body: rho = A, for a
+          partial scan; "visible" is refused: a scene cannot give the camera yet)
+      "cap": C  or  "cap": {"quantile": Q, "factor": F}   soft cap of every field
+          value, fixed or F x the Q-quantile of the scan's d~ to the body at rest
+      "cap_q": Q   the cap's sharpness (default 4)
 
 writes: history.csv, control.csv (readable by 'softhd forward --control'),
 body_NNNN.vtu, target.vtu, body.pvd, body_final.ply, target.ply, summary.json,

@@ -33,7 +33,7 @@ SceneTarget array_target(const PyScene& s, const Array& points,
   if (cloud.dim() != s.scene.dim())
     throw InvalidArgument("the target cloud is " + std::to_string(cloud.dim()) +
                           "D but the scene's body is " + std::to_string(s.scene.dim()) + "D");
-  return {std::move(cloud), std::nullopt, "arrays from Python"};
+  return {std::move(cloud), std::nullopt, "arrays from Python", {}};
 }
 
 PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,

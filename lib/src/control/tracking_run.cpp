@@ -117,6 +117,7 @@ struct TrackingRun::Impl {
     objective = std::make_unique<ShapeObjective>(
         a, c, HausdorffTarget(target.cloud, so.hausdorff), so,
         fe::state_solver_factory(scene, options.state_backend, &a, &c));
+    detail::apply_target_form(*objective, target);
     if (options.coarse_level == CoarseLevel::automatic &&
         fe::grid_levels(scene, fe::GridSequencingOptions{}) > 0) {
       const fe::Scene level = fe::coarsened(scene);
