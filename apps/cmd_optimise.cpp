@@ -55,6 +55,12 @@ options:
                      exactly wherever its far field would not be cheaper)
   --tol T            tree: relative error bound on every kernel sum (default {tol},
                      which ends the bending and torsion runs at exact's rho/floor)
+  --distance F       symmetric | scan_to_body: the distance's form (docs/formulation.md
+                     section 8; default: the scene target's "distance", else symmetric);
+                     --distance, --cap or --cap-q replace the target's form as a whole
+  --cap C            soft cap of every field value, C > 0 a length (default: the
+                     target's "cap", else none)
+  --cap-q Q          the cap's sharpness (default 4)
   --tikhonov-mass M  (M/2) int m^2 (default {tikhonov_mass})
   --tikhonov-grad E  (E/2) int |grad m|^2 (default {tikhonov_grad})
   --vtu-every K      VTU output every K iterations (default {vtu_every}; 0: start and end only)
@@ -200,6 +206,21 @@ void parse_objective(Args& args, const TrackingRunOptions& d, TrackingRunOptions
   o.tolerance = args.number("--tol", d.tolerance);
   o.tikhonov_mass = args.number("--tikhonov-mass", d.tikhonov_mass);
   o.tikhonov_gradient = args.number("--tikhonov-grad", d.tikhonov_gradient);
+  const std::optional<std::string> distance = args.value("--distance");
+  const std::optional<std::string> cap = args.value("--cap"), cap_q = args.value("--cap-q");
+  if (distance || cap || cap_q) {
+    TargetDistance form;
+    if (distance) {
+      form.sides = sides_from_string(*distance);
+      if (form.sides == Sides::visible)
+        throw UsageError(
+            "--distance visible needs the camera, which optimise cannot give yet; "
+            "expected symmetric or scan_to_body");
+    }
+    if (cap) form.cap = parse_number(*cap, "--cap");
+    if (cap_q) form.cap_q = parse_number(*cap_q, "--cap-q");
+    o.distance = form;
+  }
 }
 
 OptimiseArgs parse_optimise(Args& args) {

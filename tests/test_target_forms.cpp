@@ -95,6 +95,29 @@ TEST(TargetForms, QuantileCapIsSetFromTheRestStateAndUsed) {
   EXPECT_EQ(ev.B, 0.0);
 }
 
+// TrackingRunOptions::distance replaces the target block's form as a whole: the run's target
+// description says so, its B is 0 (scan_to_body), and visible is refused naming the field.
+TEST(TargetForms, RunOptionsReplaceTheTargetsForm) {
+  const fe::Scene scene = bend_scene("override", R"(, "cap": 0.2)");
+  TrackingRunOptions options;
+  options.max_iterations = 1;
+  options.threads = 1;
+  options.coarse_level = CoarseLevel::off;
+  options.distance = TargetDistance{};
+  options.distance->sides = Sides::scan_to_body;
+  const TrackingRunSummary s = run_tracking(scene, options);
+  EXPECT_NE(s.target.find("distance scan_to_body"), std::string::npos) << s.target;
+  EXPECT_EQ(s.target.find("cap"), std::string::npos) << s.target;  // the block's cap replaced
+  ASSERT_FALSE(s.history.empty());
+  EXPECT_EQ(s.history.back().B, 0.0);
+  EXPECT_EQ(s.history.back().rho, s.history.back().A);
+  options.distance->sides = Sides::visible;
+  expect_error<InvalidArgument>([&] { options.validate(); }, "distance visible needs the camera");
+  options.distance->sides = Sides::symmetric;
+  options.distance->cap = -1.0;
+  expect_error<InvalidArgument>([&] { options.validate(); }, "distance cap must be");
+}
+
 // The arc target cut at the middle of its z range: the points above it (`upper`) or below.
 SceneTarget half_target(const SceneTarget& full, bool upper, Sides sides) {
   const Eigen::VectorXd z = full.cloud.points().col(2);

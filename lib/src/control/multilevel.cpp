@@ -80,6 +80,7 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
         *p->assembler, *p->control, HausdorffTarget(p->target->cloud, so.hausdorff), so,
         fe::state_solver_factory(p->scene, options.state_backend, p->assembler.get(),
                                  p->control.get()));
+    if (options.distance) p->target->distance = *options.distance;
     apply_target_form(*p->objective, *p->target);
     if (options.coarse_level == CoarseLevel::automatic &&
         fe::grid_levels(p->scene, fe::GridSequencingOptions{}) > 0) {

@@ -208,6 +208,13 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
   f["distance"] = "alpha " + exact_text(h.params.alpha) + " beta " + exact_text(h.params.beta) +
                   " gamma " + exact_text(h.params.gamma) + " eps " + exact_text(h.params.epsilon) +
                   " method " + to_string(h.method) + " tol " + exact_text(h.tolerance);
+  // Only a form other than the default is recorded (older checkpoints have no such key).
+  if (so.form.sides != Sides::symmetric || so.form.cap.c != 0.0) {
+    f["form"] = to_string(so.form.sides) + " cap " + exact_text(so.form.cap.c) + " q " +
+                exact_text(so.form.cap.q);
+    if (so.form.sides == Sides::visible)
+      f["form"] += " visible " + hash_of(so.form.visible.cast<double>().matrix().eval());
+  }
   f["threads"] = std::to_string(resolve_threads(h.threads));
   f["objective"] = "particles " + to_string(so.particles) + " volumes " + to_string(so.volumes) +
                    " tikhonov " + exact_text(so.tikhonov_mass) + " " +

@@ -235,8 +235,11 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   const auto x_kd = std::make_unique<detail::KdTree>(X.points(), detail::kLeafSize);
   const Eigen::VectorXd scale_y =
       detail::nearest_distances(*x_kd, *kd, set.threads, set.share).array() + eps;
-  const Eigen::VectorXd scale_x =
-      detail::nearest_distances(*kd, *x_kd, set.threads, set.share).array() + eps;
+  // x_i's scales serve pass 2 (and 3), which scan_to_body skips for its value alone.
+  const bool need_inner = req.gradient_points || req.gradient_volumes;
+  const bool pass2 = !one_sided || req.fields || need_inner;
+  Eigen::VectorXd scale_x;
+  if (pass2) scale_x = detail::nearest_distances(*kd, *x_kd, set.threads, set.share).array() + eps;
   // Every exact S is ≤ 1 (each term ≤ its weight, the weights sum to 1), so clipping an
   // approximate sum at 1 only moves it towards the exact value and keeps d̃ ≥ r_min ≥ 0.
   const bool clip = options.method != Method::exact;
@@ -264,7 +267,6 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   // G_i = Σ_j (W_j/|Y|) p_ij t_ij (x_i − y_j)/r_ij, and the pass-1 terms scaled by y_j's
   // own scale: H_i = Σ_j g_j p'_ij, G2_i = Σ_j g_j p'_ij t_ij (x_i − y_j)/r_ij.
   // scan_to_body needs neither S_i (but for the fields) nor G_i: only H_i, G2_i for A.
-  const bool need_inner = req.gradient_points || req.gradient_volumes;
   detail::PassSources src_y{&Y.points(), kd.get(), w.data(), nullptr, nullptr};
   detail::PassOuter out_x{&X.points(), x_kd.get(), scale_x.data(), 0u, nullptr};
   if (!one_sided || req.fields) out_x.flags |= kOuterSum;
@@ -277,7 +279,7 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   // The mask leaves masked points with S alone: only where S is summed anyway.
   if (req.differentiate.size() != 0 && (out_x.flags & kOuterSum)) out_x.mask = &req.differentiate;
   detail::PassSums p2;
-  if (out_x.flags != 0) {
+  if (pass2) {
     p2 = detail::run_pass(*backend, src_y, out_x, set);
     account(r, p2);
   }
