@@ -8,6 +8,9 @@
 ///     A = ((1/|Y|) Σ_j W_j d̃_X(y_j)^β)^(1/β),  B = ((1/|X|) Σ_i V_i d̃_Y(x_i)^β)^(1/β)
 ///     ρ̃ = ((A^γ + B^γ)/2)^(1/γ)
 ///
+/// HausdorffRequest::form selects the one-sided (ρ̃ = A), visible (B over marked moving points)
+/// and soft-capped forms of docs/formulation.md §8 (DistanceForm).
+///
 /// Typical use: build a HausdorffTarget once (it owns the target's k-d tree), then call
 /// evaluate() for each moving cloud, asking only for what is needed.
 
@@ -156,7 +159,8 @@ struct HausdorffRequest {
   bool any_gradient() const { return gradient_points || gradient_volumes || gradient_target; }
 };
 
-/// Where the pair-sum work of one evaluation went, summed over its passes (2 or 3).
+/// Where the pair-sum work of one evaluation went, summed over its passes (2 or 3; 1 or 2
+/// for Sides::scan_to_body, which needs no pass for B's value).
 struct SumWork {
   std::int64_t near_pairs = 0;  ///< source–outer pairs summed directly (near field, or all)
   std::int64_t far_kernel = 0;  ///< method tree: kernel evaluations at interpolation points
