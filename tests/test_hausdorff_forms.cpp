@@ -287,6 +287,35 @@ TEST(HausdorffForms, ScanToBodySkipsPassesItDoesNotNeed) {
   EXPECT_EQ(hausdorff(X, Y, {}, req).work.passes, 3);
 }
 
+// The differentiate mask with every form and method: masked rows zero, the others unchanged
+// (scan_to_body's second pass sums no S, so it gets no mask and the rows are zeroed after).
+TEST(HausdorffForms, DifferentiateMaskKeepsTheOtherRows) {
+  const PointCloud X = random_cloud(40, 3, 17), Y = random_cloud(30, 3, 18, 0.2, 1.2);
+  for (const FormCase& fc : kForms) {
+    for (Method m : {Method::exact, Method::tree}) {
+      HausdorffOptions o;
+      o.method = m;
+      o.tree_fallback = false;
+      HausdorffRequest all;
+      all.form = make_form(fc.sides, fc.cap, X.size());
+      all.gradient_points = all.gradient_volumes = true;
+      HausdorffRequest some = all;
+      some.differentiate = random_mask(X.size(), 19);
+      const HausdorffResult a = hausdorff(X, Y, o, all), b = hausdorff(X, Y, o, some);
+      EXPECT_EQ(a.rho, b.rho) << fc.name;
+      for (Eigen::Index i = 0; i < X.size(); ++i) {
+        if (some.differentiate[i]) {
+          EXPECT_EQ(a.gradient_points.row(i), b.gradient_points.row(i)) << fc.name << " " << i;
+          EXPECT_EQ(a.gradient_volumes[i], b.gradient_volumes[i]) << fc.name << " " << i;
+        } else {
+          EXPECT_TRUE(b.gradient_points.row(i).isZero()) << fc.name << " " << i;
+          EXPECT_EQ(b.gradient_volumes[i], 0.0) << fc.name << " " << i;
+        }
+      }
+    }
+  }
+}
+
 // --- A direct reference in long double: the formulas of §2.1 and §8 as written. ---
 
 long double direct_field(const PointCloud& P, const Eigen::RowVectorXd& q,
