@@ -13,6 +13,7 @@
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/atomic_file.hpp"
 #include "softhd/io/cloud_io.hpp"
+#include "softhd/io/mask_io.hpp"
 #include "softhd/parallel.hpp"
 #include "softhd/work_share.hpp"
 
@@ -39,8 +40,18 @@ options:
   --dim D          2 or 3: dimension of text clouds (default: from the columns:
                    2 -> x y, 3 -> x y z, 4 -> x y z V)
   --threads T      OpenMP threads (default: all)
+  --distance F     symmetric | scan_to_body | visible (default symmetric;
+                   docs/formulation.md section 8): scan_to_body is rho = A alone
+                   (TARGET -> MOVING, for a partial scan; B is reported 0), visible
+                   restricts B to the moving points marked in --visible
+  --visible FILE   with --distance visible: N lines of 0 or 1, one per moving point
+                   in the order of MOVING ('#' comments allowed), 1 = in B
+  --cap C          soft cap psi_c(d) = (d^-q + c^-q)^(-1/q) on every field value
+                   before its beta-mean, C > 0 a length (default 0: no cap)
+  --cap-q Q        sharpness q > 0 of the cap (default 4)
   --grad FILE      write d rho / d x_i and d rho / d V_i, one row per moving point
-  --json           print one JSON object: rho, A, B, N, M, method, seconds, ...
+  --json           print one JSON object: rho, A, B, N, M, method, distance,
+                   cap, seconds, ...
   --help           this text
 
 MPI builds: under 'mpirun -np K softhd distance ...' every rank reads both clouds
@@ -85,6 +96,19 @@ int run_distance(const std::vector<std::string>& tokens) {
   opt.threads = static_cast<int>(args.integer("--threads", 0, 0, kMaxThreads));
   const long dim = args.integer("--dim", 0);
   if (dim != 0 && dim != 2 && dim != 3) throw UsageError("--dim must be 2 or 3");
+  DistanceForm form;
+  form.sides = sides_from_string(args.value("--distance").value_or("symmetric"));
+  form.cap.c = args.number("--cap", form.cap.c);
+  form.cap.q = args.number("--cap-q", form.cap.q);
+  try {
+    DistanceForm{Sides::symmetric, form.cap, {}}.validate(0);
+  } catch (const InvalidArgument& e) {
+    throw UsageError(std::string("--cap/--cap-q: ") + e.what());
+  }
+  const std::optional<std::string> visible_path = args.value("--visible");
+  if (visible_path.has_value() != (form.sides == Sides::visible))
+    throw UsageError(visible_path ? "--visible needs --distance visible"
+                                  : "--distance visible needs --visible FILE");
   const std::optional<std::string> grad_path = args.value("--grad");
   const bool json = args.flag("--json");
   const std::vector<std::string> files = args.finish();
@@ -102,7 +126,15 @@ int run_distance(const std::vector<std::string>& tokens) {
     throw InvalidArgument("mixed dimensions: '" + files[0] + "' is " + std::to_string(X.dim()) +
                           "D but '" + files[1] + "' is " + std::to_string(Y.dim()) + "D");
   }
+  if (visible_path) {
+    form.visible = read_mask(*visible_path);
+    if (form.visible.size() != X.size())
+      throw FileError(*visible_path + ": " + std::to_string(form.visible.size()) +
+                      " entries for the " + std::to_string(X.size()) + " points of '" + files[0] +
+                      "'");
+  }
   HausdorffRequest req;
+  req.form = form;
   req.gradient_points = req.gradient_volumes = grad_path.has_value();
   const HausdorffTarget target(Y, opt);
   const HausdorffResult r = target.evaluate(X, req);
@@ -126,6 +158,9 @@ int run_distance(const std::vector<std::string>& tokens) {
     j["gamma"] = opt.params.gamma;
     j["eps"] = opt.params.epsilon;
     if (opt.method == Method::tree) j["tolerance"] = opt.tolerance;
+    j["distance"] = to_string(form.sides);
+    j["cap"] = form.cap.c;
+    j["cap_q"] = form.cap.q;
     j["kernel_evaluations"] = r.kernel_evaluations;
     j["ranks"] = opt.share ? opt.share->size() : 1;
     j["seconds"] = r.seconds;
@@ -135,9 +170,10 @@ int run_distance(const std::vector<std::string>& tokens) {
     std::printf("%s = %.10g\n", nn ? "Hausdorff distance" : "rho", r.rho);
     std::printf("%s = %.10g\n", nn ? "max_j dist(y_j, X)" : "A  ", r.A);
     std::printf("%s = %.10g\n", nn ? "max_i dist(x_i, Y)" : "B  ", r.B);
-    std::printf("N = %ld moving, M = %ld target points, %dD, method %s, %.3g s\n",
+    std::printf("N = %ld moving, M = %ld target points, %dD, method %s, distance %s, %.3g s\n",
                 static_cast<long>(X.size()), static_cast<long>(Y.size()), X.dim(),
-                to_string(opt.method).c_str(), r.seconds);
+                to_string(opt.method).c_str(), to_string(form.sides).c_str(), r.seconds);
+    if (form.cap.c > 0.0) std::printf("cap c = %.10g, q = %.10g\n", form.cap.c, form.cap.q);
   }
   return 0;
 }

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "../io/keys.hpp"
+#include "softhd/control/shape_objective.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
 #include "softhd/hausdorff.hpp"
@@ -62,7 +63,7 @@ SceneTarget arc_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlohm
   std::ostringstream d;
   d << "arc of " << T.angle * 180.0 / M_PI << " degrees, " << counts[0] << "x" << counts[1] << "x"
     << counts[2] << " cell-centred grid";
-  return {T.apply(grid), T.displacement(mesh), d.str()};
+  return {T.apply(grid), T.displacement(mesh), d.str(), {}};
 }
 
 SceneTarget cloud_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlohmann::json& t,
@@ -73,17 +74,76 @@ SceneTarget cloud_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlo
   const fs::path f = (dir / t["file"].get<std::string>()).lexically_normal();
   PointCloud cloud = read_cloud(f.string(), scene.dim());
   check_coordinates(cloud, f.string());
-  if (!t.contains("solved_on")) return {cloud, std::nullopt, "cloud file " + f.string()};
+  if (!t.contains("solved_on")) return {cloud, std::nullopt, "cloud file " + f.string(), {}};
   // A manufactured target: the deformed nodes of a state solved on another scene's mesh.
   if (!t["solved_on"].is_string())
     throw InvalidArgument(scene.source + ": target.solved_on must be a scene path string");
   const fs::path source = (dir / t["solved_on"].get<std::string>()).lexically_normal();
   const NodalMap T(fe::load_scene(source.string(), memory_limit).make_mesh(), cloud);
-  return {cloud, T.displacement(mesh),
-          "cloud file " + f.string() + " (deformed nodes of " + source.string() + ")"};
+  return {cloud,
+          T.displacement(mesh),
+          "cloud file " + f.string() + " (deformed nodes of " + source.string() + ")",
+          {}};
+}
+
+// A number at key `key` of the target block, finite (and > 0 if `positive`).
+double target_number(const fe::Scene& scene, const nlohmann::json& v, const std::string& key,
+                     bool positive) {
+  if (!v.is_number() || !std::isfinite(v.get<double>()) || (positive && !(v.get<double>() > 0.0)))
+    throw InvalidArgument(scene.source + ": target." + key + " must be a number" +
+                          (positive ? " > 0" : "") + ", got " + v.dump());
+  return v.get<double>();
+}
+
+// The keys "distance", "cap", "cap_q" of a target block (docs/guide.md).
+TargetDistance target_distance(const fe::Scene& scene, const nlohmann::json& t) {
+  TargetDistance d;
+  if (t.contains("distance")) {
+    const nlohmann::json& v = t["distance"];
+    const std::string name = v.is_string() ? v.get<std::string>() : v.dump();
+    if (name == "visible")
+      throw InvalidArgument(scene.source +
+                            ": target.distance \"visible\" needs the camera's position, which a "
+                            "scene cannot give yet; use \"symmetric\" or \"scan_to_body\"");
+    if (!v.is_string() || (name != "symmetric" && name != "scan_to_body"))
+      throw InvalidArgument(scene.source +
+                            ": target.distance must be \"symmetric\" or \"scan_to_body\", got " +
+                            v.dump());
+    d.sides = sides_from_string(name);
+  }
+  if (t.contains("cap")) {
+    const nlohmann::json& c = t["cap"];
+    if (c.is_object()) {
+      io::check_keys(c, "scene " + scene.source, "target.cap", {"quantile", "factor"});
+      if (!c.contains("quantile") || !c.contains("factor"))
+        throw InvalidArgument(scene.source + ": target.cap needs both \"quantile\" and \"factor\"");
+      d.cap_quantile = target_number(scene, c["quantile"], "cap.quantile", false);
+      d.cap_factor = target_number(scene, c["factor"], "cap.factor", true);
+      if (!(d.cap_quantile >= 0.0 && d.cap_quantile <= 1.0))
+        throw InvalidArgument(scene.source + ": target.cap.quantile must be in [0, 1], got " +
+                              c["quantile"].dump());
+    } else {
+      d.cap = target_number(scene, c, "cap", true);
+    }
+  }
+  if (t.contains("cap_q")) d.cap_q = target_number(scene, t["cap_q"], "cap_q", true);
+  return d;
 }
 
 }  // namespace
+
+DistanceForm target_form(const TargetDistance& distance, const ShapeObjective& objective) {
+  DistanceForm form;
+  form.sides = distance.sides;
+  form.cap.c = distance.cap;
+  form.cap.q = distance.cap_q;
+  if (distance.cap_factor > 0.0) {
+    const Eigen::VectorXd rest = Eigen::VectorXd::Zero(objective.last_state().u.size());
+    form.cap.c = cap_from_quantile(objective.fields(rest).field_target, distance.cap_quantile,
+                                   distance.cap_factor);
+  }
+  return form;
+}
 
 ArcMap arc_map(const fe::Scene& scene, double angle) {
   if (scene.dim() != 3) throw InvalidArgument(scene.source + ": an arc map needs a 3D body");
@@ -107,12 +167,16 @@ SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh, double me
   const std::string kind = t["kind"].get<std::string>();
   const std::string where = "scene " + scene.source;
   if (kind == "arc") {
-    io::check_keys(t, where, "target", {"kind", "angle", "cells"});
-    return arc_target(scene, mesh, t, memory_limit);
+    io::check_keys(t, where, "target", {"kind", "angle", "cells", "distance", "cap", "cap_q"});
+    SceneTarget st = arc_target(scene, mesh, t, memory_limit);
+    st.distance = target_distance(scene, t);
+    return st;
   }
   if (kind == "cloud") {
-    io::check_keys(t, where, "target", {"kind", "file", "solved_on"});
-    return cloud_target(scene, mesh, t, memory_limit);
+    io::check_keys(t, where, "target", {"kind", "file", "solved_on", "distance", "cap", "cap_q"});
+    SceneTarget st = cloud_target(scene, mesh, t, memory_limit);
+    st.distance = target_distance(scene, t);
+    return st;
   }
   throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\", got \"" + kind +
                         "\"");
@@ -124,7 +188,7 @@ SceneTarget file_target(const std::string& path, int dim) {
   if (dim != 0 && cloud.dim() != dim)
     throw InvalidArgument("the target cloud '" + path + "' is " + std::to_string(cloud.dim()) +
                           "D but the scene's body is " + std::to_string(dim) + "D");
-  return {std::move(cloud), std::nullopt, "cloud file " + path};
+  return {std::move(cloud), std::nullopt, "cloud file " + path, {}};
 }
 
 }  // namespace softhd
