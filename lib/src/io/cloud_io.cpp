@@ -12,11 +12,12 @@
 #include <system_error>
 #include <vector>
 
+#include "cloud_io_internal.hpp"
 #include "softhd/error.hpp"
 #include "softhd/io/atomic_file.hpp"
 
 namespace softhd {
-namespace {
+namespace detail {
 
 // ---------------------------------------------------------------------------
 // Files, messages, numbers
@@ -108,6 +109,24 @@ PointCloud make_cloud(const std::string& path, const std::vector<double>& values
 }
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+std::vector<std::string_view> split_blanks(std::string_view line) {
+  std::vector<std::string_view> tokens;
+  std::size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && is_blank(line[i])) ++i;
+    const std::size_t start = i;
+    while (i < line.size() && !is_blank(line[i])) ++i;
+    if (i > start) tokens.push_back(line.substr(start, i - start));
+  }
+  return tokens;
+}
+
+}  // namespace detail
+
+using namespace detail;
+
+namespace {
 
 // ---------------------------------------------------------------------------
 // Text
@@ -261,18 +280,6 @@ std::size_t ply_size(PlyType t) {
 }
 
 template <class T>
-T load_le(const char* p) {
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, p, sizeof(T));
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
-  std::reverse(bytes, bytes + sizeof(T));
-#endif
-  T value;
-  std::memcpy(&value, bytes, sizeof(T));
-  return value;
-}
-
-template <class T>
 void store_le(std::string& out, T value) {
   char bytes[sizeof(T)];
   std::memcpy(bytes, &value, sizeof(T));
@@ -327,18 +334,6 @@ struct PlyHeader {
   std::size_t body = 0;       // offset of the first byte after the header
   std::size_t body_line = 0;  // line number of the first body line
 };
-
-std::vector<std::string_view> split_blanks(std::string_view line) {
-  std::vector<std::string_view> tokens;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && is_blank(line[i])) ++i;
-    const std::size_t start = i;
-    while (i < line.size() && !is_blank(line[i])) ++i;
-    if (i > start) tokens.push_back(line.substr(start, i - start));
-  }
-  return tokens;
-}
 
 PlyHeader parse_ply_header(const std::string& path, const std::string& data) {
   PlyHeader h;
@@ -570,12 +565,19 @@ void read_ply_ascii(const std::string& path, const std::string& data, const PlyH
 
 }  // namespace
 
-PointCloud read_ply_cloud(const std::string& path) {
-  return parse_ply_cloud(read_file(path), path);
+PointCloud read_ply_cloud(const std::string& path, std::vector<std::string>* notes) {
+  return parse_ply_cloud(read_file(path), path, notes);
 }
 
-PointCloud parse_ply_cloud(const std::string& data, const std::string& path) {
+PointCloud parse_ply_cloud(const std::string& data, const std::string& path,
+                           std::vector<std::string>* notes) {
   const PlyHeader h = parse_ply_header(path, data);
+  if (notes != nullptr) {
+    std::string skipped;
+    for (const PlyProperty& prop : h.elements[static_cast<std::size_t>(h.vertex)].properties)
+      if (prop.role < 0) skipped += (skipped.empty() ? "" : ", ") + prop.name;
+    if (!skipped.empty()) notes->push_back(path + ": vertex properties " + skipped + " ignored");
+  }
   std::vector<double> values;  // rows of x, y, [z,] volume
   if (h.binary) {
     read_ply_binary(path, data, h, values);
@@ -610,12 +612,14 @@ void write_ply_cloud(const std::string& path, const PointCloud& cloud, bool bina
 }
 
 namespace {
-bool is_ply_name(const std::string& path) {
-  std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : std::string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
+// Whether `path` ends in `ext` (".ply", ".pcd"), in any case.
+bool has_extension(const std::string& path, const char* ext) {
+  std::string tail = path.size() >= 4 ? path.substr(path.size() - 4) : std::string();
+  std::transform(tail.begin(), tail.end(), tail.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext == ".ply";
+  return tail == ext;
 }
+bool is_ply_name(const std::string& path) { return has_extension(path, ".ply"); }
 }  // namespace
 
 void write_cloud(const std::string& path, const PointCloud& cloud) {
@@ -625,10 +629,11 @@ void write_cloud(const std::string& path, const PointCloud& cloud) {
     write_text_cloud(path, cloud);
 }
 
-PointCloud read_cloud(const std::string& path, int dim) {
+PointCloud read_cloud(const std::string& path, int dim, std::vector<std::string>* notes) {
   check_dim(dim);
-  if (!is_ply_name(path)) return read_text_cloud(path, dim);
-  PointCloud cloud = read_ply_cloud(path);
+  const bool pcd = has_extension(path, ".pcd");
+  if (!pcd && !is_ply_name(path)) return read_text_cloud(path, dim);
+  PointCloud cloud = pcd ? read_pcd_cloud(path, notes) : read_ply_cloud(path, notes);
   if (dim != 0 && cloud.dim() != dim) {
     fail(path, "the file holds a " + std::to_string(cloud.dim()) +
                    "D cloud but dim=" + std::to_string(dim) + " was requested");
