@@ -197,4 +197,53 @@ PointCloud select(const PointCloud& cloud, const std::vector<Eigen::Index>& indi
   return PointCloud(std::move(points), std::move(volumes));
 }
 
+void ScanCleanup::validate() const {
+  if (crop && !(std::isfinite(*crop) && *crop >= 0.0))
+    throw InvalidArgument("clean.crop must be a finite margin >= 0, got " + std::to_string(*crop));
+  if (plane && !(std::isfinite(*plane) && *plane > 0.0))
+    throw InvalidArgument("clean.plane must be a finite distance > 0, got " +
+                          std::to_string(*plane));
+  if (outliers && outliers->k < 1)
+    throw InvalidArgument("clean.outliers.k must be >= 1, got " + std::to_string(outliers->k));
+  if (outliers && !std::isfinite(outliers->ratio))
+    throw InvalidArgument("clean.outliers.ratio must be finite");
+}
+
+PointCloud clean_scan(const PointCloud& scan, const Eigen::VectorXd& lower,
+                      const Eigen::VectorXd& upper, const ScanCleanup& cleanup,
+                      std::vector<CleanupStep>* steps) {
+  cleanup.validate();
+  PointCloud current = scan;
+  auto apply = [&](const char* name, const std::vector<Eigen::Index>& kept) {
+    const Eigen::Index removed = current.size() - static_cast<Eigen::Index>(kept.size());
+    if (steps != nullptr) steps->push_back({name, removed});
+    if (kept.empty())
+      throw InvalidArgument(std::string("no points left after the clean-up (") + name +
+                            " removed the last " + std::to_string(removed) + ")");
+    if (removed > 0) current = select(current, kept);
+  };
+  if (cleanup.crop) apply("crop", crop_to_box(current, lower, upper, *cleanup.crop));
+  if (cleanup.plane) {
+    PlaneRemoval options;
+    options.distance = *cleanup.plane;
+    apply("plane", remove_dominant_plane(current, options));
+  }
+  if (cleanup.outliers) {
+    const ScanCleanup::Outliers& o = *cleanup.outliers;
+    if (o.k >= current.size())
+      throw InvalidArgument("clean.outliers.k = " + std::to_string(o.k) +
+                            " needs more points than the " + std::to_string(current.size()) +
+                            " left");
+    apply("outliers", remove_statistical_outliers(current, o.k, o.ratio));
+  }
+  return current;
+}
+
+std::string describe(const std::vector<CleanupStep>& steps, Eigen::Index points) {
+  std::string out;
+  for (const CleanupStep& s : steps)
+    out += (out.empty() ? "" : ", ") + s.name + " removed " + std::to_string(s.removed);
+  return out + " of " + std::to_string(points) + " points";
+}
+
 }  // namespace softhd::scan

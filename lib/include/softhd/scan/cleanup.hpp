@@ -7,6 +7,8 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "softhd/point_cloud.hpp"
@@ -53,6 +55,38 @@ Plane find_dominant_plane(const PointCloud& cloud, const PlaneRemoval& options);
 /// points if the plane holds fewer than min_fraction of them.
 std::vector<Eigen::Index> remove_dominant_plane(const PointCloud& cloud,
                                                 const PlaneRemoval& options);
+
+/// The clean-up of a scan in the order a scene's target block applies it: crop to the body's
+/// box inflated by `crop` (a fraction of its diagonal), then the dominant plane within `plane`
+/// (a length), then statistical outliers; each step optional.
+struct ScanCleanup {
+  std::optional<double> crop;   ///< margin (≥ 0) for crop_to_box; none: no crop
+  std::optional<double> plane;  ///< PlaneRemoval::distance (> 0); none: no plane removal
+  struct Outliers {
+    int k = 20;          ///< neighbours (≥ 1)
+    double ratio = 2.0;  ///< of the standard deviation (finite)
+  };
+  std::optional<Outliers> outliers;  ///< none: no statistical outlier removal
+  /// Throws InvalidArgument naming the offending field (crop, plane, outliers.k, .ratio).
+  void validate() const;
+};
+
+/// What one step removed.
+struct CleanupStep {
+  std::string name;          ///< "crop", "plane" or "outliers"
+  Eigen::Index removed = 0;  ///< points it removed
+};
+
+/// The scan after `cleanup`, the box [lower, upper] being the body's. Appends one entry per
+/// step made to `steps` if given. Throws InvalidArgument "no points left after the clean-up
+/// (<step> removed the last N)" if a step leaves none, and whatever the steps throw (e.g.
+/// outliers.k not below the points left).
+PointCloud clean_scan(const PointCloud& scan, const Eigen::VectorXd& lower,
+                      const Eigen::VectorXd& upper, const ScanCleanup& cleanup,
+                      std::vector<CleanupStep>* steps = nullptr);
+
+/// "crop removed 12, plane removed 3400, outliers removed 51 of 9000 points".
+std::string describe(const std::vector<CleanupStep>& steps, Eigen::Index points);
 
 /// The sub-cloud of the given indices (points and volumes). Throws InvalidArgument if
 /// `indices` is empty or one is out of range.
