@@ -163,3 +163,19 @@ TEST(PlyReader, NamesSkippedPropertiesInANote) {
   EXPECT_EQ(softhd::parse_ply_cloud(ply, "n.ply", &notes).size(), 1);
   EXPECT_TRUE(mentions(notes, "n.ply: vertex properties red, nx ignored"));
 }
+
+TEST(TextReader, SkipsColourAndNormalColumnsWithANote) {
+  Notes notes;
+  const PointCloud c =
+      softhd::parse_text_cloud("1 2 3 255 0 0\n4 5 6 0 255 0\n", "c.txt", 0, &notes);
+  ASSERT_EQ(c.size(), 2);
+  EXPECT_EQ(c.points().row(1), Eigen::RowVector3d(4, 5, 6));
+  EXPECT_EQ(c.volumes(), Eigen::Vector2d(1, 1));
+  EXPECT_TRUE(mentions(notes, "c.txt: columns 4 to 6 (colours or normals) ignored"));
+  notes.clear();
+  const PointCloud v = softhd::parse_text_cloud("1 2 3 0.5 0 0 1 9 9 9\n", "v.txt", 3, &notes);
+  EXPECT_EQ(v.volumes()[0], 0.5);
+  EXPECT_TRUE(mentions(notes, "v.txt: columns 5 to 10"));
+  expect_error<FileError>([] { softhd::parse_text_cloud("1 2 3 4 5 6 7 8\n", "e.txt"); },
+                          "e.txt:1: expected 2, 3 or 4 columns");
+}

@@ -206,12 +206,15 @@ SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh, double me
 }
 
 SceneTarget file_target(const std::string& path, int dim) {
-  PointCloud cloud = read_cloud(path, dim);
+  std::vector<std::string> notes;
+  PointCloud cloud = read_cloud(path, dim, &notes);
   check_coordinates(cloud, path);
   if (dim != 0 && cloud.dim() != dim)
     throw InvalidArgument("the target cloud '" + path + "' is " + std::to_string(cloud.dim()) +
                           "D but the scene's body is " + std::to_string(dim) + "D");
-  return {std::move(cloud), std::nullopt, "cloud file " + path};
+  std::string description = "cloud file " + path;
+  for (const std::string& n : notes) description += "; " + n;
+  return {std::move(cloud), std::nullopt, description};
 }
 
 }  // namespace softhd

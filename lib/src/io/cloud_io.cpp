@@ -132,7 +132,7 @@ namespace {
 // Text
 
 // Splits one line (without its comment and newline) into fields separated by
-// blanks and/or single commas. Stores up to 4 fields, returns how many there are.
+// blanks and/or single commas. Stores up to 10 fields, returns how many there are.
 int split_fields(const std::string& path, std::size_t line, const char* p, const char* stop,
                  std::string_view* fields) {
   int n = 0;
@@ -148,7 +148,7 @@ int split_fields(const std::string& path, std::size_t line, const char* p, const
     }
     const char* start = p;
     while (p < stop && !is_blank(*p) && *p != ',') ++p;
-    if (n < 4) fields[n] = std::string_view(start, static_cast<std::size_t>(p - start));
+    if (n < 10) fields[n] = std::string_view(start, static_cast<std::size_t>(p - start));
     ++n;
     after_comma = false;
   }
@@ -156,19 +156,26 @@ int split_fields(const std::string& path, std::size_t line, const char* p, const
 
 }  // namespace
 
-PointCloud read_text_cloud(const std::string& path, int dim) {
+PointCloud read_text_cloud(const std::string& path, int dim, std::vector<std::string>* notes) {
   check_dim(dim);
-  return parse_text_cloud(read_file(path), path, dim);
+  return parse_text_cloud(read_file(path), path, dim, notes);
 }
 
-PointCloud parse_text_cloud(const std::string& data, const std::string& path, int dim) {
+namespace {
+// The columns x y z [V] of a 3D line with 3 or 6 more (colours and/or normals, ignored):
+// 6 or 9 columns -> 3, 7 or 10 -> 4; else 0.
+int read_columns_3d(int n) { return n == 6 || n == 9 ? 3 : n == 7 || n == 10 ? 4 : 0; }
+}  // namespace
+
+PointCloud parse_text_cloud(const std::string& data, const std::string& path, int dim,
+                            std::vector<std::string>* notes) {
   check_dim(dim);
   const char* p = data.data();
   const char* const end = p + data.size();
   if (data.compare(0, 3, "\xEF\xBB\xBF") == 0) p += 3;  // UTF-8 byte order mark
 
-  std::vector<double> values;  // row-major, `cols` numbers per point
-  int cols = 0;
+  std::vector<double> values;  // row-major, `used` numbers per point
+  int cols = 0, used = 0;
   int point_dim = 0;
   bool has_volume = false;
   std::size_t cols_line = 0;
@@ -179,29 +186,35 @@ PointCloud parse_text_cloud(const std::string& data, const std::string& path, in
     const char* stop =
         static_cast<const char*>(std::memchr(p, '#', static_cast<std::size_t>(eol - p)));
     if (stop == nullptr) stop = eol;
-    std::string_view fields[4];
+    std::string_view fields[10];
     const int n = split_fields(path, line, p, stop, fields);
     p = eol + (eol < end ? 1 : 0);
     if (n == 0) continue;
 
     if (cols == 0) {
-      const bool ok = dim == 0 ? (n >= 2 && n <= 4) : (n == dim || n == dim + 1);
+      const bool extra = dim != 2 && read_columns_3d(n) > 0;
+      const bool ok = extra || (dim == 0 ? (n >= 2 && n <= 4) : (n == dim || n == dim + 1));
       if (!ok) {
-        const char* expected = dim == 0   ? "2, 3 or 4 columns (x y [z] [V])"
-                               : dim == 2 ? "2 or 3 columns (x y [V]) for dim=2"
-                                          : "3 or 4 columns (x y z [V]) for dim=3";
+        const char* expected =
+            dim == 0   ? "2, 3 or 4 columns (x y [z] [V]; in 3D 3 or 6 more may follow)"
+            : dim == 2 ? "2 or 3 columns (x y [V]) for dim=2"
+                       : "3 or 4 columns (x y z [V]; 3 or 6 more may follow) for dim=3";
         fail_at(path, line, std::string("expected ") + expected + ", got " + std::to_string(n));
       }
       cols = n;
+      used = extra ? read_columns_3d(n) : n;
       cols_line = line;
-      point_dim = dim != 0 ? dim : std::min(n, 3);
-      has_volume = n > point_dim;
+      point_dim = extra ? 3 : dim != 0 ? dim : std::min(n, 3);
+      has_volume = used > point_dim;
+      if (extra && notes != nullptr)
+        notes->push_back(path + ": columns " + std::to_string(used + 1) + " to " +
+                         std::to_string(n) + " (colours or normals) ignored");
     } else if (n != cols) {
       fail_at(path, line,
               "mixed dimensions: line " + std::to_string(line) + " has " + std::to_string(n) +
                   " columns, line " + std::to_string(cols_line) + " had " + std::to_string(cols));
     }
-    for (int k = 0; k < n; ++k) {
+    for (int k = 0; k < used; ++k) {
       double value = 0.0;
       const char* problem = parse_double(fields[k], value);
       if (problem == nullptr) problem = check_value(value, k == point_dim);
@@ -210,7 +223,7 @@ PointCloud parse_text_cloud(const std::string& data, const std::string& path, in
       values.push_back(value);
     }
   }
-  return make_cloud(path, values, cols, point_dim, has_volume);
+  return make_cloud(path, values, used, point_dim, has_volume);
 }
 
 void write_text_cloud(const std::string& path, const PointCloud& cloud, bool with_volumes) {
@@ -632,7 +645,7 @@ void write_cloud(const std::string& path, const PointCloud& cloud) {
 PointCloud read_cloud(const std::string& path, int dim, std::vector<std::string>* notes) {
   check_dim(dim);
   const bool pcd = has_extension(path, ".pcd");
-  if (!pcd && !is_ply_name(path)) return read_text_cloud(path, dim);
+  if (!pcd && !is_ply_name(path)) return read_text_cloud(path, dim, notes);
   PointCloud cloud = pcd ? read_pcd_cloud(path, notes) : read_ply_cloud(path, notes);
   if (dim != 0 && cloud.dim() != dim) {
     fail(path, "the file holds a " + std::to_string(cloud.dim()) +

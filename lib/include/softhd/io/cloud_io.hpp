@@ -21,7 +21,8 @@
 namespace softhd {
 
 /// read_text_cloud() on bytes already in memory; `name` stands for the file in messages.
-PointCloud parse_text_cloud(const std::string& data, const std::string& name, int dim = 0);
+PointCloud parse_text_cloud(const std::string& data, const std::string& name, int dim = 0,
+                            std::vector<std::string>* notes = nullptr);
 /// read_ply_cloud() on bytes already in memory; `name` stands for the file in messages.
 PointCloud parse_ply_cloud(const std::string& data, const std::string& name,
                            std::vector<std::string>* notes = nullptr);
@@ -49,7 +50,11 @@ void write_cloud(const std::string& path, const PointCloud& cloud);
 ///  - dim = 3: 3 (x y z) or 4 (x y z V).
 /// A missing V means V = 1. Note that a 2D cloud with volumes (3 columns) is
 /// only read as such with dim = 2; with dim = 0 it would be read as 3D.
-PointCloud read_text_cloud(const std::string& path, int dim = 0);
+/// A 3D line may carry 3 or 6 more columns (colours and/or normals, as other tools write
+/// them): 6 or 9 columns are x y z and 7 or 10 are x y z V, the rest skipped (not parsed)
+/// with a note.
+PointCloud read_text_cloud(const std::string& path, int dim = 0,
+                           std::vector<std::string>* notes = nullptr);
 
 /// Reads a PLY cloud (`format ascii 1.0` or `format binary_little_endian 1.0`;
 /// big-endian files are rejected). The `vertex` element must have scalar
