@@ -48,11 +48,17 @@ bool plane_through(const Eigen::MatrixXd& x, const Eigen::Index* pick, Eigen::Ve
   return true;
 }
 
-// |{i : |n·x_i − offset| ≤ distance}|.
+// |{i : |n·x_i − offset| ≤ distance}| (runs once per RANSAC sample: no allocation).
 Eigen::Index count_inliers(const Eigen::MatrixXd& x, const Eigen::VectorXd& n, double offset,
                            double distance) {
-  const Eigen::VectorXd r = (x * n).array() - offset;
-  return (r.array().abs() <= distance).count();
+  const int d = static_cast<int>(x.cols());
+  Eigen::Index count = 0;
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    double r = -offset;
+    for (int k = 0; k < d; ++k) r += n[k] * x(i, k);
+    count += std::abs(r) <= distance;
+  }
+  return count;
 }
 
 // Least-squares plane of the rows with |n·x − offset| ≤ distance: through their centroid c,
@@ -91,11 +97,13 @@ std::vector<Eigen::Index> crop_to_box(const PointCloud& cloud, const Eigen::Vect
                                       const Eigen::VectorXd& upper, double margin) {
   check_box(cloud, lower, upper, margin);
   const double m = margin * (upper - lower).norm();
-  const Eigen::ArrayXd lo = lower.array() - m, hi = upper.array() + m;
+  const Eigen::MatrixXd& x = cloud.points();
   std::vector<Eigen::Index> kept;
   for (Eigen::Index i = 0; i < cloud.size(); ++i) {
-    const Eigen::ArrayXd p = cloud.points().row(i).transpose().array();
-    if ((p >= lo).all() && (p <= hi).all()) kept.push_back(i);
+    bool inside = true;
+    for (int k = 0; k < cloud.dim(); ++k)
+      inside = inside && x(i, k) >= lower[k] - m && x(i, k) <= upper[k] + m;
+    if (inside) kept.push_back(i);
   }
   return kept;
 }
