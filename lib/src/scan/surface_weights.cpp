@@ -70,8 +70,8 @@ double polygon_area(const std::vector<Eigen::Vector2d>& poly) {
 
 // Surface: the tangent plane from the k nearest neighbours; with p_j the `candidates` nearest
 // projected on it (the point at 0), the Voronoi cell {q : q·p_j ≤ |p_j|²/2 ∀j} inside the
-// square |q|_∞ ≤ r_k; its area. A candidate with |p_j|/2 beyond the cell's farthest vertex
-// cannot cut it. `poly` and `next` are the caller's scratch.
+// square |q|_∞ ≤ r_k; its area (a border point's: see below). A candidate with |p_j|/2 beyond the
+// cell's farthest vertex cannot cut it. `poly` and `next` are the caller's scratch.
 double voronoi_area(const Eigen::MatrixXd& x, Eigen::Index i, const Eigen::Index* nb,
                     const double* dist, int k, int candidates, std::vector<Eigen::Vector2d>& poly,
                     std::vector<Eigen::Vector2d>& next) {
@@ -89,7 +89,20 @@ double voronoi_area(const Eigen::MatrixXd& x, Eigen::Index i, const Eigen::Index
     reach2 = 0.0;
     for (const Eigen::Vector2d& v : poly) reach2 = std::max(reach2, v.squaredNorm());
   }
-  return polygon_area(poly);
+  // A point on the border of an open scan: its cell reaches the square (no neighbour bounds
+  // it outwards). Its area is twice its cell's inward half, the half on the side of its k
+  // nearest neighbours' centroid g: {q in the cell : g·q ≥ 0}.
+  bool border = false;
+  for (const Eigen::Vector2d& v : poly)
+    border = border || v.cwiseAbs().maxCoeff() >= r * (1 - 1e-9);
+  if (!border) return polygon_area(poly);
+  Eigen::Vector2d g = Eigen::Vector2d::Zero();
+  for (int m = 0; m < k; ++m) {
+    const Eigen::Vector3d e = (x.row(nb[m]) - x.row(i)).transpose();
+    g += Eigen::Vector2d(e.dot(axes.col(0)), e.dot(axes.col(1)));
+  }
+  clip(poly, -g, 0.0, next);
+  return 2.0 * polygon_area(next);
 }
 
 // Curve: the tangent from the k nearest neighbours, s_j the candidates' coordinates along it; the
