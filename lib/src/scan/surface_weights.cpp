@@ -27,18 +27,21 @@ double knn_area(double r_k, int k, int dim) {
 }
 
 // The unit vectors of the neighbourhood's principal axes (columns), largest variance first:
-// the last column is the normal (3D) or the curve's normal (2D).
-Eigen::MatrixXd principal_axes(const Eigen::MatrixXd& x, Eigen::Index i, const Eigen::Index* nb,
-                               int k) {
-  Eigen::VectorXd c = x.row(i).transpose();
+// the last column is the normal (3D) or the curve's normal (2D). Fixed-size: no allocation.
+template <int D>
+Eigen::Matrix<double, D, D> principal_axes(const Eigen::MatrixXd& x, Eigen::Index i,
+                                           const Eigen::Index* nb, int k) {
+  using Vec = Eigen::Matrix<double, D, 1>;
+  const Vec xi = x.row(i).transpose();
+  Vec c = xi;
   for (int m = 0; m < k; ++m) c += x.row(nb[m]).transpose();
   c /= double(k + 1);
-  Eigen::MatrixXd s = (x.row(i).transpose() - c) * (x.row(i).transpose() - c).transpose();
+  Eigen::Matrix<double, D, D> s = (xi - c) * (xi - c).transpose();
   for (int m = 0; m < k; ++m) {
-    const Eigen::VectorXd e = x.row(nb[m]).transpose() - c;
+    const Vec e = x.row(nb[m]).transpose() - c;
     s.noalias() += e * e.transpose();
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(s);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, D, D>> eig(s);
   return eig.eigenvectors().rowwise().reverse();  // eigenvalues were in increasing order
 }
 
@@ -75,7 +78,7 @@ double polygon_area(const std::vector<Eigen::Vector2d>& poly) {
 double voronoi_area(const Eigen::MatrixXd& x, Eigen::Index i, const Eigen::Index* nb,
                     const double* dist, int k, int candidates, std::vector<Eigen::Vector2d>& poly,
                     std::vector<Eigen::Vector2d>& next) {
-  const Eigen::MatrixXd axes = principal_axes(x, i, nb, k);
+  const Eigen::Matrix3d axes = principal_axes<3>(x, i, nb, k);
   const double r = dist[k - 1];
   poly = {{-r, -r}, {r, -r}, {r, r}, {-r, r}};
   double reach2 = 2.0 * r * r;  // the farthest vertex's |q|², an upper bound
@@ -109,11 +112,12 @@ double voronoi_area(const Eigen::MatrixXd& x, Eigen::Index i, const Eigen::Index
 // cell [max_{s<0} s/2, min_{s>0} s/2], an end point's missing side mirrored from the other.
 double voronoi_length(const Eigen::MatrixXd& x, Eigen::Index i, const Eigen::Index* nb, int k,
                       int candidates) {
-  const Eigen::MatrixXd axes = principal_axes(x, i, nb, k);
+  const Eigen::Matrix2d axes = principal_axes<2>(x, i, nb, k);
   constexpr double kInf = std::numeric_limits<double>::infinity();
   double left = kInf, right = kInf;  // half-gaps to the nearest neighbour on each side
   for (int m = 0; m < candidates; ++m) {
-    const double s = (x.row(nb[m]) - x.row(i)).dot(axes.col(0).transpose());
+    const Eigen::Vector2d e = (x.row(nb[m]) - x.row(i)).transpose();
+    const double s = e.dot(axes.col(0));
     if (s > 0.0) right = std::min(right, 0.5 * s);
     if (s < 0.0) left = std::min(left, -0.5 * s);
   }
