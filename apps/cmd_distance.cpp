@@ -15,6 +15,8 @@
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/io/mask_io.hpp"
 #include "softhd/parallel.hpp"
+#include "softhd/scan/cleanup.hpp"
+#include "softhd/scan/surface_weights.hpp"
 #include "softhd/work_share.hpp"
 
 namespace softhd::cli {
@@ -26,7 +28,10 @@ const char* kUsage = R"(usage: softhd distance MOVING TARGET [options]
 Regularised Hausdorff distance rho between two point clouds
 (docs/formulation.md section 2).
 MOVING and TARGET are text files (x y [z] [V] per line, whitespace or commas,
-'#' comments, V = 1 when absent) or PLY files (ascii or binary little-endian).
+'#' comments, V = 1 when absent), PLY files (ascii or binary little-endian) or
+PCD files (.pcd: ascii, binary or binary_compressed; fields x y z, volumes from
+a volume, weight or area field). Skipped fields (colours, normals) are named on
+stderr.
 
 options:
   --alpha A        kernel exponent alpha > 0 (default 4)
@@ -50,6 +55,16 @@ options:
                    before its beta-mean, C > 0 a length (default 0: no cap)
   --cap-q Q        sharpness q > 0 of the cap (default 4)
   --grad FILE      write d rho / d x_i and d rho / d V_i, one row per moving point
+
+clean-up of TARGET as a scan (docs/formulation.md section 8), in this order; each
+step prints how many points it removed on stderr:
+  --crop M         keep the points in MOVING's bounding box inflated by M times
+                   its diagonal (M >= 0)
+  --plane DIST     remove the dominant plane (RANSAC, inlier distance DIST > 0)
+  --outliers K,R   statistical outlier removal: mean distance to the K nearest
+                   neighbours at most mean + R std over the cloud
+  --weights W      file (default: as read) | knn | delaunay: replace TARGET's
+                   volumes by estimated surface areas (12 neighbours)
   --json           print one JSON object: rho, A, B, N, M, method, distance,
                    cap, seconds, ...
   --help           this text
@@ -74,6 +89,42 @@ void write_gradient(const std::string& path, const PointCloud& X, const Hausdorf
     out << r.gradient_volumes[i] << '\n';
   }
   write_file_atomically(path, out.str());
+}
+
+// "K,R" of --outliers.
+scan::ScanCleanup::Outliers parse_outliers(const std::string& text) {
+  scan::ScanCleanup::Outliers o;
+  const std::size_t comma = text.find(',');
+  std::size_t used_k = 0, used_r = 0;
+  try {
+    if (comma == std::string::npos) throw std::invalid_argument("no comma");
+    o.k = std::stoi(text.substr(0, comma), &used_k);
+    o.ratio = std::stod(text.substr(comma + 1), &used_r);
+  } catch (const std::exception&) {
+    used_k = 0;
+  }
+  if (used_k == 0 || used_k != comma || used_r != text.size() - comma - 1)
+    throw UsageError("--outliers must be K,R (an integer and a number), got '" + text + "'");
+  return o;
+}
+
+// TARGET cleaned (crop to MOVING's bounding box) and re-weighted; each step a note.
+PointCloud clean_target(const PointCloud& X, const PointCloud& Y, const std::string& file,
+                        const scan::ScanCleanup& clean, const std::string& weights,
+                        std::vector<std::string>& notes) {
+  std::vector<scan::CleanupStep> steps;
+  PointCloud out = Y;
+  try {
+    out = scan::clean_scan(Y, X.points().colwise().minCoeff().transpose(),
+                           X.points().colwise().maxCoeff().transpose(), clean, &steps);
+    if (weights != "file")
+      out = scan::with_area_weights(out, scan::area_estimate_from_string(weights));
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(file + ": " + e.what());
+  }
+  if (!steps.empty()) notes.push_back(file + ": " + scan::describe(steps, Y.size()));
+  if (weights != "file") notes.push_back(file + ": weights " + weights);
+  return out;
 }
 
 }  // namespace
@@ -111,6 +162,18 @@ int run_distance(const std::vector<std::string>& tokens) {
                                   : "--distance visible needs --visible FILE");
   const std::optional<std::string> grad_path = args.value("--grad");
   const bool json = args.flag("--json");
+  scan::ScanCleanup clean;
+  if (const auto crop = args.value("--crop")) clean.crop = parse_number(*crop, "--crop");
+  if (const auto plane = args.value("--plane")) clean.plane = parse_number(*plane, "--plane");
+  if (const auto o = args.value("--outliers")) clean.outliers = parse_outliers(*o);
+  const std::string weights = args.value("--weights").value_or("file");
+  if (weights != "file" && weights != "knn" && weights != "delaunay")
+    throw UsageError("--weights must be file, knn or delaunay, got '" + weights + "'");
+  try {
+    clean.validate();
+  } catch (const InvalidArgument& e) {  // "clean.crop must be ..." for the flag --crop
+    throw UsageError(std::string("--") + (e.what() + 6));
+  }
   const std::vector<std::string> files = args.finish();
   if (files.size() != 2) {
     throw UsageError("expected two cloud files (MOVING TARGET), got " +
@@ -118,14 +181,18 @@ int run_distance(const std::vector<std::string>& tokens) {
   }
   opt.validate();
 
-  const PointCloud X = read_cloud(files[0], static_cast<int>(dim));
-  const PointCloud Y = read_cloud(files[1], static_cast<int>(dim));
+  std::vector<std::string> notes;
+  const PointCloud X = read_cloud(files[0], static_cast<int>(dim), &notes);
+  PointCloud Y = read_cloud(files[1], static_cast<int>(dim), &notes);
   check_coordinates(X, files[0]);  // the limit's message names the file
   check_coordinates(Y, files[1]);
   if (X.dim() != Y.dim()) {
     throw InvalidArgument("mixed dimensions: '" + files[0] + "' is " + std::to_string(X.dim()) +
                           "D but '" + files[1] + "' is " + std::to_string(Y.dim()) + "D");
   }
+  Y = clean_target(X, Y, files[1], clean, weights, notes);
+  if (speaker)
+    for (const std::string& n : notes) std::cerr << "softhd distance: " << n << '\n';
   if (visible_path) {
     form.visible = read_mask(*visible_path);
     if (form.visible.size() != X.size())

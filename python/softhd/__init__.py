@@ -32,6 +32,7 @@ its blocks of pairs, between Newton iterations and between the evaluations of ``
 """
 
 import os as _os
+import warnings as _warnings
 
 import numpy as _np
 
@@ -40,6 +41,7 @@ from ._core import (DistanceResult, Error, FileError, ForwardResult, InvalidArgu
                     Mesh, NumericalError, OptimiseResult, ResourceError, Scene)
 
 __all__ = ["distance", "hausdorff_nearest", "Target", "read_cloud", "write_cloud", "read_mesh",
+           "crop_to_box", "remove_statistical_outliers", "remove_dominant_plane", "area_weights",
            "Scene", "Mesh", "optimise", "optimise_defaults", "DistanceResult", "ForwardResult",
            "OptimiseResult",
            "Iteration", "Error", "InvalidArgument", "FileError", "ResourceError", "NumericalError"]
@@ -129,9 +131,41 @@ def hausdorff_nearest(X, Y, *, fields=False, threads=0):
 
 
 def read_cloud(path, dim=0):
-    """(points, volumes) of a text or PLY cloud file: a C-contiguous (N, d) float64 array and
-    an (N,) one. dim: 0 (from the file), 2 or 3. Raises FileError naming the file and line."""
-    return _core.read_cloud(_os.fspath(path), dim)
+    """(points, volumes) of a text, PLY or PCD cloud file (by its extension: .ply, .pcd, else
+    text): a C-contiguous (N, d) float64 array and an (N,) one. dim: 0 (from the file), 2 or 3.
+    Raises FileError naming the file and line. What the reader skipped (colours, normals, a
+    PCD's invalid points) is reported as one UserWarning per note."""
+    points, volumes, notes = _core.read_cloud(_os.fspath(path), dim)
+    for note in notes:
+        _warnings.warn(note, stacklevel=2)
+    return points, volumes
+
+
+def crop_to_box(points, lower, upper, margin=0.0):
+    """Indices (int64, increasing) of the points inside [lower - m, upper + m], m = margin times
+    the box's diagonal |upper - lower| (docs/formulation.md section 8.8)."""
+    return _core.crop_to_box(_as_float64(points, "points"), _as_float64(lower, "lower"),
+                             _as_float64(upper, "upper"), float(margin))
+
+
+def remove_statistical_outliers(points, k=20, ratio=2.0):
+    """Indices of the points kept by statistical outlier removal: m_i the mean distance to the
+    k nearest other points, kept if m_i <= mean(m) + ratio * std(m) (sample std, N - 1)."""
+    return _core.remove_statistical_outliers(_as_float64(points, "points"), int(k), float(ratio))
+
+
+def remove_dominant_plane(points, distance, iterations=1000, min_fraction=0.1, seed=1):
+    """Indices of the points off the dominant plane (RANSAC with `iterations` samples from a
+    fixed seed, refit by least squares on its inliers): |n.x - d| > distance. Nothing is
+    removed if the plane holds fewer than min_fraction of the points."""
+    return _core.remove_dominant_plane(_as_float64(points, "points"), float(distance),
+                                       int(iterations), float(min_fraction), int(seed))
+
+
+def area_weights(points, method="knn", neighbours=12):
+    """(N,) estimated surface areas of a 3D scan (lengths of a 2D curve): "knn" (pi r_k^2 / k)
+    or "delaunay" (the tangent-plane Voronoi cell); docs/formulation.md section 8.9."""
+    return _core.area_weights(_as_float64(points, "points"), str(method), int(neighbours))
 
 
 def write_cloud(path, points, volumes=None):

@@ -15,6 +15,8 @@
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/samplers.hpp"
+#include "softhd/scan/cleanup.hpp"
+#include "softhd/scan/surface_weights.hpp"
 
 namespace softhd {
 
@@ -66,15 +68,100 @@ SceneTarget arc_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlohm
   return {T.apply(grid), T.displacement(mesh), d.str(), {}};
 }
 
+// A number at key `key` of `o` (the block `path` of the target), or InvalidArgument.
+double number_at(const fe::Scene& scene, const nlohmann::json& o, const char* path, const char* key,
+                 const char* what) {
+  if (!o[key].is_number())
+    throw InvalidArgument(scene.source + ": target." + path + key + " must be " + what + ", got " +
+                          o[key].dump());
+  return o[key].get<double>();
+}
+
+// target.clean: {"crop": MARGIN, "plane": DIST, "outliers": {"k": K, "ratio": R}}, each optional.
+scan::ScanCleanup parse_clean(const fe::Scene& scene, const nlohmann::json& t) {
+  scan::ScanCleanup c;
+  if (!t.contains("clean")) return c;
+  const nlohmann::json& j = t["clean"];
+  if (!j.is_object())
+    throw InvalidArgument(scene.source + ": target.clean must be an object, got " + j.dump());
+  const std::string where = "scene " + scene.source;
+  io::check_keys(j, where, "target.clean", {"crop", "plane", "outliers"});
+  if (j.contains("crop")) c.crop = number_at(scene, j, "clean.", "crop", "a margin >= 0");
+  if (j.contains("plane")) c.plane = number_at(scene, j, "clean.", "plane", "a distance > 0");
+  if (j.contains("outliers")) {
+    const nlohmann::json& o = j["outliers"];
+    if (!o.is_object())
+      throw InvalidArgument(scene.source + ": target.clean.outliers must be an object {\"k\": " +
+                            "K, \"ratio\": R}, got " + o.dump());
+    io::check_keys(o, where, "target.clean.outliers", {"k", "ratio"});
+    scan::ScanCleanup::Outliers out;
+    if (o.contains("k")) {
+      if (!o["k"].is_number_integer() || o["k"].get<double>() < 1 || o["k"].get<double>() > 1e4)
+        throw InvalidArgument(scene.source +
+                              ": target.clean.outliers.k must be an integer from 1 to 10000, got " +
+                              o["k"].dump());
+      out.k = o["k"].get<int>();
+    }
+    if (o.contains("ratio"))
+      out.ratio = number_at(scene, o, "clean.outliers.", "ratio", "a number");
+    c.outliers = out;
+  }
+  try {
+    c.validate();
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(scene.source + ": target." + e.what());
+  }
+  return c;
+}
+
+// target.weights: "file" (as read), "knn" or "delaunay" (scan::AreaEstimate).
+std::optional<scan::AreaEstimate> parse_weights(const fe::Scene& scene, const nlohmann::json& t) {
+  if (!t.contains("weights")) return std::nullopt;
+  const std::string name = t["weights"].is_string() ? t["weights"].get<std::string>() : "";
+  if (name == "file") return std::nullopt;
+  if (name != "knn" && name != "delaunay")
+    throw InvalidArgument(scene.source +
+                          ": target.weights must be \"file\", \"knn\" or \"delaunay\", got " +
+                          t["weights"].dump());
+  return scan::area_estimate_from_string(name);
+}
+
+// read → crop (to the body's box, inflated) → plane → outliers → weights; what each step
+// did and what the reader skipped go into `description`.
+PointCloud read_scan(const fe::Scene& scene, const nlohmann::json& t, const std::string& file,
+                     std::string& description) {
+  std::vector<std::string> notes;
+  PointCloud cloud = read_cloud(file, scene.dim(), &notes);
+  check_coordinates(cloud, file);
+  const scan::ScanCleanup clean = parse_clean(scene, t);
+  const std::optional<scan::AreaEstimate> weights = parse_weights(scene, t);
+  std::vector<scan::CleanupStep> steps;
+  const Eigen::Index read = cloud.size();
+  try {
+    cloud = scan::clean_scan(cloud, scene.lower, scene.upper, clean, &steps);
+    if (weights) cloud = scan::with_area_weights(cloud, *weights);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(scene.source + ": target " + file + ": " + e.what());
+  }
+  if (!steps.empty()) description += "; " + scan::describe(steps, read);
+  if (weights) description += "; weights " + scan::to_string(*weights);
+  for (const std::string& n : notes) description += "; " + n;
+  return cloud;
+}
+
 SceneTarget cloud_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlohmann::json& t,
                          double memory_limit) {
   if (!t.contains("file") || !t["file"].is_string())
     throw InvalidArgument(scene.source + ": target.file must be a path string");
   const fs::path dir = fs::path(scene.source).parent_path();
   const fs::path f = (dir / t["file"].get<std::string>()).lexically_normal();
-  PointCloud cloud = read_cloud(f.string(), scene.dim());
-  check_coordinates(cloud, f.string());
-  if (!t.contains("solved_on")) return {cloud, std::nullopt, "cloud file " + f.string(), {}};
+  std::string description = "cloud file " + f.string();
+  const PointCloud cloud = read_scan(scene, t, f.string(), description);
+  if (!t.contains("solved_on")) return {cloud, std::nullopt, description, {}};
+  if (t.contains("clean") || t.contains("weights"))
+    throw InvalidArgument(scene.source +
+                          ": target.solved_on takes the file's nodes as they are: no clean or "
+                          "weights with it");
   // A manufactured target: the deformed nodes of a state solved on another scene's mesh.
   if (!t["solved_on"].is_string())
     throw InvalidArgument(scene.source + ": target.solved_on must be a scene path string");
@@ -173,7 +260,8 @@ SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh, double me
     return st;
   }
   if (kind == "cloud") {
-    io::check_keys(t, where, "target", {"kind", "file", "solved_on", "distance", "cap", "cap_q"});
+    io::check_keys(t, where, "target",
+                   {"kind", "file", "solved_on", "clean", "weights", "distance", "cap", "cap_q"});
     SceneTarget st = cloud_target(scene, mesh, t, memory_limit);
     st.distance = target_distance(scene, t);
     return st;
@@ -183,12 +271,15 @@ SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh, double me
 }
 
 SceneTarget file_target(const std::string& path, int dim) {
-  PointCloud cloud = read_cloud(path, dim);
+  std::vector<std::string> notes;
+  PointCloud cloud = read_cloud(path, dim, &notes);
   check_coordinates(cloud, path);
   if (dim != 0 && cloud.dim() != dim)
     throw InvalidArgument("the target cloud '" + path + "' is " + std::to_string(cloud.dim()) +
                           "D but the scene's body is " + std::to_string(dim) + "D");
-  return {std::move(cloud), std::nullopt, "cloud file " + path, {}};
+  std::string description = "cloud file " + path;
+  for (const std::string& n : notes) description += "; " + n;
+  return {std::move(cloud), std::nullopt, description, {}};
 }
 
 }  // namespace softhd

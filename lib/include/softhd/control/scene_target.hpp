@@ -9,6 +9,11 @@
 ///     {"kind": "cloud", "file": PATH [, "solved_on": SCENE]}     a cloud file (relative to the
 ///         scene file); with solved_on it holds the deformed nodes of a state solved on SCENE's
 ///         mesh, which gives the known map
+///     {"kind": "cloud", "file": PATH, "clean": {"crop": MARGIN, "plane": DIST,
+///      "outliers": {"k": K, "ratio": R}}, "weights": "file"|"knn"|"delaunay"}   a scan: read,
+///         cropped to the body's box inflated by MARGIN × its diagonal, its dominant plane
+///         removed, statistical outliers removed, area weights estimated (scan/cleanup.hpp,
+///         scan/surface_weights.hpp; each optional); the description says what each removed
 ///
 /// Either kind also takes the distance's form (docs/formulation.md §8, docs/guide.md):
 ///     "distance": "symmetric" | "scan_to_body"   ("visible" is refused: it needs the camera)
