@@ -1,72 +1,92 @@
-// softhd._core.align: the pose of a scan (softhd/scan/align.hpp), returned as a dict.
+// softhd._core scan clean-up and surface weights (softhd/scan/cleanup.hpp,
+// softhd/scan/surface_weights.hpp): clouds in, kept indices or areas out.
+
+#include <cstdint>
+#include <vector>
 
 #include "common.hpp"
 #include "softhd/error.hpp"
-#include "softhd/scan/align.hpp"
+#include "softhd/scan/cleanup.hpp"
+#include "softhd/scan/surface_weights.hpp"
 
 namespace softhd::python {
 
 namespace {
 
-py::dict align_clouds(const Array& body, const std::optional<Array>& body_volumes,
-                      const Array& scan, bool similarity, double scale_min, double scale_max,
-                      const std::string& distance, double cap, std::optional<double> eps,
-                      double alpha, double beta, double gamma, bool global_start,
-                      const std::optional<Array>& initial, int rotations, int refine_points,
-                      double inlier, int threads) {
-  check_cloud(body, body_volumes, "body");
-  check_cloud(scan, std::nullopt, "scan");
-  scan::AlignOptions o;
-  o.kind = similarity ? scan::PoseKind::similarity : scan::PoseKind::rigid;
-  o.scale_min = scale_min;
-  o.scale_max = scale_max;
-  o.form.sides = sides_from_string(distance);
-  o.form.cap.c = cap;
-  o.distance.params.alpha = alpha;
-  o.distance.params.beta = beta;
-  o.distance.params.gamma = gamma;
-  o.global_start = global_start;
-  o.rotations = rotations;
-  o.refine_points = refine_points;
-  o.inlier_distance = inlier;
-  o.threads = threads;
-  if (initial) {
-    if (initial->ndim() != 2 || initial->shape(0) != 4 || initial->shape(1) != 4)
-      throw InvalidArgument("initial must be a (4, 4) array");
-    o.initial = scan::Pose::from_matrix(Eigen::Map<const RowMatrix>(initial->data(), 4, 4));
-  }
-  const PointCloud B = make_cloud(body, body_volumes), S = make_cloud(scan, std::nullopt);
-  o.distance.params.epsilon = eps ? *eps : 1e-3 * scan::body_size(B);  // None: L/1000
-  scan::AlignSummary s;
+py::array_t<std::int64_t> to_indices(const std::vector<Eigen::Index>& kept) {
+  py::array_t<std::int64_t> out(static_cast<py::ssize_t>(kept.size()));
+  std::int64_t* p = out.mutable_data();
+  for (std::size_t i = 0; i < kept.size(); ++i) p[i] = static_cast<std::int64_t>(kept[i]);
+  return out;
+}
+
+Eigen::VectorXd to_vector(const Array& a, const char* name) {
+  if (a.ndim() != 1) throw InvalidArgument(std::string(name) + " must be a 1-D array");
+  return Eigen::Map<const Eigen::VectorXd>(a.data(), a.shape(0));
+}
+
+py::array_t<std::int64_t> crop(const Array& points, const Array& lower, const Array& upper,
+                               double margin) {
+  check_cloud(points, std::nullopt, "points");
+  const Eigen::VectorXd lo = to_vector(lower, "lower"), hi = to_vector(upper, "upper");
+  std::vector<Eigen::Index> kept;
   {
     py::gil_scoped_release release;
-    s = scan::align(B, S, o);
+    kept = scan::crop_to_box(make_cloud(points, std::nullopt), lo, hi, margin);
   }
-  py::dict d;
-  const RowMatrix m = s.pose.matrix();
-  d["matrix"] = to_numpy(m);
-  const Eigen::Matrix<double, 7, 1> x = s.pose.twist();
-  d["twist"] = to_numpy(RowMatrix(x.transpose()));
-  d["scale"] = s.pose.s;
-  d["rho"] = s.rho;
-  d["overlap"] = s.overlap;
-  d["inlier_distance"] = s.inlier_distance;
-  d["rmse"] = s.rmse;
-  d["residuals"] = to_numpy(RowMatrix(s.residuals.transpose()));
-  d["status"] = scan::to_string(s.status);
-  d["iterations"] = s.iterations;
-  d["seconds"] = s.seconds;
-  return d;
+  return to_indices(kept);
+}
+
+py::array_t<std::int64_t> outliers(const Array& points, int k, double ratio) {
+  check_cloud(points, std::nullopt, "points");
+  std::vector<Eigen::Index> kept;
+  {
+    py::gil_scoped_release release;
+    kept = scan::remove_statistical_outliers(make_cloud(points, std::nullopt), k, ratio);
+  }
+  return to_indices(kept);
+}
+
+py::array_t<std::int64_t> plane(const Array& points, double distance, int iterations,
+                                double min_fraction, std::uint64_t seed) {
+  check_cloud(points, std::nullopt, "points");
+  scan::PlaneRemoval options;
+  options.distance = distance;
+  options.iterations = iterations;
+  options.min_fraction = min_fraction;
+  options.seed = seed;
+  std::vector<Eigen::Index> kept;
+  {
+    py::gil_scoped_release release;
+    kept = scan::remove_dominant_plane(make_cloud(points, std::nullopt), options);
+  }
+  return to_indices(kept);
+}
+
+py::array_t<double> areas(const Array& points, const std::string& method, int neighbours) {
+  check_cloud(points, std::nullopt, "points");
+  const scan::AreaEstimate estimate = scan::area_estimate_from_string(method);
+  Eigen::VectorXd a;
+  {
+    py::gil_scoped_release release;
+    a = scan::area_weights(make_cloud(points, std::nullopt), estimate, neighbours);
+  }
+  py::array_t<double> out(a.size());
+  Eigen::Map<Eigen::VectorXd>(out.mutable_data(), a.size()) = a;
+  return out;
 }
 
 }  // namespace
 
 void bind_scan(py::module_& m) {
-  m.def("align", &align_clouds, py::arg("body").noconvert(), py::arg("body_volumes").noconvert(),
-        py::arg("scan").noconvert(), py::kw_only(), py::arg("similarity"), py::arg("scale_min"),
-        py::arg("scale_max"), py::arg("distance"), py::arg("cap"), py::arg("eps"), py::arg("alpha"),
-        py::arg("beta"), py::arg("gamma"), py::arg("global_start"), py::arg("initial"),
-        py::arg("rotations"), py::arg("refine_points"), py::arg("inlier"), py::arg("threads"));
+  m.def("crop_to_box", &crop, py::arg("points").noconvert(), py::arg("lower").noconvert(),
+        py::arg("upper").noconvert(), py::arg("margin"));
+  m.def("remove_statistical_outliers", &outliers, py::arg("points").noconvert(), py::arg("k"),
+        py::arg("ratio"));
+  m.def("remove_dominant_plane", &plane, py::arg("points").noconvert(), py::arg("distance"),
+        py::arg("iterations"), py::arg("min_fraction"), py::arg("seed"));
+  m.def("area_weights", &areas, py::arg("points").noconvert(), py::arg("method"),
+        py::arg("neighbours"));
 }
 
 }  // namespace softhd::python

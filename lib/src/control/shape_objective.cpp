@@ -185,6 +185,7 @@ struct ShapeObjective::Impl {
 
 void ShapeObjectiveOptions::validate() const {
   hausdorff.validate();
+  form.validate(form.sides == Sides::visible ? form.visible.size() : 0);
   if (!(tikhonov_mass >= 0.0))
     throw InvalidArgument("tikhonov_mass (Tikhonov weight M) must be >= 0");
   if (!(tikhonov_gradient >= 0.0))
@@ -266,8 +267,14 @@ void ShapeObjective::restore_warm_starts(const std::vector<WarmStart>& states) {
   d.cache.assign(states.begin(), states.end());
 }
 
+void ShapeObjective::set_form(DistanceForm form) {
+  form.validate(impl_->particles(impl_->cache.back().state.u).size());
+  impl_->options.form = std::move(form);
+}
+
 HausdorffResult ShapeObjective::fields(const Eigen::VectorXd& u) const {
   HausdorffRequest req;
+  req.form = impl_->options.form;
   req.fields = true;
   return impl_->target.evaluate(impl_->particles(u), req);
 }
@@ -293,6 +300,7 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
   // Distance (and its gradient w.r.t. the particles).
   t0 = std::chrono::steady_clock::now();
   HausdorffRequest req;
+  req.form = d.options.form;
   req.gradient_points = gradient;
   req.gradient_volumes = gradient && d.options.volumes == ParticleVolumes::deformed;
   // Clamped nodes do not move: skip their position gradients. Their deformed volumes do

@@ -40,7 +40,10 @@ ParticleVolumes particle_volumes_from_string(const std::string& name);  ///< "re
 
 /// Settings of the objective J(m) (docs/formulation.md §4.2, §4.3); defaults per field.
 struct ShapeObjectiveOptions {
-  HausdorffOptions hausdorff;                            ///< α, β, γ, ε, method, threads
+  HausdorffOptions hausdorff;  ///< α, β, γ, ε, method, threads
+  /// The distance's form in every evaluation (docs/formulation.md §8): symmetric (default),
+  /// scan_to_body, visible (a mask over the moving cloud's points), and the soft cap.
+  DistanceForm form;
   Particles particles = Particles::nodes;                ///< moving cloud: nodes (paper)
   ParticleVolumes volumes = ParticleVolumes::reference;  ///< paper's simplification
   double tikhonov_mass = 0.0;                            ///< M ≥ 0 (paper: 0)
@@ -53,8 +56,9 @@ struct ShapeObjectiveOptions {
   /// which is better for them (bending: 3 fine iterations instead of 5).
   int coarse_correction_iterations = 6;
 
-  /// Throws InvalidArgument naming the first invalid field (the distance's parameters and the
-  /// Newton options included).
+  /// Throws InvalidArgument naming the first invalid field (the distance's parameters and
+  /// form, and the Newton options included). The visible mask's size is checked against the
+  /// moving cloud at each evaluation.
   void validate() const;
 };
 
@@ -144,8 +148,13 @@ class ShapeObjective {
   /// only through the warm starts, which a checkpoint can save. Costs a factorisation at the next
   /// solve.
   void reset_solver();
-  /// Per-point fields d̃ of the last converged state (moving cloud, target cloud).
+  /// Per-point fields d̃ of the last converged state (moving cloud, target cloud), with the
+  /// objective's form (raw fields; ρ̃, A, B of the form).
   HausdorffResult fields(const Eigen::VectorXd& u) const;
+  /// Replaces the distance form of later evaluations (e.g. a cap set from the starting
+  /// state's fields, cap_from_quantile). Throws InvalidArgument as DistanceForm::validate for
+  /// the moving cloud's size.
+  void set_form(DistanceForm form);
 
  private:
   struct Impl;
