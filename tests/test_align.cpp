@@ -96,6 +96,28 @@ TEST(Align, DistanceMinimiserAloneIsCloseButBiased) {
   }
 }
 
+// A one-sided view: the body's points on one side of a plane, exactly moved. With
+// scan_to_body (ρ̃ = A) the hidden side is not punished; the pose is recovered exactly.
+TEST(Align, OneSidedSubsetRecoveredWithScanToBody) {
+  const PointCloud body = asymmetric_body(600, 8);
+  const double L = body_size(body);
+  std::mt19937_64 gen(18);
+  AlignOptions o = fast_options();
+  o.form.sides = Sides::scan_to_body;
+  for (int k = 0; k < 3; ++k) {
+    const Pose P = random_pose(gen);
+    std::vector<Eigen::Index> side;
+    for (Eigen::Index i = 0; i < body.size(); ++i)
+      if (body.points()(i, 0) + 0.5 * body.points()(i, 1) > 0.45) side.push_back(i);
+    Eigen::MatrixXd rows(static_cast<Eigen::Index>(side.size()), 3);
+    for (size_t j = 0; j < side.size(); ++j)
+      rows.row(static_cast<Eigen::Index>(j)) = body.points().row(side[j]);
+    const AlignSummary s = align(body, PointCloud(apply_points(P.inverse(), rows)), o);
+    EXPECT_LT(rotation_angle_between(s.pose.R, P.R), 1e-6) << "pose " << k;
+    EXPECT_LT((s.pose.t - P.t).norm(), 1e-6 * L) << "pose " << k;
+  }
+}
+
 TEST(Align, SimilarityRecovered) {
   const PointCloud body = asymmetric_body(600, 2);
   const double L = body_size(body);
@@ -170,6 +192,12 @@ TEST(Align, OptionsRefusedNamingTheField) {
   o = AlignOptions{};
   o.keep = 0;
   test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "keep");
+  o = AlignOptions{};
+  o.form.sides = Sides::visible;
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "visible");
+  o = AlignOptions{};
+  o.form.cap.c = -1.0;
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "cap.c");
   test::expect_error<InvalidArgument>([] { pose_kind_from_string("affine"); }, "align 'affine'");
   const PointCloud flat(Eigen::MatrixXd::Ones(4, 3));
   test::expect_error<InvalidArgument>([&] { align(flat, body, AlignOptions{}); }, "coincide");
