@@ -141,6 +141,25 @@ std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& sc
   return kept;
 }
 
+/// Residuals (true nearest distances of the moved scan), overlap (the fraction within
+/// inlier_distance × L) and the rmse of those residuals.
+void report_nearest(const detail::NearestPoints& nearest, const PointCloud& scan,
+                    const AlignOptions& options, double L, AlignSummary* out) {
+  std::vector<Eigen::Index> index;
+  nearest.query(apply_points(out->pose, scan.points()), &index, &out->residuals, options.threads);
+  out->inlier_distance = options.inlier_distance * L;
+  double sum2 = 0.0;
+  Eigen::Index inliers = 0;
+  for (Eigen::Index j = 0; j < out->residuals.size(); ++j) {
+    if (out->residuals[j] <= out->inlier_distance) {
+      ++inliers;
+      sum2 += out->residuals[j] * out->residuals[j];
+    }
+  }
+  out->overlap = static_cast<double>(inliers) / static_cast<double>(scan.size());
+  out->rmse = inliers > 0 ? std::sqrt(sum2 / static_cast<double>(inliers)) : 0.0;
+}
+
 }  // namespace
 
 std::string to_string(PoseKind kind) { return enum_name(kPoseKindNames, kind); }
@@ -258,19 +277,7 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
                                           L, &it);
     out.iterations += it;
   }
-  std::vector<Eigen::Index> index;
-  nearest.query(apply_points(out.pose, scan.points()), &index, &out.residuals, options.threads);
-  out.inlier_distance = options.inlier_distance * L;
-  double sum2 = 0.0;
-  Eigen::Index inliers = 0;
-  for (Eigen::Index j = 0; j < out.residuals.size(); ++j) {
-    if (out.residuals[j] <= out.inlier_distance) {
-      ++inliers;
-      sum2 += out.residuals[j] * out.residuals[j];
-    }
-  }
-  out.overlap = static_cast<double>(inliers) / static_cast<double>(scan.size());
-  out.rmse = inliers > 0 ? std::sqrt(sum2 / static_cast<double>(inliers)) : 0.0;
+  report_nearest(nearest, scan, options, L, &out);
   {  // ρ̃ at the final pose, on the refine level at the user's ε
     const detail::PoseObjective final_level =
         make_level(body, scan, options.refine_points, options.distance.params.epsilon,
