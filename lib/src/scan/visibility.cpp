@@ -84,12 +84,17 @@ Bvh build_bvh(const TriangleSurface& s) {
   return bvh;
 }
 
-// Whether the segment o + t d, t in [0, t_max], meets the box [lo, hi] (slab test; a slab
-// parallel to d gives ±∞ or NaN, which std::max/min with the finite bound first ignore).
-bool segment_meets_box(const Eigen::Vector3d& o, const Eigen::Vector3d& inv_d, double t_max,
-                       const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+// Whether the segment o + t d, t in [0, t_max], meets the box [lo, hi] (slab test; inv_d =
+// 1/d; a slab parallel to the segment is met iff o lies in it).
+bool segment_meets_box(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                       const Eigen::Vector3d& inv_d, double t_max, const Eigen::Vector3d& lo,
+                       const Eigen::Vector3d& hi) {
   double t0 = 0.0, t1 = t_max;
   for (int k = 0; k < 3; ++k) {
+    if (d[k] == 0.0) {
+      if (o[k] < lo[k] || o[k] > hi[k]) return false;
+      continue;
+    }
     double a = (lo[k] - o[k]) * inv_d[k], b = (hi[k] - o[k]) * inv_d[k];
     if (a > b) std::swap(a, b);
     t0 = std::max(t0, a);
@@ -99,9 +104,14 @@ bool segment_meets_box(const Eigen::Vector3d& o, const Eigen::Vector3d& inv_d, d
   return true;
 }
 
+// Barycentric slack of a meeting: a line through an edge or vertex shared by triangles meets
+// them all, so rounding cannot let it slip between two of them.
+constexpr double kEdgeSlack = 1e-10;
+
 // The parameter t of the meeting of the line o + t d with the triangle (a, b, c) (the
-// Möller–Trumbore solution of o + t d = a + v (b − a) + w (c − a), v, w ≥ 0, v + w ≤ 1),
-// or a negative value if they do not meet (a line in the triangle's plane meets nothing).
+// Möller–Trumbore solution of o + t d = a + v (b − a) + w (c − a), v, w ≥ −s, v + w ≤ 1 + s,
+// s = kEdgeSlack), or a negative value if they do not meet (a line in the triangle's plane
+// meets nothing).
 double meet(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& a,
             const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   const Eigen::Vector3d e1 = b - a, e2 = c - a, p = d.cross(e2);
@@ -109,7 +119,7 @@ double meet(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vec
   if (det == 0.0) return -1.0;
   const Eigen::Vector3d s = o - a, q = s.cross(e1);
   const double v = s.dot(p) / det, w = d.dot(q) / det;
-  if (v < 0.0 || w < 0.0 || v + w > 1.0) return -1.0;
+  if (v < -kEdgeSlack || w < -kEdgeSlack || v + w > 1.0 + kEdgeSlack) return -1.0;
   return e2.dot(q) / det;
 }
 
@@ -178,7 +188,7 @@ Eigen::Array<bool, Eigen::Dynamic, 1> visible_points(const TriangleSurface& s,
     bool hidden = false;
     while (top > 0 && !hidden) {
       const BvhNode& n = bvh.nodes[stack[--top]];
-      if (!segment_meets_box(camera, inv_d, t_max, n.lo, n.hi)) continue;
+      if (!segment_meets_box(camera, d, inv_d, t_max, n.lo, n.hi)) continue;
       if (n.left >= 0) {
         stack[top++] = n.left;
         stack[top++] = n.left + 1;
