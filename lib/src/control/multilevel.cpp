@@ -47,7 +47,8 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
   std::vector<std::unique_ptr<CoarseProblem>> levels;  // finest first while built
   TrackingRunOptions o = options;
   if (o.method == Method::tree) o.tolerance = std::max(options.tolerance, options.coarse_tolerance);
-  const ShapeObjectiveOptions so = o.objective();
+  ShapeObjectiveOptions so = o.objective();
+  apply_target_settings(target, &so);  // the user's target's view on every level
   const fe::Scene* finer = &scene;
   const SceneTarget* finer_target = &target;
   for (int level = 1; level < options.levels; ++level) {

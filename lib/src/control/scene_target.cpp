@@ -83,7 +83,39 @@ SceneTarget cloud_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlo
           "cloud file " + f.string() + " (deformed nodes of " + source.string() + ")"};
 }
 
+// The keys both kinds take: "surface" (a boolean) and "camera" (3 finite numbers), 3D only.
+void read_view_keys(const fe::Scene& scene, const nlohmann::json& t, SceneTarget* target) {
+  if ((t.contains("surface") || t.contains("camera")) && scene.dim() != 3)
+    throw InvalidArgument(scene.source + ": target.surface and target.camera need a 3D body");
+  if (t.contains("surface")) {
+    if (!t["surface"].is_boolean())
+      throw InvalidArgument(scene.source + ": target.surface must be true or false");
+    target->surface = t["surface"].get<bool>();
+  }
+  if (t.contains("camera")) {
+    const nlohmann::json& c = t["camera"];
+    if (!c.is_array() || c.size() != 3 || !c[0].is_number() || !c[1].is_number() ||
+        !c[2].is_number())
+      throw InvalidArgument(scene.source +
+                            ": target.camera must be an array of 3 numbers (the body's frame)");
+    target->camera = Eigen::Vector3d(c[0].get<double>(), c[1].get<double>(), c[2].get<double>());
+    if (!target->camera->allFinite())
+      throw InvalidArgument(scene.source + ": target.camera must be finite");
+  }
+}
+
 }  // namespace
+
+void apply_target_settings(const SceneTarget& target, ShapeObjectiveOptions* options) {
+  if (target.surface) {
+    options->particles = Particles::boundary;
+    options->volumes = ParticleVolumes::deformed;
+  }
+  if (target.camera) {
+    options->form.sides = Sides::visible;
+    options->camera = target.camera;
+  }
+}
 
 ArcMap arc_map(const fe::Scene& scene, double angle) {
   if (scene.dim() != 3) throw InvalidArgument(scene.source + ": an arc map needs a 3D body");
@@ -106,13 +138,15 @@ SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh, double me
     throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\"");
   const std::string kind = t["kind"].get<std::string>();
   const std::string where = "scene " + scene.source;
-  if (kind == "arc") {
-    io::check_keys(t, where, "target", {"kind", "angle", "cells"});
-    return arc_target(scene, mesh, t, memory_limit);
-  }
-  if (kind == "cloud") {
-    io::check_keys(t, where, "target", {"kind", "file", "solved_on"});
-    return cloud_target(scene, mesh, t, memory_limit);
+  if (kind == "arc" || kind == "cloud") {
+    if (kind == "arc")
+      io::check_keys(t, where, "target", {"kind", "angle", "cells", "surface", "camera"});
+    if (kind == "cloud")
+      io::check_keys(t, where, "target", {"kind", "file", "solved_on", "surface", "camera"});
+    SceneTarget target = kind == "arc" ? arc_target(scene, mesh, t, memory_limit)
+                                       : cloud_target(scene, mesh, t, memory_limit);
+    read_view_keys(scene, t, &target);
+    return target;
   }
   throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\", got \"" + kind +
                         "\"");

@@ -9,11 +9,16 @@
 ///     {"kind": "cloud", "file": PATH [, "solved_on": SCENE]}     a cloud file (relative to the
 ///         scene file); with solved_on it holds the deformed nodes of a state solved on SCENE's
 ///         mesh, which gives the known map
+///
+/// Either kind also takes "surface": true (the target is a surface scan: the moving cloud is
+/// the body's boundary with its current facet areas) and "camera": [x, y, z] (the camera in
+/// the body's frame: the distance is the visible one, docs/formulation.md §8.7); 3D only.
 
 #include <Eigen/Core>
 #include <optional>
 #include <string>
 
+#include "softhd/control/shape_objective.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/fe/mesh.hpp"
 #include "softhd/fe/scene.hpp"
@@ -26,7 +31,13 @@ struct SceneTarget {
   PointCloud cloud;                                 ///< Ω_d
   std::optional<Eigen::VectorXd> map_displacement;  ///< u_T at `mesh`'s nodes, if T is known
   std::string description;                          ///< one line for people
+  bool surface = false;                             ///< "surface": the moving cloud is the boundary
+  std::optional<Eigen::Vector3d> camera = std::nullopt;  ///< "camera": visible from there
 };
+
+/// The objective settings a target asks for: surface → particles boundary with deformed
+/// (current) areas; camera → Sides::visible from it.
+void apply_target_settings(const SceneTarget& target, ShapeObjectiveOptions* options);
 
 /// The arc map of a plate scene (3D box, clamped at X1 = lower): length and thickness from the
 /// box, total angle `angle`. Throws InvalidArgument for a 2D scene or an invalid map.

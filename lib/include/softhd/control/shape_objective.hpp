@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "softhd/fe/assembly.hpp"
@@ -27,15 +28,21 @@
 namespace softhd {
 
 /// Which points of the deformed body form the moving cloud.
-enum class Particles { nodes, quadrature };
+enum class Particles {
+  nodes,       ///< the mesh nodes
+  quadrature,  ///< the quadrature points
+  /// the boundary nodes (3D): a surface target's moving cloud, the volumes the lumped facet
+  /// areas (reference, or deformed: current), docs/formulation.md §8.6
+  boundary,
+};
 /// Volumes of the moving cloud: fixed reference volumes or the deformed ones.
 enum class ParticleVolumes { reference, deformed };
 
-/// "nodes" or "quadrature".
+/// "nodes", "quadrature" or "boundary".
 std::string to_string(Particles p);
 /// "reference" or "deformed".
 std::string to_string(ParticleVolumes v);
-Particles particles_from_string(const std::string& name);               ///< "nodes"/"quadrature"
+Particles particles_from_string(const std::string& name);  ///< "nodes"/"quadrature"/"boundary"
 ParticleVolumes particle_volumes_from_string(const std::string& name);  ///< "reference"/"deformed"
 
 /// Settings of the objective J(m) (docs/formulation.md §4.2, §4.3); defaults per field.
@@ -45,7 +52,15 @@ struct ShapeObjectiveOptions {
   ParticleVolumes volumes = ParticleVolumes::reference;  ///< paper's simplification
   double tikhonov_mass = 0.0;                            ///< M ≥ 0 (paper: 0)
   double tikhonov_gradient = 0.0;                        ///< ε_m ≥ 0 (paper: 0)
-  fe::NewtonOptions newton;                              ///< state solver settings
+  /// The distance's form (sides, cap). For Sides::visible its mask is not given: every
+  /// evaluation marks the moving points seen from `camera` (docs/formulation.md §8.7).
+  DistanceForm form;
+  /// Sides::visible only (and required then): the camera in the body's frame. The moving
+  /// points marked are the boundary nodes scan::visible_points finds on the deformed boundary
+  /// (fe::boundary_surface) — for particles = boundary the cloud's own points, for nodes the
+  /// boundary nodes among them; quadrature points are refused. Held fixed in the gradient.
+  std::optional<Eigen::Vector3d> camera;
+  fe::NewtonOptions newton;   ///< state solver settings
   int warm_start_states = 8;  ///< converged states kept for warm starts (≥ 1)
   /// With a coarse level (ShapeObjective::use_coarse_level): the coarse-corrected start is
   /// used when the coarse solve to the new control needs at least this many Newton
