@@ -121,7 +121,7 @@ TEST(VisibleObjective, TracksAHalfViewBetterThanTheSymmetricDistance) {
   const Eigen::VectorXd lo = Eigen::VectorXd::Constant(space.size(), -1.0);
   const Eigen::VectorXd hi = Eigen::VectorXd::Zero(space.size());
   ShapeTrackingOptions to;
-  to.optimizer.max_iterations = 25;
+  to.optimizer.max_iterations = 15;
   to.optimizer.move_limit = 0.2;
   double rms[2];
   for (Sides sides : {Sides::symmetric, Sides::visible}) {
@@ -135,8 +135,9 @@ TEST(VisibleObjective, TracksAHalfViewBetterThanTheSymmetricDistance) {
                 s.rho_final, s.iterations);
   }
   const double rest = shape_error(A.mesh(), Eigen::VectorXd::Zero(u_true.size()), u_true).second;
+  std::printf("rest: node error rms %.3e\n", rest);
   EXPECT_LT(rms[1], 0.5 * rest);    // the visible run tracks the bend
-  EXPECT_LT(rms[1], 0.5 * rms[0]);  // and beats the symmetric one clearly
+  EXPECT_LT(rms[1], 0.2 * rms[0]);  // and beats the symmetric one clearly (measured: 15x)
 }
 
 }  // namespace softhd::test
