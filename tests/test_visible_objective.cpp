@@ -39,9 +39,9 @@ Mask seen(const fe::Mesh& mesh, const Eigen::VectorXd& u) {
   return scan::visible_points(fe::boundary_surface(mesh, u), kCamera);
 }
 
-ShapeObjectiveOptions surface_options(Sides sides) {
+ShapeObjectiveOptions surface_options(Sides sides, Particles particles = Particles::boundary) {
   ShapeObjectiveOptions o;
-  o.particles = Particles::boundary;
+  o.particles = particles;
   o.volumes = ParticleVolumes::deformed;
   o.form.sides = sides;
   if (sides == Sides::visible) o.camera = kCamera;
@@ -75,13 +75,16 @@ PointCloud visible_part(const fe::Mesh& mesh, const Eigen::VectorXd& u) {
 }  // namespace
 
 // J(m0 + h dm) − J(m0) − h g·dm falls as h² (observed order ≥ 1.9), the visible set the same at
-// every step (else the remainder would jump, and the test says so).
-TEST(VisibleObjective, TaylorRemainderIsSecondOrder) {
+// every step (else the remainder would jump, and the test says so); boundary particles, and
+// node particles with the mask on their boundary nodes.
+class VisibleGradient : public ::testing::TestWithParam<Particles> {};
+
+TEST_P(VisibleGradient, TaylorRemainderIsSecondOrder) {
   const fe::Assembler A = beam();
   const fe::ControlSpace space(A.mesh(), A.geometry(), fe::ControlKind::kVertex);
   const Eigen::MatrixXd P = space.positions(A.mesh());
   const PointCloud target = visible_part(A.mesh(), solve(A, space, -0.25 * P.col(2) / 0.3));
-  ShapeObjectiveOptions o = surface_options(Sides::visible);
+  ShapeObjectiveOptions o = surface_options(Sides::visible, GetParam());
   o.newton.relative_tolerance = 1e-13;
   o.newton.absolute_tolerance = 1e-14;
   o.hausdorff.params.epsilon = 1e-2;
@@ -108,6 +111,12 @@ TEST(VisibleObjective, TaylorRemainderIsSecondOrder) {
     EXPECT_GE(std::log2(remainder[k] / remainder[k + 1]), 1.9)
         << "remainders " << remainder[k] << " " << remainder[k + 1];
 }
+
+INSTANTIATE_TEST_SUITE_P(Particles, VisibleGradient,
+                         ::testing::Values(Particles::boundary, Particles::nodes),
+                         [](const ::testing::TestParamInfo<Particles>& info) {
+                           return to_string(info.param);
+                         });
 
 // A manufactured bend seen from the camera: the target is the visible half of the deformed
 // boundary. From rest, the visible distance (B over the seen points only) ends nearer to the
