@@ -3,6 +3,8 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <climits>
+#include <numeric>
 
 #include "softhd/error.hpp"
 
@@ -85,35 +87,38 @@ BoundaryFacets boundary_facets(const Mesh& mesh) {
   if (mesh.dim != 3) throw InvalidArgument("boundary_facets: the body is 2D (3D meshes only)");
   const std::vector<FaceTemplate> faces = face_templates(reference_element(mesh.cell));
   const int F = static_cast<int>(faces.size());
-  // Every element face keyed by its sorted global corners; a key met once is a boundary facet.
-  struct Key {
-    std::array<int, 4> corners;
-    Eigen::Index element;
-    int face;
-  };
-  std::vector<Key> keys;
-  keys.reserve(static_cast<size_t>(mesh.num_elements()) * F);
-  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
+  // Every element face keyed by its sorted global corners (a triangle's padded with INT_MAX);
+  // a key met once is a boundary facet.
+  using Key = std::array<int, 4>;
+  const Eigen::Index E = mesh.num_elements();
+  std::vector<Key> keys(static_cast<size_t>(E) * F);
+  for (Eigen::Index e = 0; e < E; ++e)
     for (int f = 0; f < F; ++f) {
-      Key k{{-1, -1, -1, -1}, e, f};
+      Key& k = keys[static_cast<size_t>(e) * F + f];
+      k.fill(INT_MAX);
       for (size_t i = 0; i < faces[f].corners.size(); ++i)
-        k.corners[i] = mesh.elements(e, faces[f].corners[i]);
-      std::sort(k.corners.begin(), k.corners.end());
-      keys.push_back(k);
+        k[i] = mesh.elements(e, faces[f].corners[i]);
+      std::sort(k.begin(), k.end());
     }
-  std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
-    return a.corners != b.corners
-               ? a.corners < b.corners
-               : std::make_pair(a.element, a.face) < std::make_pair(b.element, b.face);
-  });
+  // Faces bucketed by their smallest corner (a counting sort), each bucket sorted by key and
+  // face index: equal keys become neighbours, in an order that does not depend on threads.
+  std::vector<size_t> start(static_cast<size_t>(mesh.num_nodes()) + 1, 0), order(keys.size());
+  for (const Key& k : keys) ++start[static_cast<size_t>(k[0]) + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<size_t> fill(start.begin(), start.end() - 1);
+  for (size_t i = 0; i < keys.size(); ++i) order[fill[static_cast<size_t>(keys[i][0])]++] = i;
+  for (size_t n = 0; n + 1 < start.size(); ++n)
+    std::sort(order.begin() + start[n], order.begin() + start[n + 1],
+              [&](size_t a, size_t b) { return keys[a] != keys[b] ? keys[a] < keys[b] : a < b; });
   std::vector<std::array<int, 3>> tri;  // global node ids
-  for (size_t i = 0; i < keys.size();) {
+  for (size_t i = 0; i < order.size();) {
     size_t j = i + 1;
-    while (j < keys.size() && keys[j].corners == keys[i].corners) ++j;
-    if (j == i + 1)
-      for (const std::array<int, 3>& t : faces[keys[i].face].triangles)
-        tri.push_back({mesh.elements(keys[i].element, t[0]), mesh.elements(keys[i].element, t[1]),
-                       mesh.elements(keys[i].element, t[2])});
+    while (j < order.size() && keys[order[j]] == keys[order[i]]) ++j;
+    if (j == i + 1) {
+      const Eigen::Index e = static_cast<Eigen::Index>(order[i] / F);
+      for (const std::array<int, 3>& t : faces[order[i] % F].triangles)
+        tri.push_back({mesh.elements(e, t[0]), mesh.elements(e, t[1]), mesh.elements(e, t[2])});
+    }
     i = j;
   }
   BoundaryFacets b;

@@ -15,7 +15,9 @@
 namespace softhd::fe {
 
 /// The particles of the moving cloud: mesh nodes, quadrature points, or the boundary nodes
-/// (BoundaryFacets::nodes, in that order; 3D meshes only) with their facet areas.
+/// (BoundaryFacets::nodes, in that order; 3D meshes only) with their facet areas. For the
+/// boundary, deformed_cloud and cloud_pullback find the facets at every call; a caller that
+/// evaluates often keeps them and calls boundary_cloud and boundary_cloud_pullback.
 enum class CloudPoints { kNodes, kQuadraturePoints, kBoundaryNodes };
 /// The particles' volumes: reference ones, or deformed ones (times J).
 enum class CloudVolumes { kReference, kDeformed };
