@@ -10,7 +10,9 @@
 #include <cmath>
 #include <vector>
 
+#include "expect_error.hpp"
 #include "softhd/control/shape_tracking.hpp"
+#include "softhd/error.hpp"
 #include "softhd/fe/boundary.hpp"
 #include "softhd/fe/cloud.hpp"
 #include "softhd/fe/materials.hpp"
@@ -110,6 +112,29 @@ TEST_P(VisibleGradient, TaylorRemainderIsSecondOrder) {
   for (size_t k = 0; k + 1 < remainder.size(); ++k)
     EXPECT_GE(std::log2(remainder[k] / remainder[k + 1]), 1.9)
         << "remainders " << remainder[k] << " " << remainder[k + 1];
+}
+
+// The boundary cloud and the camera need a 3D body; a camera without the visible distance, or
+// with quadrature particles, is refused naming the field.
+TEST(VisibleObjective, RefusesWhatItCannotDo) {
+  const fe::Assembler A2(fe::make_box_mesh(Eigen::Vector2d::Zero(), Eigen::Vector2d(3.0, 0.3),
+                                           Eigen::Vector2i(4, 1), 1),
+                         std::make_shared<fe::MooneyRivlin>(1.0, 0.2, 3.0),
+                         Eigen::Vector3d::UnitX(), {{"x0", {}}});
+  const fe::ControlSpace space(A2.mesh(), A2.geometry(), fe::ControlKind::kVertex);
+  ShapeObjectiveOptions o;
+  o.particles = Particles::boundary;
+  const PointCloud Y(Eigen::MatrixXd::Ones(3, 2));
+  expect_error<InvalidArgument>([&] { ShapeObjective(A2, space, HausdorffTarget(Y), o); },
+                                "needs a 3D body");
+  o = surface_options(Sides::symmetric);
+  o.camera = kCamera;
+  expect_error<InvalidArgument>([&] { o.validate(); }, "a camera selects the visible distance");
+  o = surface_options(Sides::visible, Particles::quadrature);
+  expect_error<InvalidArgument>([&] { o.validate(); }, "particles must be nodes or boundary");
+  o = surface_options(Sides::visible);
+  o.camera = Eigen::Vector3d(NAN, 0.0, 0.0);
+  expect_error<InvalidArgument>([&] { o.validate(); }, "camera must be finite");
 }
 
 INSTANTIATE_TEST_SUITE_P(Particles, VisibleGradient,
