@@ -11,6 +11,7 @@
 
 #include "softhd/error.hpp"
 #include "softhd/fe/boundary.hpp"
+#include "softhd/parallel.hpp"
 #include "softhd/scan/visibility.hpp"
 
 using softhd::scan::TriangleSurface;
@@ -161,6 +162,12 @@ TEST(Visibility, MatchesBruteForceOnRandomSurfaces) {
     for (Eigen::Index i = 0; i < s.points.rows(); ++i) EXPECT_EQ(seen[i], expect[i]) << i;
     EXPECT_GT(seen.count(), 0);
     EXPECT_LT(seen.count(), s.points.rows() / 2);
+    softhd::set_threads(1);  // one thread and two: the same answer (no shared state)
+    const Mask one = visible_points(s, camera);
+    softhd::set_threads(2);
+    EXPECT_TRUE((visible_points(s, camera) == one).all());
+    EXPECT_TRUE((one == seen).all());
+    softhd::set_threads(0);
   }
 }
 

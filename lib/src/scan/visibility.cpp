@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "softhd/error.hpp"
+#include "softhd/parallel.hpp"
 
 namespace softhd::scan {
 
@@ -163,7 +164,10 @@ Eigen::Array<bool, Eigen::Dynamic, 1> visible_points(const TriangleSurface& s,
   incidence(s, &start, &incident);
   const Bvh bvh = build_bvh(s);
   auto P = [&](Eigen::Index t, int c) { return Eigen::Vector3d(s.points.row(s.triangles(t, c))); };
-#pragma omp parallel for schedule(dynamic, 64)
+  // One segment cast a point, each independent: threads as softhd's other loops (clamped to
+  // kMaxThreads), serial below a few hundred points.
+  const int threads = max_threads();
+#pragma omp parallel for schedule(dynamic, 64) num_threads(threads) if (N > 256)
   for (Eigen::Index i = 0; i < N; ++i) {
     const Eigen::Vector3d x = s.points.row(i).transpose(), to_camera = camera - x;
     // Facing: some incident triangle's outward normal n has n·(camera − x) > 0.
