@@ -48,7 +48,7 @@ fuzz: deps
 	  "-DCMAKE_CXX_FLAGS=-O1 -g1 -Wno-pass-failed" -DSOFTHD_SANITIZE=ON -DSOFTHD_FUZZ=ON \
 	  -DSOFTHD_BUILD_TESTS=OFF -DSOFTHD_BUILD_APPS=OFF -DSOFTHD_BUILD_BENCH=OFF \
 	  > $(FUZZ_DIR)/configure.log 2>&1 || (cat $(FUZZ_DIR)/configure.log; exit 1)
-	@cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzz_text_cloud fuzz_ply_cloud fuzz_scene fuzz_checkpoint fuzz_msh
+	@cmake --build $(FUZZ_DIR) -j $(JOBS) --target fuzz_text_cloud fuzz_ply_cloud fuzz_pcd_cloud fuzz_scene fuzz_checkpoint fuzz_msh
 	@scripts/fuzz.sh $(FUZZ_DIR) $(FUZZ_SECONDS)
 
 # The API reference of the public headers (Doxygen): $(BUILD_DIR)/docs/html/index.html.

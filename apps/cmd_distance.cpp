@@ -13,7 +13,10 @@
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/atomic_file.hpp"
 #include "softhd/io/cloud_io.hpp"
+#include "softhd/io/mask_io.hpp"
 #include "softhd/parallel.hpp"
+#include "softhd/scan/cleanup.hpp"
+#include "softhd/scan/surface_weights.hpp"
 #include "softhd/work_share.hpp"
 
 namespace softhd::cli {
@@ -25,7 +28,10 @@ const char* kUsage = R"(usage: softhd distance MOVING TARGET [options]
 Regularised Hausdorff distance rho between two point clouds
 (docs/formulation.md section 2).
 MOVING and TARGET are text files (x y [z] [V] per line, whitespace or commas,
-'#' comments, V = 1 when absent) or PLY files (ascii or binary little-endian).
+'#' comments, V = 1 when absent), PLY files (ascii or binary little-endian) or
+PCD files (.pcd: ascii, binary or binary_compressed; fields x y z, volumes from
+a volume, weight or area field). Skipped fields (colours, normals) are named on
+stderr.
 
 options:
   --alpha A        kernel exponent alpha > 0 (default 4)
@@ -39,8 +45,28 @@ options:
   --dim D          2 or 3: dimension of text clouds (default: from the columns:
                    2 -> x y, 3 -> x y z, 4 -> x y z V)
   --threads T      OpenMP threads (default: all)
+  --distance F     symmetric | scan_to_body | visible (default symmetric;
+                   docs/formulation.md section 8): scan_to_body is rho = A alone
+                   (TARGET -> MOVING, for a partial scan; B is reported 0), visible
+                   restricts B to the moving points marked in --visible
+  --visible FILE   with --distance visible: N lines of 0 or 1, one per moving point
+                   in the order of MOVING ('#' comments allowed), 1 = in B
+  --cap C          soft cap psi_c(d) = (d^-q + c^-q)^(-1/q) on every field value
+                   before its beta-mean, C > 0 a length (default 0: no cap)
+  --cap-q Q        sharpness q > 0 of the cap (default 4)
   --grad FILE      write d rho / d x_i and d rho / d V_i, one row per moving point
-  --json           print one JSON object: rho, A, B, N, M, method, seconds, ...
+
+clean-up of TARGET as a scan (docs/formulation.md section 8), in this order; each
+step prints how many points it removed on stderr:
+  --crop M         keep the points in MOVING's bounding box inflated by M times
+                   its diagonal (M >= 0)
+  --plane DIST     remove the dominant plane (RANSAC, inlier distance DIST > 0)
+  --outliers K,R   statistical outlier removal: mean distance to the K nearest
+                   neighbours at most mean + R std over the cloud
+  --weights W      file (default: as read) | knn | delaunay: replace TARGET's
+                   volumes by estimated surface areas (12 neighbours)
+  --json           print one JSON object: rho, A, B, N, M, method, distance,
+                   cap, seconds, ...
   --help           this text
 
 MPI builds: under 'mpirun -np K softhd distance ...' every rank reads both clouds
@@ -65,6 +91,42 @@ void write_gradient(const std::string& path, const PointCloud& X, const Hausdorf
   write_file_atomically(path, out.str());
 }
 
+// "K,R" of --outliers.
+scan::ScanCleanup::Outliers parse_outliers(const std::string& text) {
+  scan::ScanCleanup::Outliers o;
+  const std::size_t comma = text.find(',');
+  std::size_t used_k = 0, used_r = 0;
+  try {
+    if (comma == std::string::npos) throw std::invalid_argument("no comma");
+    o.k = std::stoi(text.substr(0, comma), &used_k);
+    o.ratio = std::stod(text.substr(comma + 1), &used_r);
+  } catch (const std::exception&) {
+    used_k = 0;
+  }
+  if (used_k == 0 || used_k != comma || used_r != text.size() - comma - 1)
+    throw UsageError("--outliers must be K,R (an integer and a number), got '" + text + "'");
+  return o;
+}
+
+// TARGET cleaned (crop to MOVING's bounding box) and re-weighted; each step a note.
+PointCloud clean_target(const PointCloud& X, const PointCloud& Y, const std::string& file,
+                        const scan::ScanCleanup& clean, const std::string& weights,
+                        std::vector<std::string>& notes) {
+  std::vector<scan::CleanupStep> steps;
+  PointCloud out = Y;
+  try {
+    out = scan::clean_scan(Y, X.points().colwise().minCoeff().transpose(),
+                           X.points().colwise().maxCoeff().transpose(), clean, &steps);
+    if (weights != "file")
+      out = scan::with_area_weights(out, scan::area_estimate_from_string(weights));
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(file + ": " + e.what());
+  }
+  if (!steps.empty()) notes.push_back(file + ": " + scan::describe(steps, Y.size()));
+  if (weights != "file") notes.push_back(file + ": weights " + weights);
+  return out;
+}
+
 }  // namespace
 
 int run_distance(const std::vector<std::string>& tokens) {
@@ -85,8 +147,33 @@ int run_distance(const std::vector<std::string>& tokens) {
   opt.threads = static_cast<int>(args.integer("--threads", 0, 0, kMaxThreads));
   const long dim = args.integer("--dim", 0);
   if (dim != 0 && dim != 2 && dim != 3) throw UsageError("--dim must be 2 or 3");
+  DistanceForm form;
+  form.sides = sides_from_string(args.value("--distance").value_or("symmetric"));
+  form.cap.c = args.number("--cap", form.cap.c);
+  form.cap.q = args.number("--cap-q", form.cap.q);
+  try {
+    DistanceForm{Sides::symmetric, form.cap, {}}.validate(0);
+  } catch (const InvalidArgument& e) {
+    throw UsageError(std::string("--cap/--cap-q: ") + e.what());
+  }
+  const std::optional<std::string> visible_path = args.value("--visible");
+  if (visible_path.has_value() != (form.sides == Sides::visible))
+    throw UsageError(visible_path ? "--visible needs --distance visible"
+                                  : "--distance visible needs --visible FILE");
   const std::optional<std::string> grad_path = args.value("--grad");
   const bool json = args.flag("--json");
+  scan::ScanCleanup clean;
+  if (const auto crop = args.value("--crop")) clean.crop = parse_number(*crop, "--crop");
+  if (const auto plane = args.value("--plane")) clean.plane = parse_number(*plane, "--plane");
+  if (const auto o = args.value("--outliers")) clean.outliers = parse_outliers(*o);
+  const std::string weights = args.value("--weights").value_or("file");
+  if (weights != "file" && weights != "knn" && weights != "delaunay")
+    throw UsageError("--weights must be file, knn or delaunay, got '" + weights + "'");
+  try {
+    clean.validate();
+  } catch (const InvalidArgument& e) {  // "clean.crop must be ..." for the flag --crop
+    throw UsageError(std::string("--") + (e.what() + 6));
+  }
   const std::vector<std::string> files = args.finish();
   if (files.size() != 2) {
     throw UsageError("expected two cloud files (MOVING TARGET), got " +
@@ -94,15 +181,27 @@ int run_distance(const std::vector<std::string>& tokens) {
   }
   opt.validate();
 
-  const PointCloud X = read_cloud(files[0], static_cast<int>(dim));
-  const PointCloud Y = read_cloud(files[1], static_cast<int>(dim));
+  std::vector<std::string> notes;
+  const PointCloud X = read_cloud(files[0], static_cast<int>(dim), &notes);
+  PointCloud Y = read_cloud(files[1], static_cast<int>(dim), &notes);
   check_coordinates(X, files[0]);  // the limit's message names the file
   check_coordinates(Y, files[1]);
   if (X.dim() != Y.dim()) {
     throw InvalidArgument("mixed dimensions: '" + files[0] + "' is " + std::to_string(X.dim()) +
                           "D but '" + files[1] + "' is " + std::to_string(Y.dim()) + "D");
   }
+  Y = clean_target(X, Y, files[1], clean, weights, notes);
+  if (speaker)
+    for (const std::string& n : notes) std::cerr << "softhd distance: " << n << '\n';
+  if (visible_path) {
+    form.visible = read_mask(*visible_path);
+    if (form.visible.size() != X.size())
+      throw FileError(*visible_path + ": " + std::to_string(form.visible.size()) +
+                      " entries for the " + std::to_string(X.size()) + " points of '" + files[0] +
+                      "'");
+  }
   HausdorffRequest req;
+  req.form = form;
   req.gradient_points = req.gradient_volumes = grad_path.has_value();
   const HausdorffTarget target(Y, opt);
   const HausdorffResult r = target.evaluate(X, req);
@@ -126,6 +225,9 @@ int run_distance(const std::vector<std::string>& tokens) {
     j["gamma"] = opt.params.gamma;
     j["eps"] = opt.params.epsilon;
     if (opt.method == Method::tree) j["tolerance"] = opt.tolerance;
+    j["distance"] = to_string(form.sides);
+    j["cap"] = form.cap.c;
+    j["cap_q"] = form.cap.q;
     j["kernel_evaluations"] = r.kernel_evaluations;
     j["ranks"] = opt.share ? opt.share->size() : 1;
     j["seconds"] = r.seconds;
@@ -135,9 +237,10 @@ int run_distance(const std::vector<std::string>& tokens) {
     std::printf("%s = %.10g\n", nn ? "Hausdorff distance" : "rho", r.rho);
     std::printf("%s = %.10g\n", nn ? "max_j dist(y_j, X)" : "A  ", r.A);
     std::printf("%s = %.10g\n", nn ? "max_i dist(x_i, Y)" : "B  ", r.B);
-    std::printf("N = %ld moving, M = %ld target points, %dD, method %s, %.3g s\n",
+    std::printf("N = %ld moving, M = %ld target points, %dD, method %s, distance %s, %.3g s\n",
                 static_cast<long>(X.size()), static_cast<long>(Y.size()), X.dim(),
-                to_string(opt.method).c_str(), r.seconds);
+                to_string(opt.method).c_str(), to_string(form.sides).c_str(), r.seconds);
+    if (form.cap.c > 0.0) std::printf("cap c = %.10g, q = %.10g\n", form.cap.c, form.cap.q);
   }
   return 0;
 }

@@ -57,6 +57,12 @@ options:
                      exactly wherever its far field would not be cheaper)
   --tol T            tree: relative error bound on every kernel sum (default {tol},
                      which ends the bending and torsion runs at exact's rho/floor)
+  --distance F       symmetric | scan_to_body: the distance's form (docs/formulation.md
+                     section 8; default: the scene target's "distance", else symmetric);
+                     --distance, --cap or --cap-q replace the target's form as a whole
+  --cap C            soft cap of every field value, C > 0 a length (default: the
+                     target's "cap", else none)
+  --cap-q Q          the cap's sharpness (default 4)
   --tikhonov-mass M  (M/2) int m^2 (default {tikhonov_mass})
   --tikhonov-grad E  (E/2) int |grad m|^2 (default {tikhonov_grad})
   --vtu-every K      VTU output every K iterations (default {vtu_every}; 0: start and end only)
@@ -97,6 +103,12 @@ scene targets ("target" in the scene file):
   {"kind": "cloud", "file": PATH [, "solved_on": SCENE]}  a cloud file; with solved_on
       it holds the deformed nodes of a state solved on SCENE's mesh ('softhd forward
       --write-cloud'), which gives the known map for the matched floor and shape error
+  either kind also takes the distance's form (docs/formulation.md section 8):
+      "distance": "symmetric" | "scan_to_body"   (scan_to_body: rho = A, for a
+          partial scan; "visible" is refused: a scene cannot give the camera yet)
+      "cap": C  or  "cap": {"quantile": Q, "factor": F}   soft cap of every field
+          value, fixed or F x the Q-quantile of the scan's d~ to the body at rest
+      "cap_q": Q   the cap's sharpness (default 4)
 
 writes: history.csv, control.csv (readable by 'softhd forward --control'),
 body_NNNN.vtu, target.vtu, body.pvd, body_final.ply, target.ply, summary.json,
@@ -196,6 +208,21 @@ void parse_objective(Args& args, const TrackingRunOptions& d, TrackingRunOptions
   o.tolerance = args.number("--tol", d.tolerance);
   o.tikhonov_mass = args.number("--tikhonov-mass", d.tikhonov_mass);
   o.tikhonov_gradient = args.number("--tikhonov-grad", d.tikhonov_gradient);
+  const std::optional<std::string> distance = args.value("--distance");
+  const std::optional<std::string> cap = args.value("--cap"), cap_q = args.value("--cap-q");
+  if (distance || cap || cap_q) {
+    TargetDistance form;
+    if (distance) {
+      form.sides = sides_from_string(*distance);
+      if (form.sides == Sides::visible)
+        throw UsageError(
+            "--distance visible needs the camera, which optimise cannot give yet; "
+            "expected symmetric or scan_to_body");
+    }
+    if (cap) form.cap = parse_number(*cap, "--cap");
+    if (cap_q) form.cap_q = parse_number(*cap_q, "--cap-q");
+    o.distance = form;
+  }
 }
 
 OptimiseArgs parse_optimise(Args& args) {

@@ -187,7 +187,7 @@ Run run_tracking(std::vector<std::pair<std::string, std::string>> params, Body& 
                        it.rho_over_floor, it.seconds);
       };
     TrackingRun tracking(body.scene, *body.assembler, *body.space,
-                         SceneTarget{target, map, "the benchmark's target"}, settings.run);
+                         SceneTarget{target, map, "the benchmark's target", {}}, settings.run);
     run.summary = tracking.run(cb);
   } catch (const std::exception& e) {
     run.error = e.what();

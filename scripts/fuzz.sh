@@ -9,7 +9,7 @@ build=${1:?usage: fuzz.sh BUILD_DIR SECONDS}
 seconds=${2:?usage: fuzz.sh BUILD_DIR SECONDS}
 source_dir=$(cd "$(dirname "$0")/.." && pwd)
 status=0
-for t in text_cloud ply_cloud scene checkpoint msh; do
+for t in text_cloud ply_cloud pcd_cloud scene checkpoint msh; do
   exe="$build/fuzz/fuzz_$t"
   [ -x "$exe" ] || { echo "fuzz.sh: $exe is missing (build with -DSOFTHD_FUZZ=ON)"; exit 1; }
   corpus="$build/fuzz-corpus/$t"

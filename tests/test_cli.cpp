@@ -188,6 +188,57 @@ TEST_F(Cli, BadInputGivesExitCode2AndOneLine) {
   expect_bad_input("distance " + good + " " + write("three.ply", ply), "three.ply");
 }
 
+// The distance forms (docs/formulation.md §8): the flags give the library's numbers, and their
+// misuse is one line naming the flag, the file or its line.
+TEST_F(Cli, DistanceFormsMatchTheLibraryAndRefuseMisuse) {
+  const PointCloud X = random_cloud(12, 3, 31), Y = random_cloud(9, 3, 32, 0.3, 1.2);
+  write_text_cloud(path("x.txt"), X);
+  write_text_cloud(path("y.txt"), Y);
+  std::string lines = "# visible points\n";
+  DistanceForm form;
+  form.sides = Sides::visible;
+  form.cap = {0.4, 2.0};
+  form.visible.resize(12);
+  for (int i = 0; i < 12; ++i) {
+    form.visible[i] = i % 3 != 1;
+    lines += form.visible[i] ? "1\n" : "0  # hidden\n";
+  }
+  const std::string seen = write("seen.txt", lines);
+  const Outcome r = run("distance " + path("x.txt") + " " + path("y.txt") +
+                        " --distance visible --visible " + seen + " --cap 0.4 --cap-q 2 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  HausdorffRequest req;
+  req.form = form;
+  const HausdorffResult ref = hausdorff(X, Y, {}, req);
+  EXPECT_EQ(j["rho"].get<double>(), ref.rho);
+  EXPECT_EQ(j["B"].get<double>(), ref.B);
+  EXPECT_EQ(j["distance"], "visible");
+  const Outcome one =
+      run("distance " + path("x.txt") + " " + path("y.txt") + " --distance scan_to_body --json");
+  ASSERT_EQ(one.status, 0) << one.err;
+  EXPECT_EQ(nlohmann::json::parse(one.out)["B"].get<double>(), 0.0);
+  const std::string xy = path("x.txt") + " " + path("y.txt");
+  expect_bad_input("distance " + xy + " --distance both", "unknown distance 'both'");
+  expect_bad_input("distance " + xy + " --distance visible", "--distance visible needs --visible");
+  expect_bad_input("distance " + xy + " --visible " + seen, "--visible needs --distance visible");
+  expect_bad_input("distance " + xy + " --cap -1", "--cap/--cap-q: distance cap.c must be");
+  expect_bad_input("distance " + xy + " --cap 1 --cap-q 0", "distance cap.q must be");
+  expect_bad_input(
+      "distance " + xy + " --distance visible --visible " + write("bad.txt", "1\n0\nyes\n"),
+      "bad.txt:3: expected 0 or 1, got 'yes'");
+  expect_bad_input("distance " + xy + " --distance visible --visible " + write("few.txt", "1\n0\n"),
+                   "few.txt: 2 entries for the 12 points of");
+  expect_bad_input("distance " + xy + " --distance visible --visible " + write("none.txt", "0\n"),
+                   "none.txt: 1 entries");
+  expect_bad_input("distance " + xy + " --distance visible --visible " + write("e.txt", "# no\n"),
+                   "e.txt: no entries");
+  std::string zeros;
+  for (int i = 0; i < 12; ++i) zeros += "0\n";
+  expect_bad_input("distance " + xy + " --distance visible --visible " + write("z.txt", zeros),
+                   "no moving point is marked visible");
+}
+
 // Issue 29: OMP_NUM_THREADS=100000 segfaulted inside GOMP_parallel; the default is clamped to
 // softhd's cap (1024 threads), and the answer is the one-thread answer.
 TEST_F(Cli, AHugeOmpNumThreadsIsClampedNotCrashed) {

@@ -279,6 +279,34 @@ TEST_F(OptimiseCli, ManufacturedTargetOnTheSameMeshHasTheSelfFloorAsMatchedFloor
 }
 
 // Every user error: exit 2 and one line naming the file, key or flag.
+// The distance form (docs/formulation.md §8) from the scene's target keys (the run's summary
+// names the form it used; the flags replacing it are tested on TrackingRunOptions::distance in
+// test_target_forms.cpp), and the flags' misuse.
+TEST_F(OptimiseCli, DistanceFormFromTheSceneOrTheFlags) {
+  nlohmann::json j = nlohmann::json::parse(kScene);
+  j["target"]["distance"] = "scan_to_body";
+  j["target"]["cap"] = {{"quantile", 0.9}, {"factor", 3}};
+  const std::string one_sided = (dir_ / "one_sided.json").string();
+  std::ofstream(one_sided) << j.dump();
+  std::string err;
+  ASSERT_EQ(run(one_sided + " --out " + out() + " --max-iter 1 --quiet", &err), 0) << err;
+  const std::string target = summary()["target"].get<std::string>();
+  EXPECT_NE(target.find("distance scan_to_body, cap c = "), std::string::npos) << target;
+  for (const auto& [args, needle] : std::vector<std::pair<std::string, std::string>>{
+           {" --distance visible", "--distance visible needs the camera"},
+           {" --distance both", "unknown distance 'both'"},
+           {" --cap -1", "distance cap must be"},
+           {" --cap-q 0", "distance cap_q must be"}}) {
+    EXPECT_EQ(run(scene() + args, &err), 2) << args;
+    EXPECT_NE(err.find(needle), std::string::npos) << args << "\n" << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  }
+  j["target"]["distance"] = "visible";
+  std::ofstream(one_sided) << j.dump();
+  EXPECT_EQ(run(one_sided, &err), 2);
+  EXPECT_NE(err.find("target.distance \"visible\" needs the camera"), std::string::npos) << err;
+}
+
 TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
   auto expect_refused = [&](const std::string& args, const std::string& needle) {
     std::string err;

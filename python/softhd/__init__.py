@@ -32,6 +32,7 @@ its blocks of pairs, between Newton iterations and between the evaluations of ``
 """
 
 import os as _os
+import warnings as _warnings
 
 import numpy as _np
 
@@ -40,6 +41,7 @@ from ._core import (DistanceResult, Error, FileError, ForwardResult, InvalidArgu
                     Mesh, NumericalError, OptimiseResult, ResourceError, Scene)
 
 __all__ = ["distance", "hausdorff_nearest", "Target", "read_cloud", "write_cloud", "read_mesh",
+           "crop_to_box", "remove_statistical_outliers", "remove_dominant_plane", "area_weights",
            "Scene", "Mesh", "optimise", "optimise_defaults", "DistanceResult", "ForwardResult",
            "OptimiseResult",
            "Iteration", "Error", "InvalidArgument", "FileError", "ResourceError", "NumericalError"]
@@ -83,33 +85,43 @@ class Target:
         return self._target.dim
 
     def evaluate(self, X, VX=None, *, fields=False, gradient=False, gradient_volumes=False,
-                 gradient_target=False):
+                 gradient_target=False, distance="symmetric", cap=0.0, cap_q=4.0, visible=None):
         """rho_H(X, Y) and what is asked for, as a :class:`DistanceResult`.
 
-        fields: d~ at every point (``field_moving`` (N,), ``field_target`` (M,));
-        gradient: d rho / d x_i (``gradient`` (N, d)); gradient_volumes: d rho / d V_i (N,);
-        gradient_target: d rho / d y_j (M, d). Unrequested members are None.
+        fields: d~ at every point (``field_moving`` (N,), ``field_target`` (M,); the raw
+        values, before any cap); gradient: d rho / d x_i (``gradient`` (N, d));
+        gradient_volumes: d rho / d V_i (N,); gradient_target: d rho / d y_j (M, d).
+        Unrequested members are None. The form (docs/formulation.md §8): distance
+        "symmetric", "scan_to_body" (rho = A, Y -> X only; B reported 0) or "visible" (B over
+        the moving points where ``visible`` (N,) is true, weights renormalised); cap: the soft
+        cap c of psi_c(d) = (d^-q + c^-q)^(-1/q) on every field value (0: none), cap_q: q.
         X (and VX) follow the module's array rule (no copy of C-contiguous float64).
         """
+        if visible is not None:
+            visible = _np.ascontiguousarray(visible, dtype=bool)
         return self._target.evaluate(_as_float64(X, "X"), _volumes(VX, "VX"), fields=fields,
                                      gradient=gradient, gradient_volumes=gradient_volumes,
-                                     gradient_target=gradient_target)
+                                     gradient_target=gradient_target, distance=distance,
+                                     cap=cap, cap_q=cap_q, visible=visible)
 
 
 def distance(X, Y, VX=None, VY=None, *, alpha=4.0, beta=4.0, gamma=2.0, eps=1e-3,
              method="exact", tol=1e-6, fields=False, gradient=False, gradient_volumes=False,
-             gradient_target=False, threads=0):
+             gradient_target=False, threads=0, distance="symmetric", cap=0.0, cap_q=4.0,
+             visible=None):
     """The regularised Hausdorff distance rho_H between X (N, d) and Y (M, d).
 
     method: "exact" (all pairs), "tree" (relative error of every kernel sum <= tol) or
-    "nearest" (the unregularised Hausdorff distance; no gradients). Returns a
+    "nearest" (the unregularised Hausdorff distance; no gradients). distance, cap, cap_q,
+    visible: the form of docs/formulation.md §8 (see :meth:`Target.evaluate`). Returns a
     :class:`DistanceResult` with ``rho``, ``A``, ``B`` and the requested arrays.
     Equivalent to ``Target(Y, VY, ...).evaluate(X, VX, ...)``.
     """
     target = Target(Y, VY, alpha=alpha, beta=beta, gamma=gamma, eps=eps, method=method, tol=tol,
                     threads=threads)
     return target.evaluate(X, VX, fields=fields, gradient=gradient,
-                           gradient_volumes=gradient_volumes, gradient_target=gradient_target)
+                           gradient_volumes=gradient_volumes, gradient_target=gradient_target,
+                           distance=distance, cap=cap, cap_q=cap_q, visible=visible)
 
 
 def hausdorff_nearest(X, Y, *, fields=False, threads=0):
@@ -119,9 +131,41 @@ def hausdorff_nearest(X, Y, *, fields=False, threads=0):
 
 
 def read_cloud(path, dim=0):
-    """(points, volumes) of a text or PLY cloud file: a C-contiguous (N, d) float64 array and
-    an (N,) one. dim: 0 (from the file), 2 or 3. Raises FileError naming the file and line."""
-    return _core.read_cloud(_os.fspath(path), dim)
+    """(points, volumes) of a text, PLY or PCD cloud file (by its extension: .ply, .pcd, else
+    text): a C-contiguous (N, d) float64 array and an (N,) one. dim: 0 (from the file), 2 or 3.
+    Raises FileError naming the file and line. What the reader skipped (colours, normals, a
+    PCD's invalid points) is reported as one UserWarning per note."""
+    points, volumes, notes = _core.read_cloud(_os.fspath(path), dim)
+    for note in notes:
+        _warnings.warn(note, stacklevel=2)
+    return points, volumes
+
+
+def crop_to_box(points, lower, upper, margin=0.0):
+    """Indices (int64, increasing) of the points inside [lower - m, upper + m], m = margin times
+    the box's diagonal |upper - lower| (docs/formulation.md section 8.8)."""
+    return _core.crop_to_box(_as_float64(points, "points"), _as_float64(lower, "lower"),
+                             _as_float64(upper, "upper"), float(margin))
+
+
+def remove_statistical_outliers(points, k=20, ratio=2.0):
+    """Indices of the points kept by statistical outlier removal: m_i the mean distance to the
+    k nearest other points, kept if m_i <= mean(m) + ratio * std(m) (sample std, N - 1)."""
+    return _core.remove_statistical_outliers(_as_float64(points, "points"), int(k), float(ratio))
+
+
+def remove_dominant_plane(points, distance, iterations=1000, min_fraction=0.1, seed=1):
+    """Indices of the points off the dominant plane (RANSAC with `iterations` samples from a
+    fixed seed, refit by least squares on its inliers): |n.x - d| > distance. Nothing is
+    removed if the plane holds fewer than min_fraction of the points."""
+    return _core.remove_dominant_plane(_as_float64(points, "points"), float(distance),
+                                       int(iterations), float(min_fraction), int(seed))
+
+
+def area_weights(points, method="knn", neighbours=12):
+    """(N,) estimated surface areas of a 3D scan (lengths of a 2D curve): "knn" (pi r_k^2 / k)
+    or "delaunay" (the tangent-plane Voronoi cell); docs/formulation.md section 8.9."""
+    return _core.area_weights(_as_float64(points, "points"), str(method), int(neighbours))
 
 
 def write_cloud(path, points, volumes=None):
@@ -161,7 +205,8 @@ def read_mesh(path, order=None, scale=1.0):
 def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=None,
              algorithm=None, move_limit=None, particles=None, volumes=None, alpha=None,
              beta=None, gamma=None, eps=None, method=None, tol=None, tikhonov_mass=None,
-             tikhonov_grad=None, coarse_level=None, levels=None, callback=None, threads=0):
+             tikhonov_grad=None, coarse_level=None, levels=None, distance=None, cap=None,
+             cap_q=None, callback=None, threads=0):
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
     target: the run ``softhd optimise`` makes (the library's TrackingRun), with its options and
     its defaults for every option left None (:func:`optimise_defaults` lists them, e.g. method
@@ -170,7 +215,10 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     user's mesh alone; levels N > 1 solves first on the N - 1 coarser levels, as ``--levels N``). Returns an :class:`OptimiseResult`.
 
     target: None (the scene's own "target"), a cloud file path, an (M, d) array, or a tuple
-    (points, volumes). callback(record): called after every accepted iteration with an
+    (points, volumes). distance ("symmetric" or "scan_to_body"), cap (a length), cap_q: the
+    distance's form (docs/formulation.md §8); None: the scene target's "distance", "cap",
+    "cap_q" (symmetric without a cap for a file or an array); any of them given replaces the
+    target's form as a whole. callback(record): called after every accepted iteration with an
     :class:`Iteration` (J, rho, A, B, ..., control); **returning False ends the run** after
     that iteration (termination "stopped by the caller"; on a coarse level, after the first
     iteration on the user's mesh, whose result it returns); any other return value continues;
@@ -188,8 +236,8 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
                           particles=particles, volumes_kind=volumes, alpha=alpha, beta=beta,
                           gamma=gamma, eps=eps, method=method, tol=tol,
                           tikhonov_mass=tikhonov_mass, tikhonov_grad=tikhonov_grad,
-                          coarse_level=coarse_level, levels=levels, callback=callback,
-                          threads=threads)
+                          coarse_level=coarse_level, levels=levels, distance=distance,
+                          cap=cap, cap_q=cap_q, callback=callback, threads=threads)
 
 
 def optimise_defaults():

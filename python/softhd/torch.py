@@ -36,7 +36,7 @@ class HausdorffFunction(torch.autograd.Function):
     """rho_H(X, Y) with volumes VX, VY (None: all 1) as an autograd Function.
 
     apply(X, Y, VX, VY, options): options is a dict of softhd.distance keyword arguments
-    (alpha, beta, gamma, eps, method, tol, threads).
+    (alpha, beta, gamma, eps, method, tol, threads, distance, cap, cap_q, visible).
     """
 
     @staticmethod
@@ -54,6 +54,10 @@ class HausdorffFunction(torch.autograd.Function):
             None,
         ]
         if need_vy:  # rho(X, Y) = rho(Y, X): d rho / d VY is the moving-volume gradient swapped
+            if options.get("distance", "symmetric") != "symmetric":
+                raise NotImplementedError(
+                    "d rho / d VY needs distance='symmetric' (the one-sided and visible forms "
+                    "are not symmetric in X and Y); make VY a constant")
             swapped = _softhd.distance(y, x, vy, vx, gradient_volumes=True, **options)
             ctx.grads[3] = _tensor(swapped.gradient_volumes, VY)
         return torch.tensor(r.rho, dtype=X.dtype)
@@ -74,24 +78,38 @@ class HausdorffLoss(torch.nn.Module):
     count PyTorch itself uses (importing torch may lower the process's OpenMP default, e.g. to 1
     on a machine whose cores are hyperthreads of one physical core).
 
-    forward(X, Y, VX=None, VY=None): X (N, d) and Y (M, d) CPU tensors (d = 2 or 3), float32 or
-    float64; VX (N,) and VY (M,) optional positive volumes (weights; only their ratios matter).
-    Returns a 0-dimensional tensor of X's dtype; gradients flow to every input that requires
-    one (points, target points, and either set of weights).
+    distance, cap, cap_q: the form of docs/formulation.md §8 (as softhd.distance): "symmetric"
+    (default), "scan_to_body" (rho = A: Y is a partial scan, the hidden parts of X are not
+    punished) or "visible" (B over the points of X marked in forward's ``visible``); cap > 0
+    applies the soft cap psi_c(d) = (d^-q + c^-q)^(-1/q), q = cap_q, to every field value.
+
+    forward(X, Y, VX=None, VY=None, visible=None): X (N, d) and Y (M, d) CPU tensors (d = 2 or
+    3), float32 or float64; VX (N,) and VY (M,) optional positive volumes (weights; only their
+    ratios matter); visible (N,) booleans (tensor or array), with distance="visible" only, held
+    fixed (no gradient). Returns a 0-dimensional tensor of X's dtype; gradients flow to every
+    input that requires one (points, target points, and either set of weights; VY only for the
+    symmetric form, the others raise NotImplementedError for it).
     """
 
     def __init__(self, alpha=4.0, beta=4.0, gamma=2.0, eps=1e-3, method="exact", tol=1e-6,
-                 threads=0):
+                 threads=0, distance="symmetric", cap=0.0, cap_q=4.0):
         super().__init__()
         if method == "nearest":
             raise ValueError("method 'nearest' has no gradient; use softhd.hausdorff_nearest")
+        if distance not in ("symmetric", "scan_to_body", "visible"):
+            raise ValueError(f"distance must be 'symmetric', 'scan_to_body' or 'visible', "
+                             f"got {distance!r}")
         self.options = dict(alpha=alpha, beta=beta, gamma=gamma, eps=eps, method=method, tol=tol,
-                            threads=threads)
+                            threads=threads, distance=distance, cap=cap, cap_q=cap_q)
 
-    def forward(self, X, Y, VX=None, VY=None):
+    def forward(self, X, Y, VX=None, VY=None, visible=None):
         options = dict(self.options)
         if options["threads"] == 0:
             options["threads"] = torch.get_num_threads()
+        if visible is not None:
+            if isinstance(visible, torch.Tensor):
+                visible = visible.detach().cpu().numpy()
+            options["visible"] = np.ascontiguousarray(visible, dtype=bool)
         return HausdorffFunction.apply(X, Y, VX, VY, options)
 
     def extra_repr(self):

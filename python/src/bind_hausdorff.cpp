@@ -32,11 +32,32 @@ HausdorffTarget make_target(const Array& Y, const std::optional<Array>& VY, doub
   return HausdorffTarget(make_cloud(Y, VY), options);
 }
 
+/// The distance form of docs/formulation.md §8 from the keyword arguments (validated by the
+/// evaluation, which names the field).
+DistanceForm make_form(const std::string& distance, double cap, double cap_q,
+                       const std::optional<py::array_t<bool, py::array::c_style>>& visible) {
+  DistanceForm form;
+  form.sides = sides_from_string(distance);
+  form.cap.c = cap;
+  form.cap.q = cap_q;
+  if (visible) {
+    if (visible->ndim() != 1)
+      throw InvalidArgument("visible must be a 1-D array of N booleans, got " +
+                            std::to_string(visible->ndim()) + " dimensions");
+    form.visible =
+        Eigen::Map<const Eigen::Array<bool, Eigen::Dynamic, 1>>(visible->data(), visible->shape(0));
+  }
+  return form;
+}
+
 HausdorffResult evaluate(const HausdorffTarget& target, const Array& X,
                          const std::optional<Array>& VX, bool fields, bool gradient,
-                         bool gradient_volumes, bool gradient_target) {
+                         bool gradient_volumes, bool gradient_target, const std::string& distance,
+                         double cap, double cap_q,
+                         const std::optional<py::array_t<bool, py::array::c_style>>& visible) {
   check_cloud(X, VX, "X");
   HausdorffRequest request;
+  request.form = make_form(distance, cap, cap_q, visible);
   request.fields = fields;
   request.gradient_points = gradient;
   request.gradient_volumes = gradient_volumes;
@@ -60,20 +81,22 @@ void bind_hausdorff(py::module_& m) {
                               "The result of one evaluation. Arrays are read-write views of the "
                               "result's own memory (no copy); None when not requested.")
       .def_readonly("rho", &HausdorffResult::rho, "rho_H (method nearest: Hausdorff distance)")
-      .def_readonly("A", &HausdorffResult::A, "target-over-moving mean")
-      .def_readonly("B", &HausdorffResult::B, "moving-over-target mean")
+      .def_readonly("A", &HausdorffResult::A, "target-over-moving mean (of capped values)")
+      .def_readonly("B", &HausdorffResult::B,
+                    "moving-over-target mean (visible points only for distance='visible'; 0 "
+                    "for 'scan_to_body')")
       .def_property_readonly(
           "field_target",
           [](py::object self) {
             return vector_view(self.cast<const HausdorffResult&>().field_target, self);
           },
-          "(M,) d~_X(y_j), with fields=True")
+          "(M,) d~_X(y_j), with fields=True (raw values, before any cap)")
       .def_property_readonly(
           "field_moving",
           [](py::object self) {
             return vector_view(self.cast<const HausdorffResult&>().field_moving, self);
           },
-          "(N,) d~_Y(x_i), with fields=True")
+          "(N,) d~_Y(x_i) of every moving point, with fields=True (raw values, before any cap)")
       .def_property_readonly(
           "gradient",
           [](py::object self) {
@@ -102,7 +125,8 @@ void bind_hausdorff(py::module_& m) {
            py::arg("method"), py::arg("tol"), py::arg("threads"))
       .def("evaluate", &evaluate, py::arg("X").noconvert(), py::arg("VX").noconvert(),
            py::kw_only(), py::arg("fields"), py::arg("gradient"), py::arg("gradient_volumes"),
-           py::arg("gradient_target"))
+           py::arg("gradient_target"), py::arg("distance") = "symmetric", py::arg("cap") = 0.0,
+           py::arg("cap_q") = 4.0, py::arg("visible") = py::none())
       .def_property_readonly("size", [](const HausdorffTarget& t) { return t.cloud().size(); })
       .def_property_readonly("dim", [](const HausdorffTarget& t) { return t.cloud().dim(); })
       .def_property_readonly("total_volume",

@@ -33,7 +33,7 @@ SceneTarget array_target(const PyScene& s, const Array& points,
   if (cloud.dim() != s.scene.dim())
     throw InvalidArgument("the target cloud is " + std::to_string(cloud.dim()) +
                           "D but the scene's body is " + std::to_string(s.scene.dim()) + "D");
-  return {std::move(cloud), std::nullopt, "arrays from Python"};
+  return {std::move(cloud), std::nullopt, "arrays from Python", {}};
 }
 
 PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
@@ -83,6 +83,10 @@ py::dict optimise_defaults() {
   out["tikhonov_grad"] = d.tikhonov_gradient;
   out["coarse_level"] = to_string(d.coarse_level);
   out["levels"] = d.levels;
+  // The form is the target's unless given (TrackingRunOptions::distance).
+  out["distance"] = py::none();
+  out["cap"] = py::none();
+  out["cap_q"] = py::none();
   out["threads"] = d.threads;
   return out;
 }
@@ -184,8 +188,16 @@ void bind_optimise(py::module_& m) {
          const std::optional<std::string>& method, std::optional<double> tol,
          std::optional<double> tikhonov_mass, std::optional<double> tikhonov_grad,
          const std::optional<std::string>& coarse_level, std::optional<int> levels,
-         const py::object& callback, int threads) {
+         const std::optional<std::string>& distance, std::optional<double> cap,
+         std::optional<double> cap_q, const py::object& callback, int threads) {
         TrackingRunOptions o;
+        if (distance || cap || cap_q) {  // the form as a whole (TrackingRunOptions::distance)
+          TargetDistance form;
+          if (distance) form.sides = sides_from_string(*distance);
+          if (cap) form.cap = *cap;
+          if (cap_q) form.cap_q = *cap_q;
+          o.distance = form;
+        }
         if (max_iter) o.max_iterations = *max_iter;
         if (max_seconds) o.max_seconds = *max_seconds;
         if (rel_tol) o.relative_change = *rel_tol;
@@ -211,7 +223,8 @@ void bind_optimise(py::module_& m) {
       py::arg("rel_tol"), py::arg("algorithm"), py::arg("move_limit"), py::arg("particles"),
       py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("eps"),
       py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"), py::arg("tikhonov_grad"),
-      py::arg("coarse_level"), py::arg("levels"), py::arg("callback"), py::arg("threads"));
+      py::arg("coarse_level"), py::arg("levels"), py::arg("distance"), py::arg("cap"),
+      py::arg("cap_q"), py::arg("callback"), py::arg("threads"));
   m.def("optimise_defaults", &optimise_defaults,
         "The defaults of optimise's options (softhd optimise's: TrackingRunOptions).");
 }

@@ -56,6 +56,7 @@ void bind_errors(py::module_& m);
 void bind_interrupts();
 void bind_hausdorff(py::module_& m);
 void bind_io(py::module_& m);
+void bind_scan(py::module_& m);
 void bind_mesh(py::module_& m);
 void bind_fe(py::module_& m);
 void bind_optimise(py::module_& m);

@@ -152,3 +152,72 @@ def test_the_gil_is_released_during_the_computation(rng):
     finally:
         sys.setswitchinterval(interval)
     assert result and count > 100
+
+
+# --- The distance forms of docs/formulation.md §8, against the NumPy oracle written from the
+# formulas (fields from spec_reference's directed mean, the cap and the masks applied here). ---
+
+def _fields_numpy(P, VP, Q, alpha=4.0, eps=1e-3):
+    """d~_P(q) for every q of Q (docs/formulation.md §2.1), NumPy float64."""
+    r = np.sqrt(((Q[:, None, :] - P[None, :, :]) ** 2).sum(axis=2))
+    s = ((VP / VP.sum())[None, :] * (r + eps) ** (-alpha)).sum(axis=1)
+    return s ** (-1.0 / alpha) - eps
+
+
+def _cap_numpy(d, c, q):
+    return d if c == 0.0 else (d ** -q + c ** -q) ** (-1.0 / q)
+
+
+def _mean_numpy(d, w, beta=4.0):
+    return ((w / w.sum()) * d ** beta).sum() ** (1.0 / beta)
+
+
+@pytest.mark.parametrize("distance", ["symmetric", "scan_to_body", "visible"])
+@pytest.mark.parametrize("cap", [0.0, 0.3])
+def test_forms_match_their_formulas(rng, distance, cap):
+    X, VX = random_cloud(rng, 30)
+    Y, VY = random_cloud(rng, 25, shift=0.4)
+    visible = rng.random(30) < 0.6 if distance == "visible" else None
+    r = softhd.distance(X, Y, VX, VY, distance=distance, cap=cap, cap_q=3.0, visible=visible,
+                        fields=True)
+    dy, dx = _fields_numpy(X, VX, Y), _fields_numpy(Y, VY, X)
+    assert r.field_target == pytest.approx(dy, rel=1e-12)  # raw fields, before the cap
+    A = _mean_numpy(_cap_numpy(dy, cap, 3.0), VY)
+    assert r.A == pytest.approx(A, rel=1e-12)
+    if distance == "scan_to_body":
+        assert r.B == 0.0 and r.rho == pytest.approx(A, rel=1e-12)
+        return
+    mask = visible if distance == "visible" else np.ones(30, bool)
+    B = _mean_numpy(_cap_numpy(dx[mask], cap, 3.0), VX[mask])
+    assert r.B == pytest.approx(B, rel=1e-12)
+    assert r.rho == pytest.approx(np.sqrt((A ** 2 + B ** 2) / 2), rel=1e-12)
+
+
+def test_forms_refused_naming_the_option(rng):
+    X, _ = random_cloud(rng, 10)
+    Y, _ = random_cloud(rng, 12)
+    with pytest.raises(softhd.InvalidArgument, match="distance"):
+        softhd.distance(X, Y, distance="both")
+    with pytest.raises(softhd.InvalidArgument, match="cap.c"):
+        softhd.distance(X, Y, cap=-1.0)
+    with pytest.raises(softhd.InvalidArgument, match="cap.q"):
+        softhd.distance(X, Y, cap=1.0, cap_q=0.0)
+    with pytest.raises(softhd.InvalidArgument, match="visible"):
+        softhd.distance(X, Y, distance="visible")
+    with pytest.raises(softhd.InvalidArgument, match="visible: the mask has 3 entries"):
+        softhd.distance(X, Y, distance="visible", visible=[True, False, True])
+
+
+def test_forms_equal_the_command_line(rng, tmp_path, cli):
+    X, VX = random_cloud(rng, 20)
+    Y, VY = random_cloud(rng, 15, shift=0.3)
+    softhd.write_cloud(tmp_path / "x.txt", X, VX)
+    softhd.write_cloud(tmp_path / "y.txt", Y, VY)
+    visible = rng.random(20) < 0.5
+    visible[0] = True
+    (tmp_path / "seen.txt").write_text("".join(f"{int(v)}\n" for v in visible))
+    j = cli("distance", tmp_path / "x.txt", tmp_path / "y.txt", "--distance", "visible",
+            "--visible", tmp_path / "seen.txt", "--cap", 0.2, "--cap-q", 2)
+    r = softhd.distance(X, Y, VX, VY, distance="visible", visible=visible, cap=0.2, cap_q=2.0)
+    assert (j["rho"], j["A"], j["B"]) == pytest.approx((r.rho, r.A, r.B), rel=1e-14)
+    assert j["distance"] == "visible" and j["cap"] == 0.2

@@ -96,6 +96,20 @@ def test_arc_target_has_a_known_map(scene_file):
     assert "arc" in r.target
 
 
+def test_distance_form_from_the_scene_or_the_keywords(scene_file):
+    """The target block's "distance"/"cap" keys, replaced as a whole by optimise's keywords
+    (docs/formulation.md §8); the run's target line names the form."""
+    spec = dict(SMALL_ARC, target=dict(SMALL_ARC["target"], distance="scan_to_body", cap=5.0))
+    scene = softhd.Scene.load(scene_file(spec))
+    r = softhd.optimise(scene, max_iter=1)
+    assert "distance scan_to_body, cap c = 5" in r.target
+    assert all(it.B == 0.0 and it.rho == it.A for it in r.history)
+    r = softhd.optimise(scene, max_iter=1, distance="symmetric")
+    assert "distance" not in r.target and r.history[-1].B > 0.0
+    with pytest.raises(softhd.InvalidArgument, match="distance visible needs the camera"):
+        softhd.optimise(scene, max_iter=1, distance="visible")
+
+
 SMALL_PLATE = {
     "name": "small_plate",
     "mesh": {"type": "box", "lower": [0, 0, 0], "upper": [2, 0.4, 0.2], "cells": [8, 2, 2],

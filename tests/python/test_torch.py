@@ -113,3 +113,26 @@ def test_threads_default_to_torchs_count(monkeypatch):
     st.HausdorffLoss()(X, Y)
     st.HausdorffLoss(threads=2)(X, Y)
     assert seen == [torch.get_num_threads(), 2]
+
+
+@pytest.mark.parametrize("form", [dict(distance="scan_to_body"), dict(distance="visible"),
+                                  dict(cap=0.3, cap_q=3.0),
+                                  dict(distance="visible", cap=0.3)])
+def test_gradcheck_distance_forms(form):
+    """The forms of docs/formulation.md §8: points, target points and moving volumes."""
+    X, Y, VX, VY = clouds()
+    X.requires_grad_(), Y.requires_grad_(), VX.requires_grad_()
+    visible = torch.tensor([True, False, True, True, False, True, True, False, True])
+    loss = st.HausdorffLoss(eps=0.05, **form)
+    vis = visible if form.get("distance") == "visible" else None
+    assert torch.autograd.gradcheck(lambda x, y, vx: loss(x, y, vx, VY, visible=vis),
+                                    (X, Y, VX), eps=1e-6, atol=1e-8, rtol=1e-6)
+
+
+def test_forms_misuse():
+    X, Y, _, VY = clouds()
+    with pytest.raises(ValueError, match="distance must be"):
+        st.HausdorffLoss(distance="both")
+    VY.requires_grad_()
+    with pytest.raises(NotImplementedError, match="VY needs distance='symmetric'"):
+        st.HausdorffLoss(distance="scan_to_body")(X, Y, None, VY)

@@ -8,6 +8,9 @@
 ///     A = ((1/|Y|) Σ_j W_j d̃_X(y_j)^β)^(1/β),  B = ((1/|X|) Σ_i V_i d̃_Y(x_i)^β)^(1/β)
 ///     ρ̃ = ((A^γ + B^γ)/2)^(1/γ)
 ///
+/// HausdorffRequest::form selects the one-sided (ρ̃ = A), visible (B over marked moving points)
+/// and soft-capped forms of docs/formulation.md §8 (DistanceForm).
+///
 /// Typical use: build a HausdorffTarget once (it owns the target's k-d tree), then call
 /// evaluate() for each moving cloud, asking only for what is needed.
 
@@ -128,9 +131,17 @@ struct DistanceForm {
   Eigen::Array<bool, Eigen::Dynamic, 1> visible;
 
   /// Throws InvalidArgument naming `cap.c`, `cap.q` or `visible` (its size against N, none
-  /// marked, or a mask given for other sides).
+  /// marked, or a mask given for other sides). Every evaluation calls it.
   void validate(Eigen::Index moving_points) const;
 };
+
+/// The cap of the rule "c = factor × the quantile-`quantile` value of `field`" (docs/formulation.md
+/// §8.3), with `field` typically HausdorffResult::field_target (d̃_X(y_j), the scan's field) at
+/// the starting state. The quantile is unweighted and interpolates linearly between order
+/// statistics: Q(p) = x_(k) + (h − k)(x_(k+1) − x_(k)), h = (n − 1)p, k = ⌊h⌋. Throws
+/// InvalidArgument naming `quantile` (outside [0, 1]), `factor` (not finite and > 0), an empty
+/// or non-finite field, or a cap that comes out 0.
+double cap_from_quantile(const Eigen::VectorXd& field, double quantile, double factor);
 
 /// What to compute beyond ρ̃, A and B. Nothing is computed that is not asked for.
 struct HausdorffRequest {
@@ -148,7 +159,8 @@ struct HausdorffRequest {
   bool any_gradient() const { return gradient_points || gradient_volumes || gradient_target; }
 };
 
-/// Where the pair-sum work of one evaluation went, summed over its passes (2 or 3).
+/// Where the pair-sum work of one evaluation went, summed over its passes (2 or 3; 1 or 2
+/// for Sides::scan_to_body, which needs no pass for B's value).
 struct SumWork {
   std::int64_t near_pairs = 0;  ///< source–outer pairs summed directly (near field, or all)
   std::int64_t far_kernel = 0;  ///< method tree: kernel evaluations at interpolation points
@@ -163,11 +175,19 @@ struct SumWork {
 
 /// The result of one evaluation. Optional members are empty unless requested.
 struct HausdorffResult {
-  double rho = 0.0;                  ///< ρ̃_H (method nearest: the Hausdorff distance)
-  double A = 0.0;                    ///< target-over-moving mean (nearest: max_j dist(y_j, X))
-  double B = 0.0;                    ///< moving-over-target mean (nearest: max_i dist(x_i, Y))
-  Eigen::VectorXd field_target;      ///< M: d̃_X(y_j) (nearest: dist(y_j, X))
-  Eigen::VectorXd field_moving;      ///< N: d̃_Y(x_i) (nearest: dist(x_i, Y))
+  double rho = 0.0;  ///< ρ̃ of the request's form (method nearest: the Hausdorff distance)
+  /// Target-over-moving mean of ψ(d̃_X(y_j)) (ψ the cap, identity without one; method nearest:
+  /// max_j ψ(dist(y_j, X))).
+  double A = 0.0;
+  /// Moving-over-target mean of ψ(d̃_Y(x_i)): over all moving points (symmetric), over the
+  /// visible ones with renormalised weights (B_V, visible); method nearest: the max of
+  /// ψ(dist(x_i, Y)) over the same points. Sides::scan_to_body: 0, not computed (ρ̃ = A).
+  double B = 0.0;
+  /// M: d̃_X(y_j) (nearest: dist(y_j, X)). The raw field values, before the cap.
+  Eigen::VectorXd field_target;
+  /// N: d̃_Y(x_i) for every moving point, visible or not (nearest: dist(x_i, Y)). The raw
+  /// values, before the cap. With scan_to_body it is computed only for this field.
+  Eigen::VectorXd field_moving;
   Eigen::MatrixXd gradient_points;   ///< N by d: ∂ρ̃/∂x_i
   Eigen::VectorXd gradient_volumes;  ///< N: ∂ρ̃/∂V_i (volumes of X, Y held otherwise fixed)
   Eigen::MatrixXd gradient_target;   ///< M by d: ∂ρ̃/∂y_j

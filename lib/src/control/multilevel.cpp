@@ -1,6 +1,7 @@
 #include "multilevel.hpp"
 
 #include <algorithm>
+#include <sstream>
 #include <string>
 
 #include "softhd/error.hpp"
@@ -41,6 +42,22 @@ SceneTarget coarse_target(const fe::Scene& coarse, const fe::Mesh& mesh, const S
 
 }  // namespace
 
+void apply_target_form(ShapeObjective& objective, SceneTarget& target) {
+  const TargetDistance& d = target.distance;
+  // Nothing to set for the plain form, unless a camera made the objective's visible (then a
+  // symmetric form asked for is a conflict set_form names).
+  if (d.sides == Sides::symmetric && d.cap == 0.0 && d.cap_factor == 0.0 &&
+      !objective.options().camera)
+    return;
+  const DistanceForm form = target_form(d, objective);
+  objective.set_form(form);
+  std::ostringstream line;
+  line.precision(6);
+  line << ", distance " << to_string(form.sides);
+  if (form.cap.c > 0.0) line << ", cap c = " << form.cap.c << " (q = " << form.cap.q << ")";
+  target.description += line.str();
+}
+
 std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& scene,
                                                             const SceneTarget& target,
                                                             const TrackingRunOptions& options) {
@@ -68,6 +85,8 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
         *p->assembler, *p->control, HausdorffTarget(p->target->cloud, so.hausdorff), so,
         fe::state_solver_factory(p->scene, options.state_backend, p->assembler.get(),
                                  p->control.get()));
+    if (options.distance) p->target->distance = *options.distance;
+    apply_target_form(*p->objective, *p->target);
     if (options.coarse_level == CoarseLevel::automatic &&
         fe::grid_levels(p->scene, fe::GridSequencingOptions{}) > 0) {
       p->two_level.emplace(fe::coarsened(p->scene).make_assembler());

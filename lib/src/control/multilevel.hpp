@@ -29,6 +29,10 @@ struct CoarseProblem {
   std::unique_ptr<ShapeObjective> objective;
 };
 
+/// Sets the objective's distance form from the target block's (target_form; nothing for the
+/// default symmetric form without a cap) and appends it to the target's description.
+void apply_target_form(ShapeObjective& objective, SceneTarget& target);
+
 /// Every `stride`-th point of `cloud` (from the first), the volumes scaled so that their total
 /// is the cloud's.
 PointCloud subsampled(const PointCloud& cloud, int stride);

@@ -9,11 +9,14 @@
 #include <sstream>
 
 #include "../io/keys.hpp"
+#include "softhd/control/shape_objective.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/samplers.hpp"
+#include "softhd/scan/cleanup.hpp"
+#include "softhd/scan/surface_weights.hpp"
 
 namespace softhd {
 
@@ -62,7 +65,88 @@ SceneTarget arc_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlohm
   std::ostringstream d;
   d << "arc of " << T.angle * 180.0 / M_PI << " degrees, " << counts[0] << "x" << counts[1] << "x"
     << counts[2] << " cell-centred grid";
-  return {T.apply(grid), T.displacement(mesh), d.str()};
+  return {T.apply(grid), T.displacement(mesh), d.str(), {}};
+}
+
+// A number at key `key` of `o` (the block `path` of the target), or InvalidArgument.
+double number_at(const fe::Scene& scene, const nlohmann::json& o, const char* path, const char* key,
+                 const char* what) {
+  if (!o[key].is_number())
+    throw InvalidArgument(scene.source + ": target." + path + key + " must be " + what + ", got " +
+                          o[key].dump());
+  return o[key].get<double>();
+}
+
+// target.clean: {"crop": MARGIN, "plane": DIST, "outliers": {"k": K, "ratio": R}}, each optional.
+scan::ScanCleanup parse_clean(const fe::Scene& scene, const nlohmann::json& t) {
+  scan::ScanCleanup c;
+  if (!t.contains("clean")) return c;
+  const nlohmann::json& j = t["clean"];
+  if (!j.is_object())
+    throw InvalidArgument(scene.source + ": target.clean must be an object, got " + j.dump());
+  const std::string where = "scene " + scene.source;
+  io::check_keys(j, where, "target.clean", {"crop", "plane", "outliers"});
+  if (j.contains("crop")) c.crop = number_at(scene, j, "clean.", "crop", "a margin >= 0");
+  if (j.contains("plane")) c.plane = number_at(scene, j, "clean.", "plane", "a distance > 0");
+  if (j.contains("outliers")) {
+    const nlohmann::json& o = j["outliers"];
+    if (!o.is_object())
+      throw InvalidArgument(scene.source + ": target.clean.outliers must be an object {\"k\": " +
+                            "K, \"ratio\": R}, got " + o.dump());
+    io::check_keys(o, where, "target.clean.outliers", {"k", "ratio"});
+    scan::ScanCleanup::Outliers out;
+    if (o.contains("k")) {
+      if (!o["k"].is_number_integer() || o["k"].get<double>() < 1 || o["k"].get<double>() > 1e4)
+        throw InvalidArgument(scene.source +
+                              ": target.clean.outliers.k must be an integer from 1 to 10000, got " +
+                              o["k"].dump());
+      out.k = o["k"].get<int>();
+    }
+    if (o.contains("ratio"))
+      out.ratio = number_at(scene, o, "clean.outliers.", "ratio", "a number");
+    c.outliers = out;
+  }
+  try {
+    c.validate();
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(scene.source + ": target." + e.what());
+  }
+  return c;
+}
+
+// target.weights: "file" (as read), "knn" or "delaunay" (scan::AreaEstimate).
+std::optional<scan::AreaEstimate> parse_weights(const fe::Scene& scene, const nlohmann::json& t) {
+  if (!t.contains("weights")) return std::nullopt;
+  const std::string name = t["weights"].is_string() ? t["weights"].get<std::string>() : "";
+  if (name == "file") return std::nullopt;
+  if (name != "knn" && name != "delaunay")
+    throw InvalidArgument(scene.source +
+                          ": target.weights must be \"file\", \"knn\" or \"delaunay\", got " +
+                          t["weights"].dump());
+  return scan::area_estimate_from_string(name);
+}
+
+// read → crop (to the body's box, inflated) → plane → outliers → weights; what each step
+// did and what the reader skipped go into `description`.
+PointCloud read_scan(const fe::Scene& scene, const nlohmann::json& t, const std::string& file,
+                     std::string& description) {
+  std::vector<std::string> notes;
+  PointCloud cloud = read_cloud(file, scene.dim(), &notes);
+  check_coordinates(cloud, file);
+  const scan::ScanCleanup clean = parse_clean(scene, t);
+  const std::optional<scan::AreaEstimate> weights = parse_weights(scene, t);
+  std::vector<scan::CleanupStep> steps;
+  const Eigen::Index read = cloud.size();
+  try {
+    cloud = scan::clean_scan(cloud, scene.lower, scene.upper, clean, &steps);
+    if (weights) cloud = scan::with_area_weights(cloud, *weights);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(scene.source + ": target " + file + ": " + e.what());
+  }
+  if (!steps.empty()) description += "; " + scan::describe(steps, read);
+  if (weights) description += "; weights " + scan::to_string(*weights);
+  for (const std::string& n : notes) description += "; " + n;
+  return cloud;
 }
 
 SceneTarget cloud_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlohmann::json& t,
@@ -71,16 +155,73 @@ SceneTarget cloud_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlo
     throw InvalidArgument(scene.source + ": target.file must be a path string");
   const fs::path dir = fs::path(scene.source).parent_path();
   const fs::path f = (dir / t["file"].get<std::string>()).lexically_normal();
-  PointCloud cloud = read_cloud(f.string(), scene.dim());
-  check_coordinates(cloud, f.string());
-  if (!t.contains("solved_on")) return {cloud, std::nullopt, "cloud file " + f.string()};
+  std::string description = "cloud file " + f.string();
+  const PointCloud cloud = read_scan(scene, t, f.string(), description);
+  if (!t.contains("solved_on")) return {cloud, std::nullopt, description, {}};
+  if (t.contains("clean") || t.contains("weights"))
+    throw InvalidArgument(scene.source +
+                          ": target.solved_on takes the file's nodes as they are: no clean or "
+                          "weights with it");
   // A manufactured target: the deformed nodes of a state solved on another scene's mesh.
   if (!t["solved_on"].is_string())
     throw InvalidArgument(scene.source + ": target.solved_on must be a scene path string");
   const fs::path source = (dir / t["solved_on"].get<std::string>()).lexically_normal();
   const NodalMap T(fe::load_scene(source.string(), memory_limit).make_mesh(), cloud);
-  return {cloud, T.displacement(mesh),
-          "cloud file " + f.string() + " (deformed nodes of " + source.string() + ")"};
+  return {cloud,
+          T.displacement(mesh),
+          "cloud file " + f.string() + " (deformed nodes of " + source.string() + ")",
+          {}};
+}
+
+// A number at key `key` of the target block, finite (and > 0 if `positive`).
+double target_number(const fe::Scene& scene, const nlohmann::json& v, const std::string& key,
+                     bool positive) {
+  if (!v.is_number() || !std::isfinite(v.get<double>()) || (positive && !(v.get<double>() > 0.0)))
+    throw InvalidArgument(scene.source + ": target." + key + " must be a number" +
+                          (positive ? " > 0" : "") + ", got " + v.dump());
+  return v.get<double>();
+}
+
+// The keys "distance", "cap", "cap_q" of a target block (docs/guide.md); "visible" goes with
+// "camera", which implies it when "distance" is absent.
+TargetDistance target_distance(const fe::Scene& scene, const nlohmann::json& t) {
+  TargetDistance d;
+  const bool camera = t.contains("camera");
+  if (camera) d.sides = Sides::visible;
+  if (t.contains("distance")) {
+    const nlohmann::json& v = t["distance"];
+    const std::string name = v.is_string() ? v.get<std::string>() : v.dump();
+    if (name == "visible" && !camera)
+      throw InvalidArgument(scene.source +
+                            ": target.distance \"visible\" needs the camera's position: give "
+                            "target.camera [x, y, z] in the body's frame");
+    if (!v.is_string() || (name != "symmetric" && name != "scan_to_body" && name != "visible"))
+      throw InvalidArgument(scene.source +
+                            ": target.distance must be \"symmetric\", \"scan_to_body\" or "
+                            "\"visible\", got " +
+                            v.dump());
+    if (camera && name != "visible")
+      throw InvalidArgument(scene.source + ": target.camera is given but target.distance is \"" +
+                            name + "\" (a camera is for the visible distance)");
+    d.sides = sides_from_string(name);
+  }
+  if (t.contains("cap")) {
+    const nlohmann::json& c = t["cap"];
+    if (c.is_object()) {
+      io::check_keys(c, "scene " + scene.source, "target.cap", {"quantile", "factor"});
+      if (!c.contains("quantile") || !c.contains("factor"))
+        throw InvalidArgument(scene.source + ": target.cap needs both \"quantile\" and \"factor\"");
+      d.cap_quantile = target_number(scene, c["quantile"], "cap.quantile", false);
+      d.cap_factor = target_number(scene, c["factor"], "cap.factor", true);
+      if (!(d.cap_quantile >= 0.0 && d.cap_quantile <= 1.0))
+        throw InvalidArgument(scene.source + ": target.cap.quantile must be in [0, 1], got " +
+                              c["quantile"].dump());
+    } else {
+      d.cap = target_number(scene, c, "cap", true);
+    }
+  }
+  if (t.contains("cap_q")) d.cap_q = target_number(scene, t["cap_q"], "cap_q", true);
+  return d;
 }
 
 // The keys both kinds take: "surface" (a boolean) and "camera" (3 finite numbers), 3D only.
@@ -117,6 +258,19 @@ void apply_target_settings(const SceneTarget& target, ShapeObjectiveOptions* opt
   }
 }
 
+DistanceForm target_form(const TargetDistance& distance, const ShapeObjective& objective) {
+  DistanceForm form;
+  form.sides = distance.sides;
+  form.cap.c = distance.cap;
+  form.cap.q = distance.cap_q;
+  if (distance.cap_factor > 0.0) {
+    const Eigen::VectorXd rest = Eigen::VectorXd::Zero(objective.last_state().u.size());
+    form.cap.c = cap_from_quantile(objective.fields(rest).field_target, distance.cap_quantile,
+                                   distance.cap_factor);
+  }
+  return form;
+}
+
 ArcMap arc_map(const fe::Scene& scene, double angle) {
   if (scene.dim() != 3) throw InvalidArgument(scene.source + ": an arc map needs a 3D body");
   ArcMap T;
@@ -140,25 +294,32 @@ SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh, double me
   const std::string where = "scene " + scene.source;
   if (kind == "arc" || kind == "cloud") {
     if (kind == "arc")
-      io::check_keys(t, where, "target", {"kind", "angle", "cells", "surface", "camera"});
+      io::check_keys(t, where, "target",
+                     {"kind", "angle", "cells", "distance", "cap", "cap_q", "surface", "camera"});
     if (kind == "cloud")
-      io::check_keys(t, where, "target", {"kind", "file", "solved_on", "surface", "camera"});
-    SceneTarget target = kind == "arc" ? arc_target(scene, mesh, t, memory_limit)
-                                       : cloud_target(scene, mesh, t, memory_limit);
-    read_view_keys(scene, t, &target);
-    return target;
+      io::check_keys(t, where, "target",
+                     {"kind", "file", "solved_on", "clean", "weights", "distance", "cap", "cap_q",
+                      "surface", "camera"});
+    SceneTarget st = kind == "arc" ? arc_target(scene, mesh, t, memory_limit)
+                                   : cloud_target(scene, mesh, t, memory_limit);
+    st.distance = target_distance(scene, t);
+    read_view_keys(scene, t, &st);
+    return st;
   }
   throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\", got \"" + kind +
                         "\"");
 }
 
 SceneTarget file_target(const std::string& path, int dim) {
-  PointCloud cloud = read_cloud(path, dim);
+  std::vector<std::string> notes;
+  PointCloud cloud = read_cloud(path, dim, &notes);
   check_coordinates(cloud, path);
   if (dim != 0 && cloud.dim() != dim)
     throw InvalidArgument("the target cloud '" + path + "' is " + std::to_string(cloud.dim()) +
                           "D but the scene's body is " + std::to_string(dim) + "D");
-  return {std::move(cloud), std::nullopt, "cloud file " + path};
+  std::string description = "cloud file " + path;
+  for (const std::string& n : notes) description += "; " + n;
+  return {std::move(cloud), std::nullopt, description, {}};
 }
 
 }  // namespace softhd

@@ -57,11 +57,11 @@ struct ShapeObjective::Impl {
     if (!solver) throw InvalidArgument("ShapeObjective: the state solver factory made none");
     const fe::Mesh& mesh = a.mesh();
     dim = mesh.dim;
-    if (options.particles == Particles::boundary || options.form.sides == Sides::visible) {
+    if (options.particles == Particles::boundary || options.camera) {
       if (dim != 3)
         throw InvalidArgument(options.particles == Particles::boundary
                                   ? "particles boundary needs a 3D body"
-                                  : "distance visible needs a 3D body");
+                                  : "a camera (distance visible) needs a 3D body");
       facets = fe::boundary_facets(mesh);
     }
     // Clamped nodes (no free dof) are not differentiated.
@@ -157,7 +157,7 @@ struct ShapeObjective::Impl {
   /// nodes among all nodes for node particles).
   DistanceForm form(const Eigen::VectorXd& u) const {
     DistanceForm f = options.form;
-    if (f.sides != Sides::visible) return f;
+    if (f.sides != Sides::visible || !options.camera) return f;  // no mask to make
     const Eigen::Array<bool, Eigen::Dynamic, 1> seen =
         scan::visible_points(fe::boundary_surface(assembler.mesh(), facets, u), *options.camera);
     if (!seen.any())
@@ -231,14 +231,20 @@ void ShapeObjectiveOptions::validate() const {
   if (warm_start_states < 1) throw InvalidArgument("warm_start_states must be >= 1");
   if (coarse_correction_iterations < 0)
     throw InvalidArgument("coarse_correction_iterations must be >= 0");
-  if (form.visible.size() != 0)
-    throw InvalidArgument(
-        "form.visible: the objective marks the visible points itself (leave it empty)");
-  DistanceForm cap_only = form;  // the cap (the mask is made and checked per evaluation)
-  cap_only.sides = Sides::symmetric;
-  cap_only.validate(0);
-  if (form.sides == Sides::visible) {
-    if (!camera) throw InvalidArgument("camera: distance visible needs the camera position");
+  if (camera) {  // the mask is made per evaluation: only the cap to check here
+    if (form.visible.size() != 0)
+      throw InvalidArgument(
+          "form.visible: with a camera the objective marks the visible points (leave it empty)");
+    DistanceForm cap_only = form;
+    cap_only.sides = Sides::symmetric;
+    cap_only.validate(0);
+  } else {  // a given mask, checked against the moving cloud's size by the objective
+    if (form.sides == Sides::visible && form.visible.size() == 0)
+      throw InvalidArgument(
+          "camera: distance visible needs the camera position (or a mask in form.visible)");
+    form.validate(form.sides == Sides::visible ? form.visible.size() : 0);
+  }
+  if (form.sides == Sides::visible && camera) {
     if (!camera->allFinite()) throw InvalidArgument("camera must be finite");
     if (particles == Particles::quadrature)
       throw InvalidArgument("distance visible marks nodes: particles must be nodes or boundary");
@@ -318,6 +324,18 @@ void ShapeObjective::restore_warm_starts(const std::vector<WarmStart>& states) {
       throw InvalidArgument("warm starts: a state does not fit this problem");
   }
   d.cache.assign(states.begin(), states.end());
+}
+
+void ShapeObjective::set_form(DistanceForm form) {
+  ShapeObjectiveOptions o = impl_->options;
+  o.form = std::move(form);
+  o.validate();  // the camera's rules
+  if (!o.camera) o.form.validate(impl_->particles(impl_->cache.back().state.u).size());
+  impl_->options.form = std::move(o.form);
+}
+
+DistanceForm ShapeObjective::distance_form(const Eigen::VectorXd& u) const {
+  return impl_->form(u);
 }
 
 HausdorffResult ShapeObjective::fields(const Eigen::VectorXd& u) const {

@@ -208,6 +208,13 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
   f["distance"] = "alpha " + exact_text(h.params.alpha) + " beta " + exact_text(h.params.beta) +
                   " gamma " + exact_text(h.params.gamma) + " eps " + exact_text(h.params.epsilon) +
                   " method " + to_string(h.method) + " tol " + exact_text(h.tolerance);
+  // Only a form other than the default is recorded (older checkpoints have no such key).
+  if (so.form.sides != Sides::symmetric || so.form.cap.c != 0.0) {
+    f["form"] = to_string(so.form.sides) + " cap " + exact_text(so.form.cap.c) + " q " +
+                exact_text(so.form.cap.q);
+    if (so.form.sides == Sides::visible)
+      f["form"] += " visible " + hash_of(so.form.visible.cast<double>().matrix().eval());
+  }
   f["threads"] = std::to_string(resolve_threads(h.threads));
   f["objective"] = "particles " + to_string(so.particles) + " volumes " + to_string(so.volumes) +
                    " tikhonov " + exact_text(so.tikhonov_mass) + " " +
@@ -256,8 +263,17 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   const bool self_floor = m_points * m_points <= options.self_floor_max_pairs;
   // With a known map the matched floor judges progress, and the self floor (M² pairs, often
   // the most expensive evaluation of the run) is only reported: computed after the run.
-  if (self_floor && !map_displacement) s.floor_self = Y.evaluate(Y.cloud()).rho;
-  if (map_displacement) s.floor_matched = Y.evaluate(objective.particles(*map_displacement)).rho;
+  // Both in the objective's distance form (the self floor's without a visible mask, which
+  // marks body points: the target against itself is symmetric there).
+  HausdorffRequest matched, self;
+  matched.form = objective.options().form;
+  self.form.sides = matched.form.sides == Sides::visible ? Sides::symmetric : matched.form.sides;
+  self.form.cap = matched.form.cap;
+  if (self_floor && !map_displacement) s.floor_self = Y.evaluate(Y.cloud(), self).rho;
+  if (map_displacement) {
+    matched.form = objective.distance_form(*map_displacement);  // with the map's visible set
+    s.floor_matched = Y.evaluate(objective.particles(*map_displacement), matched).rho;
+  }
   const std::optional<double> floor = s.floor();
 
   const ShapeEvaluation start = objective.evaluate(m0, false);
@@ -320,7 +336,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
                       " iterations (resume from the checkpoint '" + options.checkpoint + "')");
   }
   finish(objective, recorder, r, map_displacement, options.checkpoint_every, &best_state, &s);
-  if (self_floor && map_displacement) s.floor_self = Y.evaluate(Y.cloud()).rho;
+  if (self_floor && map_displacement) s.floor_self = Y.evaluate(Y.cloud(), self).rho;
   return s;
 }
 

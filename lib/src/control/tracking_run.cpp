@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -64,6 +65,21 @@ void TrackingRunOptions::validate() const {
     throw InvalidArgument("coarse_tolerance must be in (0, 1)");
   if (resume && out.empty())
     throw InvalidArgument("resume needs the run's folder (the out field is empty)");
+  if (distance) {
+    const TargetDistance& d = *distance;
+    if (d.sides == Sides::visible)
+      throw InvalidArgument(
+          "distance visible needs the camera's position, which a tracking run "
+          "cannot give yet; use symmetric or scan_to_body");
+    if (!(std::isfinite(d.cap) && d.cap >= 0.0))
+      throw InvalidArgument("distance cap must be 0 (none) or finite and > 0");
+    if (!(std::isfinite(d.cap_q) && d.cap_q > 0.0))
+      throw InvalidArgument("distance cap_q must be finite and > 0");
+    if (!(d.cap_quantile >= 0.0 && d.cap_quantile <= 1.0))
+      throw InvalidArgument("distance cap_quantile must be in [0, 1]");
+    if (!(std::isfinite(d.cap_factor) && d.cap_factor >= 0.0))
+      throw InvalidArgument("distance cap_factor must be 0 (no rule) or finite and > 0");
+  }
   objective().validate();
   tracking().validate();
 }
@@ -118,6 +134,8 @@ struct TrackingRun::Impl {
     objective = std::make_unique<ShapeObjective>(
         a, c, HausdorffTarget(target.cloud, so.hausdorff), so,
         fe::state_solver_factory(scene, options.state_backend, &a, &c));
+    if (options.distance) target.distance = *options.distance;
+    detail::apply_target_form(*objective, target);
     if (options.coarse_level == CoarseLevel::automatic &&
         fe::grid_levels(scene, fe::GridSequencingOptions{}) > 0) {
       const fe::Scene level = fe::coarsened(scene);

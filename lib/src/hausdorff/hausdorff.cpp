@@ -13,6 +13,7 @@
 #include "nearest_index.hpp"
 #include "pair_backend.hpp"
 #include "scaled_means.hpp"
+#include "side_means.hpp"
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 #include "softhd/interrupt.hpp"
@@ -79,39 +80,6 @@ Method method_from_string(const std::string& name) {
   return enum_from_name(kMethodNames, name, "method");
 }
 
-namespace {
-constexpr EnumNames<Sides, 3> kSidesNames{{{Sides::symmetric, "symmetric"},
-                                           {Sides::scan_to_body, "scan_to_body"},
-                                           {Sides::visible, "visible"}}};
-}  // namespace
-
-std::string to_string(Sides sides) { return enum_name(kSidesNames, sides); }
-
-Sides sides_from_string(const std::string& name) {
-  return enum_from_name(kSidesNames, name, "distance");
-}
-
-void DistanceForm::validate(Eigen::Index moving_points) const {
-  if (!(cap.c == 0.0 || (std::isfinite(cap.c) && cap.c > 0.0))) {
-    throw InvalidArgument("distance cap.c must be 0 (no cap) or finite and > 0, got " +
-                          std::to_string(cap.c));
-  }
-  if (!(std::isfinite(cap.q) && cap.q > 0.0)) {
-    throw InvalidArgument("distance cap.q must be finite and > 0, got " + std::to_string(cap.q));
-  }
-  if (sides != Sides::visible) {
-    if (visible.size() != 0)
-      throw InvalidArgument("distance visible: a mask is given but the distance is " +
-                            to_string(sides));
-    return;
-  }
-  if (visible.size() != moving_points) {
-    throw InvalidArgument("distance visible: the mask has " + std::to_string(visible.size()) +
-                          " entries for " + std::to_string(moving_points) + " moving points");
-  }
-  if (!visible.any()) throw InvalidArgument("distance visible: no moving point is marked visible");
-}
-
 struct HausdorffTarget::Impl {
   Impl(PointCloud c, HausdorffOptions o) : cloud(std::move(c)), options(o) {
     weights = cloud.volumes() / cloud.total_volume();  // W_j/|Y|
@@ -167,12 +135,6 @@ HausdorffResult HausdorffTarget::evaluate(const PointCloud& moving,
                           " entries for " + std::to_string(moving.size()) + " moving points");
   }
   request.form.validate(moving.size());
-  // The seam of issue 32: the forms beyond the symmetric, uncapped ρ̃ are not evaluated yet.
-  if (request.form.sides != Sides::symmetric || request.form.cap.c != 0.0) {
-    throw InvalidArgument("distance " + to_string(request.form.sides) +
-                          (request.form.cap.c != 0.0 ? " with a cap" : "") +
-                          " is not implemented yet");
-  }
   HausdorffResult result;
   if (impl_->options.method == Method::nearest) {
     if (request.any_gradient()) {
@@ -186,19 +148,31 @@ HausdorffResult HausdorffTarget::evaluate(const PointCloud& moving,
   return result;
 }
 
-// Exact Hausdorff distance: A = max_j dist(y_j, X), B = max_i dist(x_i, Y), ρ = max(A, B).
+// Exact Hausdorff distance: A = max_j ψ(dist(y_j, X)), B = max_i ψ(dist(x_i, Y)) (over the
+// visible points for Sides::visible; 0 for scan_to_body, whose query is made for the fields
+// only), ρ = max(A, B) (scan_to_body: A). ψ is monotone, so ψ(max) = max ψ.
 HausdorffResult HausdorffTarget::Impl::evaluate_nearest(const PointCloud& X,
                                                         const HausdorffRequest& req) const {
   const int threads = resolve_threads(options.threads);
   const WorkShare* share = options.share.get();
+  const DistanceForm& form = req.form;
+  const bool one_sided = form.sides == Sides::scan_to_body;
   const detail::NearestIndex moving_tree(X.points());
   check_interrupt("between distance passes");
   Eigen::VectorXd dist_target = moving_tree.distances(cloud.points(), threads, share);
-  check_interrupt("between distance passes");
-  Eigen::VectorXd dist_moving = tree->distances(X.points(), threads, share);
+  Eigen::VectorXd dist_moving;
+  if (!one_sided || req.fields) {
+    check_interrupt("between distance passes");
+    dist_moving = tree->distances(X.points(), threads, share);
+  }
   HausdorffResult r;
-  r.A = dist_target.maxCoeff();
-  r.B = dist_moving.maxCoeff();
+  r.A = detail::soft_cap(dist_target.maxCoeff(), form.cap.c, form.cap.q);
+  if (!one_sided) {
+    const double largest = form.sides == Sides::visible
+                               ? form.visible.select(dist_moving.array(), 0.0).maxCoeff()
+                               : dist_moving.maxCoeff();
+    r.B = detail::soft_cap(largest, form.cap.c, form.cap.q);
+  }
   r.rho = std::max(r.A, r.B);
   if (req.fields) {
     r.field_target = std::move(dist_target);
@@ -241,6 +215,8 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   using detail::kOuterSum;
   const PointCloud& Y = cloud;
   const HausdorffParams& prm = options.params;
+  const DistanceForm& form = req.form;
+  const bool one_sided = form.sides == Sides::scan_to_body;
   const double alpha = prm.alpha, beta = prm.beta, eps = prm.epsilon;
   const int d = X.dim();
   const Eigen::Index N = X.size(), M = Y.size();
@@ -259,8 +235,11 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   const auto x_kd = std::make_unique<detail::KdTree>(X.points(), detail::kLeafSize);
   const Eigen::VectorXd scale_y =
       detail::nearest_distances(*x_kd, *kd, set.threads, set.share).array() + eps;
-  const Eigen::VectorXd scale_x =
-      detail::nearest_distances(*kd, *x_kd, set.threads, set.share).array() + eps;
+  // x_i's scales serve pass 2 (and 3), which scan_to_body skips for its value alone.
+  const bool need_inner = req.gradient_points || req.gradient_volumes;
+  const bool pass2 = !one_sided || req.fields || need_inner;
+  Eigen::VectorXd scale_x;
+  if (pass2) scale_x = detail::nearest_distances(*kd, *x_kd, set.threads, set.share).array() + eps;
   // Every exact S is ≤ 1 (each term ≤ its weight, the weights sum to 1), so clipping an
   // approximate sum at 1 only moves it towards the exact value and keeps d̃ ≥ r_min ≥ 0.
   const bool clip = options.method != Method::exact;
@@ -275,37 +254,50 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   account(r, p1);
   if (clip) p1.S = p1.S.cwiseMin(1.0);
   const Eigen::VectorXd dt_y = fields_of(scale_y, p1.S, alpha, eps);  // d̃_X(y_j)
-  const double A = detail::power_mean(dt_y, w, beta);
+  // A = (Σ_j (W_j/|Y|) ψ(d̃_j)^β)^(1/β); a_j = ∂A/∂d̃_j = (W_j/|Y|)(ψ_j/A)^(β−1) ψ'_j.
+  const detail::SideMean mean_a = detail::side_mean(dt_y, w, form.cap, beta, req.any_gradient());
+  const double A = mean_a.value;
+  const Eigen::VectorXd& a_y = mean_a.slope;
 
-  // Coefficients carried into pass 2: g_j = ∂A/∂d̃_j · (d̃_j + ε)/S_j, with
-  // ∂A/∂d̃_j = (W_j/|Y|)(d̃_j/A)^(β−1).
-  Eigen::VectorXd a_y, g_y;
-  if (req.any_gradient()) {
-    a_y.resize(M);
-    for (Eigen::Index j = 0; j < M; ++j)
-      a_y[j] = detail::power_mean_derivative(dt_y[j], w[j], A, beta);
-    g_y = a_y.array() * (dt_y.array() + eps) / p1.S.array();
-  }
+  // Coefficients carried into pass 2: g_j = a_j (d̃_j + ε)/S_j.
+  Eigen::VectorXd g_y;
+  if (req.any_gradient()) g_y = a_y.array() * (dt_y.array() + eps) / p1.S.array();
 
   // Pass 2, sources over targets: S_i = Σ_j (W_j/|Y|) ((r_min(x_i)+ε)/(r_ij+ε))^α, with
   // G_i = Σ_j (W_j/|Y|) p_ij t_ij (x_i − y_j)/r_ij, and the pass-1 terms scaled by y_j's
   // own scale: H_i = Σ_j g_j p'_ij, G2_i = Σ_j g_j p'_ij t_ij (x_i − y_j)/r_ij.
-  const bool need_inner = req.gradient_points || req.gradient_volumes;
+  // scan_to_body needs neither S_i (but for the fields) nor G_i: only H_i, G2_i for A.
   detail::PassSources src_y{&Y.points(), kd.get(), w.data(), nullptr, nullptr};
-  detail::PassOuter out_x{&X.points(), x_kd.get(), scale_x.data(), kOuterSum, nullptr};
-  if (req.gradient_points) out_x.flags |= kOuterGrad;
+  detail::PassOuter out_x{&X.points(), x_kd.get(), scale_x.data(), 0u, nullptr};
+  if (!one_sided || req.fields) out_x.flags |= kOuterSum;
+  if (req.gradient_points && !one_sided) out_x.flags |= kOuterGrad;
   if (need_inner) {
     out_x.flags |= kInner;
     src_y.coef = g_y.data();
     src_y.scale = scale_y.data();
   }
-  if (req.differentiate.size() != 0) out_x.mask = &req.differentiate;
-  detail::PassSums p2 = detail::run_pass(*backend, src_y, out_x, set);
-  account(r, p2);
-  if (clip) p2.S = p2.S.cwiseMin(1.0);
-  const Eigen::VectorXd dt_x = fields_of(scale_x, p2.S, alpha, eps);  // d̃_Y(x_i)
-  const double B = detail::power_mean(dt_x, v, beta);
-  const double rho = detail::combine_means(A, B, prm.gamma);
+  // The mask leaves masked points with S alone: only where S is summed anyway.
+  if (req.differentiate.size() != 0 && (out_x.flags & kOuterSum)) out_x.mask = &req.differentiate;
+  detail::PassSums p2;
+  if (pass2) {
+    p2 = detail::run_pass(*backend, src_y, out_x, set);
+    account(r, p2);
+  }
+  Eigen::VectorXd dt_x;  // d̃_Y(x_i)
+  if (out_x.flags & kOuterSum) {
+    if (clip) p2.S = p2.S.cwiseMin(1.0);
+    dt_x = fields_of(scale_x, p2.S, alpha, eps);
+  }
+  // B = (Σ_i u_i ψ(d̃_i)^β)^(1/β), u_i = V_i/|X| (symmetric) or V_i/|V| on the visible
+  // points (B_V, |V| = Σ_{k visible} V_k); b_i = ∂B/∂d̃_i = u_i (ψ_i/B)^(β−1) ψ'_i.
+  double volume_b = 0.0;
+  detail::SideMean mean_b;
+  if (!one_sided)
+    mean_b = detail::side_mean(dt_x, detail::b_weights(X, form, volume_b), form.cap, beta,
+                               req.any_gradient(),
+                               form.sides == Sides::visible ? &form.visible : nullptr);
+  const double B = mean_b.value;
+  const double rho = one_sided ? A : detail::combine_means(A, B, prm.gamma);
 
   r.A = A;
   r.B = B;
@@ -316,13 +308,10 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   }
   if (!req.any_gradient()) return r;
 
-  // ∂ρ̃/∂A = ½ (A/ρ̃)^(γ−1), ∂ρ̃/∂B = ½ (B/ρ̃)^(γ−1).
-  const double rho_A = detail::power_mean_derivative(A, 0.5, rho, prm.gamma);
-  const double rho_B = detail::power_mean_derivative(B, 0.5, rho, prm.gamma);
-  // b_i = ∂B/∂d̃_i = (V_i/|X|)(d̃_i/B)^(β−1);  f_i = b_i (d̃_i + ε)/S_i.
-  Eigen::VectorXd f_x(N);
-  for (Eigen::Index i = 0; i < N; ++i)
-    f_x[i] = detail::power_mean_derivative(dt_x[i], v[i], B, beta) * (dt_x[i] + eps) / p2.S[i];
+  const auto [rho_A, rho_B] = detail::rho_slopes(A, B, rho, prm.gamma, form.sides);
+  // f_i = b_i (d̃_i + ε)/S_i (zero for scan_to_body).
+  Eigen::VectorXd f_x = Eigen::VectorXd::Zero(N);
+  if (!one_sided) f_x = mean_b.slope.array() * (dt_x.array() + eps) / p2.S.array();
   auto differentiated = [&](Eigen::Index i) {
     return req.differentiate.size() == 0 || req.differentiate[i];
   };
@@ -330,33 +319,43 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   if (req.gradient_points) {
     // ∂ρ̃/∂x_i = ρ̃_A (V_i/|X|) G2_i + ρ̃_B f_i G_i
     r.gradient_points.setZero(N, d);
-    for (Eigen::Index i = 0; i < N; ++i)
-      if (differentiated(i))
-        r.gradient_points.row(i) = rho_A * v[i] * p2.G2.row(i) + rho_B * f_x[i] * p2.G.row(i);
+    for (Eigen::Index i = 0; i < N; ++i) {
+      if (!differentiated(i)) continue;
+      r.gradient_points.row(i) = rho_A * v[i] * p2.G2.row(i);
+      if (!one_sided) r.gradient_points.row(i) += rho_B * f_x[i] * p2.G.row(i);
+    }
   }
   if (req.gradient_volumes) {
-    // ∂ρ̃/∂V_i = −ρ̃_A/(α|X|) (H_i − Σ_j a_j (d̃_j + ε)) + ρ̃_B B/(β|X|) ((d̃_i/B)^β − 1)
+    // ∂ρ̃/∂V_i = −ρ̃_A/(α|X|) (H_i − Σ_j a_j (d̃_j + ε)) + ρ̃_B ∂B/∂V_i, with
+    // ∂B/∂V_i = B/(β|U|) ((ψ_i/B)^β − 1) for the points in B's mean (|U| = |X| or |V|),
+    // 0 for the others.
     const double sum_a = (a_y.array() * (dt_y.array() + eps)).sum();
     const double volX = X.total_volume();
     r.gradient_volumes.setZero(N);
     for (Eigen::Index i = 0; i < N; ++i) {
       if (!differentiated(i)) continue;
       const double dA = -(p2.H[i] - sum_a) / (alpha * volX);
-      const double dB = B > 0.0 ? B / (beta * volX) * (std::pow(dt_x[i] / B, beta) - 1.0) : 0.0;
+      const bool in_b = !one_sided && (form.sides != Sides::visible || form.visible[i]);
+      const double dB = in_b && B > 0.0
+                            ? B / (beta * volume_b) * (std::pow(mean_b.capped[i] / B, beta) - 1.0)
+                            : 0.0;
       r.gradient_volumes[i] = rho_A * dA + rho_B * dB;
     }
   }
   if (req.gradient_target) {
-    // Pass 3, targets over sources with x_i's own scales: G3_j = Σ_i f_i p'_ij t_ij
-    // (y_j − x_i)/r_ij. Then ∂ρ̃/∂y_j = ρ̃_A a_j (d̃_j+ε)/S_j G_j + ρ̃_B (W_j/|Y|) G3_j.
-    src_x.coef = f_x.data();
-    src_x.scale = scale_x.data();
-    out_y.flags = kInner;
-    const detail::PassSums p3 = detail::run_pass(*backend, src_x, out_y, set);
-    account(r, p3);
+    // ∂ρ̃/∂y_j = ρ̃_A g_j G_j + ρ̃_B (W_j/|Y|) G3_j, with pass 3 (B's part; not for
+    // scan_to_body), targets over sources with x_i's own scales:
+    // G3_j = Σ_i f_i p'_ij t_ij (y_j − x_i)/r_ij.
     r.gradient_target.resize(M, d);
-    for (Eigen::Index j = 0; j < M; ++j)
-      r.gradient_target.row(j) = rho_A * g_y[j] * p1.G.row(j) + rho_B * w[j] * p3.G2.row(j);
+    for (Eigen::Index j = 0; j < M; ++j) r.gradient_target.row(j) = rho_A * g_y[j] * p1.G.row(j);
+    if (!one_sided) {
+      src_x.coef = f_x.data();
+      src_x.scale = scale_x.data();
+      out_y.flags = kInner;
+      const detail::PassSums p3 = detail::run_pass(*backend, src_x, out_y, set);
+      account(r, p3);
+      for (Eigen::Index j = 0; j < M; ++j) r.gradient_target.row(j) += rho_B * w[j] * p3.G2.row(j);
+    }
   }
   return r;
 }

@@ -43,3 +43,25 @@ inline double combine_means(double A, double B, double gamma) {
 }
 
 }  // namespace softhd::detail
+
+namespace softhd::detail {
+
+/// The soft cap of docs/formulation.md §8.3, ψ_c(d) = (d^(−q) + c^(−q))^(−1/q), in the
+/// scaled form ψ_c(d) = m (1 + s^q)^(−1/q) with m = min(d, c), s = m / max(d, c) ∈ [0, 1]
+/// (no power of d or c is formed, so nothing overflows). ψ_c(0) = 0; c = 0 means no cap.
+inline double soft_cap(double d, double c, double q) {
+  if (c == 0.0 || !(d > 0.0)) return c == 0.0 ? d : 0.0;
+  const double lo = std::min(d, c), hi = std::max(d, c);
+  return lo * std::exp(-std::log1p(std::pow(lo / hi, q)) / q);
+}
+
+/// ψ_c'(d) = (ψ_c(d)/d)^(q+1) ∈ (0, 1], with ψ_c/d = (1 + (d/c)^q)^(−1/q) for d ≤ c and
+/// (c/d)(1 + (c/d)^q)^(−1/q) for d > c. ψ_c'(0) = 1; c = 0 (no cap): 1.
+inline double soft_cap_derivative(double d, double c, double q) {
+  if (c == 0.0 || !(d > 0.0)) return 1.0;
+  const double s = d <= c ? d / c : c / d;
+  const double ratio = (d <= c ? 1.0 : s) * std::exp(-std::log1p(std::pow(s, q)) / q);
+  return std::pow(ratio, q + 1.0);
+}
+
+}  // namespace softhd::detail

@@ -12,11 +12,12 @@
 #include <system_error>
 #include <vector>
 
+#include "cloud_io_internal.hpp"
 #include "softhd/error.hpp"
 #include "softhd/io/atomic_file.hpp"
 
 namespace softhd {
-namespace {
+namespace detail {
 
 // ---------------------------------------------------------------------------
 // Files, messages, numbers
@@ -109,11 +110,29 @@ PointCloud make_cloud(const std::string& path, const std::vector<double>& values
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
+std::vector<std::string_view> split_blanks(std::string_view line) {
+  std::vector<std::string_view> tokens;
+  std::size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && is_blank(line[i])) ++i;
+    const std::size_t start = i;
+    while (i < line.size() && !is_blank(line[i])) ++i;
+    if (i > start) tokens.push_back(line.substr(start, i - start));
+  }
+  return tokens;
+}
+
+}  // namespace detail
+
+using namespace detail;
+
+namespace {
+
 // ---------------------------------------------------------------------------
 // Text
 
 // Splits one line (without its comment and newline) into fields separated by
-// blanks and/or single commas. Stores up to 4 fields, returns how many there are.
+// blanks and/or single commas. Stores up to 10 fields, returns how many there are.
 int split_fields(const std::string& path, std::size_t line, const char* p, const char* stop,
                  std::string_view* fields) {
   int n = 0;
@@ -129,7 +148,7 @@ int split_fields(const std::string& path, std::size_t line, const char* p, const
     }
     const char* start = p;
     while (p < stop && !is_blank(*p) && *p != ',') ++p;
-    if (n < 4) fields[n] = std::string_view(start, static_cast<std::size_t>(p - start));
+    if (n < 10) fields[n] = std::string_view(start, static_cast<std::size_t>(p - start));
     ++n;
     after_comma = false;
   }
@@ -137,19 +156,26 @@ int split_fields(const std::string& path, std::size_t line, const char* p, const
 
 }  // namespace
 
-PointCloud read_text_cloud(const std::string& path, int dim) {
+PointCloud read_text_cloud(const std::string& path, int dim, std::vector<std::string>* notes) {
   check_dim(dim);
-  return parse_text_cloud(read_file(path), path, dim);
+  return parse_text_cloud(read_file(path), path, dim, notes);
 }
 
-PointCloud parse_text_cloud(const std::string& data, const std::string& path, int dim) {
+namespace {
+// The columns x y z [V] of a 3D line with 3 or 6 more (colours and/or normals, ignored):
+// 6 or 9 columns -> 3, 7 or 10 -> 4; else 0.
+int read_columns_3d(int n) { return n == 6 || n == 9 ? 3 : n == 7 || n == 10 ? 4 : 0; }
+}  // namespace
+
+PointCloud parse_text_cloud(const std::string& data, const std::string& path, int dim,
+                            std::vector<std::string>* notes) {
   check_dim(dim);
   const char* p = data.data();
   const char* const end = p + data.size();
   if (data.compare(0, 3, "\xEF\xBB\xBF") == 0) p += 3;  // UTF-8 byte order mark
 
-  std::vector<double> values;  // row-major, `cols` numbers per point
-  int cols = 0;
+  std::vector<double> values;  // row-major, `used` numbers per point
+  int cols = 0, used = 0;
   int point_dim = 0;
   bool has_volume = false;
   std::size_t cols_line = 0;
@@ -160,29 +186,35 @@ PointCloud parse_text_cloud(const std::string& data, const std::string& path, in
     const char* stop =
         static_cast<const char*>(std::memchr(p, '#', static_cast<std::size_t>(eol - p)));
     if (stop == nullptr) stop = eol;
-    std::string_view fields[4];
+    std::string_view fields[10];
     const int n = split_fields(path, line, p, stop, fields);
     p = eol + (eol < end ? 1 : 0);
     if (n == 0) continue;
 
     if (cols == 0) {
-      const bool ok = dim == 0 ? (n >= 2 && n <= 4) : (n == dim || n == dim + 1);
+      const bool extra = dim != 2 && read_columns_3d(n) > 0;
+      const bool ok = extra || (dim == 0 ? (n >= 2 && n <= 4) : (n == dim || n == dim + 1));
       if (!ok) {
-        const char* expected = dim == 0   ? "2, 3 or 4 columns (x y [z] [V])"
-                               : dim == 2 ? "2 or 3 columns (x y [V]) for dim=2"
-                                          : "3 or 4 columns (x y z [V]) for dim=3";
+        const char* expected =
+            dim == 0   ? "2, 3 or 4 columns (x y [z] [V]; in 3D 3 or 6 more may follow)"
+            : dim == 2 ? "2 or 3 columns (x y [V]) for dim=2"
+                       : "3 or 4 columns (x y z [V]; 3 or 6 more may follow) for dim=3";
         fail_at(path, line, std::string("expected ") + expected + ", got " + std::to_string(n));
       }
       cols = n;
+      used = extra ? read_columns_3d(n) : n;
       cols_line = line;
-      point_dim = dim != 0 ? dim : std::min(n, 3);
-      has_volume = n > point_dim;
+      point_dim = extra ? 3 : dim != 0 ? dim : std::min(n, 3);
+      has_volume = used > point_dim;
+      if (extra && notes != nullptr)
+        notes->push_back(path + ": columns " + std::to_string(used + 1) + " to " +
+                         std::to_string(n) + " (colours or normals) ignored");
     } else if (n != cols) {
       fail_at(path, line,
               "mixed dimensions: line " + std::to_string(line) + " has " + std::to_string(n) +
                   " columns, line " + std::to_string(cols_line) + " had " + std::to_string(cols));
     }
-    for (int k = 0; k < n; ++k) {
+    for (int k = 0; k < used; ++k) {
       double value = 0.0;
       const char* problem = parse_double(fields[k], value);
       if (problem == nullptr) problem = check_value(value, k == point_dim);
@@ -191,7 +223,7 @@ PointCloud parse_text_cloud(const std::string& data, const std::string& path, in
       values.push_back(value);
     }
   }
-  return make_cloud(path, values, cols, point_dim, has_volume);
+  return make_cloud(path, values, used, point_dim, has_volume);
 }
 
 void write_text_cloud(const std::string& path, const PointCloud& cloud, bool with_volumes) {
@@ -261,18 +293,6 @@ std::size_t ply_size(PlyType t) {
 }
 
 template <class T>
-T load_le(const char* p) {
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, p, sizeof(T));
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
-  std::reverse(bytes, bytes + sizeof(T));
-#endif
-  T value;
-  std::memcpy(&value, bytes, sizeof(T));
-  return value;
-}
-
-template <class T>
 void store_le(std::string& out, T value) {
   char bytes[sizeof(T)];
   std::memcpy(bytes, &value, sizeof(T));
@@ -327,18 +347,6 @@ struct PlyHeader {
   std::size_t body = 0;       // offset of the first byte after the header
   std::size_t body_line = 0;  // line number of the first body line
 };
-
-std::vector<std::string_view> split_blanks(std::string_view line) {
-  std::vector<std::string_view> tokens;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && is_blank(line[i])) ++i;
-    const std::size_t start = i;
-    while (i < line.size() && !is_blank(line[i])) ++i;
-    if (i > start) tokens.push_back(line.substr(start, i - start));
-  }
-  return tokens;
-}
 
 PlyHeader parse_ply_header(const std::string& path, const std::string& data) {
   PlyHeader h;
@@ -570,12 +578,19 @@ void read_ply_ascii(const std::string& path, const std::string& data, const PlyH
 
 }  // namespace
 
-PointCloud read_ply_cloud(const std::string& path) {
-  return parse_ply_cloud(read_file(path), path);
+PointCloud read_ply_cloud(const std::string& path, std::vector<std::string>* notes) {
+  return parse_ply_cloud(read_file(path), path, notes);
 }
 
-PointCloud parse_ply_cloud(const std::string& data, const std::string& path) {
+PointCloud parse_ply_cloud(const std::string& data, const std::string& path,
+                           std::vector<std::string>* notes) {
   const PlyHeader h = parse_ply_header(path, data);
+  if (notes != nullptr) {
+    std::string skipped;
+    for (const PlyProperty& prop : h.elements[static_cast<std::size_t>(h.vertex)].properties)
+      if (prop.role < 0) skipped += (skipped.empty() ? "" : ", ") + prop.name;
+    if (!skipped.empty()) notes->push_back(path + ": vertex properties " + skipped + " ignored");
+  }
   std::vector<double> values;  // rows of x, y, [z,] volume
   if (h.binary) {
     read_ply_binary(path, data, h, values);
@@ -610,12 +625,14 @@ void write_ply_cloud(const std::string& path, const PointCloud& cloud, bool bina
 }
 
 namespace {
-bool is_ply_name(const std::string& path) {
-  std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : std::string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
+// Whether `path` ends in `ext` (".ply", ".pcd"), in any case.
+bool has_extension(const std::string& path, const char* ext) {
+  std::string tail = path.size() >= 4 ? path.substr(path.size() - 4) : std::string();
+  std::transform(tail.begin(), tail.end(), tail.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext == ".ply";
+  return tail == ext;
 }
+bool is_ply_name(const std::string& path) { return has_extension(path, ".ply"); }
 }  // namespace
 
 void write_cloud(const std::string& path, const PointCloud& cloud) {
@@ -625,10 +642,11 @@ void write_cloud(const std::string& path, const PointCloud& cloud) {
     write_text_cloud(path, cloud);
 }
 
-PointCloud read_cloud(const std::string& path, int dim) {
+PointCloud read_cloud(const std::string& path, int dim, std::vector<std::string>* notes) {
   check_dim(dim);
-  if (!is_ply_name(path)) return read_text_cloud(path, dim);
-  PointCloud cloud = read_ply_cloud(path);
+  const bool pcd = has_extension(path, ".pcd");
+  if (!pcd && !is_ply_name(path)) return read_text_cloud(path, dim, notes);
+  PointCloud cloud = pcd ? read_pcd_cloud(path, notes) : read_ply_cloud(path, notes);
   if (dim != 0 && cloud.dim() != dim) {
     fail(path, "the file holds a " + std::to_string(cloud.dim()) +
                    "D cloud but dim=" + std::to_string(dim) + " was requested");

@@ -9,10 +9,20 @@
 ///     {"kind": "cloud", "file": PATH [, "solved_on": SCENE]}     a cloud file (relative to the
 ///         scene file); with solved_on it holds the deformed nodes of a state solved on SCENE's
 ///         mesh, which gives the known map
+///     {"kind": "cloud", "file": PATH, "clean": {"crop": MARGIN, "plane": DIST,
+///      "outliers": {"k": K, "ratio": R}}, "weights": "file"|"knn"|"delaunay"}   a scan: read,
+///         cropped to the body's box inflated by MARGIN × its diagonal, its dominant plane
+///         removed, statistical outliers removed, area weights estimated (scan/cleanup.hpp,
+///         scan/surface_weights.hpp; each optional); the description says what each removed
 ///
-/// Either kind also takes "surface": true (the target is a surface scan: the moving cloud is
-/// the body's boundary with its current facet areas) and "camera": [x, y, z] (the camera in
-/// the body's frame: the distance is the visible one, docs/formulation.md §8.7); 3D only.
+/// Either kind also takes the distance's form (docs/formulation.md §8, docs/guide.md):
+///     "distance": "symmetric" | "scan_to_body" | "visible"   (visible needs "camera")
+///     "cap": C  or  "cap": {"quantile": Q, "factor": F}   the soft cap c, fixed or
+///         F × the Q-quantile of d̃_X(y_j) at the start (cap_from_quantile)
+///     "cap_q": Q                                   the cap's sharpness (default 4)
+/// and, 3D only, "surface": true (a surface scan: the moving cloud is the body's boundary with
+/// its current facet areas, §8.6) and "camera": [x, y, z] (the camera in the body's frame, for
+/// the visible distance, which it implies when "distance" is absent, §8.7).
 
 #include <Eigen/Core>
 #include <optional>
@@ -22,22 +32,43 @@
 #include "softhd/control/targets.hpp"
 #include "softhd/fe/mesh.hpp"
 #include "softhd/fe/scene.hpp"
+#include "softhd/hausdorff.hpp"
 #include "softhd/point_cloud.hpp"
 
 namespace softhd {
+
+/// The distance's form a target block asks for (its keys "distance", "cap", "cap_q").
+struct TargetDistance {
+  Sides sides = Sides::symmetric;  ///< symmetric, scan_to_body, or visible (with a camera)
+  double cap = 0.0;                ///< a fixed cap c (0: none, unless the quantile rule is set)
+  /// The rule c = cap_factor × the cap_quantile-quantile of d̃_X(y_j) at the start; used
+  /// when cap_factor > 0 (then `cap` is 0).
+  double cap_quantile = 0.0;
+  double cap_factor = 0.0;
+  double cap_q = 4.0;  ///< the cap's sharpness q
+};
 
 /// A target cloud and, if T is known, the nodal displacements u_T = T(X) − X of the body.
 struct SceneTarget {
   PointCloud cloud;                                 ///< Ω_d
   std::optional<Eigen::VectorXd> map_displacement;  ///< u_T at `mesh`'s nodes, if T is known
   std::string description;                          ///< one line for people
+  TargetDistance distance;                          ///< the form its block asks for
   bool surface = false;                             ///< "surface": the moving cloud is the boundary
   std::optional<Eigen::Vector3d> camera = std::nullopt;  ///< "camera": visible from there
 };
 
 /// The objective settings a target asks for: surface → particles boundary with deformed
-/// (current) areas; camera → Sides::visible from it.
+/// (current) areas; camera → Sides::visible from it (before target_form, which keeps it).
 void apply_target_settings(const SceneTarget& target, ShapeObjectiveOptions* options);
+
+class ShapeObjective;
+
+/// The DistanceForm of `distance` for `objective`: a fixed cap as given, or the quantile rule
+/// applied to the target's field d̃_X(y_j) of the body at rest (u = 0, the start of a run whose
+/// start control is 0, the default; docs/guide.md). Throws InvalidArgument as
+/// cap_from_quantile.
+DistanceForm target_form(const TargetDistance& distance, const ShapeObjective& objective);
 
 /// The arc map of a plate scene (3D box, clamped at X1 = lower): length and thickness from the
 /// box, total angle `angle`. Throws InvalidArgument for a 2D scene or an invalid map.

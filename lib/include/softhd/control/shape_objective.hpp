@@ -52,10 +52,12 @@ struct ShapeObjectiveOptions {
   ParticleVolumes volumes = ParticleVolumes::reference;  ///< paper's simplification
   double tikhonov_mass = 0.0;                            ///< M ≥ 0 (paper: 0)
   double tikhonov_gradient = 0.0;                        ///< ε_m ≥ 0 (paper: 0)
-  /// The distance's form (sides, cap). For Sides::visible its mask is not given: every
-  /// evaluation marks the moving points seen from `camera` (docs/formulation.md §8.7).
+  /// The distance's form in every evaluation (docs/formulation.md §8): symmetric (default),
+  /// scan_to_body, visible, and the soft cap. For Sides::visible either a fixed mask over the
+  /// moving cloud's points, or (with `camera`) none: every evaluation then marks the moving
+  /// points seen from the camera (§8.7).
   DistanceForm form;
-  /// Sides::visible only (and required then): the camera in the body's frame. The moving
+  /// Sides::visible only: the camera in the body's frame (then form.visible is empty). The moving
   /// points marked are the boundary nodes scan::visible_points finds on the deformed boundary
   /// (fe::boundary_surface) — for particles = boundary the cloud's own points, for nodes the
   /// boundary nodes among them; quadrature points are refused. Held fixed in the gradient.
@@ -68,8 +70,9 @@ struct ShapeObjectiveOptions {
   /// which is better for them (bending: 3 fine iterations instead of 5).
   int coarse_correction_iterations = 6;
 
-  /// Throws InvalidArgument naming the first invalid field (the distance's parameters and the
-  /// Newton options included).
+  /// Throws InvalidArgument naming the first invalid field (the distance's parameters and
+  /// form, and the Newton options included). The visible mask's size is checked against the
+  /// moving cloud at each evaluation.
   void validate() const;
 };
 
@@ -159,8 +162,16 @@ class ShapeObjective {
   /// only through the warm starts, which a checkpoint can save. Costs a factorisation at the next
   /// solve.
   void reset_solver();
-  /// Per-point fields d̃ of the last converged state (moving cloud, target cloud).
+  /// Per-point fields d̃ of the last converged state (moving cloud, target cloud), with the
+  /// objective's form (raw fields; ρ̃, A, B of the form).
   HausdorffResult fields(const Eigen::VectorXd& u) const;
+  /// Replaces the distance form of later evaluations (e.g. a cap set from the starting
+  /// state's fields, cap_from_quantile). Throws InvalidArgument as DistanceForm::validate for
+  /// the moving cloud's size.
+  void set_form(DistanceForm form);
+  /// The form an evaluation at displacement u uses: the options' form, with the visible mask
+  /// of u's deformed boundary when a camera is set.
+  DistanceForm distance_form(const Eigen::VectorXd& u) const;
 
  private:
   struct Impl;

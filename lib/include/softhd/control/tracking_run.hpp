@@ -94,6 +94,10 @@ struct TrackingRunOptions {
   fe::StateBackend state_backend = fe::StateBackend::kCholmod;  ///< the state solver
   /// A target cloud file (text or PLY) instead of the scene's "target"; empty: the scene's.
   std::string target_file;
+  /// The distance's form (docs/formulation.md §8), replacing the target's own as a whole (a
+  /// scene's "distance", "cap", "cap_q"; a file or array target has the symmetric form without
+  /// a cap). Unset: the target's. Sides::visible is refused (it needs the camera).
+  std::optional<TargetDistance> distance;
   /// Refuse an arc target grid whose estimated memory exceeds this many bytes.
   double memory_limit = fe::kDefaultMemoryLimit;
   ///@{

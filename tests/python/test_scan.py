@@ -1,0 +1,49 @@
+"""softhd.read_cloud on PCD files and the scan clean-up and weights against NumPy oracles
+(docs/formulation.md section 8)."""
+
+import os
+import pathlib
+
+import numpy as np
+import pytest
+
+import softhd
+
+DATA = pathlib.Path(os.environ.get("SOFTHD_SOURCE_DIR", pathlib.Path(__file__).parents[2])) / \
+    "tests" / "data" / "pcd"
+
+
+def test_read_cloud_reads_open3d_pcd_with_a_note():
+    expected = np.loadtxt(DATA / "open3d_points.txt")
+    with pytest.warns(UserWarning, match="normal_x, normal_y, normal_z, rgb ignored"):
+        points, volumes = softhd.read_cloud(DATA / "open3d_binary.pcd")
+    assert np.array_equal(points, expected)
+    assert np.array_equal(volumes, np.ones(len(expected)))
+
+
+def test_crop_and_outliers_match_numpy(rng):
+    X = rng.uniform(-1, 2, size=(400, 3))
+    lo, hi = np.array([0.0, 0.0, 0.0]), np.array([1.0, 0.5, 0.8])
+    m = 0.1 * np.linalg.norm(hi - lo)
+    inside = np.flatnonzero(np.all((X >= lo - m) & (X <= hi + m), axis=1))
+    assert np.array_equal(softhd.crop_to_box(X, lo, hi, 0.1), inside)
+    d = np.linalg.norm(X[:, None, :] - X[None, :, :], axis=2)
+    mean = np.sort(d, axis=1)[:, 1:9].mean(axis=1)  # column 0 is the point itself
+    kept = np.flatnonzero(mean <= mean.mean() + 1.5 * mean.std(ddof=1))
+    assert np.array_equal(softhd.remove_statistical_outliers(X, k=8, ratio=1.5), kept)
+
+
+def test_plane_and_area_weights(rng):
+    table = np.c_[rng.uniform(-1, 1, (500, 2)), np.zeros(500)]
+    above = rng.uniform([-1, -1, 0.5], [1, 1, 1], size=(100, 3))
+    off = softhd.remove_dominant_plane(np.r_[table, above], distance=0.01)
+    assert np.array_equal(off, np.arange(500, 600))
+    # A unit sphere, uniform: the areas sum to 4 pi within 3 %.
+    v = rng.normal(size=(2000, 3))
+    sphere = v / np.linalg.norm(v, axis=1, keepdims=True)
+    for method in ("knn", "delaunay"):
+        assert softhd.area_weights(sphere, method).sum() == pytest.approx(4 * np.pi, rel=0.03)
+    with pytest.raises(softhd.InvalidArgument, match="expected knn or delaunay"):
+        softhd.area_weights(sphere, "voronoi")
+    with pytest.raises(softhd.InvalidArgument, match="k must"):
+        softhd.remove_statistical_outliers(sphere, k=0)

@@ -1,0 +1,99 @@
+// A scan as a scene's target (docs/guide.md, target block): clean and weights applied in the
+// order read → crop → plane → outliers → weights, the same as the library's calls, with the
+// counts in the description; bad keys and an emptied scan refused.
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+
+#include "expect_error.hpp"
+#include "softhd/control/scene_target.hpp"
+#include "softhd/fe/scene.hpp"
+#include "softhd/io/cloud_io.hpp"
+#include "softhd/scan/cleanup.hpp"
+#include "softhd/scan/surface_weights.hpp"
+
+namespace softhd::test {
+namespace {
+
+// A body [0,2]×[0,1]×[0,0.2]: its top face sampled (800 points), a table z = 0 around it
+// (3000 points over [−1,3]×[−1,2], not under the body), 60 uniform outliers.
+std::string write_scan() {
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Eigen::MatrixXd p(3860, 3);
+  Eigen::Index r = 0;
+  for (int i = 0; i < 800; ++i) p.row(r++) << 2 * u(rng), u(rng), 0.2;
+  while (r < 3800) {
+    const double x = -1 + 4 * u(rng), y = -1 + 3 * u(rng);
+    if (x > 0 && x < 2 && y > 0 && y < 1) continue;
+    p.row(r++) << x, y, 0.0;
+  }
+  while (r < 3860) p.row(r++) << -1 + 4 * u(rng), -1 + 3 * u(rng), u(rng);
+  const std::string path = testing::TempDir() + "/scan_scene.ply";
+  write_ply_cloud(path, PointCloud(p));
+  return path;
+}
+
+fe::Scene scene_with(const std::string& target) {
+  return fe::parse_scene(R"({
+    "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [2, 1, 0.2], "cells": [2, 1, 1], "order": 1 },
+    "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
+    "fibers": [1, 0, 0], "clamp": ["x0"],
+    "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
+    "target": )" + target + "}",
+                         testing::TempDir() + "/scan_scene.json");
+}
+
+TEST(ScanScene, CleansAndWeighsInTheDocumentedOrder) {
+  const std::string file = write_scan();
+  const fe::Scene s = scene_with(
+      R"({"kind": "cloud", "file": "scan_scene.ply", "weights": "knn",
+          "clean": {"crop": 0.5, "plane": 0.01, "outliers": {"k": 10, "ratio": 2}}})");
+  const SceneTarget t = scene_target(s, s.make_mesh());
+  // The same steps by the library's calls.
+  const PointCloud read = read_cloud(file);
+  const PointCloud cropped = scan::select(read, scan::crop_to_box(read, s.lower, s.upper, 0.5));
+  scan::PlaneRemoval plane;
+  plane.distance = 0.01;
+  const PointCloud flat = scan::select(cropped, scan::remove_dominant_plane(cropped, plane));
+  const PointCloud clean = scan::select(flat, scan::remove_statistical_outliers(flat, 10, 2.0));
+  const PointCloud expected = scan::with_area_weights(clean, scan::AreaEstimate::knn);
+  ASSERT_EQ(t.cloud.size(), expected.size());
+  EXPECT_EQ(t.cloud.points(), expected.points());
+  EXPECT_EQ(t.cloud.volumes(), expected.volumes());
+  // The table went with the plane, the body's top stayed (a few outliers near it too).
+  EXPECT_EQ((t.cloud.points().col(2).array() == 0.0).count(), 0);
+  EXPECT_GE((t.cloud.points().col(2).array() == 0.2).count(), 790);
+  const std::string counts = "crop removed " + std::to_string(read.size() - cropped.size()) +
+                             ", plane removed " + std::to_string(cropped.size() - flat.size()) +
+                             ", outliers removed " + std::to_string(flat.size() - clean.size()) +
+                             " of 3860 points; weights knn";
+  EXPECT_NE(t.description.find(counts), std::string::npos) << t.description;
+  EXPECT_FALSE(t.map_displacement);
+}
+
+TEST(ScanScene, RefusesBadKeysAndAnEmptiedScan) {
+  write_scan();
+  const std::string head = R"({"kind": "cloud", "file": "scan_scene.ply", )";
+  auto refuses = [&](const std::string& rest, const std::string& message) {
+    const fe::Scene s = scene_with(head + rest + "}");
+    expect_error<Error>([&] { scene_target(s, s.make_mesh()); }, message);
+  };
+  refuses(R"("weights": "area")", "target.weights must be \"file\", \"knn\" or \"delaunay\"");
+  refuses(R"("clean": {"crop": -1})", "target.clean.crop must be a finite margin >= 0");
+  refuses(R"("clean": {"plain": 0.1})", "unknown key 'plain'");
+  refuses(R"("clean": {"outliers": {"k": 0}})", "target.clean.outliers.k must be an integer");
+  refuses(R"("clean": {"outliers": 3})", "target.clean.outliers must be an object");
+  refuses(R"("clean": {"plane": 0})", "target.clean.plane must be a finite distance > 0");
+  // Crop to the body's box with no margin, then a plane as thick as the scene: nothing left.
+  refuses(R"("clean": {"crop": 0, "plane": 5})",
+          "no points left after the clean-up (plane removed the last");
+  // "file" weights are the file's (here 1s).
+  const fe::Scene s = scene_with(head + R"("weights": "file"})");
+  EXPECT_EQ(scene_target(s, s.make_mesh()).cloud.volumes(), Eigen::VectorXd::Ones(3860));
+}
+
+}  // namespace
+}  // namespace softhd::test
