@@ -48,7 +48,9 @@ options:
   --algorithm A      mma | ccsaq | lbfgs | slsqp (default {algorithm})
   --move-limit D     each round of 10 evaluations moves m by at most D times the
                      bound range (default {move_limit}; 0: no move limit)
-  --particles P      nodes | quadrature: the moving cloud (default {particles})
+  --particles P      nodes | quadrature | boundary: the moving cloud (default {particles};
+                     boundary, 3D: the boundary nodes with their facet areas, which a
+                     target block's "surface": true selects)
   --volumes V        reference | deformed particle volumes (default {volumes})
   --alpha A --beta B --gamma G --eps E   functional parameters (default {alpha} {beta} {gamma} {eps})
   --method M         exact | tree: the distance's pair sums (default {method}; it sums

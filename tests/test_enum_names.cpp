@@ -27,6 +27,7 @@ TEST(EnumNames, BothDirections) {
 
 TEST(EnumNames, LibraryParsers) {
   EXPECT_EQ(particles_from_string("quadrature"), Particles::quadrature);
+  EXPECT_EQ(particles_from_string("boundary"), Particles::boundary);
   EXPECT_EQ(to_string(ParticleVolumes::deformed), "deformed");
   EXPECT_EQ(fe::parse_control_kind("element"), fe::ControlKind::kElement);
   expect_error<InvalidArgument>([] { particle_volumes_from_string("moving"); },

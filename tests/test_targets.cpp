@@ -106,6 +106,49 @@ TEST(SceneTarget, ArcOfATranslatedSceneIsTheTranslatedArc) {
   EXPECT_LT((*b.map_displacement - *a.map_displacement).cwiseAbs().maxCoeff(), 1e-14);
 }
 
+// "surface" and "camera" in a target block (docs/guide.md): read into the SceneTarget and
+// applied to the objective (boundary particles with current areas; the visible distance from
+// the camera); malformed values and a 2D body refused naming the key.
+TEST(SceneTarget, SurfaceAndCameraKeys) {
+  const std::string head = R"({
+    "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [4, 1, 0.2], "cells": [4, 1, 1], "order": 1 },
+    "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
+    "fibers": [1, 0, 0], "clamp": ["x0"],
+    "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
+    "target": { "kind": "arc", "angle": 1.5)";
+  auto target = [&](const std::string& keys) {
+    const fe::Scene s = fe::parse_scene(head + keys + "} }", "view.json");
+    return scene_target(s, s.make_mesh());
+  };
+  const SceneTarget t = target(R"(, "surface": true, "camera": [1, 2, 3])");
+  EXPECT_TRUE(t.surface);
+  ASSERT_TRUE(t.camera.has_value());
+  EXPECT_EQ(*t.camera, Eigen::Vector3d(1, 2, 3));
+  ShapeObjectiveOptions o;
+  apply_target_settings(t, &o);
+  EXPECT_EQ(o.particles, Particles::boundary);
+  EXPECT_EQ(o.volumes, ParticleVolumes::deformed);
+  EXPECT_EQ(o.form.sides, Sides::visible);
+  EXPECT_EQ(*o.camera, Eigen::Vector3d(1, 2, 3));
+  EXPECT_NO_THROW(o.validate());
+  const SceneTarget plain = target("");
+  EXPECT_FALSE(plain.surface || plain.camera.has_value());
+  expect_error<InvalidArgument>([&] { target(R"(, "camera": [1, 2])"); }, "target.camera");
+  expect_error<InvalidArgument>([&] { target(R"(, "camera": [1, "a", 2])"); }, "target.camera");
+  expect_error<InvalidArgument>([&] { target(R"(, "surface": 1)"); }, "target.surface");
+  expect_error<FileError>([&] { target(R"(, "camra": [1, 2, 3])"); }, "did you mean 'camera'");
+  // The objective's own checks: a camera without the visible distance, visible without one.
+  ShapeObjectiveOptions bad;
+  bad.camera = Eigen::Vector3d(0, 0, 1);
+  expect_error<InvalidArgument>([&] { bad.validate(); }, "camera");
+  bad = ShapeObjectiveOptions();
+  bad.form.sides = Sides::visible;
+  expect_error<InvalidArgument>([&] { bad.validate(); }, "camera");
+  bad.camera = Eigen::Vector3d(0, 0, 1);
+  bad.particles = Particles::quadrature;
+  expect_error<InvalidArgument>([&] { bad.validate(); }, "particles");
+}
+
 TEST(ArcMap, RejectsBadGeometry) {
   ArcMap T;
   T.angle = 7.0;

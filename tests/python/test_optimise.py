@@ -178,8 +178,8 @@ def test_defaults_are_the_command_line_tools(cli_help):
     text = " ".join(cli_help("optimise").split())
     flags = {"max_iter": "--max-iter N iterations", "rel_tol": "--rel-tol R stop when J changes "
              "by less than R relative", "algorithm": "--algorithm A mma | ccsaq | lbfgs | slsqp",
-             "move_limit": "bound range", "particles": "--particles P nodes | quadrature: the "
-             "moving cloud", "volumes": "--volumes V reference | deformed particle volumes",
+             "move_limit": "bound range", "particles": "--particles P nodes | quadrature | boundary: "
+             "the moving cloud", "volumes": "--volumes V reference | deformed particle volumes",
              "method": "--method M exact | tree: the distance's pair sums",
              "tol": "relative error bound on every kernel sum", "tikhonov_mass":
              "--tikhonov-mass M (M/2) int m^2", "tikhonov_grad": "--tikhonov-grad E (E/2) int "

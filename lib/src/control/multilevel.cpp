@@ -44,7 +44,11 @@ SceneTarget coarse_target(const fe::Scene& coarse, const fe::Mesh& mesh, const S
 
 void apply_target_form(ShapeObjective& objective, SceneTarget& target) {
   const TargetDistance& d = target.distance;
-  if (d.sides == Sides::symmetric && d.cap == 0.0 && d.cap_factor == 0.0) return;
+  // Nothing to set for the plain form, unless a camera made the objective's visible (then a
+  // symmetric form asked for is a conflict set_form names).
+  if (d.sides == Sides::symmetric && d.cap == 0.0 && d.cap_factor == 0.0 &&
+      !objective.options().camera)
+    return;
   const DistanceForm form = target_form(d, objective);
   objective.set_form(form);
   std::ostringstream line;
@@ -60,7 +64,8 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
   std::vector<std::unique_ptr<CoarseProblem>> levels;  // finest first while built
   TrackingRunOptions o = options;
   if (o.method == Method::tree) o.tolerance = std::max(options.tolerance, options.coarse_tolerance);
-  const ShapeObjectiveOptions so = o.objective();
+  ShapeObjectiveOptions so = o.objective();
+  apply_target_settings(target, &so);  // the user's target's view on every level
   const fe::Scene* finer = &scene;
   const SceneTarget* finer_target = &target;
   for (int level = 1; level < options.levels; ++level) {

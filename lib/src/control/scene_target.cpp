@@ -182,20 +182,27 @@ double target_number(const fe::Scene& scene, const nlohmann::json& v, const std:
   return v.get<double>();
 }
 
-// The keys "distance", "cap", "cap_q" of a target block (docs/guide.md).
+// The keys "distance", "cap", "cap_q" of a target block (docs/guide.md); "visible" goes with
+// "camera", which implies it when "distance" is absent.
 TargetDistance target_distance(const fe::Scene& scene, const nlohmann::json& t) {
   TargetDistance d;
+  const bool camera = t.contains("camera");
+  if (camera) d.sides = Sides::visible;
   if (t.contains("distance")) {
     const nlohmann::json& v = t["distance"];
     const std::string name = v.is_string() ? v.get<std::string>() : v.dump();
-    if (name == "visible")
+    if (name == "visible" && !camera)
       throw InvalidArgument(scene.source +
-                            ": target.distance \"visible\" needs the camera's position, which a "
-                            "scene cannot give yet; use \"symmetric\" or \"scan_to_body\"");
-    if (!v.is_string() || (name != "symmetric" && name != "scan_to_body"))
+                            ": target.distance \"visible\" needs the camera's position: give "
+                            "target.camera [x, y, z] in the body's frame");
+    if (!v.is_string() || (name != "symmetric" && name != "scan_to_body" && name != "visible"))
       throw InvalidArgument(scene.source +
-                            ": target.distance must be \"symmetric\" or \"scan_to_body\", got " +
+                            ": target.distance must be \"symmetric\", \"scan_to_body\" or "
+                            "\"visible\", got " +
                             v.dump());
+    if (camera && name != "visible")
+      throw InvalidArgument(scene.source + ": target.camera is given but target.distance is \"" +
+                            name + "\" (a camera is for the visible distance)");
     d.sides = sides_from_string(name);
   }
   if (t.contains("cap")) {
@@ -217,7 +224,39 @@ TargetDistance target_distance(const fe::Scene& scene, const nlohmann::json& t) 
   return d;
 }
 
+// The keys both kinds take: "surface" (a boolean) and "camera" (3 finite numbers), 3D only.
+void read_view_keys(const fe::Scene& scene, const nlohmann::json& t, SceneTarget* target) {
+  if ((t.contains("surface") || t.contains("camera")) && scene.dim() != 3)
+    throw InvalidArgument(scene.source + ": target.surface and target.camera need a 3D body");
+  if (t.contains("surface")) {
+    if (!t["surface"].is_boolean())
+      throw InvalidArgument(scene.source + ": target.surface must be true or false");
+    target->surface = t["surface"].get<bool>();
+  }
+  if (t.contains("camera")) {
+    const nlohmann::json& c = t["camera"];
+    if (!c.is_array() || c.size() != 3 || !c[0].is_number() || !c[1].is_number() ||
+        !c[2].is_number())
+      throw InvalidArgument(scene.source +
+                            ": target.camera must be an array of 3 numbers (the body's frame)");
+    target->camera = Eigen::Vector3d(c[0].get<double>(), c[1].get<double>(), c[2].get<double>());
+    if (!target->camera->allFinite())
+      throw InvalidArgument(scene.source + ": target.camera must be finite");
+  }
+}
+
 }  // namespace
+
+void apply_target_settings(const SceneTarget& target, ShapeObjectiveOptions* options) {
+  if (target.surface) {
+    options->particles = Particles::boundary;
+    options->volumes = ParticleVolumes::deformed;
+  }
+  if (target.camera) {
+    options->form.sides = Sides::visible;
+    options->camera = target.camera;
+  }
+}
 
 DistanceForm target_form(const TargetDistance& distance, const ShapeObjective& objective) {
   DistanceForm form;
@@ -253,17 +292,18 @@ SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh, double me
     throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\"");
   const std::string kind = t["kind"].get<std::string>();
   const std::string where = "scene " + scene.source;
-  if (kind == "arc") {
-    io::check_keys(t, where, "target", {"kind", "angle", "cells", "distance", "cap", "cap_q"});
-    SceneTarget st = arc_target(scene, mesh, t, memory_limit);
+  if (kind == "arc" || kind == "cloud") {
+    if (kind == "arc")
+      io::check_keys(t, where, "target",
+                     {"kind", "angle", "cells", "distance", "cap", "cap_q", "surface", "camera"});
+    if (kind == "cloud")
+      io::check_keys(t, where, "target",
+                     {"kind", "file", "solved_on", "clean", "weights", "distance", "cap", "cap_q",
+                      "surface", "camera"});
+    SceneTarget st = kind == "arc" ? arc_target(scene, mesh, t, memory_limit)
+                                   : cloud_target(scene, mesh, t, memory_limit);
     st.distance = target_distance(scene, t);
-    return st;
-  }
-  if (kind == "cloud") {
-    io::check_keys(t, where, "target",
-                   {"kind", "file", "solved_on", "clean", "weights", "distance", "cap", "cap_q"});
-    SceneTarget st = cloud_target(scene, mesh, t, memory_limit);
-    st.distance = target_distance(scene, t);
+    read_view_keys(scene, t, &st);
     return st;
   }
   throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\", got \"" + kind +

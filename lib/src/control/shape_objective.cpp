@@ -8,16 +8,19 @@
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/adjoint.hpp"
+#include "softhd/fe/boundary.hpp"
 #include "softhd/fe/cloud.hpp"
 #include "softhd/fe/geometry.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/state_solver.hpp"
+#include "softhd/scan/visibility.hpp"
 
 namespace softhd {
 
 namespace {
-constexpr EnumNames<Particles, 2> kParticles{
-    {{Particles::nodes, "nodes"}, {Particles::quadrature, "quadrature"}}};
+constexpr EnumNames<Particles, 3> kParticles{{{Particles::nodes, "nodes"},
+                                              {Particles::quadrature, "quadrature"},
+                                              {Particles::boundary, "boundary"}}};
 constexpr EnumNames<ParticleVolumes, 2> kVolumes{
     {{ParticleVolumes::reference, "reference"}, {ParticleVolumes::deformed, "deformed"}}};
 constexpr EnumNames<EvaluationStatus, 2> kEvaluationStatus{
@@ -54,12 +57,23 @@ struct ShapeObjective::Impl {
     if (!solver) throw InvalidArgument("ShapeObjective: the state solver factory made none");
     const fe::Mesh& mesh = a.mesh();
     dim = mesh.dim;
+    if (options.particles == Particles::boundary || options.camera) {
+      if (dim != 3)
+        throw InvalidArgument(options.particles == Particles::boundary
+                                  ? "particles boundary needs a 3D body"
+                                  : "a camera (distance visible) needs a 3D body");
+      facets = fe::boundary_facets(mesh);
+    }
     // Clamped nodes (no free dof) are not differentiated.
-    if (options.particles == Particles::nodes) {
-      differentiate.setConstant(mesh.num_nodes(), false);
-      for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n)
+    if (options.particles != Particles::quadrature) {
+      const bool all = options.particles == Particles::nodes;
+      const Eigen::Index N = all ? mesh.num_nodes() : Eigen::Index(facets.nodes.size());
+      differentiate.setConstant(N, false);
+      for (Eigen::Index i = 0; i < N; ++i) {
+        const Eigen::Index n = all ? i : facets.nodes[i];
         for (int c = 0; c < dim; ++c)
-          if (a.dofs().free_index[n * dim + c] >= 0) differentiate[n] = true;
+          if (a.dofs().free_index[n * dim + c] >= 0) differentiate[i] = true;
+      }
     }
     cache.push_back({Eigen::VectorXd(), fe::rest_state(a)});
   }
@@ -71,6 +85,7 @@ struct ShapeObjective::Impl {
   std::unique_ptr<fe::StateEquation> solver;  // the fine state equation, any backend
   int dim = 3;
   Eigen::Array<bool, Eigen::Dynamic, 1> differentiate;
+  fe::BoundaryFacets facets;    // particles boundary or distance visible (3D)
   std::deque<WarmStart> cache;  // most recent first
   // Two-level starts (use_coarse_level): the coarse body and its solver.
   const fe::Assembler* coarse = nullptr;
@@ -125,12 +140,36 @@ struct ShapeObjective::Impl {
                                                          : fe::CloudVolumes::kDeformed;
   }
   PointCloud particles(const Eigen::VectorXd& u) const {
+    if (options.particles == Particles::boundary)
+      return fe::boundary_cloud(assembler.mesh(), facets, u, cloud_volumes());
     return fe::deformed_cloud(assembler, u, cloud_points(), cloud_volumes());
   }
   /// ∂ρ̃/∂u (num_dofs) from the cloud gradients w.r.t. particle positions and volumes.
   Eigen::VectorXd displacement_gradient(const Eigen::VectorXd& u, const HausdorffResult& r) const {
+    if (options.particles == Particles::boundary)
+      return fe::boundary_cloud_pullback(assembler.mesh(), facets, u, cloud_volumes(),
+                                         r.gradient_points, r.gradient_volumes);
     return fe::cloud_pullback(assembler, u, cloud_points(), cloud_volumes(), r.gradient_points,
                               r.gradient_volumes);
+  }
+  /// The distance's form at u: for Sides::visible the moving points seen from the camera on
+  /// the boundary deformed by u (the cloud's own points for boundary particles, the boundary
+  /// nodes among all nodes for node particles).
+  DistanceForm form(const Eigen::VectorXd& u) const {
+    DistanceForm f = options.form;
+    if (f.sides != Sides::visible || !options.camera) return f;  // no mask to make
+    const Eigen::Array<bool, Eigen::Dynamic, 1> seen =
+        scan::visible_points(fe::boundary_surface(assembler.mesh(), facets, u), *options.camera);
+    if (!seen.any())
+      throw InvalidArgument("distance visible: the camera sees no boundary point of the body");
+    if (options.particles == Particles::boundary) {
+      f.visible = seen;
+    } else {
+      f.visible.setConstant(assembler.mesh().num_nodes(), false);
+      for (size_t k = 0; k < facets.nodes.size(); ++k)
+        f.visible[facets.nodes[k]] = seen[static_cast<Eigen::Index>(k)];
+    }
+    return f;
   }
 
   /// The cached state whose control is nearest to m (the rest state counts as m = 0).
@@ -185,7 +224,6 @@ struct ShapeObjective::Impl {
 
 void ShapeObjectiveOptions::validate() const {
   hausdorff.validate();
-  form.validate(form.sides == Sides::visible ? form.visible.size() : 0);
   if (!(tikhonov_mass >= 0.0))
     throw InvalidArgument("tikhonov_mass (Tikhonov weight M) must be >= 0");
   if (!(tikhonov_gradient >= 0.0))
@@ -193,6 +231,27 @@ void ShapeObjectiveOptions::validate() const {
   if (warm_start_states < 1) throw InvalidArgument("warm_start_states must be >= 1");
   if (coarse_correction_iterations < 0)
     throw InvalidArgument("coarse_correction_iterations must be >= 0");
+  if (camera) {  // the mask is made per evaluation: only the cap to check here
+    if (form.visible.size() != 0)
+      throw InvalidArgument(
+          "form.visible: with a camera the objective marks the visible points (leave it empty)");
+    DistanceForm cap_only = form;
+    cap_only.sides = Sides::symmetric;
+    cap_only.validate(0);
+  } else {  // a given mask, checked against the moving cloud's size by the objective
+    if (form.sides == Sides::visible && form.visible.size() == 0)
+      throw InvalidArgument(
+          "camera: distance visible needs the camera position (or a mask in form.visible)");
+    form.validate(form.sides == Sides::visible ? form.visible.size() : 0);
+  }
+  if (form.sides == Sides::visible && camera) {
+    if (!camera->allFinite()) throw InvalidArgument("camera must be finite");
+    if (particles == Particles::quadrature)
+      throw InvalidArgument("distance visible marks nodes: particles must be nodes or boundary");
+  } else if (camera) {
+    throw InvalidArgument("camera is given but the distance is " + to_string(form.sides) +
+                          " (a camera selects the visible distance)");
+  }
   newton.validate();
 }
 
@@ -268,14 +327,21 @@ void ShapeObjective::restore_warm_starts(const std::vector<WarmStart>& states) {
 }
 
 void ShapeObjective::set_form(DistanceForm form) {
-  form.validate(impl_->particles(impl_->cache.back().state.u).size());
-  impl_->options.form = std::move(form);
+  ShapeObjectiveOptions o = impl_->options;
+  o.form = std::move(form);
+  o.validate();  // the camera's rules
+  if (!o.camera) o.form.validate(impl_->particles(impl_->cache.back().state.u).size());
+  impl_->options.form = std::move(o.form);
+}
+
+DistanceForm ShapeObjective::distance_form(const Eigen::VectorXd& u) const {
+  return impl_->form(u);
 }
 
 HausdorffResult ShapeObjective::fields(const Eigen::VectorXd& u) const {
   HausdorffRequest req;
-  req.form = impl_->options.form;
   req.fields = true;
+  req.form = impl_->form(u);
   return impl_->target.evaluate(impl_->particles(u), req);
 }
 
@@ -300,7 +366,7 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
   // Distance (and its gradient w.r.t. the particles).
   t0 = std::chrono::steady_clock::now();
   HausdorffRequest req;
-  req.form = d.options.form;
+  req.form = d.form(state.u);  // the visible set of this state, fixed in the gradient
   req.gradient_points = gradient;
   req.gradient_volumes = gradient && d.options.volumes == ParticleVolumes::deformed;
   // Clamped nodes do not move: skip their position gradients. Their deformed volumes do

@@ -270,8 +270,10 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   self.form.sides = matched.form.sides == Sides::visible ? Sides::symmetric : matched.form.sides;
   self.form.cap = matched.form.cap;
   if (self_floor && !map_displacement) s.floor_self = Y.evaluate(Y.cloud(), self).rho;
-  if (map_displacement)
+  if (map_displacement) {
+    matched.form = objective.distance_form(*map_displacement);  // with the map's visible set
     s.floor_matched = Y.evaluate(objective.particles(*map_displacement), matched).rho;
+  }
   const std::optional<double> floor = s.floor();
 
   const ShapeEvaluation start = objective.evaluate(m0, false);

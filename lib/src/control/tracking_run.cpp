@@ -129,7 +129,8 @@ struct TrackingRun::Impl {
     if (target.cloud.dim() != scene.dim())
       throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
                             "D but the scene's body is " + std::to_string(scene.dim()) + "D");
-    const ShapeObjectiveOptions so = options.objective();
+    ShapeObjectiveOptions so = options.objective();
+    apply_target_settings(target, &so);
     objective = std::make_unique<ShapeObjective>(
         a, c, HausdorffTarget(target.cloud, so.hausdorff), so,
         fe::state_solver_factory(scene, options.state_backend, &a, &c));
@@ -158,8 +159,8 @@ struct TrackingRun::Impl {
     sum["nodes"] = setup.nodes;
     sum["controls"] = setup.controls;
     sum["algorithm"] = to_string(options.algorithm);
-    sum["particles"] = to_string(options.particles);
-    sum["volumes"] = to_string(options.volumes);
+    sum["particles"] = to_string(objective->options().particles);  // the target's may differ
+    sum["volumes"] = to_string(objective->options().volumes);
     sum["state_backend"] = to_string(options.state_backend);
     sum["ranks"] = ranks;
     return sum;

@@ -13,6 +13,8 @@ PointCloud deformed_cloud(const Assembler& A, const Eigen::VectorXd& u, CloudPoi
   const int dim = mesh.dim, nq = g.points_per_element(), nen = mesh.nodes_per_element();
   const Eigen::Index E = mesh.num_elements();
   if (u.size() != A.dofs().num_dofs) throw InvalidArgument("deformed_cloud: u has the wrong size");
+  if (points == CloudPoints::kBoundaryNodes)
+    return boundary_cloud(mesh, boundary_facets(mesh), u, volumes);
   const Eigen::MatrixXd J =
       volumes == CloudVolumes::kDeformed ? A.jacobians(u) : Eigen::MatrixXd::Ones(E, nq);
   const Eigen::MatrixXd Uv = u.reshaped(dim, mesh.num_nodes()).transpose();  // N by dim
@@ -55,6 +57,8 @@ Eigen::VectorXd cloud_pullback(const Assembler& A, const Eigen::VectorXd& u, Clo
   const ReferenceGeometry& g = A.geometry();
   const int dim = mesh.dim, nq = g.points_per_element(), nen = mesh.nodes_per_element();
   const Eigen::Index E = mesh.num_elements();
+  if (points == CloudPoints::kBoundaryNodes)
+    return boundary_cloud_pullback(mesh, boundary_facets(mesh), u, volumes, dJ_dx, dJ_dV);
   const Eigen::Index N = points == CloudPoints::kNodes ? mesh.num_nodes() : E * nq;
   const bool deformed = volumes == CloudVolumes::kDeformed;
   if (dJ_dx.rows() != N || dJ_dx.cols() != dim || (deformed && dJ_dV.size() != N)) {
@@ -107,6 +111,34 @@ Eigen::VectorXd cloud_pullback(const Assembler& A, const Eigen::VectorXd& u, Clo
     for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n)
       for (int k = 0; k < dim; ++k) grad[n * dim + k] += dJ_dx(n, k);  // ∂x_i/∂u_i = I
   }
+  return grad;
+}
+
+PointCloud boundary_cloud(const Mesh& mesh, const BoundaryFacets& facets, const Eigen::VectorXd& u,
+                          CloudVolumes volumes) {
+  const scan::TriangleSurface s = boundary_surface(mesh, facets, u);
+  const Eigen::VectorXd V =
+      lumped_areas(volumes == CloudVolumes::kDeformed
+                       ? s
+                       : boundary_surface(mesh, facets, Eigen::VectorXd::Zero(u.size())));
+  return PointCloud(s.points, V);
+}
+
+Eigen::VectorXd boundary_cloud_pullback(const Mesh& mesh, const BoundaryFacets& facets,
+                                        const Eigen::VectorXd& u, CloudVolumes volumes,
+                                        const Eigen::MatrixXd& dJ_dx,
+                                        const Eigen::VectorXd& dJ_dV) {
+  const Eigen::Index N = static_cast<Eigen::Index>(facets.nodes.size());
+  const bool deformed = volumes == CloudVolumes::kDeformed;
+  if (dJ_dx.rows() != N || dJ_dx.cols() != 3 || (deformed && dJ_dV.size() != N)) {
+    throw InvalidArgument(
+        "boundary_cloud_pullback: dJ_dx must be N by 3 and dJ_dV of size N, N = " +
+        std::to_string(N));
+  }
+  Eigen::MatrixXd g = dJ_dx;  // ∂x_k/∂u_k = I
+  if (deformed) g += lumped_areas_pullback(boundary_surface(mesh, facets, u), dJ_dV);
+  Eigen::VectorXd grad = Eigen::VectorXd::Zero(mesh.num_nodes() * 3);
+  for (Eigen::Index k = 0; k < N; ++k) grad.segment<3>(3 * facets.nodes[k]) = g.row(k).transpose();
   return grad;
 }
 

@@ -16,15 +16,19 @@
 ///         scan/surface_weights.hpp; each optional); the description says what each removed
 ///
 /// Either kind also takes the distance's form (docs/formulation.md §8, docs/guide.md):
-///     "distance": "symmetric" | "scan_to_body"   ("visible" is refused: it needs the camera)
+///     "distance": "symmetric" | "scan_to_body" | "visible"   (visible needs "camera")
 ///     "cap": C  or  "cap": {"quantile": Q, "factor": F}   the soft cap c, fixed or
 ///         F × the Q-quantile of d̃_X(y_j) at the start (cap_from_quantile)
 ///     "cap_q": Q                                   the cap's sharpness (default 4)
+/// and, 3D only, "surface": true (a surface scan: the moving cloud is the body's boundary with
+/// its current facet areas, §8.6) and "camera": [x, y, z] (the camera in the body's frame, for
+/// the visible distance, which it implies when "distance" is absent, §8.7).
 
 #include <Eigen/Core>
 #include <optional>
 #include <string>
 
+#include "softhd/control/shape_objective.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/fe/mesh.hpp"
 #include "softhd/fe/scene.hpp"
@@ -35,7 +39,7 @@ namespace softhd {
 
 /// The distance's form a target block asks for (its keys "distance", "cap", "cap_q").
 struct TargetDistance {
-  Sides sides = Sides::symmetric;  ///< symmetric or scan_to_body
+  Sides sides = Sides::symmetric;  ///< symmetric, scan_to_body, or visible (with a camera)
   double cap = 0.0;                ///< a fixed cap c (0: none, unless the quantile rule is set)
   /// The rule c = cap_factor × the cap_quantile-quantile of d̃_X(y_j) at the start; used
   /// when cap_factor > 0 (then `cap` is 0).
@@ -50,7 +54,13 @@ struct SceneTarget {
   std::optional<Eigen::VectorXd> map_displacement;  ///< u_T at `mesh`'s nodes, if T is known
   std::string description;                          ///< one line for people
   TargetDistance distance;                          ///< the form its block asks for
+  bool surface = false;                             ///< "surface": the moving cloud is the boundary
+  std::optional<Eigen::Vector3d> camera = std::nullopt;  ///< "camera": visible from there
 };
+
+/// The objective settings a target asks for: surface → particles boundary with deformed
+/// (current) areas; camera → Sides::visible from it (before target_form, which keeps it).
+void apply_target_settings(const SceneTarget& target, ShapeObjectiveOptions* options);
 
 class ShapeObjective;
 

@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <deque>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "softhd/fe/assembly.hpp"
@@ -27,28 +28,41 @@
 namespace softhd {
 
 /// Which points of the deformed body form the moving cloud.
-enum class Particles { nodes, quadrature };
+enum class Particles {
+  nodes,       ///< the mesh nodes
+  quadrature,  ///< the quadrature points
+  /// the boundary nodes (3D): a surface target's moving cloud, the volumes the lumped facet
+  /// areas (reference, or deformed: current), docs/formulation.md §8.6
+  boundary,
+};
 /// Volumes of the moving cloud: fixed reference volumes or the deformed ones.
 enum class ParticleVolumes { reference, deformed };
 
-/// "nodes" or "quadrature".
+/// "nodes", "quadrature" or "boundary".
 std::string to_string(Particles p);
 /// "reference" or "deformed".
 std::string to_string(ParticleVolumes v);
-Particles particles_from_string(const std::string& name);               ///< "nodes"/"quadrature"
+Particles particles_from_string(const std::string& name);  ///< "nodes"/"quadrature"/"boundary"
 ParticleVolumes particle_volumes_from_string(const std::string& name);  ///< "reference"/"deformed"
 
 /// Settings of the objective J(m) (docs/formulation.md §4.2, §4.3); defaults per field.
 struct ShapeObjectiveOptions {
-  HausdorffOptions hausdorff;  ///< α, β, γ, ε, method, threads
-  /// The distance's form in every evaluation (docs/formulation.md §8): symmetric (default),
-  /// scan_to_body, visible (a mask over the moving cloud's points), and the soft cap.
-  DistanceForm form;
+  HausdorffOptions hausdorff;                            ///< α, β, γ, ε, method, threads
   Particles particles = Particles::nodes;                ///< moving cloud: nodes (paper)
   ParticleVolumes volumes = ParticleVolumes::reference;  ///< paper's simplification
   double tikhonov_mass = 0.0;                            ///< M ≥ 0 (paper: 0)
   double tikhonov_gradient = 0.0;                        ///< ε_m ≥ 0 (paper: 0)
-  fe::NewtonOptions newton;                              ///< state solver settings
+  /// The distance's form in every evaluation (docs/formulation.md §8): symmetric (default),
+  /// scan_to_body, visible, and the soft cap. For Sides::visible either a fixed mask over the
+  /// moving cloud's points, or (with `camera`) none: every evaluation then marks the moving
+  /// points seen from the camera (§8.7).
+  DistanceForm form;
+  /// Sides::visible only: the camera in the body's frame (then form.visible is empty). The moving
+  /// points marked are the boundary nodes scan::visible_points finds on the deformed boundary
+  /// (fe::boundary_surface) — for particles = boundary the cloud's own points, for nodes the
+  /// boundary nodes among them; quadrature points are refused. Held fixed in the gradient.
+  std::optional<Eigen::Vector3d> camera;
+  fe::NewtonOptions newton;   ///< state solver settings
   int warm_start_states = 8;  ///< converged states kept for warm starts (≥ 1)
   /// With a coarse level (ShapeObjective::use_coarse_level): the coarse-corrected start is
   /// used when the coarse solve to the new control needs at least this many Newton
@@ -155,6 +169,9 @@ class ShapeObjective {
   /// state's fields, cap_from_quantile). Throws InvalidArgument as DistanceForm::validate for
   /// the moving cloud's size.
   void set_form(DistanceForm form);
+  /// The form an evaluation at displacement u uses: the options' form, with the visible mask
+  /// of u's deformed boundary when a camera is set.
+  DistanceForm distance_form(const Eigen::VectorXd& u) const;
 
  private:
   struct Impl;
