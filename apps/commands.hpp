@@ -7,6 +7,7 @@
 
 namespace softhd::cli {
 
+int run_align(const std::vector<std::string>& args);
 int run_distance(const std::vector<std::string>& args);
 int run_optimise(const std::vector<std::string>& args);
 

@@ -51,6 +51,7 @@ class PetscSession {
 const char* kUsage = R"(usage: softhd COMMAND [options]
 
 commands:
+  align      pose of a scan (camera frame) on a body, by the distance
   distance   regularised Hausdorff distance between two point clouds
   forward    equilibrium of a scene's body for a given fiber tension
   optimise   fiber tension that makes a body match a target cloud
@@ -96,6 +97,7 @@ int main(int argc, char** argv) {
   int code = 0;
   std::string error;  // the one line of a failed command
   try {
+    if (command == "align") return softhd::cli::run_align(rest);
     if (command == "distance") return softhd::cli::run_distance(rest);
     if (command == "forward") return run_forward(argc - 1, argv + 1);
     if (command == "optimise" || command == "optimize") return softhd::cli::run_optimise(rest);

@@ -484,6 +484,28 @@ def section_python(rows):
                          "Python wall − C++ time, within one call (fraction)"], out)
 
 
+def section_align(rows):
+    """softhd align against Open3D (bench/bench_align.py, issue 32)."""
+    text = ("## Pose of a scan: softhd align against Open3D (issue 32)\n\n"
+            "The deformed finger (data/targets/finger_target.ply, 4000 of its points as the "
+            "body), random cameras (bench/synthetic_scan.py), views full and half (the left "
+            "half of the image), 2000 visible points, noise 0.5 % of the body's size L, 3 % "
+            "outliers. softhd: `softhd.align` (distance and cap in align.log); Open3D: "
+            "FPFH + RANSAC + point-to-plane ICP, voxel L/40 (bench/peers/open3d_align.py). "
+            "Success: rotation error < 2 degrees; translation error of the body's centre / L.\n\n")
+    out = []
+    for m in sorted({r["method"] for r in rows}):
+        for v in ("full", "half"):
+            sel = [r for r in rows if r["method"] == m and r["view"] == v]
+            if not sel:
+                continue
+            med = lambda k: sorted(num(r, k) for r in sel)[len(sel) // 2]
+            out.append([m, v, "%d/%d" % (sum(int(r["success"]) for r in sel), len(sel)),
+                        med("rotation_deg"), med("translation_rel"), med("seconds")])
+    return text + table(["method", "view", "success", "median rotation error (deg)",
+                         "median translation error / L", "median seconds"], out)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__)
     p.add_argument("out")
@@ -502,13 +524,14 @@ def main():
         parts.append("**Smoke run (`make bench-quick`)**: tiny meshes and a few iterations; "
                      "the numbers only show that every benchmark runs end to end.\n\n")
     parts.append(wall_times(out, ["kernel", "hausdorff", "resolution", "control", "stability",
-                                  "forward_fenics", "finger", "python"]))
+                                  "forward_fenics", "finger", "align", "python"]))
     sections = [("resolution", lambda r: section_resolution(r, out, a.report)),
                 ("control", lambda r: section_control(r, out, a.report)),
                 ("stability", section_stability),
                 ("kernel", section_kernel),
                 ("forward_fenics", section_forward),
                 ("finger", lambda r: section_finger(r, out)),
+                ("align", section_align),
                 ("python", section_python)]
     for name, make in sections:
         rows = load(os.path.join(out, name + ".csv"))

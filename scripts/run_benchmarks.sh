@@ -4,7 +4,7 @@
 #   scripts/run_benchmarks.sh [--quick] [--only a,b,...] BUILD_DIR OUT_DIR REPORT
 #
 # Benchmarks: kernel, hausdorff, resolution, control, stability, forward_fenics, finger,
-# python (--only picks some; the report then also uses the CSVs already in OUT_DIR for the
+# align, python (--only picks some; the report then also uses the CSVs already in OUT_DIR for the
 # others; finger has no smoke variant and runs only without --quick). Each writes
 # OUT_DIR/<name>.csv, its log OUT_DIR/<name>.log and OUT_DIR/<name>.meta (command, date,
 # commit, machine, load before and after); then bench/make_report.py writes REPORT and the
@@ -12,7 +12,7 @@
 # suite runs it). Exit code: non-zero if any benchmark or the report failed.
 set -euo pipefail
 quick=0
-only="kernel,hausdorff,resolution,control,stability,forward_fenics,finger,python"
+only="kernel,hausdorff,resolution,control,stability,forward_fenics,finger,align,python"
 # The goal cases of issue 13 (value + gradient, methods interleaved, medians of 3): the
 # exact sums of the large cases are timed on a sample of target points and scaled.
 goals() {  # bench_dir csv
@@ -66,6 +66,13 @@ run() {  # name command...
 }
 
 b="$build/bench"
+align_bench() {  # bench/bench_align.py (issue 32), when the Python module is built
+  if [ ! -d "$build/python/softhd" ]; then
+    echo "== align: skipped (the Python module is not built: pybind11-dev, python3-dev)" >&2
+    return 0
+  fi
+  run align /usr/bin/python3 "$here/bench/bench_align.py" "$build" --csv "$out/align.csv" "$@"
+}
 python_bench() {  # bench/bench_python.py, when the Python module is built
   if [ ! -d "$build/python/softhd" ]; then
     echo "== python: skipped (the Python module is not built: pybind11-dev, python3-dev)" >&2
@@ -80,6 +87,7 @@ if [ $quick -eq 1 ]; then
   run resolution "$b/bench_resolution" --quick --csv "$out/resolution.csv"
   run control "$b/bench_control" --quick --csv "$out/control.csv"
   run stability "$b/bench_stability" --quick --csv "$out/stability.csv"
+  align_bench --poses 2
   python_bench --n 2000 --torch-n 1000 --repeats 2
 else
   run kernel "$b/bench_kernel" --n 20000 --repeats 5 --csv "$out/kernel.csv"
@@ -99,6 +107,10 @@ else
   run finger /usr/bin/python3 "$here/bench/bench_finger.py" "$build" --repeats 1 \
     --csv "$out/finger.csv" --optimise --optimise-max-iter 30 \
     --optimise-csv "$out/finger_optimise.csv"
+  # softhd align against Open3D's FPFH + RANSAC + ICP (issue 32; Open3D skipped, with a
+  # line, without python3-open3d): 15 poses x 2 views (a sample of the 100 of the issue),
+  # about 2 minutes on 2 cores.
+  align_bench --poses 15 --distance scan_to_body
   # The Python module: overhead over C++ and HausdorffLoss against plain PyTorch (issue 14).
   python_bench --n 10000 --torch-n 10000 --repeats 5
 fi

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <Eigen/Geometry>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +15,7 @@
 #include "hausdorff_reference.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/cloud_io.hpp"
+#include "softhd/io/pose_io.hpp"
 
 namespace softhd::test {
 namespace {
@@ -186,6 +189,52 @@ TEST_F(Cli, BadInputGivesExitCode2AndOneLine) {
   const double xyz[9] = {0, 0, 0, 1, 0, 0, 2, 0, 0};
   ply.append(reinterpret_cast<const char*>(xyz), sizeof xyz);
   expect_bad_input("distance " + good + " " + write("three.ply", ply), "three.ply");
+}
+
+// softhd align (issue 32): an exactly moved copy of a body is put back (pose.txt read by
+// the library's own reader), every output is written, and bad input is exit 2 and one line.
+TEST_F(Cli, AlignRecoversAMovedCopyAndRefusesBadInput) {
+  std::string body_text, scan_text;
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(2.0, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Vector3d t(0.5, -1.0, 2.0);
+  for (int i = 0; i < 120; ++i) {  // an asymmetric spiral: no rotation maps it onto itself
+    const double a = 0.15 * i;
+    const Eigen::Vector3d x(std::cos(a) * (1 + 0.01 * i), std::sin(a), 0.02 * i * (i % 3));
+    const Eigen::Vector3d y = R.transpose() * (x - t);  // P⁻¹ x
+    body_text +=
+        std::to_string(x.x()) + " " + std::to_string(x.y()) + " " + std::to_string(x.z()) + "\n";
+    std::ostringstream os;
+    os.precision(17);
+    os << y.x() << ' ' << y.y() << ' ' << y.z() << '\n';
+    scan_text += os.str();
+  }
+  const std::string body = write("body.txt", body_text), scan = write("scan.txt", scan_text);
+  const Outcome ok = run("align " + body + " " + scan + " --out " + path("al") + " --threads 2");
+  ASSERT_EQ(ok.status, 0) << ok.err;
+  for (const char* f : {"pose.txt", "pose.json", "aligned.ply", "residuals.csv"})
+    EXPECT_TRUE(fs::exists(dir_ / "al" / f)) << f;
+  const scan::Pose P = read_pose(path("al/pose.txt"));
+  EXPECT_LT(scan::rotation_angle_between(P.R, R), 1e-5);  // body written with 6 decimals
+  EXPECT_LT((P.t - t).norm(), 1e-5);
+  const std::string good = write("good.txt", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
+  const std::string out = " --out " + path("bad");
+  expect_bad_input("align " + good + " " + good + out + " --no-global --initial " +
+                       write("p3.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n"),
+                   "p3.txt: expected 4 rows");
+  expect_bad_input("align " + good + " " + good + out + " --initial " +
+                       write("p5.txt", "1 0 0 0\n0 1 0 0\n0 0 1\n0 0 0 1\n"),
+                   "p5.txt:3: expected 4 numbers, got 3");
+  expect_bad_input("align " + good + " " + good + out + " --initial " +
+                       write("shear.txt", "1 0.5 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n"),
+                   "not a scaled rotation");
+  expect_bad_input("align " + good + " " + write("nan.txt", "0 0 0\nnan 1 0\n") + out, "nan.txt:2");
+  expect_bad_input("align " + good + " " + good + out + " --similarity --scale-min 1.5",
+                   "--scale-min must be in (0, 1]");
+  expect_bad_input("align " + good + " " + good + out + " --scale-max 0.8",
+                   "--scale-max must be >= 1");
+  expect_bad_input("align " + good + " " + write("flat.txt", "0 0\n1 1\n") + out, "align takes 3D");
+  expect_bad_input("align " + good + " " + good, "--out DIR is required");
 }
 
 // The distance forms (docs/formulation.md §8): the flags give the library's numbers, and their

@@ -40,7 +40,7 @@ from . import _core
 from ._core import (DistanceResult, Error, FileError, ForwardResult, InvalidArgument, Iteration,
                     Mesh, NumericalError, OptimiseResult, ResourceError, Scene)
 
-__all__ = ["distance", "hausdorff_nearest", "Target", "read_cloud", "write_cloud", "read_mesh",
+__all__ = ["distance", "align", "hausdorff_nearest", "Target", "read_cloud", "write_cloud", "read_mesh",
            "crop_to_box", "remove_statistical_outliers", "remove_dominant_plane", "area_weights",
            "Scene", "Mesh", "optimise", "optimise_defaults", "DistanceResult", "ForwardResult",
            "OptimiseResult",
@@ -128,6 +128,43 @@ def hausdorff_nearest(X, Y, *, fields=False, threads=0):
     """The exact (unregularised) Hausdorff distance: ``rho`` = max(A, B), ``A`` = max_j
     dist(y_j, X), ``B`` = max_i dist(x_i, Y) (nearest-neighbour queries)."""
     return distance(X, Y, method="nearest", fields=fields, threads=threads)
+
+
+def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, scale_max=2.0,
+          distance="symmetric", cap=0.0, eps=None, alpha=4.0, beta=4.0, gamma=2.0,
+          global_start=True, initial=None, rotations=48, refine_points=1000, inlier=0.01,
+          threads=0):
+    """The pose that takes ``scan`` (M, 3), in the camera's frame, onto ``body`` (N, 3)
+    (docs/formulation.md section 8, as ``softhd align``): y -> s R y + t minimising rho over a
+    twist, after a global start over ``rotations`` grid rotations (unless ``global_start`` is
+    False: then from ``initial``, a (4, 4) matrix, default the identity).
+
+    similarity: also a scale s in [scale_min, scale_max] (the bounds must include 1).
+    distance: "symmetric" or "scan_to_body" (rho = A, for partial views); cap: the soft cap
+    (a length, 0: none). eps: the final refinement's epsilon (None: L/1000, L the diagonal of
+    the body's bounding box). refine_points: points of each cloud in the refinement (0: all).
+    inlier: the overlap's threshold as a fraction of L.
+
+    Returns a dict: ``matrix`` (4, 4), ``twist`` (7,: omega, v, sigma with R = exp([omega]x),
+    t = v, s = e^sigma), ``scale``, ``rho``, ``overlap`` (fraction of scan points within the
+    inlier distance of the body), ``inlier_distance``, ``rmse`` (of those points' true
+    nearest distances), ``residuals`` (M,: every moved scan point's true nearest distance to
+    the body), ``status``, ``iterations``, ``seconds``. Raises InvalidArgument for bounds
+    that exclude 1, a wrong ``initial``, non-3D or non-finite clouds.
+    """
+    init = None if initial is None else _as_float64(initial, "initial")
+    d = _core.align(_as_float64(body, "body"), _volumes(body_volumes, "body_volumes"),
+                    _as_float64(scan, "scan"), similarity=bool(similarity),
+                    scale_min=float(scale_min), scale_max=float(scale_max),
+                    distance=str(distance), cap=float(cap),
+                    eps=None if eps is None else float(eps), alpha=float(alpha),
+                    beta=float(beta), gamma=float(gamma), global_start=bool(global_start),
+                    initial=init, rotations=int(rotations),
+                    refine_points=int(refine_points), inlier=float(inlier),
+                    threads=int(threads))
+    d["twist"] = d["twist"].reshape(7)
+    d["residuals"] = d["residuals"].reshape(-1)
+    return d
 
 
 def read_cloud(path, dim=0):

@@ -55,8 +55,9 @@ void bind_errors(py::module_& m);
 /// Installs the interrupt check that lets Ctrl-C stop long calls (KeyboardInterrupt).
 void bind_interrupts();
 void bind_hausdorff(py::module_& m);
-void bind_io(py::module_& m);
 void bind_scan(py::module_& m);
+void bind_io(py::module_& m);
+void bind_align(py::module_& m);
 void bind_mesh(py::module_& m);
 void bind_fe(py::module_& m);
 void bind_optimise(py::module_& m);

@@ -109,8 +109,9 @@ PYBIND11_MODULE(_core, m) {
   softhd::python::bind_errors(m);
   softhd::python::bind_interrupts();
   softhd::python::bind_hausdorff(m);
-  softhd::python::bind_io(m);
   softhd::python::bind_scan(m);
+  softhd::python::bind_io(m);
+  softhd::python::bind_align(m);
   softhd::python::bind_mesh(m);
   softhd::python::bind_fe(m);
   softhd::python::bind_optimise(m);

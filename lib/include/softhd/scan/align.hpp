@@ -24,13 +24,22 @@ struct AlignOptions {
   PoseKind kind = PoseKind::rigid;
   double scale_min = 0.5;  ///< similarity only: bounds on s, 0 < scale_min ≤ 1 ≤ scale_max
   double scale_max = 2.0;
-  HausdorffOptions distance;  ///< the functional's parameters and method for the refinement
-  DistanceForm form;          ///< sides and cap (visible: recomputed from the pose each step)
+  HausdorffOptions distance;  ///< the functional's parameters (ε: the finest level's) and method
+  DistanceForm form;          ///< sides and cap (a visible mask is refused: align has no camera
+                              ///< model of its own; use scan_to_body for partial views)
   Pose initial;               ///< the starting pose (used as is when global_start is false)
   bool global_start = true;   ///< search rotations first (else start at `initial`)
-  int max_iterations = 200;   ///< refinement iterations
-  double tolerance = 1e-10;   ///< stop when the twist step is below this (radians / body size)
-  int threads = 0;            ///< as HausdorffOptions::threads
+  int rotations = 48;         ///< global start: grid rotations tried (plus 4 principal-axis ones)
+  int coarse_points = 150;    ///< global start: points of each subsampled cloud
+  double coarse_epsilon = 0.05;   ///< global start: ε as a fraction of the body's size L
+  int keep = 4;                   ///< global start: best distinct poses refined further
+  int candidate_points = 400;     ///< points of each cloud when the kept poses are compared
+  int refine_points = 1000;       ///< points of each cloud in the refinement (0: all)
+  int max_iterations = 200;       ///< refinement iterations (per level)
+  double tolerance = 1e-10;       ///< stop when a step moves no point more than this × L
+  int nearest_iterations = 50;    ///< final nearest-point refinement iterations (0: none)
+  double inlier_distance = 0.01;  ///< the overlap's threshold as a fraction of L
+  int threads = 0;                ///< as HausdorffOptions::threads
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
 };
@@ -54,8 +63,11 @@ struct AlignSummary {
   std::string BriefReport() const;
 };
 
+/// The size L of a body: the diagonal of its points' bounding box.
+double body_size(const PointCloud& body);
+
 /// The pose that takes `scan` (camera frame) onto `body` (body frame). Throws InvalidArgument
-/// for invalid options, non-3D or empty clouds.
+/// for invalid options, non-3D clouds or a body whose points all coincide.
 AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOptions& options);
 
 }  // namespace softhd::scan

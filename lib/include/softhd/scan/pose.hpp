@@ -38,4 +38,18 @@ struct Pose {
 /// Rotation angle of Ra Rbᵀ in radians (the error measure of the tests and benchmarks).
 double rotation_angle_between(const Eigen::Matrix3d& Ra, const Eigen::Matrix3d& Rb);
 
+/// The pose a ∘ b: y ↦ a(b(y)).
+Pose compose(const Pose& a, const Pose& b);
+/// The rows of `points` (N by 3) moved: s R y + t.
+Eigen::MatrixXd apply_points(const Pose& pose, const Eigen::MatrixXd& points);
+
+/// [ω]×, the skew matrix with [ω]× v = ω × v.
+Eigen::Matrix3d hat(const Eigen::Vector3d& w);
+/// (K₃₂ − K₂₃, K₁₃ − K₃₁, K₂₁ − K₁₂): 2ω for K = [ω]×.
+Eigen::Vector3d vee(const Eigen::Matrix3d& K);
+/// exp([ω]×) by Rodrigues' formula (its Taylor series below |ω| = 1e-4).
+Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& w);
+/// The ω with |ω| ≤ π and exp([ω]×) = R (R a rotation), accurate near 0 and near π.
+Eigen::Vector3d rotation_log(const Eigen::Matrix3d& R);
+
 }  // namespace softhd::scan

@@ -1,0 +1,186 @@
+// softhd align: the pose of a scan found by the distance (docs/formulation.md §8.5).
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "cli.hpp"
+#include "commands.hpp"
+#include "softhd/fe/cloud.hpp"
+#include "softhd/fe/scene.hpp"
+#include "softhd/io/atomic_file.hpp"
+#include "softhd/io/cloud_io.hpp"
+#include "softhd/io/pose_io.hpp"
+#include "softhd/parallel.hpp"
+#include "softhd/scan/align.hpp"
+
+namespace softhd::cli {
+
+namespace {
+
+const char* kUsage = R"(usage: softhd align SCENE_OR_CLOUD SCAN --out DIR [options]
+
+Finds the pose P (y -> s R y + t) that takes the scan's points (camera frame) onto the
+body (its frame) by minimising rho over a twist (docs/formulation.md section 8): a global
+start over a grid of rotations on subsampled clouds with a large epsilon, a refinement at
+epsilon = L/100 and at --eps, then a nearest-point (ICP) finish.
+SCENE_OR_CLOUD: a scene file (.json: the body is its mesh's nodes in the reference
+configuration, with their volumes) or a 3D cloud file (text or PLY, as softhd distance).
+SCAN: a 3D cloud file.
+
+options:
+  --out DIR         write DIR/pose.txt (4x4 matrix), DIR/pose.json (matrix, twist,
+                    scale, rho, overlap, rmse, ...), DIR/aligned.ply (the moved scan) and
+                    DIR/residuals.csv (each scan point's true nearest distance to the body)
+  --similarity      also find a scale s (default: a rigid motion, s = 1)
+  --scale-min S     similarity: lower bound on s, 0 < S <= 1 (default 0.5)
+  --scale-max S     similarity: upper bound on s, S >= 1 (default 2)
+  --distance D      symmetric | scan_to_body (default symmetric); scan_to_body (rho = A)
+                    does not punish the parts of the body a partial view does not show
+  --cap C           soft cap on every field value (a length; default 0: none)
+  --eps E           epsilon of the final refinement, a length (default: L/1000, L the
+                    diagonal of the body's bounding box)
+  --alpha A, --beta B, --gamma G
+                    the functional's exponents (defaults 4, 4, 2)
+  --no-global       no global start: refine from --initial (default the identity)
+  --initial FILE    starting pose, a 4x4 matrix file as pose.txt (with --no-global)
+  --rotations K     global start: grid rotations (default 48, plus 4 principal-axis ones)
+  --refine-points N points of each cloud in the refinement, 0: all (default 1000)
+  --inlier F        overlap threshold as a fraction of L (default 0.01)
+  --threads T       OpenMP threads (default: all)
+  --json            print pose.json's object instead of the one-line summary
+  --help            this text
+
+exit status: 0 done; 1 numerical failure; 2 bad input or refused (one line on stderr
+names the file, line or flag): a pose file that is not a 4x4 scaled rotation, NaN
+coordinates, scale bounds that exclude 1, a 2D cloud.
+)";
+
+bool is_scene(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".json";
+}
+
+/// The body: a scene's mesh nodes with their reference volumes, or a cloud file.
+PointCloud read_body(const std::string& path) {
+  if (!is_scene(path)) return read_cloud(path);
+  const fe::Scene scene = fe::load_scene(path);
+  const fe::Assembler assembler = scene.make_assembler();
+  return fe::deformed_cloud(assembler, Eigen::VectorXd::Zero(assembler.dofs().num_dofs),
+                            fe::CloudPoints::kNodes, fe::CloudVolumes::kReference);
+}
+
+void require_3d(const PointCloud& c, const std::string& path) {
+  if (c.dim() != 3)
+    throw InvalidArgument("'" + path + "' is a " + std::to_string(c.dim()) +
+                          "D cloud; align takes 3D clouds");
+}
+
+nlohmann::json summary_json(const scan::AlignSummary& s, const scan::AlignOptions& o, double L) {
+  nlohmann::json j;
+  const Eigen::Matrix4d m = s.pose.matrix();
+  const Eigen::Matrix<double, 7, 1> x = s.pose.twist();
+  j["matrix"] = nlohmann::json::array();
+  for (int r = 0; r < 4; ++r) j["matrix"].push_back({m(r, 0), m(r, 1), m(r, 2), m(r, 3)});
+  j["twist"] = {x[0], x[1], x[2], x[3], x[4], x[5], x[6]};
+  j["rotation_deg"] = x.head<3>().norm() * 180.0 / M_PI;
+  j["scale"] = s.pose.s;
+  j["rho"] = s.rho;
+  j["overlap"] = s.overlap;
+  j["inlier_distance"] = s.inlier_distance;
+  j["rmse"] = s.rmse;
+  j["status"] = scan::to_string(s.status);
+  j["iterations"] = s.iterations;
+  j["seconds"] = s.seconds;
+  j["kind"] = scan::to_string(o.kind);
+  j["distance"] = to_string(o.form.sides);
+  j["cap"] = o.form.cap.c;
+  j["eps"] = o.distance.params.epsilon;
+  j["body_size"] = L;
+  j["scan_points"] = s.residuals.size();
+  return j;
+}
+
+void write_residuals(const std::string& path, const PointCloud& moved, const Eigen::VectorXd& r) {
+  std::ostringstream out;
+  out.precision(17);
+  out << "x,y,z,distance\n";
+  for (Eigen::Index j = 0; j < moved.size(); ++j)
+    out << moved.points()(j, 0) << ',' << moved.points()(j, 1) << ',' << moved.points()(j, 2) << ','
+        << r[j] << '\n';
+  write_file_atomically(path, out.str());
+}
+
+}  // namespace
+
+int run_align(const std::vector<std::string>& tokens) {
+  Args args(tokens);
+  if (args.flag("--help")) {
+    std::cout << kUsage;
+    return 0;
+  }
+  scan::AlignOptions o;
+  const std::optional<std::string> out_dir = args.value("--out");
+  if (args.flag("--similarity")) o.kind = scan::PoseKind::similarity;
+  o.scale_min = args.number("--scale-min", o.scale_min);
+  o.scale_max = args.number("--scale-max", o.scale_max);
+  o.form.sides = sides_from_string(args.value("--distance").value_or("symmetric"));
+  o.form.cap.c = args.number("--cap", 0.0);
+  const std::optional<std::string> eps = args.value("--eps");
+  o.distance.params.alpha = args.number("--alpha", o.distance.params.alpha);
+  o.distance.params.beta = args.number("--beta", o.distance.params.beta);
+  o.distance.params.gamma = args.number("--gamma", o.distance.params.gamma);
+  o.global_start = !args.flag("--no-global");
+  const std::optional<std::string> initial = args.value("--initial");
+  o.rotations = static_cast<int>(args.integer("--rotations", o.rotations, 0, 100000));
+  o.refine_points = static_cast<int>(args.integer("--refine-points", o.refine_points, 0, 1L << 30));
+  o.inlier_distance = args.number("--inlier", o.inlier_distance);
+  o.threads = static_cast<int>(args.integer("--threads", 0, 0, kMaxThreads));
+  const bool json = args.flag("--json");
+  const std::vector<std::string> files = args.finish();
+  if (files.size() != 2)
+    throw UsageError("expected SCENE_OR_CLOUD and SCAN, got " + std::to_string(files.size()) +
+                     " files (see --help)");
+  if (!out_dir) throw UsageError("--out DIR is required (see --help)");
+  if (initial) o.initial = read_pose(*initial);
+  if (o.scale_min <= 0.0 || o.scale_min > 1.0)
+    throw UsageError("--scale-min must be in (0, 1] (the bounds must include 1), got " +
+                     std::to_string(o.scale_min));
+  if (o.scale_max < 1.0)
+    throw UsageError("--scale-max must be >= 1 (the bounds must include 1), got " +
+                     std::to_string(o.scale_max));
+
+  const PointCloud body = read_body(files[0]);
+  const PointCloud scan = read_cloud(files[1]);
+  require_3d(body, files[0]);
+  require_3d(scan, files[1]);
+  check_coordinates(body, files[0]);
+  check_coordinates(scan, files[1]);
+  const double L = scan::body_size(body);
+  o.distance.params.epsilon = eps ? parse_number(*eps, "--eps") : 1e-3 * L;
+  o.validate();
+  const scan::AlignSummary s = scan::align(body, scan, o);
+  if (s.status == scan::AlignStatus::failed)
+    throw NumericalError("align failed: " + s.BriefReport());
+
+  std::filesystem::create_directories(*out_dir);
+  const std::filesystem::path dir(*out_dir);
+  write_pose((dir / "pose.txt").string(), s.pose);
+  const nlohmann::json j = summary_json(s, o, L);
+  write_file_atomically((dir / "pose.json").string(), j.dump(2) + "\n");
+  const PointCloud moved = s.pose.apply(scan, false);
+  write_cloud((dir / "aligned.ply").string(), moved);
+  write_residuals((dir / "residuals.csv").string(), moved, s.residuals);
+  if (json)
+    std::cout << j.dump(2) << '\n';
+  else
+    std::cout << s.BriefReport() << "\nwrote " << (dir / "pose.txt").string() << ", pose.json, "
+              << "aligned.ply, residuals.csv\n";
+  return 0;
+}
+
+}  // namespace softhd::cli

@@ -1,0 +1,294 @@
+// align(): the pose of a scan found by the distance itself (docs/formulation.md §8.5).
+
+#include "softhd/scan/align.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <numeric>
+
+#include "align_internal.hpp"
+#include "softhd/enum_names.hpp"
+#include "softhd/error.hpp"
+#include "softhd/parallel.hpp"
+
+namespace softhd::scan {
+
+namespace {
+
+constexpr EnumNames<PoseKind, 2> kPoseKindNames{
+    {{PoseKind::rigid, "rigid"}, {PoseKind::similarity, "similarity"}}};
+constexpr EnumNames<AlignStatus, 3> kAlignStatusNames{
+    {{AlignStatus::converged, "converged"},
+     {AlignStatus::iteration_limit, "iteration_limit"},
+     {AlignStatus::failed, "failed"}}};
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw InvalidArgument("align: " + what);
+}
+
+Eigen::MatrixXd rows_of(const Eigen::MatrixXd& m, const std::vector<Eigen::Index>& rows) {
+  Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), m.cols());
+  for (size_t k = 0; k < rows.size(); ++k) out.row(static_cast<Eigen::Index>(k)) = m.row(rows[k]);
+  return out;
+}
+
+Eigen::VectorXd entries_of(const Eigen::VectorXd& v, const std::vector<Eigen::Index>& rows) {
+  Eigen::VectorXd out(static_cast<Eigen::Index>(rows.size()));
+  for (size_t k = 0; k < rows.size(); ++k) out[static_cast<Eigen::Index>(k)] = v[rows[k]];
+  return out;
+}
+
+/// f(k) for k = 0..n−1 in parallel (OpenMP, dynamic schedule); the first exception (in the
+/// order of k) is rethrown after the loop.
+template <class F>
+void parallel_each(int n, int threads, const F& f) {
+  std::vector<std::exception_ptr> errors(static_cast<size_t>(n));
+#pragma omp parallel for schedule(dynamic) num_threads(resolve_threads(threads)) if (n > 1)
+  for (int k = 0; k < n; ++k) {
+    try {
+      f(static_cast<size_t>(k));
+    } catch (...) {
+      errors[static_cast<size_t>(k)] = std::current_exception();
+    }
+  }
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
+/// A level of detail: the body and scan subsampled to `points` each, ε given.
+detail::PoseObjective make_level(const PointCloud& body, const PointCloud& scan,
+                                 Eigen::Index points, double epsilon, int threads,
+                                 const AlignOptions& o) {
+  const Eigen::Index nb = points > 0 ? points : body.size();
+  const Eigen::Index ns = points > 0 ? points : scan.size();
+  const auto ib = detail::subsample(body.size(), nb, 1u);
+  const auto is = detail::subsample(scan.size(), ns, 2u);
+  HausdorffOptions d = o.distance;
+  d.params.epsilon = epsilon;
+  d.threads = threads;
+  // A cap is never below 3ε of the level: an inlier's field value is about ε there, and a cap
+  // below it would flatten the coarse levels.
+  DistanceForm form = o.form;
+  if (form.cap.c > 0.0) form.cap.c = std::max(form.cap.c, 3.0 * epsilon);
+  return detail::PoseObjective(
+      rows_of(body.points(), ib), entries_of(body.volumes(), ib),
+      PointCloud(rows_of(scan.points(), is), entries_of(scan.volumes(), is)), d, form);
+}
+
+detail::LocalSettings local_settings(const AlignOptions& o, double L, int iterations,
+                                     double tolerance) {
+  detail::LocalSettings st;
+  st.max_iterations = iterations;
+  st.step_tolerance = tolerance;
+  st.size = L;
+  st.similarity = o.kind == PoseKind::similarity;
+  st.log_scale_min = -std::log(o.scale_max);  // Q = P⁻¹ has scale 1/s
+  st.log_scale_max = -std::log(o.scale_min);
+  return st;
+}
+
+/// The starting poses Q (body → scan frame) of the global search: each rotation of the grid
+/// and the 4 principal-axis matches, the body's centroid put on the scan's.
+std::vector<Pose> starting_poses(const Eigen::MatrixXd& body, const Eigen::MatrixXd& scan,
+                                 int rotations) {
+  std::vector<Eigen::Matrix3d> Rs = detail::rotation_grid(rotations);
+  const Eigen::Matrix3d Ab = detail::principal_axes(body), As = detail::principal_axes(scan);
+  for (int k = 0; k < 4; ++k) {  // proper sign flips of the axes
+    const Eigen::Vector3d d(k & 1 ? -1 : 1, k & 2 ? -1 : 1, (k == 1 || k == 2) ? -1 : 1);
+    Rs.push_back(As * d.asDiagonal() * Ab.transpose());
+  }
+  const Eigen::Vector3d cb = body.colwise().mean().transpose(),
+                        cs = scan.colwise().mean().transpose();
+  std::vector<Pose> out;
+  for (const Eigen::Matrix3d& R : Rs) {
+    Pose Q;
+    Q.R = R;
+    Q.t = cs - R * cb;
+    out.push_back(Q);
+  }
+  return out;
+}
+
+/// Global start: every starting pose minimised briefly on the coarse level (in parallel over
+/// the poses), then the `keep` best that differ by more than 10° or L/10.
+std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& scan, double L,
+                                    const AlignOptions& o) {
+  const detail::PoseObjective coarse =
+      make_level(body, scan, o.coarse_points, o.coarse_epsilon * L, 1, o);
+  const std::vector<Pose> starts = starting_poses(body.points(), scan.points(), o.rotations);
+  const detail::LocalSettings st = local_settings(o, L, 20, 1e-4);
+  std::vector<detail::LocalResult> found(starts.size());
+  const int n = static_cast<int>(starts.size());
+  parallel_each(n, o.threads,
+                [&](size_t i) { found[i] = detail::minimise_pose(coarse, starts[i], st); });
+  std::vector<size_t> order(found.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return found[a].rho < found[b].rho; });
+  std::vector<Pose> kept;
+  for (size_t k : order) {
+    const Pose& q = found[k].pose;
+    bool distinct = std::isfinite(found[k].rho);
+    for (const Pose& p : kept)
+      if (rotation_angle_between(p.R, q.R) < 10.0 * M_PI / 180.0 && (p.t - q.t).norm() < 0.1 * L)
+        distinct = false;
+    if (distinct) kept.push_back(q);
+    if (static_cast<int>(kept.size()) >= o.keep) break;
+  }
+  return kept;
+}
+
+/// Residuals (true nearest distances of the moved scan), overlap (the fraction within
+/// inlier_distance × L) and the rmse of those residuals.
+void report_nearest(const detail::NearestPoints& nearest, const PointCloud& scan,
+                    const AlignOptions& options, double L, AlignSummary* out) {
+  std::vector<Eigen::Index> index;
+  nearest.query(apply_points(out->pose, scan.points()), &index, &out->residuals, options.threads);
+  out->inlier_distance = options.inlier_distance * L;
+  double sum2 = 0.0;
+  Eigen::Index inliers = 0;
+  for (Eigen::Index j = 0; j < out->residuals.size(); ++j) {
+    if (out->residuals[j] <= out->inlier_distance) {
+      ++inliers;
+      sum2 += out->residuals[j] * out->residuals[j];
+    }
+  }
+  out->overlap = static_cast<double>(inliers) / static_cast<double>(scan.size());
+  out->rmse = inliers > 0 ? std::sqrt(sum2 / static_cast<double>(inliers)) : 0.0;
+}
+
+}  // namespace
+
+std::string to_string(PoseKind kind) { return enum_name(kPoseKindNames, kind); }
+PoseKind pose_kind_from_string(const std::string& name) {
+  return enum_from_name(kPoseKindNames, name, "align");
+}
+std::string to_string(AlignStatus status) { return enum_name(kAlignStatusNames, status); }
+
+void AlignOptions::validate() const {
+  require(std::isfinite(scale_min) && scale_min > 0.0 && scale_min <= 1.0,
+          "scale_min must be in (0, 1] (the bounds must include s = 1), got " +
+              std::to_string(scale_min));
+  require(std::isfinite(scale_max) && scale_max >= 1.0,
+          "scale_max must be finite and >= 1 (the bounds must include s = 1), got " +
+              std::to_string(scale_max));
+  distance.validate();
+  require(distance.method != Method::nearest, "distance.method nearest has no gradient");
+  form.validate(form.visible.size() > 0 ? form.visible.size() : 1);
+  require(form.sides != Sides::visible,
+          "form visible is not supported (align has no camera model; use scan_to_body)");
+  require(
+      initial.R.allFinite() && initial.t.allFinite() && std::isfinite(initial.s) && initial.s > 0.0,
+      "initial pose is not finite");
+  require(rotations >= 0 && rotations <= 100000, "rotations must be in [0, 100000]");
+  require(coarse_points >= 10, "coarse_points must be >= 10");
+  require(std::isfinite(coarse_epsilon) && coarse_epsilon > 0.0, "coarse_epsilon must be > 0");
+  require(keep >= 1, "keep must be >= 1");
+  require(refine_points == 0 || refine_points >= 10, "refine_points must be 0 or >= 10");
+  require(candidate_points >= 10, "candidate_points must be >= 10");
+  require(max_iterations >= 0, "max_iterations must be >= 0");
+  require(std::isfinite(tolerance) && tolerance > 0.0, "tolerance must be > 0");
+  require(nearest_iterations >= 0, "nearest_iterations must be >= 0");
+  require(std::isfinite(inlier_distance) && inlier_distance > 0.0, "inlier_distance must be > 0");
+  check_threads(threads);
+}
+
+double body_size(const PointCloud& body) {
+  return (body.points().colwise().maxCoeff() - body.points().colwise().minCoeff()).norm();
+}
+
+std::string AlignSummary::BriefReport() const {
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "align %s: rotation %.6g deg, translation (%.6g %.6g %.6g), scale %.6g, rho %.6g, "
+                "overlap %.4f, rmse %.6g, %d iterations, %.3g s",
+                to_string(status).c_str(), rotation_log(pose.R).norm() * 180.0 / M_PI, pose.t.x(),
+                pose.t.y(), pose.t.z(), pose.s, rho, overlap, rmse, iterations, seconds);
+  return line;
+}
+
+AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  options.validate();
+  require(body.dim() == 3 && scan.dim() == 3, "the body and the scan must be 3D clouds");
+  check_coordinates(body, "body");
+  check_coordinates(scan, "scan");
+  const double L = body_size(body);
+  require(L > 0.0, "the body's points all coincide (its size is 0)");
+
+  std::vector<Pose> candidates;
+  if (options.global_start) candidates = global_candidates(body, scan, L, options);
+  if (candidates.empty()) candidates.push_back(options.initial.inverse());
+
+  // Refinement: continuation in ε (a hundredth of L, then the user's) on the refine level.
+  std::vector<double> eps;
+  if (options.distance.params.epsilon < 0.01 * L) eps.push_back(0.01 * L);
+  eps.push_back(options.distance.params.epsilon);
+  AlignSummary out;
+  bool limit = false;
+  {
+    // Every candidate on the first level, one per thread, each evaluation serial (small
+    // clouds parallelise poorly); then the best of them on the finer levels, its evaluations
+    // threaded when they are large (above 4e6 pairs).
+    const Eigen::Index nb = std::min<Eigen::Index>(
+        body.size(), options.refine_points > 0 ? options.refine_points : body.size());
+    const Eigen::Index ns = std::min<Eigen::Index>(
+        scan.size(), options.refine_points > 0 ? options.refine_points : scan.size());
+    const int eval_threads =
+        static_cast<double>(nb) * static_cast<double>(ns) > 4e6 ? options.threads : 1;
+    const bool spread = candidates.size() > 1;
+    const detail::LocalSettings st =
+        local_settings(options, L, options.max_iterations, options.tolerance);
+    std::vector<detail::LocalResult> refined(candidates.size());
+    {
+      // Several candidates are compared on smaller clouds (candidate_points each).
+      const Eigen::Index points = spread && options.refine_points != 0
+                                      ? std::min(options.candidate_points, options.refine_points)
+                                      : options.refine_points;
+      const detail::PoseObjective first =
+          make_level(body, scan, points, eps[0], spread ? 1 : eval_threads, options);
+      parallel_each(
+          static_cast<int>(candidates.size()), spread ? options.threads : 1,
+          [&](size_t k) { refined[k] = detail::minimise_pose(first, candidates[k], st); });
+    }
+    size_t best = 0;
+    for (size_t k = 1; k < refined.size(); ++k)
+      if (refined[k].rho < refined[best].rho) best = k;
+    out.iterations = refined[best].iterations;
+    // The best on the refinement clouds: at the first ε again if it was compared on
+    // smaller clouds, then at the others.
+    for (size_t l = spread && eps.size() == 1 ? 0 : 1; l < eps.size(); ++l) {
+      const detail::PoseObjective level =
+          make_level(body, scan, options.refine_points, eps[l], eval_threads, options);
+      refined[best] = detail::minimise_pose(level, refined[best].pose, st);
+      out.iterations += refined[best].iterations;
+    }
+    out.pose = refined[best].pose.inverse();
+    limit = !refined[best].converged;
+  }
+  // Nearest-point finish and the report in true nearest distances.
+  const detail::NearestPoints nearest(body.points());
+  if (options.nearest_iterations > 0) {
+    int it = 0;
+    out.pose = detail::nearest_refinement(nearest, body.points(), scan.points(), out.pose, options,
+                                          L, &it);
+    out.iterations += it;
+  }
+  report_nearest(nearest, scan, options, L, &out);
+  {  // ρ̃ at the final pose, on the refine level at the user's ε
+    const detail::PoseObjective final_level =
+        make_level(body, scan, options.refine_points, options.distance.params.epsilon,
+                   options.threads, options);
+    out.rho = final_level.value(out.pose.inverse(), nullptr, nullptr);
+  }
+  out.status = !std::isfinite(out.rho) ? AlignStatus::failed
+               : limit                 ? AlignStatus::iteration_limit
+                                       : AlignStatus::converged;
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace softhd::scan

@@ -1,0 +1,99 @@
+#pragma once
+// Pieces of align() (internal): the objective on one level of detail, its local minimiser
+// over a twist, the rotation grid of the global start, and the nearest-point refinement
+// (docs/formulation.md §8.5).
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "softhd/hausdorff.hpp"
+#include "softhd/scan/align.hpp"
+#include "softhd/scan/pose.hpp"
+
+namespace softhd::scan::detail {
+
+/// ρ̃ between the body moved into the scan's frame (moving cloud X = Q(body), Q = P⁻¹) and the
+/// scan (target Y, fixed in its own frame: its trees are built once, in the constructor).
+/// Volumes are the body's own (ρ̃ uses V_i/|X|, which a scale leaves unchanged).
+class PoseObjective {
+ public:
+  PoseObjective(const Eigen::MatrixXd& body, const Eigen::VectorXd& body_volumes,
+                const PointCloud& scan, const HausdorffOptions& distance, DistanceForm form);
+  /// ρ̃ at Q and, if `gradient` is not null, ∂ρ̃/∂δ of the twist δ = (ω, v, σ) about the
+  /// centroid c of Q(body) (6 entries for a rigid motion, 7 with σ):
+  ///   ∂/∂v = Σ g_i, ∂/∂ω = Σ (x_i − c) × g_i, ∂/∂σ = Σ (x_i − c)·g_i, g_i = ∂ρ̃/∂x_i.
+  double value(const Pose& Q, Eigen::VectorXd* gradient, Eigen::Vector3d* centre) const;
+  const HausdorffTarget& target() const { return target_; }
+
+ private:
+  Eigen::MatrixXd body_;
+  Eigen::VectorXd volumes_;
+  HausdorffTarget target_;
+  DistanceForm form_;
+};
+
+/// The pose after a twist δ = (ω, v, σ) about the centre c: z ↦ c + e^σ exp([ω]×)(z − c) + v
+/// applied after Q.
+Pose twist_step(const Pose& Q, const Eigen::VectorXd& delta, const Eigen::Vector3d& centre);
+
+/// Settings of one local minimisation.
+struct LocalSettings {
+  int max_iterations = 200;
+  double step_tolerance = 1e-10;  ///< stop when the step moves no point more than this × size
+  double size = 1.0;              ///< the body's size L (scales ω and σ into lengths)
+  bool similarity = false;
+  double log_scale_min = 0.0;  ///< bounds on log s of Q (the inverse pose)
+  double log_scale_max = 0.0;
+};
+
+struct LocalResult {
+  Pose pose;
+  double rho = 0.0;
+  int iterations = 0;
+  int evaluations = 0;  ///< of the objective (each with its gradient)
+  bool converged = false;
+};
+
+/// BFGS on the twist (ω L, v, σ L) with an Armijo backtracking line search, re-based at each
+/// accepted pose; the scale clamped to its bounds.
+LocalResult minimise_pose(const PoseObjective& objective, const Pose& start,
+                          const LocalSettings& settings);
+
+/// `count` rotations spread over SO(3) (a super-Fibonacci spiral of unit quaternions).
+std::vector<Eigen::Matrix3d> rotation_grid(int count);
+
+/// The principal axes (columns, eigenvalues descending, det +1) of the rows of `points`.
+Eigen::Matrix3d principal_axes(const Eigen::MatrixXd& points);
+
+/// `count` rows of `points` (all if fewer), chosen by a seeded shuffle: deterministic.
+std::vector<Eigen::Index> subsample(Eigen::Index rows, Eigen::Index count, unsigned seed);
+
+/// Nearest neighbours among the rows of a fixed N by 3 matrix (a k-d tree built once).
+class NearestPoints {
+ public:
+  explicit NearestPoints(const Eigen::MatrixXd& points);
+  ~NearestPoints();
+  /// For each row q of `queries`: the index of its nearest point and the distance.
+  void query(const Eigen::MatrixXd& queries, std::vector<Eigen::Index>* index,
+             Eigen::VectorXd* distance, int threads) const;
+
+ private:
+  struct Tree;
+  Eigen::MatrixXd points_;
+  std::unique_ptr<Tree> tree_;
+};
+
+/// The least-squares pose (rigid, or a similarity with s clamped to [s_min, s_max]) taking
+/// the rows `from` onto the rows `to` (Kabsch/Umeyama via the SVD of the cross-covariance).
+Pose fit_pose(const Eigen::MatrixXd& from, const Eigen::MatrixXd& to, bool similarity, double s_min,
+              double s_max);
+
+/// Iterated nearest-point fit of the scan onto the body (P the scan's pose): pairs each moved
+/// scan point with its nearest body point, keeps the pairs within 3× the median distance and
+/// fits the pose to them (fit_pose), until the pose stops changing.
+Pose nearest_refinement(const NearestPoints& body, const Eigen::MatrixXd& body_points,
+                        const Eigen::MatrixXd& scan, Pose P, const AlignOptions& options,
+                        double size, int* iterations);
+
+}  // namespace softhd::scan::detail

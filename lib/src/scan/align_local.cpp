@@ -1,0 +1,164 @@
+// The objective of align() on one level and its local minimiser over a twist
+// (docs/formulation.md §8.5).
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "align_internal.hpp"
+#include "softhd/error.hpp"
+
+namespace softhd::scan::detail {
+
+PoseObjective::PoseObjective(const Eigen::MatrixXd& body, const Eigen::VectorXd& body_volumes,
+                             const PointCloud& scan, const HausdorffOptions& distance,
+                             DistanceForm form)
+    : body_(body), volumes_(body_volumes), target_(scan, distance), form_(std::move(form)) {}
+
+double PoseObjective::value(const Pose& Q, Eigen::VectorXd* gradient,
+                            Eigen::Vector3d* centre) const {
+  const PointCloud moved(apply_points(Q, body_), volumes_);
+  HausdorffRequest request;
+  request.form = form_;
+  request.gradient_points = gradient != nullptr;
+  const HausdorffResult r = target_.evaluate(moved, request);
+  if (gradient == nullptr) return r.rho;
+  // Twist about the centroid c of the moved points x_i, g_i = ∂ρ̃/∂x_i:
+  //   ∂ρ̃/∂v = Σ g_i,  ∂ρ̃/∂ω = Σ (x_i − c) × g_i,  ∂ρ̃/∂σ = Σ (x_i − c)·g_i.
+  const Eigen::Vector3d c = moved.points().colwise().mean().transpose();
+  Eigen::Vector3d gv = Eigen::Vector3d::Zero(), gw = Eigen::Vector3d::Zero();
+  double gs = 0.0;
+  for (Eigen::Index i = 0; i < moved.size(); ++i) {
+    const Eigen::Vector3d d = moved.points().row(i).transpose() - c;
+    const Eigen::Vector3d g = r.gradient_points.row(i).transpose();
+    gv += g;
+    gw += d.cross(g);
+    gs += d.dot(g);
+  }
+  gradient->resize(gradient->size() == 7 ? 7 : 6);
+  gradient->head<3>() = gw;
+  gradient->segment<3>(3) = gv;
+  if (gradient->size() == 7) (*gradient)[6] = gs;
+  *centre = c;
+  return r.rho;
+}
+
+Pose twist_step(const Pose& Q, const Eigen::VectorXd& delta, const Eigen::Vector3d& centre) {
+  // T(z) = c + e^σ E (z − c) + v, E = exp([ω]×); T ∘ Q: R' = E R, s' = e^σ s,
+  // t' = c + e^σ E (t − c) + v.
+  const Eigen::Matrix3d E = rotation_exp(delta.head<3>());
+  const double es = delta.size() == 7 ? std::exp(delta[6]) : 1.0;
+  Pose out;
+  out.R = E * Q.R;
+  out.s = es * Q.s;
+  out.t = centre + es * (E * (Q.t - centre)) + delta.segment<3>(3);
+  return out;
+}
+
+namespace {
+
+/// The twist δ of the scaled variables u = (L ω, v, L σ).
+Eigen::VectorXd unscale(const Eigen::VectorXd& u, double L) {
+  Eigen::VectorXd d = u;
+  d.head<3>() /= L;
+  if (d.size() == 7) d[6] /= L;
+  return d;
+}
+
+/// ∂ρ̃/∂u from ∂ρ̃/∂δ (u = D⁻¹ δ, so ∂/∂u = D ∂/∂δ with D = diag(1/L, 1, 1/L)).
+Eigen::VectorXd scale_gradient(const Eigen::VectorXd& g, double L) { return unscale(g, L); }
+
+Pose clamp_scale(Pose Q, const LocalSettings& st) {
+  if (st.similarity) Q.s = std::exp(std::clamp(std::log(Q.s), st.log_scale_min, st.log_scale_max));
+  return Q;
+}
+
+/// The pose after the step u of the scaled variables from Q, σ stopped at the scale's bounds
+/// (u changed to the step taken).
+Pose step_pose(const Pose& Q, Eigen::VectorXd* u, const Eigen::Vector3d& c,
+               const LocalSettings& st) {
+  if (st.similarity) {
+    const double ls = std::log(Q.s);
+    (*u)[6] =
+        std::clamp((*u)[6], (st.log_scale_min - ls) * st.size, (st.log_scale_max - ls) * st.size);
+  }
+  return clamp_scale(twist_step(Q, unscale(*u, st.size), c), st);
+}
+
+}  // namespace
+
+LocalResult minimise_pose(const PoseObjective& objective, const Pose& start,
+                          const LocalSettings& st) {
+  const int n = st.similarity ? 7 : 6;
+  const double L = st.size;
+  LocalResult out;
+  out.pose = clamp_scale(start, st);
+  Eigen::VectorXd g(n), g_new(n);
+  Eigen::Vector3d c, c_new;
+  double f = objective.value(out.pose, &g, &c);
+  g = scale_gradient(g, L);
+  // Inverse-Hessian estimate in u; the first step moves points by about L/20 at most.
+  Eigen::MatrixXd H = Eigen::MatrixXd::Identity(n, n) * (0.05 * L / std::max(g.norm(), 1e-300));
+  bool fresh = true;
+  for (out.iterations = 0; out.iterations < st.max_iterations; ++out.iterations) {
+    Eigen::VectorXd p = -H * g;
+    if (st.similarity) {  // a scale at its bound stays there while the gradient pushes out
+      const double ls = std::log(out.pose.s);
+      if ((ls <= st.log_scale_min && p[6] < 0) || (ls >= st.log_scale_max && p[6] > 0)) p[6] = 0;
+    }
+    const double longest = p.lpNorm<Eigen::Infinity>();  // no point moves further than L/2
+    if (longest > 0.5 * L) p *= 0.5 * L / longest;
+    double slope = g.dot(p);
+    if (!(slope < 0.0)) {  // not a descent direction: restart from the gradient
+      if (fresh) {         // the gradient itself is zero (or not finite)
+        out.converged = g.allFinite();
+        break;
+      }
+      H = Eigen::MatrixXd::Identity(n, n) * (0.05 * L / std::max(g.norm(), 1e-300));
+      fresh = true;
+      --out.iterations;
+      continue;
+    }
+    // Armijo backtracking: f(α) ≤ f + 1e-4 α gᵀp.
+    double alpha = 1.0, f_new = f;
+    Pose trial;
+    Eigen::VectorXd s;
+    bool accepted = false;
+    for (int k = 0; k < 40 && !accepted; ++k, alpha *= 0.5) {
+      s = alpha * p;
+      trial = step_pose(out.pose, &s, c, st);
+      ++out.evaluations;
+      g_new.resize(n);
+      f_new = objective.value(trial, &g_new, &c_new);
+      accepted = std::isfinite(f_new) && f_new <= f + 1e-4 * g.dot(s);
+      if (accepted) break;
+    }
+    if (!accepted) {  // no decrease left at double precision
+      out.converged = true;
+      break;
+    }
+    g_new = scale_gradient(g_new, L);
+    const Eigen::VectorXd y = g_new - g;
+    const double sy = s.dot(y);
+    if (sy > 1e-12 * s.norm() * y.norm()) {  // BFGS update of the inverse Hessian
+      if (fresh) H = Eigen::MatrixXd::Identity(n, n) * (sy / y.squaredNorm());
+      const double r = 1.0 / sy;
+      const Eigen::MatrixXd V = Eigen::MatrixXd::Identity(n, n) - r * y * s.transpose();
+      H = V.transpose() * H * V + r * s * s.transpose();
+      fresh = false;
+    }
+    out.pose = trial;
+    f = f_new;
+    g = g_new;
+    c = c_new;
+    if (s.lpNorm<Eigen::Infinity>() <= st.step_tolerance * L) {
+      out.converged = true;
+      ++out.iterations;
+      break;
+    }
+  }
+  out.rho = f;
+  return out;
+}
+
+}  // namespace softhd::scan::detail

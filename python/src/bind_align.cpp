@@ -1,0 +1,72 @@
+// softhd._core.align: the pose of a scan (softhd/scan/align.hpp), returned as a dict.
+
+#include "common.hpp"
+#include "softhd/error.hpp"
+#include "softhd/scan/align.hpp"
+
+namespace softhd::python {
+
+namespace {
+
+py::dict align_clouds(const Array& body, const std::optional<Array>& body_volumes,
+                      const Array& scan, bool similarity, double scale_min, double scale_max,
+                      const std::string& distance, double cap, std::optional<double> eps,
+                      double alpha, double beta, double gamma, bool global_start,
+                      const std::optional<Array>& initial, int rotations, int refine_points,
+                      double inlier, int threads) {
+  check_cloud(body, body_volumes, "body");
+  check_cloud(scan, std::nullopt, "scan");
+  scan::AlignOptions o;
+  o.kind = similarity ? scan::PoseKind::similarity : scan::PoseKind::rigid;
+  o.scale_min = scale_min;
+  o.scale_max = scale_max;
+  o.form.sides = sides_from_string(distance);
+  o.form.cap.c = cap;
+  o.distance.params.alpha = alpha;
+  o.distance.params.beta = beta;
+  o.distance.params.gamma = gamma;
+  o.global_start = global_start;
+  o.rotations = rotations;
+  o.refine_points = refine_points;
+  o.inlier_distance = inlier;
+  o.threads = threads;
+  if (initial) {
+    if (initial->ndim() != 2 || initial->shape(0) != 4 || initial->shape(1) != 4)
+      throw InvalidArgument("initial must be a (4, 4) array");
+    o.initial = scan::Pose::from_matrix(Eigen::Map<const RowMatrix>(initial->data(), 4, 4));
+  }
+  const PointCloud B = make_cloud(body, body_volumes), S = make_cloud(scan, std::nullopt);
+  o.distance.params.epsilon = eps ? *eps : 1e-3 * scan::body_size(B);  // None: L/1000
+  scan::AlignSummary s;
+  {
+    py::gil_scoped_release release;
+    s = scan::align(B, S, o);
+  }
+  py::dict d;
+  const RowMatrix m = s.pose.matrix();
+  d["matrix"] = to_numpy(m);
+  const Eigen::Matrix<double, 7, 1> x = s.pose.twist();
+  d["twist"] = to_numpy(RowMatrix(x.transpose()));
+  d["scale"] = s.pose.s;
+  d["rho"] = s.rho;
+  d["overlap"] = s.overlap;
+  d["inlier_distance"] = s.inlier_distance;
+  d["rmse"] = s.rmse;
+  d["residuals"] = to_numpy(RowMatrix(s.residuals.transpose()));
+  d["status"] = scan::to_string(s.status);
+  d["iterations"] = s.iterations;
+  d["seconds"] = s.seconds;
+  return d;
+}
+
+}  // namespace
+
+void bind_align(py::module_& m) {
+  m.def("align", &align_clouds, py::arg("body").noconvert(), py::arg("body_volumes").noconvert(),
+        py::arg("scan").noconvert(), py::kw_only(), py::arg("similarity"), py::arg("scale_min"),
+        py::arg("scale_max"), py::arg("distance"), py::arg("cap"), py::arg("eps"), py::arg("alpha"),
+        py::arg("beta"), py::arg("gamma"), py::arg("global_start"), py::arg("initial"),
+        py::arg("rotations"), py::arg("refine_points"), py::arg("inlier"), py::arg("threads"));
+}
+
+}  // namespace softhd::python

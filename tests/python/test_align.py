@@ -1,0 +1,59 @@
+"""softhd.align: the pose of an exactly moved subset recovered (rigid and similarity), the
+result's fields against an independent NumPy check, refusals."""
+
+import numpy as np
+import pytest
+
+import softhd
+
+
+def random_rotation(rng):
+    q = rng.normal(size=4)
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def body_cloud(rng, n=400):
+    """An asymmetric body: a slab with a block on one corner (no self-symmetry)."""
+    p = rng.uniform(size=(n, 3)) * [1.0, 0.6, 0.3]
+    k = n // 6
+    p[:k] = [0.8, 0.4, 0.3] + rng.uniform(size=(k, 3)) * [0.2, 0.2, 0.25]
+    return p
+
+
+def angle(Ra, Rb):
+    return np.arccos(np.clip((np.trace(Ra @ Rb.T) - 1) / 2, -1, 1))
+
+
+@pytest.mark.parametrize("scale", [None, 1.2])
+def test_moved_subset_recovered(rng, scale):
+    body = body_cloud(rng)
+    R, t, s = random_rotation(rng), rng.normal(size=3), 1.0 if scale is None else scale
+    scan = ((body[::2] - t) @ R) / s  # P^-1(y) = R^T (y - t) / s
+    r = softhd.align(body, scan, similarity=scale is not None)
+    M = r["matrix"]
+    assert angle(M[:3, :3] / r["scale"], R) < 1e-6
+    assert np.linalg.norm(M[:3, 3] - t) < 1e-6
+    assert r["scale"] == pytest.approx(s, rel=1e-6)
+    assert r["overlap"] == 1.0
+    # the residuals are the true nearest distances of the moved scan (brute force)
+    moved = scan @ M[:3, :3].T + M[:3, 3]
+    brute = np.sqrt(((moved[:, None, :] - body[None, :, :]) ** 2).sum(-1)).min(1)
+    assert np.allclose(r["residuals"], brute, atol=1e-12)
+    assert r["twist"].shape == (7,) and r["twist"][6] == pytest.approx(np.log(s), abs=1e-6)
+
+
+def test_bad_input_refused(rng):
+    body = body_cloud(rng, 60)
+    with pytest.raises(softhd.InvalidArgument, match="scale_min"):
+        softhd.align(body, body, similarity=True, scale_min=1.5)
+    with pytest.raises(softhd.InvalidArgument, match=r"\(4, 4\)"):
+        softhd.align(body, body, initial=np.eye(3))
+    with pytest.raises(softhd.InvalidArgument, match="last row"):
+        bad = np.eye(4)
+        bad[3, 0] = 1.0
+        softhd.align(body, body, initial=bad)
+    with pytest.raises(softhd.InvalidArgument, match="distance"):
+        softhd.align(body, body, distance="both")
