@@ -125,8 +125,8 @@ struct SoftCap {
 /// do not depend on it), so a caller can tighten the cap or renew the visible set between
 /// evaluations. Held fixed in the gradient (the visible set is piecewise constant).
 struct DistanceForm {
-  Sides sides = Sides::symmetric;
-  SoftCap cap;
+  Sides sides = Sides::symmetric;  ///< which directed terms make ρ̃
+  SoftCap cap;                     ///< the soft cap on every field value (default: none)
   /// Sides::visible only: N entries, true for the moving points in B_V (at least one).
   Eigen::Array<bool, Eigen::Dynamic, 1> visible;
 

@@ -43,9 +43,9 @@ struct TargetDistance {
   double cap = 0.0;                ///< a fixed cap c (0: none, unless the quantile rule is set)
   /// The rule c = cap_factor × the cap_quantile-quantile of d̃_X(y_j) at the start; used
   /// when cap_factor > 0 (then `cap` is 0).
-  double cap_quantile = 0.0;
-  double cap_factor = 0.0;
-  double cap_q = 4.0;  ///< the cap's sharpness q
+  double cap_quantile = 0.0;  ///< Q of the rule, in (0, 1]
+  double cap_factor = 0.0;    ///< F of the rule (> 0 when the rule is used)
+  double cap_q = 4.0;         ///< the cap's sharpness q
 };
 
 /// A target cloud and, if T is known, the nodal displacements u_T = T(X) − X of the body.

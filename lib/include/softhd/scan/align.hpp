@@ -17,13 +17,14 @@ namespace softhd::scan {
 enum class PoseKind { rigid, similarity };
 /// "rigid" / "similarity"; pose_kind_from_string throws InvalidArgument naming `align`.
 std::string to_string(PoseKind kind);
+/// The PoseKind named "rigid" or "similarity".
 PoseKind pose_kind_from_string(const std::string& name);
 
 /// Settings of align(); defaults documented per field and validated by validate().
 struct AlignOptions {
-  PoseKind kind = PoseKind::rigid;
-  double scale_min = 0.5;  ///< similarity only: bounds on s, 0 < scale_min ≤ 1 ≤ scale_max
-  double scale_max = 2.0;
+  PoseKind kind = PoseKind::rigid;  ///< a rigid motion, or a similarity (with a scale s)
+  double scale_min = 0.5;     ///< similarity only: bounds on s, 0 < scale_min ≤ 1 ≤ scale_max
+  double scale_max = 2.0;     ///< see scale_min
   HausdorffOptions distance;  ///< the functional's parameters (ε: the finest level's) and method
   DistanceForm form;          ///< sides and cap (a visible mask is refused: align has no camera
                               ///< model of its own; use scan_to_body for partial views)
@@ -46,19 +47,20 @@ struct AlignOptions {
 
 /// Why align() stopped.
 enum class AlignStatus { converged, iteration_limit, failed };
+/// "converged", "iteration_limit" or "failed".
 std::string to_string(AlignStatus status);
 
 /// What align() found.
 struct AlignSummary {
-  AlignStatus status = AlignStatus::failed;
-  Pose pose;                     ///< scan frame → body frame
-  double rho = 0.0;              ///< ρ̃ at the pose (the chosen form)
+  AlignStatus status = AlignStatus::failed;  ///< why it stopped
+  Pose pose;                                 ///< scan frame → body frame
+  double rho = 0.0;                          ///< ρ̃ at the pose (the chosen form)
   double overlap = 0.0;          ///< fraction of scan points within `inlier_distance` of the body
   double inlier_distance = 0.0;  ///< the overlap's threshold (a length)
   double rmse = 0.0;             ///< RMS true nearest-neighbour distance of the overlapping points
   Eigen::VectorXd residuals;     ///< true nearest-neighbour distance of each moved scan point
-  int iterations = 0;
-  double seconds = 0.0;
+  int iterations = 0;            ///< refinement iterations of the best candidate, over its levels
+  double seconds = 0.0;          ///< wall time of align()
   /// One line: status, rotation and translation of the pose, ρ̃, overlap, rmse, time.
   std::string BriefReport() const;
 };

@@ -45,10 +45,11 @@ struct PlaneRemoval {
 /// The plane found (see PlaneRemoval): unit normal (sign: its largest component positive),
 /// offset, and the number of points within `distance` of it.
 struct Plane {
-  Eigen::VectorXd normal;
-  double offset = 0.0;
-  Eigen::Index inliers = 0;
+  Eigen::VectorXd normal;    ///< unit normal n
+  double offset = 0.0;       ///< d of n·x = d
+  Eigen::Index inliers = 0;  ///< points within PlaneRemoval::distance of it
 };
+/// The dominant plane of `cloud` by RANSAC and a least-squares refit on its inliers.
 Plane find_dominant_plane(const PointCloud& cloud, const PlaneRemoval& options);
 
 /// The indices of the points off the dominant plane (|n·x − offset| > distance), or of all
@@ -62,6 +63,7 @@ std::vector<Eigen::Index> remove_dominant_plane(const PointCloud& cloud,
 struct ScanCleanup {
   std::optional<double> crop;   ///< margin (≥ 0) for crop_to_box; none: no crop
   std::optional<double> plane;  ///< PlaneRemoval::distance (> 0); none: no plane removal
+  /// Statistical outlier removal's settings (remove_statistical_outliers).
   struct Outliers {
     int k = 20;          ///< neighbours (≥ 1)
     double ratio = 2.0;  ///< of the standard deviation (finite)
