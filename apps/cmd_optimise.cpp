@@ -104,8 +104,12 @@ scene targets ("target" in the scene file):
       it holds the deformed nodes of a state solved on SCENE's mesh ('softhd forward
       --write-cloud'), which gives the known map for the matched floor and shape error
   either kind also takes the distance's form (docs/formulation.md section 8):
-      "distance": "symmetric" | "scan_to_body"   (scan_to_body: rho = A, for a
-          partial scan; "visible" is refused: a scene cannot give the camera yet)
+      "distance": "symmetric" | "scan_to_body" | "visible"   (scan_to_body: rho = A,
+          for a partial scan; visible: also the body's boundary points seen from
+          "camera", which implies it)
+      "camera": [x, y, z]   the camera's position in the body's frame (3D)
+      "surface": true   the target is a surface scan: the moving cloud is the body's
+          boundary with its current facet areas (as --particles boundary)
       "cap": C  or  "cap": {"quantile": Q, "factor": F}   soft cap of every field
           value, fixed or F x the Q-quantile of the scan's d~ to the body at rest
       "cap_q": Q   the cap's sharpness (default 4)
@@ -216,8 +220,8 @@ void parse_objective(Args& args, const TrackingRunOptions& d, TrackingRunOptions
       form.sides = sides_from_string(*distance);
       if (form.sides == Sides::visible)
         throw UsageError(
-            "--distance visible needs the camera, which optimise cannot give yet; "
-            "expected symmetric or scan_to_body");
+            "--distance visible needs the camera: give the scene target's \"camera\" "
+            "(it selects visible); expected symmetric or scan_to_body");
     }
     if (cap) form.cap = parse_number(*cap, "--cap");
     if (cap_q) form.cap_q = parse_number(*cap_q, "--cap-q");
