@@ -105,11 +105,11 @@ scene targets ("target" in the scene file):
       --write-cloud'), which gives the known map for the matched floor and shape error
   either kind also takes the distance's form (docs/formulation.md section 8):
       "distance": "symmetric" | "scan_to_body" | "visible"   (scan_to_body: rho = A,
-          for a partial scan; visible: also the body's boundary points seen from
-          "camera", which implies it)
+          for a partial scan; visible: the body-to-scan term only over the body's
+          boundary points seen from "camera", which implies it)
       "camera": [x, y, z]   the camera's position in the body's frame (3D)
       "surface": true   the target is a surface scan: the moving cloud is the body's
-          boundary with its current facet areas (as --particles boundary)
+          boundary with its current facet areas (--particles boundary --volumes deformed)
       "cap": C  or  "cap": {"quantile": Q, "factor": F}   soft cap of every field
           value, fixed or F x the Q-quantile of the scan's d~ to the body at rest
       "cap_q": Q   the cap's sharpness (default 4)
