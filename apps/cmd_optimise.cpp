@@ -75,10 +75,15 @@ options:
   --levels N         multilevel optimisation: solve first on the box halved N-1 times (a
                      mesh file of order 2: N = 2, its P1/Q1 level first) with a
                      coarse target and tree tolerance max(--tol, {coarse_tol}), at most
-                     --coarse-iterations K (default {coarse_iterations}) iterations per coarse
-                     level, ending earlier once rho decreased by less than {switch_decrease}
+                     --coarse-iterations K (default {coarse_iterations}; at most --max-iter)
+                     iterations per coarse level, ending earlier once rho decreased by less than {switch_decrease}
                      (relative) twice in a row; then the next finer level from its control
-                     (default {levels}: the user's mesh alone; docs/guide.md section 5)
+                     (default {levels}: automatic, 2 where the body has a coarse level of
+                     >= 32 elements, as --coarse-level auto, else 1: the user's mesh alone;
+                     docs/guide.md section 5)
+  --refined-move-limit D  the move limit of each level started from a coarser
+                     level's control (default {refined_move_limit}; --move-limit is the
+                     coarsest level's)
   --threads T        OpenMP threads (default: all)
   --max-memory GIB   refuse meshes whose estimated memory exceeds this (default {max_memory})
   --state-backend B  cholmod | petsc-mumps | petsc-gamg: the state solver (default
@@ -180,6 +185,7 @@ std::string usage() {
       {"coarse_iterations", std::to_string(d.coarse_iterations)},
       {"switch_decrease", number_text(d.switch_decrease)},
       {"coarse_tol", number_text(d.coarse_tolerance)},
+      {"refined_move_limit", number_text(d.refined_move_limit)},
       {"max_memory", number_text(d.memory_limit / (1u << 30))},
       {"state_backend", to_string(d.state_backend)}};
   std::string text = kUsage;
@@ -250,9 +256,10 @@ OptimiseArgs parse_optimise(Args& args) {
   if (coarse != "auto" && coarse != "off")
     throw UsageError("--coarse-level: expected auto or off, got '" + coarse + "'");
   o.coarse_level = coarse_level_from_string(coarse);
-  o.levels = static_cast<int>(args.integer("--levels", d.levels, 1, 16));
+  o.levels = static_cast<int>(args.integer("--levels", d.levels, 0, 16));
   o.coarse_iterations =
       static_cast<int>(args.integer("--coarse-iterations", d.coarse_iterations, 1, 1000000));
+  o.refined_move_limit = args.number("--refined-move-limit", d.refined_move_limit);
   const double gib = args.number("--max-memory", d.memory_limit / (1u << 30));
   if (!(gib > 0.0 && gib <= 1e6)) throw UsageError("--max-memory: expected GiB in (0, 1e6]");
   o.memory_limit = gib * (1u << 30);

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <utility>
 
 #include "control/multilevel.hpp"
 #include "expect_error.hpp"
@@ -117,8 +119,15 @@ TEST_F(MultilevelRun, CoarseLevelFirstThenTheUsersMeshFromItsControl) {
   EXPECT_TRUE(one.levels.empty());
   for (const TrackingIteration& it : one.history) EXPECT_EQ(it.level, 0);
 
+  // The coarse level's iterations are bounded by max_iterations too: room for the switch
+  // rule here, and the user's mesh stopped after 5 iterations as the single-level run.
   options_.levels = 2;
-  const TrackingRunSummary two = run_tracking(scene_, options_);
+  options_.max_iterations = 30;
+  TrackingRunCallbacks stop_at_5;
+  stop_at_5.on_iteration = [](const TrackingIteration& it, const Eigen::VectorXd&) {
+    if (it.level == 0 && it.iteration == 5) throw StopRequest{};
+  };
+  const TrackingRunSummary two = run_tracking(scene_, options_, stop_at_5);
   ASSERT_EQ(two.levels.size(), 2u);
   EXPECT_EQ(two.levels[0].level, 1);
   EXPECT_EQ(two.levels[1].level, 0);
@@ -135,6 +144,9 @@ TEST_F(MultilevelRun, CoarseLevelFirstThenTheUsersMeshFromItsControl) {
   // coarse level's end (a 0.6 rad arc: ρ̃ at rest is far above, about 1.8 × the floor).
   EXPECT_LT(two.rho_start, 0.7 * one.rho_start) << two.rho_start << " vs " << one.rho_start;
   EXPECT_GT(two.control.cwiseAbs().maxCoeff(), 0.0);
+  ASSERT_GT(coarse, 2) << "the bound below could not fail";
+  options_.max_iterations = 2;
+  EXPECT_EQ(run_tracking(scene_, options_).levels[0].iterations, 2);
 }
 
 TEST_F(MultilevelRun, ACallerStopOnACoarseLevelEndsTheRunAfterOneIterationOnTheUsersMesh) {
@@ -150,11 +162,66 @@ TEST_F(MultilevelRun, ACallerStopOnACoarseLevelEndsTheRunAfterOneIterationOnTheU
   EXPECT_EQ(s.status, OptimizerStatus::stopped);
 }
 
+// The user's mesh, started from the coarse level's control, keeps each round inside the box of
+// half-width refined_move_limit × (upper − lower) around its best point (docs/formulation.md
+// §4.8): its first iterate lies in the first round's box around the start. With the coarse
+// level's move limit instead, the same first step leaves that box (the bound can fail).
+TEST_F(MultilevelRun, LevelsAfterTheCoarsestStepWithinTheRefinedMoveLimit) {
+  options_.levels = 2;
+  options_.coarse_iterations = 3;
+  options_.max_iterations = 1;
+  const double range = scene_.control_upper - scene_.control_lower;
+  auto first_step = [&](double refined) {
+    options_.refined_move_limit = refined;
+    Eigen::VectorXd start, first;
+    TrackingRunCallbacks cb;
+    cb.on_start = [&](const ShapeTrackingSummary& s) { start = s.control; };
+    cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd& m) {
+      if (it.level == 0 && first.size() == 0) first = m;
+    };
+    run_tracking(scene_, options_, cb);
+    EXPECT_EQ(start.size(), first.size());
+    return (first - start).lpNorm<Eigen::Infinity>() / range;
+  };
+  const double small = 0.002;
+  const double step = first_step(small);
+  EXPECT_GT(step, 0.0);
+  EXPECT_LE(step, small * (1.0 + 1e-12));
+  EXPECT_GT(first_step(options_.move_limit), small) << "the check could not fail";
+}
+
+// levels 0 (the default) is 2 where the box halved along its even axes has at least 32
+// elements (the counts by hand), else 1; an explicit count is kept.
+TEST_F(MultilevelRun, AutomaticLevelsAreTwoWhereTheCoarseLevelHasAtLeast32Elements) {
+  EXPECT_EQ(TrackingRunOptions{}.levels, 0);
+  const std::pair<std::string, int> cases[] = {
+      {"[6, 1, 2]", 1},    // (3, 1, 1): 3 elements
+      {"[14, 4, 4]", 1},   // (7, 2, 2): 28
+      {"[16, 4, 4]", 2},   // (8, 2, 2): 32
+      {"[15, 4, 4]", 2},   // (15, 2, 2): 60, the odd axis kept
+      {"[15, 3, 1]", 1}};  // no even axis: no coarse level
+  std::string text;
+  std::getline(std::ifstream(file_), text, '\0');
+  const std::string::size_type at = text.find("[6, 1, 2]");
+  ASSERT_NE(at, std::string::npos);
+  for (const auto& [cells, levels] : cases) {
+    std::ofstream(file_) << std::string(text).replace(at, 9, cells);
+    const fe::Scene scene = fe::load_scene(file_.string());
+    EXPECT_EQ(tracking_levels(scene, TrackingRunOptions{}), levels) << cells;
+    TrackingRunOptions explicit_one;
+    explicit_one.levels = 1;
+    EXPECT_EQ(tracking_levels(scene, explicit_one), 1) << cells;
+  }
+}
+
 TEST_F(MultilevelRun, MoreLevelsThanHalvingsAreRefusedNamingLevels) {
   options_.levels = 3;  // (6, 1, 2) -> (3, 1, 1) -> no even count
   expect_error<InvalidArgument>([&] { run_tracking(scene_, options_); }, "levels");
-  options_.levels = 0;
+  options_.levels = -1;
   expect_error<InvalidArgument>([&] { options_.validate(); }, "levels");
+  options_.levels = 2;
+  options_.refined_move_limit = 1.5;
+  expect_error<InvalidArgument>([&] { options_.validate(); }, "refined_move_limit");
 }
 
 }  // namespace

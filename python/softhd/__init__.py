@@ -242,14 +242,17 @@ def read_mesh(path, order=None, scale=1.0):
 def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=None,
              algorithm=None, move_limit=None, particles=None, volumes=None, alpha=None,
              beta=None, gamma=None, eps=None, method=None, tol=None, tikhonov_mass=None,
-             tikhonov_grad=None, coarse_level=None, levels=None, distance=None, cap=None,
-             cap_q=None, callback=None, threads=0):
+             tikhonov_grad=None, coarse_level=None, levels=None, refined_move_limit=None,
+             distance=None, cap=None, cap_q=None, callback=None, threads=0):
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
     target: the run ``softhd optimise`` makes (the library's TrackingRun), with its options and
     its defaults for every option left None (:func:`optimise_defaults` lists them, e.g. method
     "tree" with tol 1e-2, move_limit 0.1, coarse_level "auto": two-level starts on the coarse level
-    (a box with half the cells, a mesh file of order 2 as P1/Q1 on its vertices), levels 1: the
-    user's mesh alone; levels N > 1 solves first on the N - 1 coarser levels, as ``--levels N``). Returns an :class:`OptimiseResult`.
+    (a box with half the cells, a mesh file of order 2 as P1/Q1 on its vertices), levels 0:
+    automatic, 2 where the body has such a coarse level, else 1 (the user's mesh alone); levels
+    N > 1 solves first on the N - 1 coarser levels, as ``--levels N``,
+    each level after the coarsest with the move limit refined_move_limit, 0.02, as
+    ``--refined-move-limit``). Returns an :class:`OptimiseResult`.
 
     target: None (the scene's own "target"), a cloud file path, an (M, d) array, or a tuple
     (points, volumes). distance ("symmetric" or "scan_to_body"), cap (a length), cap_q: the
@@ -273,7 +276,8 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
                           particles=particles, volumes_kind=volumes, alpha=alpha, beta=beta,
                           gamma=gamma, eps=eps, method=method, tol=tol,
                           tikhonov_mass=tikhonov_mass, tikhonov_grad=tikhonov_grad,
-                          coarse_level=coarse_level, levels=levels, distance=distance,
+                          coarse_level=coarse_level, levels=levels,
+                          refined_move_limit=refined_move_limit, distance=distance,
                           cap=cap, cap_q=cap_q, callback=callback, threads=threads)
 
 

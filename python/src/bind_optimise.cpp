@@ -83,6 +83,7 @@ py::dict optimise_defaults() {
   out["tikhonov_grad"] = d.tikhonov_gradient;
   out["coarse_level"] = to_string(d.coarse_level);
   out["levels"] = d.levels;
+  out["refined_move_limit"] = d.refined_move_limit;
   // The form is the target's unless given (TrackingRunOptions::distance).
   out["distance"] = py::none();
   out["cap"] = py::none();
@@ -188,8 +189,9 @@ void bind_optimise(py::module_& m) {
          const std::optional<std::string>& method, std::optional<double> tol,
          std::optional<double> tikhonov_mass, std::optional<double> tikhonov_grad,
          const std::optional<std::string>& coarse_level, std::optional<int> levels,
-         const std::optional<std::string>& distance, std::optional<double> cap,
-         std::optional<double> cap_q, const py::object& callback, int threads) {
+         std::optional<double> refined_move_limit, const std::optional<std::string>& distance,
+         std::optional<double> cap, std::optional<double> cap_q, const py::object& callback,
+         int threads) {
         TrackingRunOptions o;
         if (distance || cap || cap_q) {  // the form as a whole (TrackingRunOptions::distance)
           TargetDistance form;
@@ -215,6 +217,7 @@ void bind_optimise(py::module_& m) {
         if (tikhonov_grad) o.tikhonov_gradient = *tikhonov_grad;
         if (coarse_level) o.coarse_level = coarse_level_from_string(*coarse_level);
         if (levels) o.levels = *levels;
+        if (refined_move_limit) o.refined_move_limit = *refined_move_limit;
         o.threads = threads;
         return optimise(s, points, volumes, file, o, callback);
       },
@@ -223,8 +226,9 @@ void bind_optimise(py::module_& m) {
       py::arg("rel_tol"), py::arg("algorithm"), py::arg("move_limit"), py::arg("particles"),
       py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("eps"),
       py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"), py::arg("tikhonov_grad"),
-      py::arg("coarse_level"), py::arg("levels"), py::arg("distance"), py::arg("cap"),
-      py::arg("cap_q"), py::arg("callback"), py::arg("threads"));
+      py::arg("coarse_level"), py::arg("levels"), py::arg("refined_move_limit"),
+      py::arg("distance"), py::arg("cap"), py::arg("cap_q"), py::arg("callback"),
+      py::arg("threads"));
   m.def("optimise_defaults", &optimise_defaults,
         "The defaults of optimise's options (softhd optimise's: TrackingRunOptions).");
 }

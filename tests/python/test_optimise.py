@@ -184,7 +184,9 @@ def test_defaults_are_the_command_line_tools(cli_help):
              "tol": "relative error bound on every kernel sum", "tikhonov_mass":
              "--tikhonov-mass M (M/2) int m^2", "tikhonov_grad": "--tikhonov-grad E (E/2) int "
              "|grad m|^2", "coarse_level": "or for a mesh file of order 2 as P1/Q1 on its vertices",
-             "levels": "then the next finer level from its control"}
+             "levels": "then the next finer level from its control",
+             "refined_move_limit": "the move limit of each level started from a coarser "
+             "level's control"}
     for name, before in flags.items():
         m = re.search(re.escape(before) + r" \(default ([^;,:)]+)", text)
         assert m, name

@@ -280,6 +280,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   if (start.status != EvaluationStatus::ok)
     throw StateSolveError("the state solve at the starting control failed: " + start.failure);
   s.rho_start = start.rho;
+  s.control = m0;  // the best so far
   if (callbacks.on_start) callbacks.on_start(s);
 
   // The objective for the optimiser, remembering the last evaluation for the records. Its

@@ -55,7 +55,8 @@ void TrackingRunOptions::validate() const {
     throw InvalidArgument("method: nearest has no gradient; expected exact or tree");
   if (vtu_every < 0) throw InvalidArgument("vtu_every must be >= 0");
   if (!(memory_limit > 0.0)) throw InvalidArgument("memory_limit must be > 0");
-  if (levels < 1) throw InvalidArgument("levels must be >= 1, got " + std::to_string(levels));
+  if (levels < 0)
+    throw InvalidArgument("levels must be >= 1 (0: automatic), got " + std::to_string(levels));
   if (coarse_iterations < 1)
     throw InvalidArgument("coarse_iterations must be >= 1, got " +
                           std::to_string(coarse_iterations));
@@ -63,6 +64,8 @@ void TrackingRunOptions::validate() const {
     throw InvalidArgument("switch_decrease must be in [0, 1)");
   if (!(coarse_tolerance > 0.0 && coarse_tolerance < 1.0))
     throw InvalidArgument("coarse_tolerance must be in (0, 1)");
+  if (!(refined_move_limit >= 0.0 && refined_move_limit <= 1.0))
+    throw InvalidArgument("refined_move_limit must be in [0, 1]");
   if (resume && out.empty())
     throw InvalidArgument("resume needs the run's folder (the out field is empty)");
   if (distance) {
@@ -115,6 +118,11 @@ ShapeTrackingOptions TrackingRunOptions::tracking() const {
   return t;
 }
 
+int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options) {
+  if (options.levels > 0) return options.levels;
+  return fe::grid_levels(scene, fe::GridSequencingOptions{}) > 0 ? 2 : 1;
+}
+
 SceneTarget tracking_target(const fe::Scene& scene, const fe::Mesh& mesh,
                             const TrackingRunOptions& options) {
   if (!options.target_file.empty()) return file_target(options.target_file, scene.dim());
@@ -126,6 +134,7 @@ struct TrackingRun::Impl {
        const TrackingRunOptions& o)
       : scene(s), assembler(a), control(c), options(o), target(std::move(t)) {
     options.validate();
+    options.levels = tracking_levels(scene, options);
     if (target.cloud.dim() != scene.dim())
       throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
                             "D but the scene's body is " + std::to_string(scene.dim()) + "D");
@@ -262,13 +271,15 @@ Eigen::VectorXd TrackingRun::Impl::run_coarse_levels(const ShapeTrackingOptions&
     const Eigen::VectorXd upper = p.control->constant(p.scene.control_upper);
     if (k == 0) m = p.control->constant(p.scene.control_initial);
     ShapeTrackingOptions to = fine;
-    to.optimizer.max_iterations = options.coarse_iterations;
-    to.optimizer.max_evaluations = 5 * options.coarse_iterations + 20;
+    // A level's iterations: coarse_iterations, and never more than the run's own limit.
+    const int iterations = std::min(options.coarse_iterations, options.max_iterations);
+    to.optimizer.max_iterations = iterations;
+    to.optimizer.max_evaluations = 5 * iterations + 20;
+    if (k > 0) to.optimizer.move_limit = options.refined_move_limit;  // from a coarser level
     if (options.max_seconds > 0.0)
       to.optimizer.max_seconds = std::max(1e-9, options.max_seconds - seconds);
-    to.fingerprint["level"] = std::to_string(p.level) + ", at most " +
-                              std::to_string(options.coarse_iterations) + " iterations, switch " +
-                              exact_text(options.switch_decrease);
+    to.fingerprint["level"] = std::to_string(p.level) + ", at most " + std::to_string(iterations) +
+                              " iterations, switch " + exact_text(options.switch_decrease);
     if (!to.checkpoint.empty()) {
       to.checkpoint = level_checkpoint(p.level);
       to.resume = options.resume && fs::exists(to.checkpoint);
@@ -371,8 +382,11 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
   for (const LevelReport& l : s.levels) offset += l.seconds;
   if (!d.levels.empty() && d.options.max_seconds > 0.0)
     to.optimizer.max_seconds = std::max(1e-9, d.options.max_seconds - offset);
-  // A multilevel run killed on a coarse level has no checkpoint of this level yet.
-  if (!d.levels.empty() && to.resume) to.resume = fs::exists(to.checkpoint);
+  if (!d.levels.empty()) {
+    to.optimizer.move_limit = d.options.refined_move_limit;  // started from a coarser level
+    // A multilevel run killed on a coarse level has no checkpoint of this level yet.
+    if (to.resume) to.resume = fs::exists(to.checkpoint);
+  }
   const Eigen::VectorXd lower = d.control.constant(d.scene.control_lower);
   const Eigen::VectorXd upper = d.control.constant(d.scene.control_upper);
   ShapeTrackingCallbacks cb;

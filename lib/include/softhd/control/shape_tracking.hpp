@@ -123,7 +123,8 @@ std::pair<double, double> shape_error(const fe::Mesh& mesh, const Eigen::VectorX
 
 /// Optional observers of a run.
 struct ShapeTrackingCallbacks {
-  /// After the start state is solved and the floors are known (history still empty).
+  /// After the start state is solved and the floors are known (history still empty; control
+  /// the start, clamped to the bounds).
   std::function<void(const ShapeTrackingSummary&)> on_start;
   /// After each accepted iteration, with the best control so far. Throwing StopRequest
   /// ends the run after this iteration (termination "stopped by the caller").

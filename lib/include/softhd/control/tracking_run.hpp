@@ -83,13 +83,19 @@ struct TrackingRunOptions {
   /// finishing on the user's mesh, target and tolerance with max_iterations. A coarse level
   /// has the scene's target for its body (an arc grid twice as fine as its nodes), or, for a target
   /// with as many points as the finer level's, every 2^d-th point with the volumes scaled to keep
-  /// their total; the tree tolerance max(tolerance, coarse_tolerance); at most coarse_iterations
-  /// iterations, and it ends earlier once ρ̃ decreased by less than switch_decrease (relative) in
-  /// two iterations in a row. 1: today's single-level run.
-  int levels = 1;
+  /// their total; the tree tolerance max(tolerance, coarse_tolerance); at most
+  /// min(coarse_iterations, max_iterations) iterations, and it ends earlier once ρ̃ decreased by
+  /// less than switch_decrease (relative) in two iterations in a row. 1: the user's mesh alone. 0
+  /// (the default): 2 where the body has a coarse level of at least 32 elements (the two-level
+  /// starts' rule, fe::grid_levels), else 1 (tracking_levels). Every level started from a coarser
+  /// level's control has the move limit refined_move_limit instead of move_limit: its start is
+  /// near its optimum already, and a step as large as a first one's curls the body far from the
+  /// state it was started from (docs/formulation.md §4.8).
+  int levels = 0;
   int coarse_iterations = 30;
   double switch_decrease = 0.01;
   double coarse_tolerance = 5e-2;
+  double refined_move_limit = 0.02;
   ///@}
   fe::StateBackend state_backend = fe::StateBackend::kCholmod;  ///< the state solver
   /// A target cloud file (text or PLY) instead of the scene's "target"; empty: the scene's.
@@ -166,6 +172,10 @@ struct TrackingRunCallbacks : ShapeTrackingCallbacks {
 /// known map), else the scene's "target" (scene_target, options.memory_limit). Throws as those.
 SceneTarget tracking_target(const fe::Scene& scene, const fe::Mesh& mesh,
                             const TrackingRunOptions& options);
+
+/// The levels of a run of `options` on `scene`: options.levels, or for 0 (automatic) 2 where the
+/// body has a coarse level of at least 32 elements (fe::grid_levels), else 1.
+int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options);
 
 /// One tracking run, set up at construction (no file touched) and made by run().
 class TrackingRun {
