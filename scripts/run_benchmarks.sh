@@ -3,7 +3,7 @@
 #
 #   scripts/run_benchmarks.sh [--quick] [--only a,b,...] BUILD_DIR OUT_DIR REPORT
 #
-# Benchmarks: kernel, hausdorff, resolution, control, stability, forward_fenics, finger,
+# Benchmarks: kernel, hausdorff, resolution, control, stability, time_to_floor, forward_fenics, finger,
 # align, python (--only picks some; the report then also uses the CSVs already in OUT_DIR for the
 # others; finger has no smoke variant and runs only without --quick). Each writes
 # OUT_DIR/<name>.csv, its log OUT_DIR/<name>.log and OUT_DIR/<name>.meta (command, date,
@@ -12,7 +12,7 @@
 # suite runs it). Exit code: non-zero if any benchmark or the report failed.
 set -euo pipefail
 quick=0
-only="kernel,hausdorff,resolution,control,stability,forward_fenics,finger,align,python"
+only="kernel,hausdorff,resolution,control,stability,time_to_floor,forward_fenics,finger,align,python"
 # The goal cases of issue 13 (value + gradient, methods interleaved, medians of 3): the
 # exact sums of the large cases are timed on a sample of target points and scaled.
 goals() {  # bench_dir csv
@@ -87,6 +87,8 @@ if [ $quick -eq 1 ]; then
   run resolution "$b/bench_resolution" --quick --csv "$out/resolution.csv"
   run control "$b/bench_control" --quick --csv "$out/control.csv"
   run stability "$b/bench_stability" --quick --csv "$out/stability.csv"
+  run time_to_floor /usr/bin/python3 "$here/bench/bench_time_to_floor.py" "$build" --quick \
+    --csv "$out/time_to_floor.csv"
   align_bench --poses 2
   python_bench --n 2000 --torch-n 1000 --repeats 2
 else
@@ -99,6 +101,10 @@ else
   run resolution "$b/bench_resolution" --csv "$out/resolution.csv"
   run control "$b/bench_control" --csv "$out/control.csv"
   run stability "$b/bench_stability" --csv "$out/stability.csv"
+  # Issue 31's goals: softhd optimise on bending (default levels, then --levels 1) and torsion,
+  # one run at a time, each from its own clock (about 10 minutes on 2 cores).
+  run time_to_floor /usr/bin/python3 "$here/bench/bench_time_to_floor.py" "$build" \
+    --csv "$out/time_to_floor.csv"
   # softhd forward against FEniCS (skipped, with a line, without python3-dolfin).
   run forward_fenics /usr/bin/python3 "$here/bench/bench_forward_fenics.py" "$build" \
     --repeats 3 --csv "$out/forward_fenics.csv"
