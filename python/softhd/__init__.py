@@ -143,9 +143,10 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
     distance: "symmetric" or "scan_to_body" (rho = A, for partial views); cap: the soft cap
     (a length, 0: none). eps: the final refinement's epsilon (None: L/1000, L the diagonal of
     the body's bounding box). refine_points: points of each cloud in the refinement (0: all).
-    inlier: the overlap's threshold as a fraction of L. score: how the ``keep`` refined
-    candidates of the global start are compared: "visible" (the visible-surface score of
-    docs/formulation.md section 8.5: the camera at the scan frame's origin) or "rho".
+    inlier: the overlap's threshold as a fraction of L. score: how the global start's poses
+    are ranked and its ``keep`` refined candidates compared: "visible" (the visible-surface
+    score of docs/formulation.md section 8.5; the camera at the scan frame's origin) or "rho"
+    (rho itself, for a scan not in its camera's frame).
 
     Returns a dict: ``matrix`` (4, 4), ``twist`` (7,: omega, v, sigma with R = exp([omega]x),
     t = v, s = e^sigma), ``scale``, ``rho``, ``overlap`` (fraction of scan points within the

@@ -4,7 +4,8 @@
 /// chosen form: symmetric, scan_to_body, visible; with or without the soft cap) over a twist
 /// about the moved scan's centroid, with the exact gradient from ∂ρ̃/∂y_j, after a global
 /// start over a grid of rotations (and the principal-axis variants) evaluated cheaply on
-/// subsampled clouds with a larger ε.
+/// subsampled clouds with a larger ε, its poses ranked by a visible-surface score that tells a
+/// flipped one-sided view from the true one (CandidateScore).
 
 #include <string>
 
