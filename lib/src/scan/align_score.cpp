@@ -1,5 +1,6 @@
-// The visible-surface score that align() uses to choose among its refined candidates
-// (docs/formulation.md §8.5): a flipped one-sided view shows the body's hidden side.
+// The visible-surface score by which align() ranks its starts and chooses among its refined
+// candidates (docs/formulation.md §8.5): a flipped one-sided view shows the camera the side
+// of the body the scan does not have.
 
 #include <algorithm>
 #include <cmath>
