@@ -18,6 +18,7 @@ skipped with one line on stderr (softhd's rows are still written).
 
   bench/bench_align.py BUILD_DIR [--poses N] [--csv FILE] [--threads T] [--distance D]
                        [--cap C] [--body-points N] [--scan-points N] [--methods a,b]
+                       [--score visible|rho]
 """
 import argparse
 import csv
@@ -55,6 +56,7 @@ def main():
     ap.add_argument("--scan-points", type=int, default=2000)
     ap.add_argument("--methods", default="softhd,open3d")
     ap.add_argument("--refine-points", type=int, default=1000)
+    ap.add_argument("--score", default="visible", help="softhd's candidate score: visible | rho")
     a = ap.parse_args()
     sys.path.insert(0, os.path.join(os.path.abspath(a.build), "python"))
     sys.path.insert(0, HERE)
@@ -81,7 +83,8 @@ def main():
                 t0 = time.perf_counter()
                 if m == "softhd":
                     r = softhd.align(body, scan, distance=a.distance, cap=a.cap * L,
-                                     refine_points=a.refine_points, threads=a.threads)
+                                     refine_points=a.refine_points, threads=a.threads,
+                                     score=a.score)
                     M = r["matrix"]
                 else:
                     M, _ = open3d_align.align(body, scan, L / 40.0, seed=k)
@@ -102,7 +105,7 @@ def main():
         w.writeheader()
         w.writerows(rows)
     print(f"\n{a.poses} poses, body {len(body)} points, L = {L:.4g}, distance {a.distance}, "
-          f"cap {a.cap} L")
+          f"cap {a.cap} L, softhd score {a.score}")
     for m in methods:
         for view in ("full", "half"):
             sel = [r for r in rows if r["method"] == m and r["view"] == view]
@@ -110,8 +113,9 @@ def main():
             tr = np.median([r["translation_rel"] for r in sel])
             ok = sum(r["success"] for r in sel)
             sec = np.median([r["seconds"] for r in sel])
+            total = sum(r["seconds"] for r in sel)
             print(f"{m:7s} {view:4s}: success {ok}/{len(sel)}, median rotation {rot:.4g} deg, "
-                  f"median translation {tr:.3g} L, median {sec:.3g} s")
+                  f"median translation {tr:.3g} L, median {sec:.3g} s, total {total:.1f} s")
 
 
 if __name__ == "__main__":

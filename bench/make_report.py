@@ -490,7 +490,8 @@ def section_align(rows):
             "The deformed finger (data/targets/finger_target.ply, 4000 of its points as the "
             "body), random cameras (bench/synthetic_scan.py), views full and half (the left "
             "half of the image), 2000 visible points, noise 0.5 % of the body's size L, 3 % "
-            "outliers. softhd: `softhd.align` (distance and cap in align.log); Open3D: "
+            "outliers. softhd: `softhd.align` (distance, cap and candidate score in align.log; "
+            "the default score is the visible-surface score of docs/formulation.md §8.5); Open3D: "
             "FPFH + RANSAC + point-to-plane ICP, voxel L/40 (bench/peers/open3d_align.py). "
             "Success: rotation error < 2 degrees; translation error of the body's centre / L.\n\n")
     out = []
@@ -501,9 +502,11 @@ def section_align(rows):
                 continue
             med = lambda k: sorted(num(r, k) for r in sel)[len(sel) // 2]
             out.append([m, v, "%d/%d" % (sum(int(r["success"]) for r in sel), len(sel)),
-                        med("rotation_deg"), med("translation_rel"), med("seconds")])
+                        med("rotation_deg"), med("translation_rel"), med("seconds"),
+                        sum(num(r, "seconds") for r in sel)])
     return text + table(["method", "view", "success", "median rotation error (deg)",
-                         "median translation error / L", "median seconds"], out)
+                         "median translation error / L", "median seconds", "total seconds"],
+                        out)
 
 
 def section_time_to_floor(rows):

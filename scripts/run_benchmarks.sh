@@ -114,9 +114,9 @@ else
     --csv "$out/finger.csv" --optimise --optimise-max-iter 30 \
     --optimise-csv "$out/finger_optimise.csv"
   # softhd align against Open3D's FPFH + RANSAC + ICP (issue 32; Open3D skipped, with a
-  # line, without python3-open3d): 15 poses x 2 views (a sample of the 100 of the issue),
-  # about 2 minutes on 2 cores.
-  align_bench --poses 15 --distance scan_to_body
+  # line, without python3-open3d): issue 32's 100 poses x 2 views (its wall time in
+  # docs/bench/align.meta).
+  align_bench --poses 100 --distance scan_to_body
   # The Python module: overhead over C++ and HausdorffLoss against plain PyTorch (issue 14).
   python_bench --n 10000 --torch-n 10000 --repeats 5
 fi

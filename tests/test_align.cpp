@@ -181,6 +181,97 @@ TEST(Align, MovedScanGivesComposedPose) {
   EXPECT_LT(rotation_angle_between(a.pose.R, P.R), 0.01);  // and near the truth
 }
 
+/// A bent bar (volumetric grid, spacing h = 0.05): arm 1 the box [0, 1] × [0, 0.3] × [0, 0.1],
+/// arm 2 the same box turned 40° about the y axis at x = 1 (bent away from +z), and a knob
+/// 0.15 high under arm 1's back face z = 0. The scan of the front face z = 0.1 lies as well
+/// on the back face (the flip: a half turn about arm 1's long axis), where the knob's points
+/// add to the field and make ρ̃ a little lower.
+PointCloud bent_bar() {
+  std::vector<Eigen::Vector3d> p;
+  const double h = 0.05, a = 40.0 * M_PI / 180.0;
+  for (int i = 0; i <= 20; ++i)
+    for (int j = 0; j <= 6; ++j)
+      for (int k = 0; k <= 2; ++k) {
+        const Eigen::Vector3d q(i * h, j * h, k * h);
+        p.push_back(q);  // arm 1
+        if (i > 0)       // arm 2: x ↦ 1 + (x cos a, ·, −x sin a) + z (sin a, ·, cos a)
+          p.emplace_back(1.0 + q.x() * std::cos(a) + q.z() * std::sin(a), q.y(),
+                         -q.x() * std::sin(a) + q.z() * std::cos(a));
+      }
+  for (int i = 0; i <= 3; ++i)
+    for (int j = 0; j <= 3; ++j)
+      for (int k = 1; k <= 3; ++k) p.emplace_back(0.2 + i * h, 0.0 + j * h, -k * h);  // the knob
+  Eigen::MatrixXd m(static_cast<Eigen::Index>(p.size()), 3);
+  for (size_t i = 0; i < p.size(); ++i) m.row(static_cast<Eigen::Index>(i)) = p[i].transpose();
+  return PointCloud(m);
+}
+
+/// A half view of bent_bar(): the camera 3 above arm 1 looking down −z sees only arm 1's
+/// front face z = 0.1 (the body's nodes there, noise-free); the scan in the camera's frame
+/// and its true pose P (camera → body).
+PointCloud bent_bar_half_view(Pose* P) {
+  Eigen::Matrix3d axes;  // columns: the camera's x (right), y (down), z (forward) in the body
+  axes << 1, 0, 0, 0, -1, 0, 0, 0, -1;
+  P->R = axes;
+  P->t = Eigen::Vector3d(0.5, 0.15, 3.0);
+  Eigen::MatrixXd rows(21 * 7, 3);
+  for (int i = 0; i <= 20; ++i)
+    for (int j = 0; j <= 6; ++j) rows.row(i * 7 + j) << 0.05 * i, 0.05 * j, 0.1;
+  return PointCloud(apply_points(P->inverse(), rows));
+}
+
+// The flip of a one-sided view (formulation §8.5): the scan of arm 1's front face lies as well
+// (to ρ̃: better) on its back face, the bar turned over; both poses are local minima of ρ̃
+// (scan_to_body), which does not see the knob (the scan over it is as near the body). The
+// visible-surface score does: turned over, the camera sees the knob 0.15 before the scan.
+TEST(Align, VisibleScoreTellsAFlippedHalfViewApart) {
+  const PointCloud body = bent_bar();
+  const double L = body_size(body);
+  Pose P;
+  const PointCloud scan = bent_bar_half_view(&P);
+  // The flip: a half turn about arm 1's long axis (x, through its centre y = 0.15, z = 0.05).
+  Pose half_turn;
+  half_turn.R = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  half_turn.t = Eigen::Vector3d(0.0, 0.15, 0.05) - half_turn.R * Eigen::Vector3d(0.0, 0.15, 0.05);
+  const Pose flipped = compose(half_turn, P);
+  HausdorffOptions d;
+  d.params.epsilon = 0.01 * L;
+  d.threads = 1;
+  AlignOptions o;  // ρ̃ = A (scan_to_body), as for a partial view
+  o.form.sides = Sides::scan_to_body;
+  o.threads = 1;
+  const detail::PoseObjective rho(body.points(), body.volumes(), scan, d, o.form);
+  detail::LocalSettings st;
+  st.size = L;
+  st.max_iterations = 10;
+  // ρ̃ is lower at the flipped pose; both are local minima.
+  EXPECT_LT(rho.value(flipped.inverse(), nullptr, nullptr),
+            rho.value(P.inverse(), nullptr, nullptr));
+  std::vector<detail::LocalResult> refined;
+  for (const Pose& start : {P, flipped}) {
+    refined.push_back(detail::minimise_pose(rho, start.inverse(), st));
+    EXPECT_LT(rotation_angle_between(refined.back().pose.R, start.inverse().R), 1e-3);
+    EXPECT_LT((refined.back().pose.t - start.inverse().t).norm(), 1e-3 * L);
+  }
+  EXPECT_LT(refined[1].rho, refined[0].rho);
+  // The visible-surface score: near 0 at the true pose, 5 times more turned over.
+  const detail::VisibleScore score(body.points(), scan.points(), L, 0.05, 1);
+  const double s_true = score.value(P.inverse()), s_flip = score.value(flipped.inverse());
+  EXPECT_LT(s_true, 1e-3);
+  EXPECT_GT(s_flip, 5.0 * s_true);
+  // align()'s choice between the two: by ρ̃ (score rho, the old rule) the flip, by the
+  // visible score (after each candidate's nearest-point fit) the true pose.
+  o.score = CandidateScore::rho;
+  std::vector<detail::LocalResult> copy = refined;
+  EXPECT_EQ(detail::choose_candidate(body, scan, L, o, &copy), 1u);
+  o.score = CandidateScore::visible;
+  copy = refined;
+  const size_t chosen = detail::choose_candidate(body, scan, L, o, &copy);
+  EXPECT_EQ(chosen, 0u);
+  EXPECT_LT(rotation_angle_between(copy[chosen].pose.R, P.inverse().R), 1e-3);
+  EXPECT_LT((copy[chosen].pose.t - P.inverse().t).norm(), 1e-3 * L);
+}
+
 TEST(Align, OptionsRefusedNamingTheField) {
   const PointCloud body = asymmetric_body(50, 6);
   AlignOptions o;
@@ -198,7 +289,11 @@ TEST(Align, OptionsRefusedNamingTheField) {
   o = AlignOptions{};
   o.form.cap.c = -1.0;
   test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "cap.c");
+  o = AlignOptions{};
+  o.score_truncation = 0.0;
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "score_truncation");
   test::expect_error<InvalidArgument>([] { pose_kind_from_string("affine"); }, "align 'affine'");
+  test::expect_error<InvalidArgument>([] { candidate_score_from_string("best"); }, "score 'best'");
   const PointCloud flat(Eigen::MatrixXd::Ones(4, 3));
   test::expect_error<InvalidArgument>([&] { align(flat, body, AlignOptions{}); }, "coincide");
 }

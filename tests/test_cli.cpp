@@ -229,6 +229,8 @@ TEST_F(Cli, AlignRecoversAMovedCopyAndRefusesBadInput) {
                        write("shear.txt", "1 0.5 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n"),
                    "not a scaled rotation");
   expect_bad_input("align " + good + " " + write("nan.txt", "0 0 0\nnan 1 0\n") + out, "nan.txt:2");
+  expect_bad_input("align " + good + " " + good + out + " --score best", "--score must be");
+  expect_bad_input("align " + good + " " + good + out + " --score-cap 0", "--score-cap must be");
   expect_bad_input("align " + good + " " + good + out + " --similarity --scale-min 1.5",
                    "--scale-min must be in (0, 1]");
   expect_bad_input("align " + good + " " + good + out + " --scale-max 0.8",

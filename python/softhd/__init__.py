@@ -133,7 +133,7 @@ def hausdorff_nearest(X, Y, *, fields=False, threads=0):
 def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, scale_max=2.0,
           distance="symmetric", cap=0.0, eps=None, alpha=4.0, beta=4.0, gamma=2.0,
           global_start=True, initial=None, rotations=48, refine_points=1000, inlier=0.01,
-          threads=0):
+          threads=0, score="visible", keep=4):
     """The pose that takes ``scan`` (M, 3), in the camera's frame, onto ``body`` (N, 3)
     (docs/formulation.md section 8, as ``softhd align``): y -> s R y + t minimising rho over a
     twist, after a global start over ``rotations`` grid rotations (unless ``global_start`` is
@@ -143,7 +143,10 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
     distance: "symmetric" or "scan_to_body" (rho = A, for partial views); cap: the soft cap
     (a length, 0: none). eps: the final refinement's epsilon (None: L/1000, L the diagonal of
     the body's bounding box). refine_points: points of each cloud in the refinement (0: all).
-    inlier: the overlap's threshold as a fraction of L.
+    inlier: the overlap's threshold as a fraction of L. score: how the global start's poses
+    are ranked and its ``keep`` refined candidates compared: "visible" (the visible-surface
+    score of docs/formulation.md section 8.5; the camera at the scan frame's origin) or "rho"
+    (rho itself, for a scan not in its camera's frame).
 
     Returns a dict: ``matrix`` (4, 4), ``twist`` (7,: omega, v, sigma with R = exp([omega]x),
     t = v, s = e^sigma), ``scale``, ``rho``, ``overlap`` (fraction of scan points within the
@@ -161,7 +164,7 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
                     beta=float(beta), gamma=float(gamma), global_start=bool(global_start),
                     initial=init, rotations=int(rotations),
                     refine_points=int(refine_points), inlier=float(inlier),
-                    threads=int(threads))
+                    threads=int(threads), score=str(score), keep=int(keep))
     d["twist"] = d["twist"].reshape(7)
     d["residuals"] = d["residuals"].reshape(-1)
     return d

@@ -13,7 +13,7 @@ py::dict align_clouds(const Array& body, const std::optional<Array>& body_volume
                       const std::string& distance, double cap, std::optional<double> eps,
                       double alpha, double beta, double gamma, bool global_start,
                       const std::optional<Array>& initial, int rotations, int refine_points,
-                      double inlier, int threads) {
+                      double inlier, int threads, const std::string& score, int keep) {
   check_cloud(body, body_volumes, "body");
   check_cloud(scan, std::nullopt, "scan");
   scan::AlignOptions o;
@@ -27,6 +27,8 @@ py::dict align_clouds(const Array& body, const std::optional<Array>& body_volume
   o.distance.params.gamma = gamma;
   o.global_start = global_start;
   o.rotations = rotations;
+  o.score = scan::candidate_score_from_string(score);
+  o.keep = keep;
   o.refine_points = refine_points;
   o.inlier_distance = inlier;
   o.threads = threads;
@@ -66,7 +68,8 @@ void bind_align(py::module_& m) {
         py::arg("scan").noconvert(), py::kw_only(), py::arg("similarity"), py::arg("scale_min"),
         py::arg("scale_max"), py::arg("distance"), py::arg("cap"), py::arg("eps"), py::arg("alpha"),
         py::arg("beta"), py::arg("gamma"), py::arg("global_start"), py::arg("initial"),
-        py::arg("rotations"), py::arg("refine_points"), py::arg("inlier"), py::arg("threads"));
+        py::arg("rotations"), py::arg("refine_points"), py::arg("inlier"), py::arg("threads"),
+        py::arg("score"), py::arg("keep"));
 }
 
 }  // namespace softhd::python

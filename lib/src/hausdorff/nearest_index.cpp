@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <nanoflann.hpp>
 #include <utility>
 #include <vector>
 
@@ -14,24 +13,12 @@
 #include <omp.h>
 #endif
 
+#include "../common/matrix_rows.hpp"
+
 namespace softhd::detail {
 
 namespace {
-// nanoflann's dataset adaptor: reads the caller's N by d matrix in place.
-struct MatrixRows {
-  const Eigen::MatrixXd* points;
-  size_t kdtree_get_point_count() const { return static_cast<size_t>(points->rows()); }
-  double kdtree_get_pt(size_t i, size_t d) const {
-    return (*points)(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(d));
-  }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox&) const {
-    return false;
-  }
-};
-using FlannTree =
-    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, MatrixRows>,
-                                        MatrixRows, -1, size_t>;
+using FlannTree = MatrixRowsTree<>;
 }  // namespace
 
 // The adaptor must live at a fixed address as long as the tree (nanoflann keeps a

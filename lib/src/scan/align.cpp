@@ -24,6 +24,8 @@ constexpr EnumNames<AlignStatus, 3> kAlignStatusNames{
     {{AlignStatus::converged, "converged"},
      {AlignStatus::iteration_limit, "iteration_limit"},
      {AlignStatus::failed, "failed"}}};
+constexpr EnumNames<CandidateScore, 2> kCandidateScoreNames{
+    {{CandidateScore::visible, "visible"}, {CandidateScore::rho, "rho"}}};
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw InvalidArgument("align: " + what);
@@ -124,14 +126,22 @@ std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& sc
   const int n = static_cast<int>(starts.size());
   parallel_each(n, o.threads,
                 [&](size_t i) { found[i] = detail::minimise_pose(coarse, starts[i], st); });
+  std::vector<double> score(found.size());
+  for (size_t k = 0; k < found.size(); ++k) score[k] = found[k].rho;
+  if (o.score == CandidateScore::visible) {  // rank by the visible-surface score instead
+    const detail::VisibleScore visible(body.points(), scan.points(), L, o.score_truncation,
+                                       o.threads);
+    for (size_t k = 0; k < found.size(); ++k)
+      if (std::isfinite(score[k])) score[k] = visible.value(found[k].pose);
+  }
   std::vector<size_t> order(found.size());
   std::iota(order.begin(), order.end(), size_t{0});
   std::stable_sort(order.begin(), order.end(),
-                   [&](size_t a, size_t b) { return found[a].rho < found[b].rho; });
+                   [&](size_t a, size_t b) { return score[a] < score[b]; });
   std::vector<Pose> kept;
   for (size_t k : order) {
     const Pose& q = found[k].pose;
-    bool distinct = std::isfinite(found[k].rho);
+    bool distinct = std::isfinite(score[k]);
     for (const Pose& p : kept)
       if (rotation_angle_between(p.R, q.R) < 10.0 * M_PI / 180.0 && (p.t - q.t).norm() < 0.1 * L)
         distinct = false;
@@ -167,6 +177,10 @@ PoseKind pose_kind_from_string(const std::string& name) {
   return enum_from_name(kPoseKindNames, name, "align");
 }
 std::string to_string(AlignStatus status) { return enum_name(kAlignStatusNames, status); }
+std::string to_string(CandidateScore score) { return enum_name(kCandidateScoreNames, score); }
+CandidateScore candidate_score_from_string(const std::string& name) {
+  return enum_from_name(kCandidateScoreNames, name, "score");
+}
 
 void AlignOptions::validate() const {
   require(std::isfinite(scale_min) && scale_min > 0.0 && scale_min <= 1.0,
@@ -191,6 +205,8 @@ void AlignOptions::validate() const {
   require(candidate_points >= 10, "candidate_points must be >= 10");
   require(max_iterations >= 0, "max_iterations must be >= 0");
   require(std::isfinite(tolerance) && tolerance > 0.0, "tolerance must be > 0");
+  require(std::isfinite(score_truncation) && score_truncation > 0.0,
+          "score_truncation must be > 0");
   require(nearest_iterations >= 0, "nearest_iterations must be >= 0");
   require(std::isfinite(inlier_distance) && inlier_distance > 0.0, "inlier_distance must be > 0");
   check_threads(threads);
@@ -254,9 +270,7 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
           static_cast<int>(candidates.size()), spread ? options.threads : 1,
           [&](size_t k) { refined[k] = detail::minimise_pose(first, candidates[k], st); });
     }
-    size_t best = 0;
-    for (size_t k = 1; k < refined.size(); ++k)
-      if (refined[k].rho < refined[best].rho) best = k;
+    const size_t best = detail::choose_candidate(body, scan, L, options, &refined);
     out.iterations = refined[best].iterations;
     // The best on the refinement clouds: at the first ε again if it was compared on
     // smaller clouds, then at the others.

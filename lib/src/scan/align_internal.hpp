@@ -84,6 +84,36 @@ class NearestPoints {
   std::unique_ptr<Tree> tree_;
 };
 
+/// The score align() chooses its candidate by (docs/formulation.md §8.5): with the camera at
+/// the scan frame's origin, the body points a pose Q puts nearest the camera in their pixel
+/// (over the pixels that hold scan points) should lie on the scan, and every scan point on
+/// the body. S(Q) = ½ [mean_j min(d(y_j, Q(B)), c) + mean_{x∈V} min(d(x, Y), c)] / (s_Q L),
+/// c = truncation · s_Q L: dimensionless, 0 for a perfect fit. Exact nearest distances (k-d
+/// trees built once); no gradient (it only ranks local minima).
+class VisibleScore {
+ public:
+  VisibleScore(const Eigen::MatrixXd& body, const Eigen::MatrixXd& scan, double size,
+               double truncation, int threads);
+  double value(const Pose& Q) const;
+
+ private:
+  Eigen::Index pixel_of(const Eigen::Vector3d& p) const;  ///< −1 outside the image
+  Eigen::MatrixXd body_, scan_;
+  double size_, truncation_;
+  int threads_;
+  NearestPoints body_tree_, scan_tree_;
+  Eigen::Vector3d e1_, e2_, e3_;
+  double pixel_ = 1.0, depth_tolerance_ = 0.0, lo_u_ = 0.0, lo_v_ = 0.0;
+  Eigen::Index nu_ = 0, nv_ = 0;
+  std::vector<char> footprint_;  ///< nu × nv: 1 where a scan point falls
+};
+
+/// The refined candidate (Q: body → scan frame) align() continues from: the lowest ρ̃ (score
+/// rho), or (score visible) the lowest VisibleScore after each candidate is taken by
+/// nearest_refinement (its pose replaced by the fitted one); ties: the first.
+size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double size,
+                        const AlignOptions& options, std::vector<LocalResult>* refined);
+
 /// The least-squares pose (rigid, or a similarity with s clamped to [s_min, s_max]) taking
 /// the rows `from` onto the rows `to` (Kabsch/Umeyama via the SVD of the cross-covariance).
 Pose fit_pose(const Eigen::MatrixXd& from, const Eigen::MatrixXd& to, bool similarity, double s_min,

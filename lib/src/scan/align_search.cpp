@@ -5,9 +5,9 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
-#include <nanoflann.hpp>
 #include <random>
 
+#include "../common/matrix_rows.hpp"
 #include "align_internal.hpp"
 #include "softhd/parallel.hpp"
 
@@ -55,19 +55,8 @@ std::vector<Eigen::Index> subsample(Eigen::Index rows, Eigen::Index count, unsig
 }
 
 namespace {
-struct Rows {  // nanoflann's adaptor over the rows of an N by 3 matrix, read in place
-  const Eigen::MatrixXd* points;
-  size_t kdtree_get_point_count() const { return static_cast<size_t>(points->rows()); }
-  double kdtree_get_pt(size_t i, size_t d) const {
-    return (*points)(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(d));
-  }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox&) const {
-    return false;
-  }
-};
-using Flann = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Rows>, Rows,
-                                                  3, size_t>;
+using Rows = softhd::detail::MatrixRows;
+using Flann = softhd::detail::MatrixRowsTree<3>;
 }  // namespace
 
 struct NearestPoints::Tree {  // the adaptor must stay at one address while the tree lives
