@@ -162,6 +162,14 @@ void bind_optimise(py::module_& m) {
       .def_property_readonly("seconds", [](const PyOptimise& r) { return r.summary.seconds; })
       .def_property_readonly("control", [](const PyOptimise& r) { return r.summary.control; })
       .def_property_readonly(
+          "pose",
+          [](const PyOptimise& r) -> py::object {
+            if (!r.summary.pose) return py::none();
+            return py::cast(Eigen::Matrix4d(r.summary.pose->matrix()));
+          },
+          "a target in the camera's frame: the 4x4 pose (scan -> body) found with the control; "
+          "else None")
+      .def_property_readonly(
           "displacements",
           [](const PyOptimise& r) { return node_rows(r.summary.displacement, r.dim); })
       .def_property_readonly("history",

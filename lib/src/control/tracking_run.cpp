@@ -131,6 +131,12 @@ struct TrackingRun::Impl {
                             "D but the scene's body is " + std::to_string(scene.dim()) + "D");
     ShapeObjectiveOptions so = options.objective();
     apply_target_settings(target, &so);
+    if (target.frame == TargetFrame::camera) {  // the pose joins the control (§8.10)
+      if (options.levels > 1)
+        throw InvalidArgument(
+            "levels: a target in the camera's frame (joint pose) runs on one level (levels 1)");
+      so.pose = start_pose(target, a, so, options.threads);
+    }
     objective = std::make_unique<ShapeObjective>(
         a, c, HausdorffTarget(target.cloud, so.hausdorff), so,
         fe::state_solver_factory(scene, options.state_backend, &a, &c));
@@ -162,6 +168,12 @@ struct TrackingRun::Impl {
     sum["particles"] = to_string(objective->options().particles);  // the target's may differ
     sum["volumes"] = to_string(objective->options().volumes);
     sum["state_backend"] = to_string(options.state_backend);
+    if (const std::optional<scan::Pose>& p = objective->options().pose) {
+      sum["frame"] = "camera";
+      sum["align"] = scan::to_string(objective->options().pose_kind);
+      sum["pose_start"] = {{"matrix", detail::matrix_json(p->matrix())},
+                           {"twist", detail::matrix_json(p->twist())}};
+    }
     sum["ranks"] = ranks;
     return sum;
   }
