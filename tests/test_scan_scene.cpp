@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <string>
@@ -146,6 +148,34 @@ TEST(ScanScene, CameraFrameKeys) {
     "target": {"kind": "arc", "frame": "camera"}})",
                                         testing::TempDir() + "/scan_scene_arc.json");
   expect_error<Error>([&] { scene_target(arc, arc.make_mesh()); }, "unknown key 'frame'");
+}
+
+// Without "pose" the start is align against the body at rest: for the rest nodes seen from a
+// camera (moved by a rigid motion) it puts every scan point on a node (to 1e-6 of the body's
+// size; which of the box's symmetric poses is not asked).
+TEST(ScanScene, CameraFrameWithoutAPoseStartsFromAlign) {
+  const fe::Scene s0 = scene_with(R"({"kind": "arc"})");
+  const fe::Assembler A = s0.make_assembler();
+  const Eigen::MatrixXd& nodes = A.mesh().nodes;
+  Eigen::Matrix<double, 7, 1> tw;
+  tw << 0.7, -0.4, 1.1, 3.0, -1.0, 2.0, 0.0;
+  const scan::Pose G = scan::Pose::from_twist(tw);
+  write_ply_cloud(testing::TempDir() + "/scan_scene_rest.ply", G.apply(PointCloud(nodes), false));
+  const fe::Scene s = scene_with(R"({"kind": "cloud", "file": "scan_scene_rest.ply",
+                                      "frame": "camera"})");
+  const SceneTarget t = scene_target(s, s.make_mesh());
+  EXPECT_FALSE(t.pose);
+  EXPECT_NE(t.description.find("start pose by align"), std::string::npos) << t.description;
+  ShapeObjectiveOptions o;
+  apply_target_settings(t, &o);
+  const Eigen::MatrixXd moved = scan::apply_points(start_pose(t, A, o), t.cloud.points());
+  double worst = 0.0;
+  for (Eigen::Index i = 0; i < moved.rows(); ++i)
+    worst = std::max(worst, (nodes.rowwise() - moved.row(i)).rowwise().norm().minCoeff());
+  EXPECT_LT(worst, 1e-6 * std::sqrt(2.0 * 2.0 + 1.0 + 0.04));
+  const fe::Scene body = scene_with(R"({"kind": "cloud", "file": "scan_scene_rest.ply"})");
+  expect_error<InvalidArgument>([&] { start_pose(scene_target(body, body.make_mesh()), A, o); },
+                                "body's frame");
 }
 
 }  // namespace
