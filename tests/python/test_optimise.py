@@ -225,3 +225,15 @@ def test_camera_frame_target_returns_the_pose(scene_file, tmp_path):
     bad = dict(spec, target=dict(spec["target"], frame="world"))
     with pytest.raises(softhd.InvalidArgument, match='target.frame must be "body" or "camera"'):
         softhd.optimise(softhd.Scene.load(scene_file(bad, "bad.json")), max_iter=1)
+
+
+def test_initial_control_starts_there(scene_file):
+    """initial: the run starts at the given control (an earlier run's: its final rho is the next
+    run's start); a control of the wrong size is refused."""
+    scene = softhd.Scene.load(scene_file(SMALL_ARC))
+    r1 = softhd.optimise(scene, max_iter=2)
+    r2 = softhd.optimise(scene, max_iter=1, initial=r1.control)
+    assert r2.rho_start == pytest.approx(r1.rho_final, rel=1e-6)
+    assert r2.rho_start < softhd.optimise(scene, max_iter=1).rho_start
+    with pytest.raises(softhd.InvalidArgument, match="initial_control has 3 values, expected"):
+        softhd.optimise(scene, max_iter=1, initial=[0.0, 0.0, 0.0])

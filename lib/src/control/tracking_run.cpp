@@ -65,6 +65,11 @@ void TrackingRunOptions::validate() const {
     throw InvalidArgument("coarse_tolerance must be in (0, 1)");
   if (resume && out.empty())
     throw InvalidArgument("resume needs the run's folder (the out field is empty)");
+  if (initial_control.size() > 0 && levels > 1)
+    throw InvalidArgument(
+        "initial_control: a multilevel run (levels > 1) starts from its coarse "
+        "levels' control; give levels 1");
+  if (!initial_control.allFinite()) throw InvalidArgument("initial_control must be finite");
   if (distance) {
     const TargetDistance& d = *distance;
     if (d.sides == Sides::visible)
@@ -377,8 +382,15 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
   TrackingRunSummary s = d.setup;
   // The scene's bounds and start where a control acts (0 where it touches none of its
   // regions); a multilevel run starts from its coarse levels' control.
-  const Eigen::VectorXd m0 = d.levels.empty() ? d.control.constant(d.scene.control_initial)
-                                              : d.run_coarse_levels(to, callbacks, &s);
+  const Eigen::Index n = d.control.size();
+  if (d.options.initial_control.size() > 0 && d.options.initial_control.size() != n)
+    throw InvalidArgument("initial_control has " +
+                          std::to_string(d.options.initial_control.size()) + " values, expected " +
+                          std::to_string(n) + " (the scene's controls)");
+  const Eigen::VectorXd m0 = !d.levels.empty() ? d.run_coarse_levels(to, callbacks, &s)
+                             : d.options.initial_control.size() > 0
+                                 ? d.options.initial_control
+                                 : d.control.constant(d.scene.control_initial);
   double offset = 0.0;  // the coarse levels' time
   for (const LevelReport& l : s.levels) offset += l.seconds;
   if (!d.levels.empty() && d.options.max_seconds > 0.0)

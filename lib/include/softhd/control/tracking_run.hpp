@@ -92,6 +92,10 @@ struct TrackingRunOptions {
   double coarse_tolerance = 5e-2;
   ///@}
   fe::StateBackend state_backend = fe::StateBackend::kCholmod;  ///< the state solver
+  /// The starting control (one value per control, clamped into the bounds), e.g. an earlier
+  /// run's: a staged run (docs/formulation.md §8.10). Empty (default): the scene's
+  /// control.initial everywhere. Single-level runs only (levels 1).
+  Eigen::VectorXd initial_control;
   /// A target cloud file (text or PLY) instead of the scene's "target"; empty: the scene's.
   std::string target_file;
   /// The distance's form (docs/formulation.md §8), replacing the target's own as a whole (a
