@@ -319,6 +319,28 @@ TEST(ShapeObjective, RigidlyMovedTargetWithTheInversePoseGivesTheSameObjective) 
   }
 }
 
+// The visible distance chosen after construction (set_form, as a run's target form does): the
+// same J as an objective made with it.
+TEST(ShapeObjective, VisibleFormSetLaterWithAPoseIsTheSame) {
+  const fe::Assembler A = strip(3);
+  const fe::ControlSpace space(A.mesh(), A.geometry(), fe::ControlKind::kElement);
+  const scan::Pose G = camera_motion();
+  ShapeObjectiveOptions o;
+  o.hausdorff.params.epsilon = 1e-2;
+  o.pose = G.inverse();
+  ShapeObjective later(A, space, HausdorffTarget(G.apply(bent_target(), false)), o);
+  o.form.sides = Sides::visible;
+  ShapeObjective made(A, space, HausdorffTarget(G.apply(bent_target(), false)), o);
+  const Eigen::VectorXd m = Eigen::VectorXd::Constant(space.size(), -0.2);
+  const ShapeEvaluation symmetric = later.evaluate(m, false);
+  later.set_form(o.form);
+  const ShapeEvaluation a = later.evaluate(m, true), b = made.evaluate(m, true);
+  ASSERT_TRUE(a.status == EvaluationStatus::ok && b.status == EvaluationStatus::ok);
+  EXPECT_EQ(a.J, b.J);
+  EXPECT_EQ(a.gradient, b.gradient);
+  EXPECT_NE(a.B, symmetric.B);  // the mask changed B
+}
+
 TEST(ShapeObjective, PoseOptionsAreChecked) {
   const fe::Assembler A = strip(3);
   const fe::ControlSpace space(A.mesh(), A.geometry(), fe::ControlKind::kElement);

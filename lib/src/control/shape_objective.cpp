@@ -74,8 +74,10 @@ struct ShapeObjective::Impl {
     if (!solver) throw InvalidArgument("ShapeObjective: the state solver factory made none");
     const fe::Mesh& mesh = a.mesh();
     dim = mesh.dim;
-    if (options.particles == Particles::boundary || options.camera ||
-        (options.pose && options.form.sides == Sides::visible)) {
+    if (options.pose && dim != 3)
+      throw InvalidArgument("pose: a pose (target in the camera's frame) needs a 3D body");
+    // With a pose the boundary is kept too: set_form may choose the visible distance later.
+    if (options.particles == Particles::boundary || options.camera || options.pose) {
       if (dim != 3)
         throw InvalidArgument(options.particles == Particles::boundary
                                   ? "particles boundary needs a 3D body"
@@ -95,8 +97,6 @@ struct ShapeObjective::Impl {
     }
     cache.push_back({Eigen::VectorXd(), fe::rest_state(a)});
     if (options.pose) {
-      if (dim != 3)
-        throw InvalidArgument("pose: a pose (target in the camera's frame) needs a 3D body");
       start_inverse = options.pose->inverse();
       const Eigen::Vector3d mean = particles(cache.front().state.u).points().colwise().mean();
       centre = scan::apply_points(start_inverse, mean.transpose()).row(0).transpose();
