@@ -174,7 +174,7 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
             json.dump(j, f, indent=1)
         eps = a.first_eps * L if stage == 1 and a.first_eps else None
         r = softhd.optimise(softhd.Scene.load(path), max_iter=a.max_iter, algorithm=a.algorithm,
-                            initial=initial, eps=eps)
+                            initial=initial, eps=eps, pose_move=a.pose_move)
         P = r.pose
         centre = scan.mean(0)  # the pose's error where the body is (the camera is 3 L away)
         shift = np.linalg.norm((P[:3, :3] - P_true[:3, :3]) @ centre + P[:3, 3] - P_true[:3, 3])
@@ -213,6 +213,8 @@ def main():
     ap.add_argument("--first-eps", type=float, default=None,
                     help="--joint: epsilon of the first joint stage as a fraction of L (later "
                          "stages: the default)")
+    ap.add_argument("--pose-move", type=float, default=None,
+                    help="--joint: the pose's move limit as a fraction of the control's")
     ap.add_argument("--algorithm", default=None, help="--joint: the optimiser (default mma)")
     ap.add_argument("--start", choices=["align", "true"], default="align",
                     help="--joint: the start pose, align's at rest or (a diagnostic) the true one")

@@ -243,7 +243,7 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
              algorithm=None, move_limit=None, particles=None, volumes=None, alpha=None,
              beta=None, gamma=None, eps=None, method=None, tol=None, tikhonov_mass=None,
              tikhonov_grad=None, coarse_level=None, levels=None, distance=None, cap=None,
-             cap_q=None, initial=None, callback=None, threads=0):
+             cap_q=None, initial=None, pose_move=None, callback=None, threads=0):
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
     target: the run ``softhd optimise`` makes (the library's TrackingRun), with its options and
     its defaults for every option left None (:func:`optimise_defaults` lists them, e.g. method
@@ -261,7 +261,8 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     iteration on the user's mesh, whose result it returns); any other return value continues;
     an exception raised by the callback ends the run and propagates. initial: the starting
     control (one value per control, e.g. an earlier result's ``control``; levels 1 only); None:
-    the scene's control.initial.
+    the scene's control.initial. pose_move: a scene target in the camera's frame only, the
+    pose's move limit as a fraction of the control's, in (0, 1] (default 1).
     """
     points = vols = file = None
     if isinstance(target, (str, bytes, _os.PathLike)):
@@ -278,7 +279,7 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
                           coarse_level=coarse_level, levels=levels, distance=distance,
                           cap=cap, cap_q=cap_q,
                           initial=None if initial is None else _as_float64(initial, "initial"),
-                          callback=callback, threads=threads)
+                          pose_move=pose_move, callback=callback, threads=threads)
 
 
 def optimise_defaults():

@@ -68,6 +68,7 @@ py::dict optimise_defaults() {
   py::dict out;
   out["max_iter"] = d.max_iterations;
   out["initial"] = py::none();  // the scene's control.initial
+  out["pose_move"] = d.pose_move;
   out["max_seconds"] = d.max_seconds;
   out["rel_tol"] = d.relative_change;
   out["algorithm"] = to_string(d.algorithm);
@@ -199,9 +200,10 @@ void bind_optimise(py::module_& m) {
          const std::optional<std::string>& coarse_level, std::optional<int> levels,
          const std::optional<std::string>& distance, std::optional<double> cap,
          std::optional<double> cap_q, const std::optional<Eigen::VectorXd>& initial,
-         const py::object& callback, int threads) {
+         std::optional<double> pose_move, const py::object& callback, int threads) {
         TrackingRunOptions o;
         if (initial) o.initial_control = *initial;
+        if (pose_move) o.pose_move = *pose_move;
         if (distance || cap || cap_q) {  // the form as a whole (TrackingRunOptions::distance)
           TargetDistance form;
           if (distance) form.sides = sides_from_string(*distance);
@@ -235,7 +237,8 @@ void bind_optimise(py::module_& m) {
       py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("eps"),
       py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"), py::arg("tikhonov_grad"),
       py::arg("coarse_level"), py::arg("levels"), py::arg("distance"), py::arg("cap"),
-      py::arg("cap_q"), py::arg("initial"), py::arg("callback"), py::arg("threads"));
+      py::arg("cap_q"), py::arg("initial"), py::arg("pose_move"), py::arg("callback"),
+      py::arg("threads"));
   m.def("optimise_defaults", &optimise_defaults,
         "The defaults of optimise's options (softhd optimise's: TrackingRunOptions).");
 }

@@ -237,3 +237,5 @@ def test_initial_control_starts_there(scene_file):
     assert r2.rho_start < softhd.optimise(scene, max_iter=1).rho_start
     with pytest.raises(softhd.InvalidArgument, match="initial_control has 3 values, expected"):
         softhd.optimise(scene, max_iter=1, initial=[0.0, 0.0, 0.0])
+    with pytest.raises(softhd.InvalidArgument, match=r"pose_move must be in \(0, 1\]"):
+        softhd.optimise(scene, max_iter=1, pose_move=0.0)

@@ -242,6 +242,7 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
     f["pose"] = to_string(so.pose_kind) + " from " + hash_of(pose->matrix()) + " bounds " +
                 exact_text(b.rotation) + " " + exact_text(b.translation) + " " +
                 exact_text(b.scale_min) + " " + exact_text(b.scale_max);
+    if (b.move != 1.0) f["pose"] += " move " + exact_text(b.move);
   }
   f["checkpoint"] = "every " + std::to_string(options.checkpoint_every) + " iterations";
   const BoundedOptimizerOptions& o = options.optimizer;
@@ -259,6 +260,7 @@ void PoseBounds::validate() const {
     throw InvalidArgument("pose_bounds.translation must be finite and > 0 (a fraction of L)");
   if (!(scale_min > 0.0 && scale_min <= scale_max && std::isfinite(scale_max)))
     throw InvalidArgument("pose_bounds.scale_min, scale_max: need 0 < scale_min <= scale_max");
+  if (!(move > 0.0 && move <= 1.0)) throw InvalidArgument("pose_bounds.move must be in (0, 1]");
 }
 
 namespace {
@@ -399,6 +401,10 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     if (stop) throw StopRequest{};
   };
   BoundedOptimizerOptions opt = options.optimizer;
+  if (np > 0 && options.pose_bounds.move != 1.0) {  // the pose slower than the control
+    opt.move_scale.setOnes(nm + np);
+    opt.move_scale.tail(np).setConstant(options.pose_bounds.move);
+  }
   if (opt.max_seconds > 0.0)  // a total over the resumes
     opt.max_seconds = std::max(1e-9, opt.max_seconds - recorder.logged_seconds());
   BoundedOptimizerSummary r;

@@ -70,6 +70,8 @@ void TrackingRunOptions::validate() const {
         "initial_control: a multilevel run (levels > 1) starts from its coarse "
         "levels' control; give levels 1");
   if (!initial_control.allFinite()) throw InvalidArgument("initial_control must be finite");
+  if (!(pose_move > 0.0 && pose_move <= 1.0))
+    throw InvalidArgument("pose_move must be in (0, 1] (the pose's move limit over the control's)");
   if (distance) {
     const TargetDistance& d = *distance;
     if (d.sides == Sides::visible)
@@ -115,6 +117,7 @@ ShapeTrackingOptions TrackingRunOptions::tracking() const {
   o.relative_change = relative_change;
   o.move_limit = move_limit;
   t.checkpoint_every = checkpoint_every;
+  t.pose_bounds.move = pose_move;
   if (!out.empty()) t.checkpoint = (fs::path(out) / "checkpoint.bin").string();
   t.resume = resume;
   return t;

@@ -58,6 +58,10 @@ struct PoseBounds {
   /// σ within [log(s₀/scale_max), log(s₀/scale_min)] (s₀: the start's scale).
   double scale_min = 0.5, scale_max = 2.0;
   ///@}
+  /// The pose's move limit as a fraction of the control's (BoundedOptimizerOptions::move_scale
+  /// of the pose variables), in (0, 1]: 1 (default) moves both by the same fraction of their
+  /// range; smaller lets the control bend before the pose turns (docs/formulation.md §8.10).
+  double move = 1.0;
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
 };

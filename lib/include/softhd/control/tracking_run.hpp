@@ -96,6 +96,9 @@ struct TrackingRunOptions {
   /// run's: a staged run (docs/formulation.md §8.10). Empty (default): the scene's
   /// control.initial everywhere. Single-level runs only (levels 1).
   Eigen::VectorXd initial_control;
+  /// A camera-frame target (docs/formulation.md §8.10): the pose's move limit as a fraction of
+  /// the control's, in (0, 1] (PoseBounds::move; default 1).
+  double pose_move = 1.0;
   /// A target cloud file (text or PLY) instead of the scene's "target"; empty: the scene's.
   std::string target_file;
   /// The distance's form (docs/formulation.md §8), replacing the target's own as a whole (a
