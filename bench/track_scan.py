@@ -35,13 +35,15 @@ degrees off (the finger's tip is bent up by a third of its length), the rounds b
 degrees, and the node error's rms is 48x the clean run's.
 
 --joint (the pose refined with the control, docs/formulation.md §8.10) does not reach the goal
-either: from align's 23-degree start every variant left the control near zero and let the pose
-absorb the bend (seed 1, full view, 40 iterations: pose 15-27 degrees off, node rms 11.8-12.0 =
-143-145x the clean run's 0.0827; with the control fitted first with the pose fixed, --staged:
-12.6 degrees, 126x). A slower pose, --pose-move 0.1: 15.8 degrees, 94x; with --cap-stages 3
-as well: 10.5 degrees, 63x. Seeds 2 and 3 and seed 1's half view: align at rest is 89, 92 and 180
-degrees off, the joint runs end 87, 89 and 178 degrees off (rms 12.0). Variants: --start true (a diagnostic: from the true pose it drifts to 20
-degrees), --algorithm, --cap-stages K (the cap re-made from each run's state), --first-eps F.
+either: from align's 23-degree start, with the same move limit for pose and control, every
+variant left the control near zero and let the pose absorb the bend (seed 1, full view, 40
+iterations: pose 15-27 degrees off, node rms 11.8-12.0 = 143-145x the clean run's 0.0827; with
+the control fitted first with the pose fixed, --staged: 12.6 degrees, 126x). A slower pose,
+--pose-move 0.1: 15.8 degrees, 94x; with --cap-stages 3 as well: 10.5 degrees, 63x. Seeds 2
+and 3 and seed 1's half view: align at rest is 89, 92 and 180 degrees off, the joint runs end
+87, 89 and 178 degrees off (rms 12.0). Variants: --start true (a diagnostic: from the true pose
+it drifts to 20 degrees), --algorithm, --cap-stages K (the cap re-made from each run's state),
+--first-eps F, --pose-move F, --no-crop, --probe (rho at the true and the start pose).
 --clean-rms R reuses the clean run's rms (0.08268 at 40 iterations; it depends on neither the
 seed nor the view).
 Prints one line per stage and a table of node errors; writes the scan, the aligned scan and
@@ -179,7 +181,8 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         P = r.pose
         centre = scan.mean(0)  # the pose's error where the body is (the camera is 3 L away)
         shift = np.linalg.norm((P[:3, :3] - P_true[:3, :3]) @ centre + P[:3, 3] - P_true[:3, 3])
-        log(f"joint stage {stage}{f' (eps {eps:.3g})' if eps else ''}: optimise {r.iterations} iterations, {r.seconds:.1f} s, "
+        tag = f" (eps {eps:.3g})" if eps else ""
+        log(f"joint stage {stage}{tag}: optimise {r.iterations} iterations, {r.seconds:.1f} s, "
             f"{r.termination}; rho {r.rho_start:.4g} -> {r.rho_final:.4g}; pose rotation error "
             f"{rotation_error(P[:3, :3], P_true):.3f} deg, error at the scan's centroid "
             f"{shift:.4g} ({shift / L:.3g} L); node error rms "
@@ -204,13 +207,14 @@ def main():
                     help="--joint: also print rho at the true control m* = -1.5 X3 and at rest, "
                          "each at the true pose and at the start pose (one evaluation each)")
     ap.add_argument("--no-crop", action="store_true",
-                    help="--joint: keep the points outside the body's box (moved by the start pose)")
+                    help="--joint: keep the points outside the body's box (moved by the start "
+                         "pose)")
     ap.add_argument("--staged", action="store_true",
                     help="--joint: first fit the control with the pose fixed (the alternation's "
                          "round 1), re-align against that body, then the joint run from both")
     ap.add_argument("--cap-stages", type=int, default=1,
-                    help="--joint: K joint runs, each from the last one's control and pose with the "
-                         "cap 3 x the 90 %% quantile of the scan's distances to its body")
+                    help="--joint: K joint runs, each from the last one's control and pose with "
+                         "the cap 3 x the 90 %% quantile of the scan's distances to its body")
     ap.add_argument("--first-eps", type=float, default=None,
                     help="--joint: epsilon of the first joint stage as a fraction of L (later "
                          "stages: the default)")
