@@ -39,7 +39,8 @@ either: from align's 23-degree start, with the same move limit for pose and cont
 variant left the control near zero and let the pose absorb the bend (seed 1, full view, 40
 iterations: pose 15-27 degrees off, node rms 11.8-12.0 = 143-145x the clean run's 0.0827; with
 the control fitted first with the pose fixed, --staged: 12.6 degrees, 126x). A slower pose,
---pose-move 0.1: 15.8 degrees, 94x; with --cap-stages 3 as well: 10.5 degrees, 63x. Seeds 2
+--pose-move 0.1: 15.8 degrees, 94x; with --cap-stages 8 as well: 6.1 degrees, 36x (still
+improving by about 8 % a stage; the alternation: 20 degrees, 48x). Seeds 2
 and 3 and seed 1's half view: align at rest is 89, 92 and 180 degrees off, the joint runs end
 87, 89 and 178 degrees off (rms 12.0). Variants: --start true (a diagnostic: from the true pose
 it drifts to 20 degrees), --algorithm, --cap-stages K (the cap re-made from each run's state),
