@@ -118,6 +118,12 @@ scene targets ("target" in the scene file):
       "cap": C  or  "cap": {"quantile": Q, "factor": F}   soft cap of every field
           value, fixed or F x the Q-quantile of the scan's d~ to the body at rest
       "cap_q": Q   the cap's sharpness (default 4)
+  a cloud target may be in the camera's frame (docs/formulation.md section 8.10):
+      "frame": "camera"   the pose (scan -> body) is refined jointly with the control
+          (then no "camera": the visible distance's camera is the pose's; no clean.crop)
+      "align": "rigid" | "similarity"   what the pose may change (default rigid)
+      "pose": FILE   the start pose (softhd align's pose.txt); default: align at rest
+      the final pose is printed and written to summary.json ("pose") and history.csv
 
 writes: history.csv, control.csv (readable by 'softhd forward --control'),
 body_NNNN.vtu, target.vtu, body.pvd, body_final.ply, target.ply, summary.json,
@@ -300,6 +306,13 @@ void print_end(const ShapeTrackingSummary& s, const fs::path& out) {
                s.floor() ? s.rho_final / *s.floor() : std::nan(""));
   if (s.shape_error_max)
     std::fprintf(stderr, ", shape error max %.4g rms %.4g", *s.shape_error_max, *s.shape_error_rms);
+  if (s.pose) {  // a camera-frame target: the pose found with the control (scan -> body)
+    const Eigen::Matrix<double, 7, 1> w = s.pose->twist();
+    std::fprintf(stderr,
+                 "\n  pose (scan -> body): rotation %.4g deg about (%.4g, %.4g, %.4g), "
+                 "translation (%.6g, %.6g, %.6g), scale %.6g",
+                 w.head<3>().norm() * 180.0 / M_PI, w[0], w[1], w[2], w[3], w[4], w[5], s.pose->s);
+  }
   std::fprintf(stderr, "\n  results in %s\n", out.string().c_str());
 }
 

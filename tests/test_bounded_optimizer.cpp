@@ -134,6 +134,44 @@ TEST(BoundedOptimizer, MoveLimitBoundsEveryStepAndStillConverges) {
   }
 }
 
+// A per-variable move scale: every step of variable k stays within its own δ·s_k·(u_k − l_k)
+// of the best point (the slow ones at a quarter of the others), and the run still converges.
+TEST(BoundedOptimizer, MoveScaleBoundsEachVariablesSteps) {
+  const int n = 4;
+  Eigen::VectorXd c(n), lo = Eigen::VectorXd::Constant(n, -1.0), hi = Eigen::VectorXd::Ones(n);
+  c << 0.6, -0.7, 0.5, -0.4;
+  Eigen::VectorXd scale(n);
+  scale << 1.0, 1.0, 0.25, 0.25;
+  const double delta = 0.1;
+  Eigen::VectorXd best = Eigen::VectorXd::Zero(n), worst = Eigen::VectorXd::Zero(n);
+  double best_f = INFINITY;
+  const BoundedObjective f = [&](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+    worst = worst.cwiseMax((x - best).cwiseAbs());
+    v = (x - c).squaredNorm();
+    if (g) *g = 2 * (x - c);
+    if (v < best_f) {
+      best_f = v;
+      best = x;
+    }
+    return true;
+  };
+  BoundedOptimizerOptions o;
+  o.move_limit = delta;
+  o.move_scale = scale;
+  o.relative_change = 1e-14;
+  o.max_iterations = 1000;
+  o.max_evaluations = 2000;
+  const BoundedOptimizerSummary s = minimise(f, Eigen::VectorXd::Zero(n), lo, hi, o);
+  for (int k = 0; k < n; ++k)
+    EXPECT_LE(worst[k], delta * scale[k] * 2.0 * (1 + 1e-12)) << "variable " << k;
+  EXPECT_GT(worst[0], delta * 0.25 * 2.0);  // the fast ones did use their larger box
+  EXPECT_LE((s.x - c).cwiseAbs().maxCoeff(), 1e-4) << s.termination;
+  o.move_scale = Eigen::VectorXd::Constant(n, 0.0);
+  EXPECT_THROW(minimise(f, Eigen::VectorXd::Zero(n), lo, hi, o), InvalidArgument);
+  o.move_scale = Eigen::VectorXd::Ones(n - 1);
+  EXPECT_THROW(minimise(f, Eigen::VectorXd::Zero(n), lo, hi, o), InvalidArgument);
+}
+
 TEST(BoundedOptimizer, StopsOnIterationsTargetAndFailedStart) {
   // Σ (x_k − 1/4)⁴ + 1: MMA approaches the minimiser without reaching it, so every
   // iteration improves (from a start symmetric to the box, its first step lands exactly on

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <fstream>
 #include <random>
 #include <string>
 
@@ -11,6 +14,7 @@
 #include "softhd/control/scene_target.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/io/cloud_io.hpp"
+#include "softhd/io/pose_io.hpp"
 #include "softhd/scan/cleanup.hpp"
 #include "softhd/scan/surface_weights.hpp"
 
@@ -93,6 +97,85 @@ TEST(ScanScene, RefusesBadKeysAndAnEmptiedScan) {
   // "file" weights are the file's (here 1s).
   const fe::Scene s = scene_with(head + R"("weights": "file"})");
   EXPECT_EQ(scene_target(s, s.make_mesh()).cloud.volumes(), Eigen::VectorXd::Ones(3860));
+}
+
+// A scan in the camera's frame (docs/formulation.md §8.10): "frame", "align", "pose" read; the
+// pose file's matrix is the start; bad values refused naming the key.
+TEST(ScanScene, CameraFrameKeys) {
+  write_scan();
+  Eigen::Matrix<double, 7, 1> tw;
+  tw << 0.1, -0.2, 0.3, 1.0, 2.0, -0.5, 0.0;
+  const scan::Pose P = scan::Pose::from_twist(tw);
+  write_pose(testing::TempDir() + "/scan_scene_pose.txt", P);
+  const std::string head = R"({"kind": "cloud", "file": "scan_scene.ply", )";
+  const fe::Scene s =
+      scene_with(head + R"("frame": "camera", "align": "similarity", "pose": "scan_scene_pose.txt",
+                 "distance": "visible"})");
+  const SceneTarget t = scene_target(s, s.make_mesh());
+  EXPECT_EQ(t.frame, TargetFrame::camera);
+  EXPECT_EQ(t.align, scan::PoseKind::similarity);
+  ASSERT_TRUE(t.pose);
+  EXPECT_LT((t.pose->matrix() - P.matrix()).norm(), 1e-14);
+  EXPECT_EQ(t.distance.sides, Sides::visible);  // its camera is the pose's
+  EXPECT_FALSE(t.camera);
+  ShapeObjectiveOptions o;
+  apply_target_settings(t, &o);
+  EXPECT_EQ(o.pose_kind, scan::PoseKind::similarity);
+  const fe::Scene body = scene_with(head + R"("frame": "body"})");
+  EXPECT_EQ(scene_target(body, body.make_mesh()).frame, TargetFrame::body);
+
+  auto refuses = [&](const std::string& rest, const std::string& message) {
+    const fe::Scene bad = scene_with(head + rest + "}");
+    expect_error<Error>([&] { scene_target(bad, bad.make_mesh()); }, message);
+  };
+  refuses(R"("frame": "world")", "target.frame must be \"body\" or \"camera\", got \"world\"");
+  refuses(R"("frame": "camera", "align": "affine")",
+          "target.align must be \"rigid\" or \"similarity\"");
+  refuses(R"("align": "rigid")", "target.align is for a cloud in the camera's frame");
+  refuses(R"("pose": "scan_scene_pose.txt")", "target.pose is for a cloud in the camera's frame");
+  refuses(R"("frame": "camera", "pose": "missing_pose.txt")", "cannot open the pose file");
+  refuses(R"("frame": "camera", "pose": 3)", "target.pose must be a pose file path string");
+  refuses(R"("frame": "camera", "camera": [0, 0, 5])", "the camera is the pose's");
+  refuses(R"("frame": "camera", "clean": {"crop": 0.5})", "target.clean.crop crops to the body's");
+  std::ofstream(testing::TempDir() + "/scan_scene_bad_pose.txt") << "1 0 0 0\n0 1 0 0\n0 0 1\n";
+  refuses(R"("frame": "camera", "pose": "scan_scene_bad_pose.txt")",
+          "scan_scene_bad_pose.txt:3: expected 4 numbers, got 3");
+  const fe::Scene arc = fe::parse_scene(R"({
+    "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [2, 1, 0.2], "cells": [2, 1, 1], "order": 1 },
+    "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
+    "fibers": [1, 0, 0], "clamp": ["x0"],
+    "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
+    "target": {"kind": "arc", "frame": "camera"}})",
+                                        testing::TempDir() + "/scan_scene_arc.json");
+  expect_error<Error>([&] { scene_target(arc, arc.make_mesh()); }, "unknown key 'frame'");
+}
+
+// Without "pose" the start is align against the body at rest: for the rest nodes seen from a
+// camera (moved by a rigid motion) it puts every scan point on a node (to 1e-6 of the body's
+// size; which of the box's symmetric poses is not asked).
+TEST(ScanScene, CameraFrameWithoutAPoseStartsFromAlign) {
+  const fe::Scene s0 = scene_with(R"({"kind": "arc"})");
+  const fe::Assembler A = s0.make_assembler();
+  const Eigen::MatrixXd& nodes = A.mesh().nodes;
+  Eigen::Matrix<double, 7, 1> tw;
+  tw << 0.7, -0.4, 1.1, 3.0, -1.0, 2.0, 0.0;
+  const scan::Pose G = scan::Pose::from_twist(tw);
+  write_ply_cloud(testing::TempDir() + "/scan_scene_rest.ply", G.apply(PointCloud(nodes), false));
+  const fe::Scene s = scene_with(R"({"kind": "cloud", "file": "scan_scene_rest.ply",
+                                      "frame": "camera"})");
+  const SceneTarget t = scene_target(s, s.make_mesh());
+  EXPECT_FALSE(t.pose);
+  EXPECT_NE(t.description.find("start pose by align"), std::string::npos) << t.description;
+  ShapeObjectiveOptions o;
+  apply_target_settings(t, &o);
+  const Eigen::MatrixXd moved = scan::apply_points(start_pose(t, A, o), t.cloud.points());
+  double worst = 0.0;
+  for (Eigen::Index i = 0; i < moved.rows(); ++i)
+    worst = std::max(worst, (nodes.rowwise() - moved.row(i)).rowwise().norm().minCoeff());
+  EXPECT_LT(worst, 1e-6 * std::sqrt(2.0 * 2.0 + 1.0 + 0.04));
+  const fe::Scene body = scene_with(R"({"kind": "cloud", "file": "scan_scene_rest.ply"})");
+  expect_error<InvalidArgument>([&] { start_pose(scene_target(body, body.make_mesh()), A, o); },
+                                "body's frame");
 }
 
 }  // namespace

@@ -246,7 +246,8 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
              algorithm=None, move_limit=None, particles=None, volumes=None, alpha=None,
              beta=None, gamma=None, eps=None, method=None, tol=None, tikhonov_mass=None,
              tikhonov_grad=None, coarse_level=None, levels=None, refined_move_limit=None,
-             distance=None, cap=None, cap_q=None, callback=None, threads=0):
+             distance=None, cap=None, cap_q=None, initial=None, pose_move=None, callback=None,
+             threads=0):
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
     target: the run ``softhd optimise`` makes (the library's TrackingRun), with its options and
     its defaults for every option left None (:func:`optimise_defaults` lists them, e.g. method
@@ -265,7 +266,10 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     :class:`Iteration` (J, rho, A, B, ..., control); **returning False ends the run** after
     that iteration (termination "stopped by the caller"; on a coarse level, after the first
     iteration on the user's mesh, whose result it returns); any other return value continues;
-    an exception raised by the callback ends the run and propagates.
+    an exception raised by the callback ends the run and propagates. initial: the starting
+    control (one value per control, e.g. an earlier result's ``control``; levels 1 only); None:
+    the scene's control.initial. pose_move: a scene target in the camera's frame only, the
+    pose's move limit as a fraction of the control's, in (0, 1] (default 1).
     """
     points = vols = file = None
     if isinstance(target, (str, bytes, _os.PathLike)):
@@ -281,7 +285,9 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
                           tikhonov_mass=tikhonov_mass, tikhonov_grad=tikhonov_grad,
                           coarse_level=coarse_level, levels=levels,
                           refined_move_limit=refined_move_limit, distance=distance,
-                          cap=cap, cap_q=cap_q, callback=callback, threads=threads)
+                          cap=cap, cap_q=cap_q,
+                          initial=None if initial is None else _as_float64(initial, "initial"),
+                          pose_move=pose_move, callback=callback, threads=threads)
 
 
 def optimise_defaults():

@@ -67,6 +67,8 @@ py::dict optimise_defaults() {
   const TrackingRunOptions d;
   py::dict out;
   out["max_iter"] = d.max_iterations;
+  out["initial"] = py::none();  // the scene's control.initial
+  out["pose_move"] = d.pose_move;
   out["max_seconds"] = d.max_seconds;
   out["rel_tol"] = d.relative_change;
   out["algorithm"] = to_string(d.algorithm);
@@ -163,6 +165,14 @@ void bind_optimise(py::module_& m) {
       .def_property_readonly("seconds", [](const PyOptimise& r) { return r.summary.seconds; })
       .def_property_readonly("control", [](const PyOptimise& r) { return r.summary.control; })
       .def_property_readonly(
+          "pose",
+          [](const PyOptimise& r) -> py::object {
+            if (!r.summary.pose) return py::none();
+            return py::cast(Eigen::Matrix4d(r.summary.pose->matrix()));
+          },
+          "a target in the camera's frame: the 4x4 pose (scan -> body) found with the control; "
+          "else None")
+      .def_property_readonly(
           "displacements",
           [](const PyOptimise& r) { return node_rows(r.summary.displacement, r.dim); })
       .def_property_readonly("history",
@@ -190,9 +200,12 @@ void bind_optimise(py::module_& m) {
          std::optional<double> tikhonov_mass, std::optional<double> tikhonov_grad,
          const std::optional<std::string>& coarse_level, std::optional<int> levels,
          std::optional<double> refined_move_limit, const std::optional<std::string>& distance,
-         std::optional<double> cap, std::optional<double> cap_q, const py::object& callback,
-         int threads) {
+         std::optional<double> cap, std::optional<double> cap_q,
+         const std::optional<Eigen::VectorXd>& initial, std::optional<double> pose_move,
+         const py::object& callback, int threads) {
         TrackingRunOptions o;
+        if (initial) o.initial_control = *initial;
+        if (pose_move) o.pose_move = *pose_move;
         if (distance || cap || cap_q) {  // the form as a whole (TrackingRunOptions::distance)
           TargetDistance form;
           if (distance) form.sides = sides_from_string(*distance);
@@ -227,8 +240,8 @@ void bind_optimise(py::module_& m) {
       py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("eps"),
       py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"), py::arg("tikhonov_grad"),
       py::arg("coarse_level"), py::arg("levels"), py::arg("refined_move_limit"),
-      py::arg("distance"), py::arg("cap"), py::arg("cap_q"), py::arg("callback"),
-      py::arg("threads"));
+      py::arg("distance"), py::arg("cap"), py::arg("cap_q"), py::arg("initial"),
+      py::arg("pose_move"), py::arg("callback"), py::arg("threads"));
   m.def("optimise_defaults", &optimise_defaults,
         "The defaults of optimise's options (softhd optimise's: TrackingRunOptions).");
 }

@@ -199,3 +199,45 @@ def test_defaults_are_the_command_line_tools(cli_help):
     m = re.search(r"functional parameters \(default (\S+) (\S+) (\S+) (\S+)\)", text)
     assert [float(v) for v in m.groups()] == [defaults[k] for k in ("alpha", "beta", "gamma",
                                                                    "eps")]
+
+
+def test_camera_frame_target_returns_the_pose(scene_file, tmp_path):
+    """A scene target in the camera's frame (docs/formulation.md §8.10): the body at rest moved by
+    a rigid motion, the start pose 0.1 rad off; result.pose (None for a body-frame target) is the
+    4x4 pose found with the control, nearer the true one than the start (its recovery to 0.01
+    rad: tests/test_optimise_cli.cpp)."""
+    scene = softhd.Scene.load(scene_file(SMALL_ARC))
+    c, s = np.cos(0.5), np.sin(0.5)
+    G = np.array([[c, -s, 0, 1.0], [s, c, 0, -2.0], [0, 0, 1, 0.5], [0, 0, 0, 1]])
+    softhd.write_cloud(tmp_path / "seen.ply", scene.nodes @ G[:3, :3].T + G[:3, 3])
+    truth = np.linalg.inv(G)
+    c, s = np.cos(0.1), np.sin(0.1)
+    off = np.array([[1, 0, 0, 0.02], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1]])
+    np.savetxt(tmp_path / "start.txt", truth @ off, fmt="%.17g")
+    spec = dict(SMALL_ARC, target={"kind": "cloud", "file": "seen.ply", "frame": "camera",
+                                   "pose": "start.txt"})
+    r = softhd.optimise(softhd.Scene.load(scene_file(spec, "camera.json")), max_iter=4)
+    assert r.pose.shape == (4, 4)
+
+    def angle(P):
+        return np.arccos(np.clip((np.trace(P[:3, :3] @ truth[:3, :3].T) - 1) / 2, -1, 1))
+
+    assert angle(r.pose) < angle(truth @ off)
+    assert softhd.optimise(scene, max_iter=1).pose is None
+    bad = dict(spec, target=dict(spec["target"], frame="world"))
+    with pytest.raises(softhd.InvalidArgument, match='target.frame must be "body" or "camera"'):
+        softhd.optimise(softhd.Scene.load(scene_file(bad, "bad.json")), max_iter=1)
+
+
+def test_initial_control_starts_there(scene_file):
+    """initial: the run starts at the given control (an earlier run's: its final rho is the next
+    run's start); a control of the wrong size is refused."""
+    scene = softhd.Scene.load(scene_file(SMALL_ARC))
+    r1 = softhd.optimise(scene, max_iter=2)
+    r2 = softhd.optimise(scene, max_iter=1, initial=r1.control)
+    assert r2.rho_start == pytest.approx(r1.rho_final, rel=1e-6)
+    assert r2.rho_start < softhd.optimise(scene, max_iter=1).rho_start
+    with pytest.raises(softhd.InvalidArgument, match="initial_control has 3 values, expected"):
+        softhd.optimise(scene, max_iter=1, initial=[0.0, 0.0, 0.0])
+    with pytest.raises(softhd.InvalidArgument, match=r"pose_move must be in \(0, 1\]"):
+        softhd.optimise(scene, max_iter=1, pose_move=0.0)

@@ -286,6 +286,12 @@ BoundedOptimizerSummary minimise(
   if (n < 1) throw InvalidArgument("optimizer: no variables");
   if (lower.size() != n || upper.size() != n)
     throw InvalidArgument("optimizer: bounds and start have different sizes");
+  if (options.move_scale.size() != 0 &&
+      (options.move_scale.size() != n || !(options.move_scale.array() > 0.0).all() ||
+       !(options.move_scale.array() <= 1.0).all()))
+    throw InvalidArgument(
+        "optimizer: move_scale must be empty or have one entry in (0, 1] per "
+        "variable");
   for (Eigen::Index k = 0; k < n; ++k) {
     if (!std::isfinite(lower[k]) || !std::isfinite(upper[k]) || !(lower[k] <= upper[k])) {
       std::ostringstream m;
@@ -343,8 +349,10 @@ BoundedOptimizerSummary minimise(
   while (true) {
     Eigen::VectorXd lo = d.zlo, hi = d.zhi;
     if (delta > 0.0) {
-      lo = d.zlo.cwiseMax(d.z0 - delta * (d.zhi - d.zlo));
-      hi = d.zhi.cwiseMin(d.z0 + delta * (d.zhi - d.zlo));
+      Eigen::VectorXd half = delta * (d.zhi - d.zlo);  // the box's half-width per variable
+      if (options.move_scale.size() == n) half = half.cwiseProduct(options.move_scale);
+      lo = d.zlo.cwiseMax(d.z0 - half);
+      hi = d.zhi.cwiseMin(d.z0 + half);
     }
     const int remaining = options.max_evaluations - d.summary.evaluations;
     if (remaining <= 0) {

@@ -20,6 +20,9 @@ const char* kHistoryHeader =
     "iteration,evaluation,J,rho,A,B,rho_over_floor,projected_gradient_norm,newton_iterations,"
     "factorizations,seconds_state,seconds_distance,seconds_adjoint,seconds,level";
 
+// With a pose: the twist of the best pose so far (ω, t, log s of P, scan → body).
+const char* kPoseHeader = ",pose_w1,pose_w2,pose_w3,pose_t1,pose_t2,pose_t3,pose_log_s";
+
 nlohmann::json optional_json(const std::optional<double>& v) {
   return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
 }
@@ -53,26 +56,45 @@ void add_final(const ShapeTrackingSummary& s, nlohmann::json& sum) {
   sum["seconds_distance"] = s.seconds_distance;
   sum["seconds_adjoint"] = s.seconds_adjoint;
   sum["seconds_optimizer"] = s.seconds_optimizer;
+  if (s.pose)
+    sum["pose"] = {{"matrix", matrix_json(s.pose->matrix())},
+                   {"twist", matrix_json(s.pose->twist())},
+                   {"xi", matrix_json(s.pose_twist)}};
 }
 
 }  // namespace
 
+nlohmann::json matrix_json(const Eigen::MatrixXd& m) {
+  nlohmann::json j = nlohmann::json::array();
+  if (m.cols() == 1) {
+    for (Eigen::Index i = 0; i < m.rows(); ++i) j.push_back(m(i, 0));
+    return j;
+  }
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    nlohmann::json row = nlohmann::json::array();
+    for (Eigen::Index c = 0; c < m.cols(); ++c) row.push_back(m(i, c));
+    j.push_back(row);
+  }
+  return j;
+}
+
 std::string history_row(const TrackingIteration& it) {
-  const std::vector<double> v{double(it.iteration),
-                              double(it.evaluation),
-                              it.J,
-                              it.rho,
-                              it.A,
-                              it.B,
-                              it.rho_over_floor,
-                              it.projected_gradient_norm,
-                              double(it.newton_iterations),
-                              double(it.factorizations),
-                              it.seconds_state,
-                              it.seconds_distance,
-                              it.seconds_adjoint,
-                              it.seconds,
-                              double(it.level)};
+  std::vector<double> v{double(it.iteration),
+                        double(it.evaluation),
+                        it.J,
+                        it.rho,
+                        it.A,
+                        it.B,
+                        it.rho_over_floor,
+                        it.projected_gradient_norm,
+                        double(it.newton_iterations),
+                        double(it.factorizations),
+                        it.seconds_state,
+                        it.seconds_distance,
+                        it.seconds_adjoint,
+                        it.seconds,
+                        double(it.level)};
+  for (Eigen::Index k = 0; k < it.pose.size(); ++k) v.push_back(it.pose[k]);
   std::ostringstream s;
   s.precision(10);
   for (size_t k = 0; k < v.size(); ++k) {
@@ -134,10 +156,12 @@ void RunFiles::level_iteration(const TrackingIteration& it) {
 }
 
 void RunFiles::finish(const ShapeTrackingSummary& s, const PointCloud& target) {
-  const HausdorffResult fields = write_body(s.iterations, s.control, s.displacement);
+  const HausdorffResult fields = write_body(s.iterations, s.control, s.displacement, s.pose_twist);
   if (!writes_) return;
   write_vtu_cloud((dir_ / "target.vtu").string(), target, {{"d_tilde", fields.field_target}});
   write_ply_cloud((dir_ / "target.ply").string(), target);
+  // A camera-frame target moved into the body's frame by the final pose.
+  if (s.pose) write_ply_cloud((dir_ / "target_aligned.ply").string(), s.pose->apply(target, true));
   write_ply_cloud((dir_ / "body_final.ply").string(), objective_.particles(s.displacement));
   write_history();
   const fe::Mesh& mesh = objective_.assembler().mesh();
@@ -148,9 +172,9 @@ void RunFiles::finish(const ShapeTrackingSummary& s, const PointCloud& target) {
 }
 
 HausdorffResult RunFiles::write_body(int iteration, const Eigen::VectorXd& m,
-                                     const Eigen::VectorXd& u) {
+                                     const Eigen::VectorXd& u, const Eigen::VectorXd& xi) {
   const fe::Assembler& a = objective_.assembler();
-  const HausdorffResult r = objective_.fields(u);
+  const HausdorffResult r = objective_.fields(u, xi);
   if (!writes_) return r;
   std::vector<VtuField> point{{"m", fe::control_at_nodes(a.mesh(), space_, m)}};
   std::vector<VtuField> cell;
@@ -174,7 +198,7 @@ void RunFiles::list_body(int iteration) {
 void RunFiles::write_history() const {
   if (!writes_) return;
   std::ostringstream h;
-  h << kHistoryHeader << '\n';
+  h << kHistoryHeader << (objective_.pose_variables() > 0 ? kPoseHeader : "") << '\n';
   for (const std::string& r : rows_) h << r << '\n';
   write_file_atomically((dir_ / "history.csv").string(), h.str());
 }

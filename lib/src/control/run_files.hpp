@@ -20,6 +20,8 @@ namespace softhd::detail {
 /// history.csv's row of an iteration: its numbers with 10 significant digits (%.10g), a ratio
 /// without a floor left empty.
 std::string history_row(const TrackingIteration& it);
+/// A matrix as JSON: rows of numbers (a vector: a flat list).
+nlohmann::json matrix_json(const Eigen::MatrixXd& m);
 
 class RunFiles {
  public:
@@ -40,11 +42,14 @@ class RunFiles {
   void level_iteration(const TrackingIteration& it);
   /// summary.json's entries of the set-up and the end (e.g. the levels), kept from now on.
   nlohmann::json& summary() { return summary_; }
-  /// At the end: the final body and clouds, history.csv, control.csv and summary.json.
+  /// At the end: the final body and clouds (with a pose also target_aligned.ply, the target
+  /// moved by it), history.csv, control.csv and summary.json.
   void finish(const ShapeTrackingSummary& s, const PointCloud& target);
 
  private:
-  HausdorffResult write_body(int iteration, const Eigen::VectorXd& m, const Eigen::VectorXd& u);
+  /// The body's VTU; its fields at the pose twist xi (empty: the start pose).
+  HausdorffResult write_body(int iteration, const Eigen::VectorXd& m, const Eigen::VectorXd& u,
+                             const Eigen::VectorXd& xi = Eigen::VectorXd());
   void list_body(int iteration);
   void write_history() const;
   void write_summary(const nlohmann::json& sum) const;

@@ -12,8 +12,11 @@
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
+#include "softhd/fe/boundary.hpp"
+#include "softhd/fe/cloud.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/cloud_io.hpp"
+#include "softhd/io/pose_io.hpp"
 #include "softhd/samplers.hpp"
 #include "softhd/scan/cleanup.hpp"
 #include "softhd/scan/surface_weights.hpp"
@@ -184,10 +187,11 @@ double target_number(const fe::Scene& scene, const nlohmann::json& v, const std:
 
 // The keys "distance", "cap", "cap_q" of a target block (docs/guide.md); "visible" goes with
 // "camera", which implies it when "distance" is absent.
-TargetDistance target_distance(const fe::Scene& scene, const nlohmann::json& t) {
+TargetDistance target_distance(const fe::Scene& scene, const nlohmann::json& t, bool camera_frame) {
   TargetDistance d;
-  const bool camera = t.contains("camera");
-  if (camera) d.sides = Sides::visible;
+  const bool camera = t.contains("camera") || camera_frame;  // a pose gives the camera
+  const bool implied = t.contains("camera");
+  if (implied) d.sides = Sides::visible;
   if (t.contains("distance")) {
     const nlohmann::json& v = t["distance"];
     const std::string name = v.is_string() ? v.get<std::string>() : v.dump();
@@ -200,7 +204,7 @@ TargetDistance target_distance(const fe::Scene& scene, const nlohmann::json& t) 
                             ": target.distance must be \"symmetric\", \"scan_to_body\" or "
                             "\"visible\", got " +
                             v.dump());
-    if (camera && name != "visible")
+    if (implied && name != "visible")
       throw InvalidArgument(scene.source + ": target.camera is given but target.distance is \"" +
                             name + "\" (a camera is for the visible distance)");
     d.sides = sides_from_string(name);
@@ -245,7 +249,90 @@ void read_view_keys(const fe::Scene& scene, const nlohmann::json& t, SceneTarget
   }
 }
 
+// The keys "frame", "align", "pose" of a cloud target (docs/guide.md).
+struct FrameKeys {
+  TargetFrame frame = TargetFrame::body;
+  scan::PoseKind align = scan::PoseKind::rigid;
+  std::optional<scan::Pose> pose;
+  std::string description;
+};
+
+FrameKeys read_frame_keys(const fe::Scene& scene, const nlohmann::json& t) {
+  FrameKeys keys;
+  FrameKeys* target = &keys;
+  if (t.contains("frame")) {
+    const nlohmann::json& f = t["frame"];
+    const std::string name = f.is_string() ? f.get<std::string>() : "";
+    if (name != "body" && name != "camera")
+      throw InvalidArgument(scene.source + ": target.frame must be \"body\" or \"camera\", got " +
+                            f.dump());
+    target->frame = name == "camera" ? TargetFrame::camera : TargetFrame::body;
+  }
+  const bool camera = target->frame == TargetFrame::camera;
+  for (const char* key : {"align", "pose"})
+    if (t.contains(key) && !camera)
+      throw InvalidArgument(scene.source + ": target." + key +
+                            " is for a cloud in the camera's frame (give \"frame\": \"camera\")");
+  if (!camera) return keys;
+  if (scene.dim() != 3)
+    throw InvalidArgument(scene.source + ": target.frame \"camera\" needs a 3D body");
+  if (t.contains("camera"))
+    throw InvalidArgument(scene.source +
+                          ": target.camera: with \"frame\": \"camera\" the camera is the pose's "
+                          "(remove target.camera)");
+  if (t.contains("clean") && t["clean"].is_object() && t["clean"].contains("crop"))
+    throw InvalidArgument(scene.source +
+                          ": target.clean.crop crops to the body's box, which is not in the "
+                          "camera's frame (remove it with \"frame\": \"camera\")");
+  if (t.contains("align")) {
+    const nlohmann::json& a = t["align"];
+    const std::string name = a.is_string() ? a.get<std::string>() : "";
+    if (name != "rigid" && name != "similarity")
+      throw InvalidArgument(scene.source +
+                            ": target.align must be \"rigid\" or \"similarity\", got " + a.dump());
+    target->align = scan::pose_kind_from_string(name);
+  }
+  if (t.contains("pose")) {
+    if (!t["pose"].is_string())
+      throw InvalidArgument(scene.source + ": target.pose must be a pose file path string, got " +
+                            t["pose"].dump());
+    const fs::path dir = fs::path(scene.source).parent_path();
+    const fs::path f = (dir / t["pose"].get<std::string>()).lexically_normal();
+    if (!fs::exists(f))
+      throw FileError(scene.source + ": target.pose: cannot open the pose file '" + f.string() +
+                      "'");
+    target->pose = read_pose(f.string());
+    target->description += "; camera frame, start pose " + f.string();
+  } else {
+    target->description += "; camera frame, start pose by align";
+  }
+  return keys;
+}
+
 }  // namespace
+
+std::string to_string(TargetFrame frame) {
+  return frame == TargetFrame::camera ? "camera" : "body";
+}
+
+scan::Pose start_pose(const SceneTarget& target, const fe::Assembler& assembler,
+                      const ShapeObjectiveOptions& options, int threads) {
+  if (target.frame != TargetFrame::camera)
+    throw InvalidArgument("start_pose: the target is in the body's frame (no pose to find)");
+  if (target.pose) return *target.pose;
+  const Eigen::VectorXd rest = Eigen::VectorXd::Zero(assembler.dofs().num_dofs);
+  const PointCloud body =
+      options.particles == Particles::boundary
+          ? fe::boundary_cloud(assembler.mesh(), fe::boundary_facets(assembler.mesh()), rest,
+                               fe::CloudVolumes::kReference)
+          : fe::deformed_cloud(assembler, rest, fe::CloudPoints::kNodes,
+                               fe::CloudVolumes::kReference);
+  scan::AlignOptions a;
+  a.kind = target.align;
+  a.form.sides = target.distance.sides == Sides::symmetric ? Sides::symmetric : Sides::scan_to_body;
+  a.threads = threads;
+  return scan::align(body, target.cloud, a).pose;
+}
 
 void apply_target_settings(const SceneTarget& target, ShapeObjectiveOptions* options) {
   if (target.surface) {
@@ -256,6 +343,7 @@ void apply_target_settings(const SceneTarget& target, ShapeObjectiveOptions* opt
     options->form.sides = Sides::visible;
     options->camera = target.camera;
   }
+  if (target.frame == TargetFrame::camera) options->pose_kind = target.align;
 }
 
 DistanceForm target_form(const TargetDistance& distance, const ShapeObjective& objective) {
@@ -299,10 +387,16 @@ SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh, double me
     if (kind == "cloud")
       io::check_keys(t, where, "target",
                      {"kind", "file", "solved_on", "clean", "weights", "distance", "cap", "cap_q",
-                      "surface", "camera"});
+                      "surface", "camera", "frame", "align", "pose"});
+    // The frame's keys before the scan is read and cleaned.
+    const FrameKeys frame = kind == "cloud" ? read_frame_keys(scene, t) : FrameKeys{};
     SceneTarget st = kind == "arc" ? arc_target(scene, mesh, t, memory_limit)
                                    : cloud_target(scene, mesh, t, memory_limit);
-    st.distance = target_distance(scene, t);
+    st.frame = frame.frame;
+    st.align = frame.align;
+    st.pose = frame.pose;
+    st.description += frame.description;
+    st.distance = target_distance(scene, t, st.frame == TargetFrame::camera);
     read_view_keys(scene, t, &st);
     return st;
   }

@@ -44,6 +44,23 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+/// The left Jacobian of exp on rotations: exp([ω + δ]×) = exp([J_l δ]×) exp([ω]×) + O(δ²),
+/// J_l = I + (1 − cos θ)/θ² [ω]× + (θ − sin θ)/θ³ [ω]×² (Taylor series below θ = 1e-4).
+Eigen::Matrix3d left_jacobian(const Eigen::Vector3d& w) {
+  const double t2 = w.squaredNorm();
+  const double t = std::sqrt(t2);
+  double b = 0.0, c = 0.0;
+  if (t < 1e-4) {
+    b = 0.5 - t2 / 24.0 + t2 * t2 / 720.0;
+    c = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0;
+  } else {
+    b = (1.0 - std::cos(t)) / t2;
+    c = (t - std::sin(t)) / (t2 * t);
+  }
+  const Eigen::Matrix3d K = scan::hat(w);
+  return Eigen::Matrix3d::Identity() + b * K + c * K * K;
+}
+
 }  // namespace
 
 struct ShapeObjective::Impl {
@@ -57,7 +74,10 @@ struct ShapeObjective::Impl {
     if (!solver) throw InvalidArgument("ShapeObjective: the state solver factory made none");
     const fe::Mesh& mesh = a.mesh();
     dim = mesh.dim;
-    if (options.particles == Particles::boundary || options.camera) {
+    if (options.pose && dim != 3)
+      throw InvalidArgument("pose: a pose (target in the camera's frame) needs a 3D body");
+    // With a pose the boundary is kept too: set_form may choose the visible distance later.
+    if (options.particles == Particles::boundary || options.camera || options.pose) {
       if (dim != 3)
         throw InvalidArgument(options.particles == Particles::boundary
                                   ? "particles boundary needs a 3D body"
@@ -76,6 +96,11 @@ struct ShapeObjective::Impl {
       }
     }
     cache.push_back({Eigen::VectorXd(), fe::rest_state(a)});
+    if (options.pose) {
+      start_inverse = options.pose->inverse();
+      const Eigen::Vector3d mean = particles(cache.front().state.u).points().colwise().mean();
+      centre = scan::apply_points(start_inverse, mean.transpose()).row(0).transpose();
+    }
   }
 
   const fe::Assembler& assembler;
@@ -92,6 +117,66 @@ struct ShapeObjective::Impl {
   std::optional<fe::NewtonSolver> coarse_newton;
   bool coarse_active = true;           // false after a small step, until a hard fine solve
   std::deque<WarmStart> coarse_cache;  // coarse equilibria by control, most recent first
+  // With a pose (docs/formulation.md §8.10): Q₀ = P₀⁻¹ and the twist's centre c.
+  scan::Pose start_inverse;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+
+  int pose_variables() const {
+    if (!options.pose) return 0;
+    return options.pose_kind == scan::PoseKind::similarity ? 7 : 6;
+  }
+  /// ξ checked (size, finite); empty means 0.
+  Eigen::VectorXd checked_twist(const Eigen::VectorXd& xi) const {
+    const int n = pose_variables();
+    if (xi.size() == 0) return Eigen::VectorXd::Zero(n);
+    if (xi.size() != n)
+      throw InvalidArgument("pose twist has " + std::to_string(xi.size()) + " values, expected " +
+                            std::to_string(n));
+    if (!xi.allFinite()) throw InvalidArgument("pose twist is not finite");
+    return xi;
+  }
+  /// Q_ξ = T_ξ ∘ Q₀ (body → camera frame): T_ξ(z) = c + e^σ E (z − c) + v, E = exp([ω]×).
+  scan::Pose target_map(const Eigen::VectorXd& xi) const {
+    const Eigen::Matrix3d E = scan::rotation_exp(xi.head<3>());
+    const double es = xi.size() == 7 ? std::exp(xi[6]) : 1.0;
+    scan::Pose q;
+    q.R = E * start_inverse.R;
+    q.s = es * start_inverse.s;
+    q.t = centre + es * (E * (start_inverse.t - centre)) + xi.segment<3>(3);
+    return q;
+  }
+  /// The camera in the body's frame at ξ: the options' camera, or P_ξ's with a pose.
+  std::optional<Eigen::Vector3d> camera_at(const Eigen::VectorXd& xi) const {
+    if (!options.pose) return options.camera;
+    return target_map(xi).inverse().camera_position();
+  }
+  /// The moving cloud of u in the target's frame at ξ (Q_ξ applied; volumes unchanged: ρ̃ uses
+  /// V_i/|X|).
+  PointCloud moved_particles(const Eigen::VectorXd& u, const Eigen::VectorXd& xi) const {
+    PointCloud X = particles(u);
+    if (!options.pose) return X;
+    return PointCloud(scan::apply_points(target_map(xi), X.points()), X.volumes());
+  }
+  /// dJ/dξ from g_i = ∂ρ̃/∂x'_i at the moved points x'_i (y_i = x'_i − c − v):
+  ///   ∂/∂v = Σ g_i,  ∂/∂ω = J_l(ω)ᵀ Σ y_i × g_i,  ∂/∂σ = Σ y_i·g_i.
+  Eigen::VectorXd twist_gradient(const Eigen::MatrixXd& moved, const Eigen::MatrixXd& g,
+                                 const Eigen::VectorXd& xi) const {
+    const Eigen::Vector3d base = centre + xi.segment<3>(3);
+    Eigen::Vector3d gv = Eigen::Vector3d::Zero(), gw = Eigen::Vector3d::Zero();
+    double gs = 0.0;
+    for (Eigen::Index i = 0; i < moved.rows(); ++i) {
+      const Eigen::Vector3d y = moved.row(i).transpose() - base;
+      const Eigen::Vector3d gi = g.row(i).transpose();
+      gv += gi;
+      gw += y.cross(gi);
+      gs += y.dot(gi);
+    }
+    Eigen::VectorXd out(xi.size());
+    out.head<3>() = left_jacobian(xi.head<3>()).transpose() * gw;
+    out.segment<3>(3) = gv;
+    if (xi.size() == 7) out[6] = gs;
+    return out;
+  }
 
   Eigen::MatrixXd coarse_control(const Eigen::VectorXd& m) const {
     return fe::control_on_quadrature(*coarse, assembler.mesh(), control.kind(), m,
@@ -155,11 +240,11 @@ struct ShapeObjective::Impl {
   /// The distance's form at u: for Sides::visible the moving points seen from the camera on
   /// the boundary deformed by u (the cloud's own points for boundary particles, the boundary
   /// nodes among all nodes for node particles).
-  DistanceForm form(const Eigen::VectorXd& u) const {
+  DistanceForm form(const Eigen::VectorXd& u, const std::optional<Eigen::Vector3d>& camera) const {
     DistanceForm f = options.form;
-    if (f.sides != Sides::visible || !options.camera) return f;  // no mask to make
+    if (f.sides != Sides::visible || !camera) return f;  // no mask to make
     const Eigen::Array<bool, Eigen::Dynamic, 1> seen =
-        scan::visible_points(fe::boundary_surface(assembler.mesh(), facets, u), *options.camera);
+        scan::visible_points(fe::boundary_surface(assembler.mesh(), facets, u), *camera);
     if (!seen.any())
       throw InvalidArgument("distance visible: the camera sees no boundary point of the body");
     if (options.particles == Particles::boundary) {
@@ -231,7 +316,19 @@ void ShapeObjectiveOptions::validate() const {
   if (warm_start_states < 1) throw InvalidArgument("warm_start_states must be >= 1");
   if (coarse_correction_iterations < 0)
     throw InvalidArgument("coarse_correction_iterations must be >= 0");
-  if (camera) {  // the mask is made per evaluation: only the cap to check here
+  if (pose) {
+    if (camera)
+      throw InvalidArgument("camera: with a pose the camera is the pose's (leave camera empty)");
+    const scan::Pose& p = *pose;
+    if (!p.R.allFinite() || !p.t.allFinite() || !std::isfinite(p.s) || !(p.s > 0.0))
+      throw InvalidArgument("pose: not finite, or its scale is not positive");
+    if ((p.R.transpose() * p.R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-9 ||
+        p.R.determinant() < 0.0)
+      throw InvalidArgument("pose: R is not a rotation (to 1e-9)");
+  }
+  const bool has_camera = camera || pose;  // a pose gives the camera (Sides::visible)
+  if (has_camera && (camera || form.sides == Sides::visible)) {
+    // the mask is made per evaluation: only the cap to check here
     if (form.visible.size() != 0)
       throw InvalidArgument(
           "form.visible: with a camera the objective marks the visible points (leave it empty)");
@@ -244,8 +341,8 @@ void ShapeObjectiveOptions::validate() const {
           "camera: distance visible needs the camera position (or a mask in form.visible)");
     form.validate(form.sides == Sides::visible ? form.visible.size() : 0);
   }
-  if (form.sides == Sides::visible && camera) {
-    if (!camera->allFinite()) throw InvalidArgument("camera must be finite");
+  if (form.sides == Sides::visible && has_camera) {
+    if (camera && !camera->allFinite()) throw InvalidArgument("camera must be finite");
     if (particles == Particles::quadrature)
       throw InvalidArgument("distance visible marks nodes: particles must be nodes or boundary");
   } else if (camera) {
@@ -330,23 +427,48 @@ void ShapeObjective::set_form(DistanceForm form) {
   ShapeObjectiveOptions o = impl_->options;
   o.form = std::move(form);
   o.validate();  // the camera's rules
-  if (!o.camera) o.form.validate(impl_->particles(impl_->cache.back().state.u).size());
+  if (!o.camera && !o.pose) o.form.validate(impl_->particles(impl_->cache.back().state.u).size());
   impl_->options.form = std::move(o.form);
 }
 
 DistanceForm ShapeObjective::distance_form(const Eigen::VectorXd& u) const {
-  return impl_->form(u);
+  return distance_form(u, Eigen::VectorXd());
+}
+DistanceForm ShapeObjective::distance_form(const Eigen::VectorXd& u,
+                                           const Eigen::VectorXd& xi) const {
+  return impl_->form(u, impl_->camera_at(impl_->checked_twist(xi)));
 }
 
 HausdorffResult ShapeObjective::fields(const Eigen::VectorXd& u) const {
+  return fields(u, Eigen::VectorXd());
+}
+HausdorffResult ShapeObjective::fields(const Eigen::VectorXd& u, const Eigen::VectorXd& xi) const {
+  const Eigen::VectorXd x = impl_->checked_twist(xi);
   HausdorffRequest req;
   req.fields = true;
-  req.form = impl_->form(u);
-  return impl_->target.evaluate(impl_->particles(u), req);
+  req.form = impl_->form(u, impl_->camera_at(x));
+  return impl_->target.evaluate(impl_->moved_particles(u, x), req);
+}
+
+int ShapeObjective::pose_variables() const { return impl_->pose_variables(); }
+scan::Pose ShapeObjective::pose_at(const Eigen::VectorXd& xi) const {
+  if (!impl_->options.pose) return scan::Pose();
+  return impl_->target_map(impl_->checked_twist(xi)).inverse();
+}
+Eigen::Vector3d ShapeObjective::pose_centre() const { return impl_->centre; }
+PointCloud ShapeObjective::target_frame_particles(const Eigen::VectorXd& u,
+                                                  const Eigen::VectorXd& xi) const {
+  return impl_->moved_particles(u, impl_->checked_twist(xi));
 }
 
 ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient) {
+  return evaluate(m, Eigen::VectorXd(), gradient);
+}
+
+ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, const Eigen::VectorXd& xi_in,
+                                         bool gradient) {
   Impl& d = *impl_;
+  const Eigen::VectorXd xi = d.checked_twist(xi_in);
   if (m.size() != d.control.size()) {
     throw InvalidArgument("control has " + std::to_string(m.size()) + " values, expected " +
                           std::to_string(d.control.size()));
@@ -366,14 +488,16 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
   // Distance (and its gradient w.r.t. the particles).
   t0 = std::chrono::steady_clock::now();
   HausdorffRequest req;
-  req.form = d.form(state.u);  // the visible set of this state, fixed in the gradient
+  req.form = d.form(state.u, d.camera_at(xi));  // this state's visible set, fixed in the gradient
   req.gradient_points = gradient;
   req.gradient_volumes = gradient && d.options.volumes == ParticleVolumes::deformed;
   // Clamped nodes do not move: skip their position gradients. Their deformed volumes do
-  // change with the neighbouring nodes, so with deformed volumes every node is needed.
-  if (gradient && d.options.volumes == ParticleVolumes::reference)
+  // change with the neighbouring nodes, so with deformed volumes every node is needed; with a
+  // pose every point moves with ξ.
+  if (gradient && d.options.volumes == ParticleVolumes::reference && !d.options.pose)
     req.differentiate = d.differentiate;
-  const HausdorffResult r = d.target.evaluate(d.particles(state.u), req);
+  const PointCloud moved = d.moved_particles(state.u, xi);
+  HausdorffResult r = d.target.evaluate(moved, req);
   ev.seconds_distance = seconds_since(t0);
   ev.rho = r.rho;
   ev.A = r.A;
@@ -385,6 +509,12 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
   if (gradient) {
     // Adjoint: K λ = ∂ρ̃/∂u, then dJ/dm = ∂J_reg/∂m + ∫ M_k (F a₀)·(∇λ a₀) dX.
     t0 = std::chrono::steady_clock::now();
+    if (d.options.pose) {
+      // x'_i = s_Q R_Q x_i + t_Q: dJ/dξ from g_i = ∂ρ̃/∂x'_i, and ∂ρ̃/∂x_i = s_Q R_Qᵀ g_i.
+      ev.pose_gradient = d.twist_gradient(moved.points(), r.gradient_points, xi);
+      const scan::Pose Q = d.target_map(xi);
+      r.gradient_points = Q.s * (r.gradient_points * Q.R);
+    }
     const Eigen::VectorXd g = d.displacement_gradient(state.u, r);
     ev.gradient = reg_gradient + d.solver->gradient(g);
     ev.factorizations += d.solver->adjoint_factorizations();

@@ -68,7 +68,8 @@ class Recorder {
     return log_.evaluations.empty() ? 0.0 : log_.evaluations.back().seconds;
   }
 
-  /// The evaluation at m: from the log, or made (and logged).
+  /// The evaluation at x = [m; ξ]: from the log, or made (and logged); its gradient [dJ/dm;
+  /// dJ/dξ].
   ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient, fe::State* best) {
     if (replaying()) {
       const LoggedEvaluation& e = log_.evaluations[next_];
@@ -84,7 +85,13 @@ class Recorder {
     }
     restore(best);
     ++next_;
-    LoggedEvaluation e{m, gradient, objective_.evaluate(m, gradient), 0.0};
+    const Eigen::Index np = objective_.pose_variables(), nm = m.size() - np;
+    LoggedEvaluation e{m, gradient, objective_.evaluate(m.head(nm), m.tail(np), gradient), 0.0};
+    if (np > 0 && e.result.gradient.size() == nm) {
+      e.result.gradient.conservativeResize(nm + np);
+      e.result.gradient.tail(np) = e.result.pose_gradient;
+      e.result.pose_gradient.resize(0);
+    }
     e.seconds = seconds();
     if (writer_) writer_->append(e);
     return e.result;
@@ -164,11 +171,17 @@ void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimize
   recorder.restore(best_state);
   // The best control's state, evaluated again from its own state (Newton stops at once
   // there, so the final ρ̃ is the one the optimiser saw).
-  objective.remember_state(r.x, *best_state);
-  const ShapeEvaluation final_eval = objective.evaluate(r.x, false);
+  const Eigen::Index np = objective.pose_variables(), nm = r.x.size() - np;
+  const Eigen::VectorXd m = r.x.head(nm), xi = r.x.tail(np);
+  objective.remember_state(m, *best_state);
+  const ShapeEvaluation final_eval = objective.evaluate(m, xi, false);
   if (final_eval.status != EvaluationStatus::ok)
     throw StateSolveError("the state solve at the best control failed: " + final_eval.failure);
-  s->control = r.x;
+  s->control = m;
+  if (np > 0) {
+    s->pose_twist = xi;
+    s->pose = objective.pose_at(xi);
+  }
   s->displacement = objective.last_state().u;
   s->rho_final = final_eval.rho;
   s->J_final = final_eval.J;
@@ -224,6 +237,13 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
     f["objective"] += " coarse level " + hash_of(coarse->mesh().nodes) + " from " +
                       std::to_string(so.coarse_correction_iterations) + " iterations";
   }
+  if (const std::optional<scan::Pose>& pose = so.pose) {
+    const PoseBounds& b = options.pose_bounds;
+    f["pose"] = to_string(so.pose_kind) + " from " + hash_of(pose->matrix()) + " bounds " +
+                exact_text(b.rotation) + " " + exact_text(b.translation) + " " +
+                exact_text(b.scale_min) + " " + exact_text(b.scale_max);
+    if (b.move != 1.0) f["pose"] += " move " + exact_text(b.move);
+  }
   f["checkpoint"] = "every " + std::to_string(options.checkpoint_every) + " iterations";
   const BoundedOptimizerOptions& o = options.optimizer;
   f["optimiser"] = to_string(o.algorithm) + " rel-tol " + exact_text(o.relative_change) +
@@ -233,8 +253,49 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
   return f;
 }
 
+void PoseBounds::validate() const {
+  if (!(rotation > 0.0 && rotation <= M_PI))
+    throw InvalidArgument("pose_bounds.rotation must be in (0, pi] radians");
+  if (!(translation > 0.0 && std::isfinite(translation)))
+    throw InvalidArgument("pose_bounds.translation must be finite and > 0 (a fraction of L)");
+  if (!(scale_min > 0.0 && scale_min <= scale_max && std::isfinite(scale_max)))
+    throw InvalidArgument("pose_bounds.scale_min, scale_max: need 0 < scale_min <= scale_max");
+  if (!(move > 0.0 && move <= 1.0)) throw InvalidArgument("pose_bounds.move must be in (0, 1]");
+}
+
+namespace {
+
+/// The bounds of ξ (docs/formulation.md §8.10): |ω_k| ≤ rotation, |v_k| ≤ translation × L and,
+/// for a similarity, σ with s₀ e^{−σ} within [scale_min, scale_max].
+void pose_bounds(const ShapeObjective& objective, const PoseBounds& b, Eigen::VectorXd* lower,
+                 Eigen::VectorXd* upper) {
+  const int np = objective.pose_variables();
+  lower->resize(np);
+  upper->resize(np);
+  const fe::State& rest = objective.warm_starts().back().state;
+  const PointCloud X = objective.particles(Eigen::VectorXd::Zero(rest.u.size()));
+  const double L = (X.points().colwise().maxCoeff() - X.points().colwise().minCoeff()).norm();
+  for (int k = 0; k < 3; ++k) {
+    (*lower)[k] = -b.rotation;
+    (*upper)[k] = b.rotation;
+    (*lower)[3 + k] = -b.translation * L;
+    (*upper)[3 + k] = b.translation * L;
+  }
+  if (np == 7) {
+    const double s0 = objective.options().pose->s;
+    (*lower)[6] = std::log(s0 / b.scale_max);
+    (*upper)[6] = std::log(s0 / b.scale_min);
+    if (!((*lower)[6] <= 0.0 && 0.0 <= (*upper)[6]))
+      throw InvalidArgument("pose_bounds: the start pose's scale " + exact_text(s0) +
+                            " is outside [scale_min, scale_max]");
+  }
+}
+
+}  // namespace
+
 void ShapeTrackingOptions::validate() const {
   optimizer.validate();
+  pose_bounds.validate();
   if (!(self_floor_max_pairs >= 0.0)) throw InvalidArgument("self_floor_max_pairs must be >= 0");
   if (checkpoint_every < 1) throw InvalidArgument("checkpoint_every must be >= 1");
   if (resume && checkpoint.empty())
@@ -254,6 +315,19 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     throw InvalidArgument("track_shape: m0, lower and upper differ in size");
   const Eigen::VectorXd m0 = m0_in.cwiseMax(lower).cwiseMin(upper);
   Recorder recorder(objective, options, run_fingerprint(objective, lower, upper, m0_in, options));
+  // With a pose the variables are x = [m; ξ], ξ from 0 (the start pose).
+  const Eigen::Index nm = m0.size(), np = objective.pose_variables();
+  Eigen::VectorXd x0 = m0, x_lower = lower, x_upper = upper;
+  if (np > 0) {
+    Eigen::VectorXd pl, pu;
+    pose_bounds(objective, options.pose_bounds, &pl, &pu);
+    x0.conservativeResize(nm + np);
+    x0.tail(np).setZero();
+    x_lower.conservativeResize(nm + np);
+    x_lower.tail(np) = pl;
+    x_upper.conservativeResize(nm + np);
+    x_upper.tail(np) = pu;
+  }
 
   ShapeTrackingSummary s;
   // Floors (docs/formulation.md §2.2, §5.3): the target against itself, and the body deformed
@@ -272,7 +346,10 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   if (self_floor && !map_displacement) s.floor_self = Y.evaluate(Y.cloud(), self).rho;
   if (map_displacement) {
     matched.form = objective.distance_form(*map_displacement);  // with the map's visible set
-    s.floor_matched = Y.evaluate(objective.particles(*map_displacement), matched).rho;
+    // With a pose: the map's body at the start pose (the true pose is not known).
+    s.floor_matched =
+        Y.evaluate(objective.target_frame_particles(*map_displacement, Eigen::VectorXd()), matched)
+            .rho;
   }
   const std::optional<double> floor = s.floor();
 
@@ -306,16 +383,17 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     return true;
   };
   int iterations = 0;  // accepted so far (for the message of an interrupt)
-  const auto on_iteration = [&](const IterationRecord& rec, const Eigen::VectorXd& m) {
+  const auto on_iteration = [&](const IterationRecord& rec, const Eigen::VectorXd& x) {
     iterations = rec.iteration;
     if (!last_replayed) best_state = objective.last_state();  // else restored from the log
     TrackingIteration it = record(rec, last, floor);
     it.seconds = recorder.seconds();
     it.replayed = last_replayed;
+    if (np > 0) it.pose = objective.pose_at(x.tail(np)).twist();
     s.history.push_back(it);
     bool stop = false;
     try {
-      if (callbacks.on_iteration) callbacks.on_iteration(it, m);
+      if (callbacks.on_iteration) callbacks.on_iteration(it, x.head(nm));
     } catch (const StopRequest&) {
       stop = true;  // minimise() ends the run after this iteration
     }
@@ -324,11 +402,15 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     if (stop) throw StopRequest{};
   };
   BoundedOptimizerOptions opt = options.optimizer;
+  if (np > 0 && options.pose_bounds.move != 1.0) {  // the pose slower than the control
+    opt.move_scale.setOnes(nm + np);
+    opt.move_scale.tail(np).setConstant(options.pose_bounds.move);
+  }
   if (opt.max_seconds > 0.0)  // a total over the resumes
     opt.max_seconds = std::max(1e-9, opt.max_seconds - recorder.logged_seconds());
   BoundedOptimizerSummary r;
   try {
-    r = minimise(f, m0, lower, upper, opt, on_iteration);
+    r = minimise(f, x0, x_lower, x_upper, opt, on_iteration);
   } catch (const Interrupted& e) {
     // The checkpoint holds every evaluation finished and the states of the last save, as
     // when the process is killed: resuming it continues the uninterrupted run.

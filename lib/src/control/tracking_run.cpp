@@ -68,6 +68,13 @@ void TrackingRunOptions::validate() const {
     throw InvalidArgument("refined_move_limit must be in [0, 1]");
   if (resume && out.empty())
     throw InvalidArgument("resume needs the run's folder (the out field is empty)");
+  if (initial_control.size() > 0 && levels > 1)
+    throw InvalidArgument(
+        "initial_control: a multilevel run (levels > 1) starts from its coarse "
+        "levels' control; give levels 1");
+  if (!initial_control.allFinite()) throw InvalidArgument("initial_control must be finite");
+  if (!(pose_move > 0.0 && pose_move <= 1.0))
+    throw InvalidArgument("pose_move must be in (0, 1] (the pose's move limit over the control's)");
   if (distance) {
     const TargetDistance& d = *distance;
     if (d.sides == Sides::visible)
@@ -113,13 +120,16 @@ ShapeTrackingOptions TrackingRunOptions::tracking() const {
   o.relative_change = relative_change;
   o.move_limit = move_limit;
   t.checkpoint_every = checkpoint_every;
+  t.pose_bounds.move = pose_move;
   if (!out.empty()) t.checkpoint = (fs::path(out) / "checkpoint.bin").string();
   t.resume = resume;
   return t;
 }
 
-int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options) {
+int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options, TargetFrame frame) {
   if (options.levels > 0) return options.levels;
+  // A given start or a joint pose runs on one level (validate, TrackingRun refuse more).
+  if (options.initial_control.size() > 0 || frame == TargetFrame::camera) return 1;
   return fe::grid_levels(scene, fe::GridSequencingOptions{}) > 0 ? 2 : 1;
 }
 
@@ -134,12 +144,18 @@ struct TrackingRun::Impl {
        const TrackingRunOptions& o)
       : scene(s), assembler(a), control(c), options(o), target(std::move(t)) {
     options.validate();
-    options.levels = tracking_levels(scene, options);
+    options.levels = tracking_levels(scene, options, target.frame);
     if (target.cloud.dim() != scene.dim())
       throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
                             "D but the scene's body is " + std::to_string(scene.dim()) + "D");
     ShapeObjectiveOptions so = options.objective();
     apply_target_settings(target, &so);
+    if (target.frame == TargetFrame::camera) {  // the pose joins the control (§8.10)
+      if (options.levels > 1)
+        throw InvalidArgument(
+            "levels: a target in the camera's frame (joint pose) runs on one level (levels 1)");
+      so.pose = start_pose(target, a, so, options.threads);
+    }
     objective = std::make_unique<ShapeObjective>(
         a, c, HausdorffTarget(target.cloud, so.hausdorff), so,
         fe::state_solver_factory(scene, options.state_backend, &a, &c));
@@ -171,6 +187,12 @@ struct TrackingRun::Impl {
     sum["particles"] = to_string(objective->options().particles);  // the target's may differ
     sum["volumes"] = to_string(objective->options().volumes);
     sum["state_backend"] = to_string(options.state_backend);
+    if (const std::optional<scan::Pose>& p = objective->options().pose) {
+      sum["frame"] = "camera";
+      sum["align"] = scan::to_string(objective->options().pose_kind);
+      sum["pose_start"] = {{"matrix", detail::matrix_json(p->matrix())},
+                           {"twist", detail::matrix_json(p->twist())}};
+    }
     sum["ranks"] = ranks;
     return sum;
   }
@@ -376,8 +398,15 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
   TrackingRunSummary s = d.setup;
   // The scene's bounds and start where a control acts (0 where it touches none of its
   // regions); a multilevel run starts from its coarse levels' control.
-  const Eigen::VectorXd m0 = d.levels.empty() ? d.control.constant(d.scene.control_initial)
-                                              : d.run_coarse_levels(to, callbacks, &s);
+  const Eigen::Index n = d.control.size();
+  if (d.options.initial_control.size() > 0 && d.options.initial_control.size() != n)
+    throw InvalidArgument("initial_control has " +
+                          std::to_string(d.options.initial_control.size()) + " values, expected " +
+                          std::to_string(n) + " (the scene's controls)");
+  const Eigen::VectorXd m0 = !d.levels.empty() ? d.run_coarse_levels(to, callbacks, &s)
+                             : d.options.initial_control.size() > 0
+                                 ? d.options.initial_control
+                                 : d.control.constant(d.scene.control_initial);
   double offset = 0.0;  // the coarse levels' time
   for (const LevelReport& l : s.levels) offset += l.seconds;
   if (!d.levels.empty() && d.options.max_seconds > 0.0)

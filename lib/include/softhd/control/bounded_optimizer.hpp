@@ -49,6 +49,10 @@ struct BoundedOptimizerOptions {
   /// one NLopt run on the whole box.
   double move_limit = 0.0;
   int round_evaluations = 10;  ///< evaluations per round when move_limit > 0
+  /// Per variable: a factor in (0, 1] on the move limit (the box's half-width is
+  /// move_limit × move_scale_k × (u_k − l_k)), e.g. to let some variables move more slowly than
+  /// others. Empty (default): 1 for every variable; else one entry per variable (minimise()).
+  Eigen::VectorXd move_scale;
 
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;

@@ -23,6 +23,16 @@
 /// and, 3D only, "surface": true (a surface scan: the moving cloud is the body's boundary with
 /// its current facet areas, §8.6) and "camera": [x, y, z] (the camera in the body's frame, for
 /// the visible distance, which it implies when "distance" is absent, §8.7).
+///
+/// A cloud target in the camera's frame (3D; docs/formulation.md §8.10): the pose is refined
+/// jointly with the control,
+///     "frame": "body" | "camera"      the frame of the cloud (default body)
+///     "align": "rigid" | "similarity"  camera frame only: what the pose may change (default rigid)
+///     "pose": FILE                     camera frame only: the start pose (a pose file of
+///         `softhd align`, scan → body, relative to the scene file); without it the start is
+///         scan::align against the body at rest
+/// With "frame": "camera" the camera of the visible distance is the pose's (no "camera" key), and
+/// "clean.crop" is refused (the body's box is in the body's frame).
 
 #include <Eigen/Core>
 #include <optional>
@@ -34,6 +44,8 @@
 #include "softhd/fe/scene.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/point_cloud.hpp"
+#include "softhd/scan/align.hpp"
+#include "softhd/scan/pose.hpp"
 
 namespace softhd {
 
@@ -48,6 +60,11 @@ struct TargetDistance {
   double cap_q = 4.0;         ///< the cap's sharpness q
 };
 
+/// The frame of a target's cloud: the body's (default) or the camera's (the pose found jointly).
+enum class TargetFrame { body, camera };
+/// "body" or "camera".
+std::string to_string(TargetFrame frame);
+
 /// A target cloud and, if T is known, the nodal displacements u_T = T(X) − X of the body.
 struct SceneTarget {
   PointCloud cloud;                                 ///< Ω_d
@@ -56,11 +73,21 @@ struct SceneTarget {
   TargetDistance distance;                          ///< the form its block asks for
   bool surface = false;                             ///< "surface": the moving cloud is the boundary
   std::optional<Eigen::Vector3d> camera = std::nullopt;  ///< "camera": visible from there
+  TargetFrame frame = TargetFrame::body;                 ///< "frame"
+  scan::PoseKind align = scan::PoseKind::rigid;          ///< "align" (camera frame)
+  std::optional<scan::Pose> pose = std::nullopt;         ///< "pose": the start (camera frame)
 };
 
 /// The objective settings a target asks for: surface → particles boundary with deformed
 /// (current) areas; camera → Sides::visible from it (before target_form, which keeps it).
 void apply_target_settings(const SceneTarget& target, ShapeObjectiveOptions* options);
+
+/// The start pose of a camera-frame target (docs/formulation.md §8.10): its "pose", else
+/// scan::align of the cloud against the moving cloud of `options` at rest (rigid or similarity
+/// as "align"; the distance scan_to_body unless the target's is symmetric; no cap; `threads`).
+/// Throws InvalidArgument for a body-frame target.
+scan::Pose start_pose(const SceneTarget& target, const fe::Assembler& assembler,
+                      const ShapeObjectiveOptions& options, int threads = 0);
 
 class ShapeObjective;
 

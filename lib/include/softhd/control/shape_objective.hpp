@@ -11,6 +11,10 @@
 ///     g = ∂ρ̃/∂u (through the particle positions, and volumes if they move),
 ///     K λ = g on the free dofs (the converged tangent's factorisation),
 ///     dJ/dm_k = ∂J_reg/∂m_k + ∫ M_k (F a₀)·(∇λ a₀) dX.
+///
+/// With a pose (ShapeObjectiveOptions::pose, docs/formulation.md §8.10) the target stays in the
+/// camera's frame and the moving cloud is mapped into it, x'_i = Q_ξ(x_i), by the twist ξ about
+/// a fixed centre composed with the start; evaluate(m, ξ) returns dJ/dξ beside dJ/dm.
 
 #include <Eigen/Core>
 #include <deque>
@@ -24,6 +28,8 @@
 #include "softhd/fe/state_equation.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/point_cloud.hpp"
+#include "softhd/scan/align.hpp"
+#include "softhd/scan/pose.hpp"
 
 namespace softhd {
 
@@ -69,6 +75,16 @@ struct ShapeObjectiveOptions {
   /// iterations (a large step); smaller steps keep the warm start and its path predictor,
   /// which is better for them (bending: 3 fine iterations instead of 5).
   int coarse_correction_iterations = 6;
+  /// The target's frame (docs/formulation.md §8.10). Empty (default): the target is in the
+  /// body's frame. Set: the target is in the camera's frame and this is the start P₀ (scan →
+  /// body) of the joint pose; an evaluation at the twist ξ maps the moving cloud into the
+  /// camera's frame by Q_ξ = T_ξ ∘ P₀⁻¹, T_ξ(z) = c + e^σ exp([ω]×)(z − c) + v, c = P₀⁻¹ of the
+  /// rest cloud's centroid. Sides::visible then takes its camera from the pose (P_ξ's
+  /// camera_position(); `camera` must be empty). 3D only.
+  std::optional<scan::Pose> pose;
+  /// With a pose: rigid (ξ = (ω, v), 6 variables) or similarity (ξ = (ω, v, σ), 7, σ = log of
+  /// the scale change). Default rigid.
+  scan::PoseKind pose_kind = scan::PoseKind::rigid;
 
   /// Throws InvalidArgument naming the first invalid field (the distance's parameters and
   /// form, and the Newton options included). The visible mask's size is checked against the
@@ -92,10 +108,11 @@ struct ShapeEvaluation {
   /// ρ̃, A and B of the deformed body against the target (docs/formulation.md §2.1).
   double rho = 0.0, A = 0.0, B = 0.0;
   ///@}
-  double regularisation = 0.0;  ///< the Tikhonov terms of J
-  Eigen::VectorXd gradient;     ///< dJ/dm (if requested and ok)
-  int newton_iterations = 0;    ///< Newton iterations of the state solve
-  int factorizations = 0;       ///< numeric factorisations of the state solve and the adjoint
+  double regularisation = 0.0;    ///< the Tikhonov terms of J
+  Eigen::VectorXd gradient;       ///< dJ/dm (if requested and ok)
+  Eigen::VectorXd pose_gradient;  ///< dJ/dξ (with a pose, if requested and ok; else empty)
+  int newton_iterations = 0;      ///< Newton iterations of the state solve
+  int factorizations = 0;         ///< numeric factorisations of the state solve and the adjoint
   ///@{
   /// Wall time (seconds) of the state solve, the distance and the adjoint.
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
@@ -128,8 +145,22 @@ class ShapeObjective {
                  const fe::StateSolverFactory& make_solver);
   ~ShapeObjective();
 
-  /// J(m); with `gradient`, also dJ/dm. Never throws for a failed state solve.
+  /// J(m); with `gradient`, also dJ/dm. Never throws for a failed state solve. With a pose:
+  /// J at the start pose (ξ = 0), and dJ/dξ too.
   ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient);
+  /// J(m, ξ) with the pose twist ξ (pose_variables() entries; empty means 0); with `gradient`,
+  /// dJ/dm and dJ/dξ (exact, docs/formulation.md §8.10). Throws InvalidArgument for a ξ of the
+  /// wrong size or not finite.
+  ShapeEvaluation evaluate(const Eigen::VectorXd& m, const Eigen::VectorXd& xi, bool gradient);
+  /// The number of pose variables: 0 without a pose, 6 (rigid) or 7 (similarity).
+  int pose_variables() const;
+  /// The pose P_ξ (scan → body) of the twist ξ (empty: the start pose; without a pose: identity).
+  scan::Pose pose_at(const Eigen::VectorXd& xi) const;
+  /// The twist's fixed centre c (the camera's frame; zero without a pose).
+  Eigen::Vector3d pose_centre() const;
+  /// The moving cloud of u in the target's frame at the twist ξ (x'_i = Q_ξ(x_i); without a
+  /// pose, particles(u)).
+  PointCloud target_frame_particles(const Eigen::VectorXd& u, const Eigen::VectorXd& xi) const;
 
   /// The moving cloud of a displacement u (num_dofs entries).
   PointCloud particles(const Eigen::VectorXd& u) const;
@@ -165,6 +196,8 @@ class ShapeObjective {
   /// Per-point fields d̃ of the last converged state (moving cloud, target cloud), with the
   /// objective's form (raw fields; ρ̃, A, B of the form).
   HausdorffResult fields(const Eigen::VectorXd& u) const;
+  /// As fields(u), at the pose twist ξ (empty: 0).
+  HausdorffResult fields(const Eigen::VectorXd& u, const Eigen::VectorXd& xi) const;
   /// Replaces the distance form of later evaluations (e.g. a cap set from the starting
   /// state's fields, cap_from_quantile). Throws InvalidArgument as DistanceForm::validate for
   /// the moving cloud's size.
@@ -172,6 +205,8 @@ class ShapeObjective {
   /// The form an evaluation at displacement u uses: the options' form, with the visible mask
   /// of u's deformed boundary when a camera is set.
   DistanceForm distance_form(const Eigen::VectorXd& u) const;
+  /// As distance_form(u), with the camera of the pose twist ξ (empty: 0).
+  DistanceForm distance_form(const Eigen::VectorXd& u, const Eigen::VectorXd& xi) const;
 
  private:
   struct Impl;

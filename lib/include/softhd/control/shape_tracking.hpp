@@ -43,6 +43,27 @@ struct TrackingIteration {
   /// The multilevel level (TrackingRunOptions::levels): how many times the user's mesh was
   /// halved for it, 0 on the user's mesh.
   int level = 0;
+  /// With a pose (docs/formulation.md §8.10): the twist (ω, t, log s) of the best pose P so far
+  /// (scan::Pose::twist, 7 entries); empty otherwise.
+  Eigen::VectorXd pose;
+};
+
+/// Bounds of the pose twist ξ = (ω, v[, σ]) of a joint run (docs/formulation.md §8.10); ξ = 0
+/// (the start pose) must lie inside them.
+struct PoseBounds {
+  double rotation = 0.5;      ///< |ω_k| ≤ this (radians)
+  double translation = 0.25;  ///< |v_k| ≤ this × L (L: the rest cloud's bounding-box diagonal)
+  ///@{
+  /// Similarity only: the scale s of P_ξ (scan → body) within [scale_min, scale_max], i.e.
+  /// σ within [log(s₀/scale_max), log(s₀/scale_min)] (s₀: the start's scale).
+  double scale_min = 0.5, scale_max = 2.0;
+  ///@}
+  /// The pose's move limit as a fraction of the control's (BoundedOptimizerOptions::move_scale
+  /// of the pose variables), in (0, 1]: 1 (default) moves both by the same fraction of their
+  /// range; smaller lets the control bend before the pose turns (docs/formulation.md §8.10).
+  double move = 1.0;
+  /// Throws InvalidArgument naming the first invalid field.
+  void validate() const;
 };
 
 /// Settings of track_shape(); defaults per field.
@@ -71,6 +92,10 @@ struct ShapeTrackingOptions {
   /// The caller's part of the fingerprint (e.g. a content hash of the scene file);
   /// track_shape adds the mesh, controls, target, objective and optimiser settings.
   RunFingerprint fingerprint;
+  /// With an objective that has a pose: the bounds of its twist ξ, which joins the optimiser's
+  /// variables as [m; ξ] (the optimiser scales each variable by its bound, so its move limit is
+  /// the same fraction of the range for both).
+  PoseBounds pose_bounds;
 
   /// Throws InvalidArgument naming the first invalid field (the optimiser's included).
   void validate() const;
@@ -103,10 +128,13 @@ struct ShapeTrackingSummary {
   /// Total wall time (seconds) of the state solves, distances and adjoints.
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
   ///@}
-  double seconds_optimizer = 0.0;          ///< the rest: NLopt, records, callbacks
-  int newton_iterations = 0;               ///< over all state solves of this run
-  int factorizations = 0;                  ///< numeric factorisations (state solves and adjoints)
-  Eigen::VectorXd control;                 ///< the best m found
+  double seconds_optimizer = 0.0;  ///< the rest: NLopt, records, callbacks
+  int newton_iterations = 0;       ///< over all state solves of this run
+  int factorizations = 0;          ///< numeric factorisations (state solves and adjoints)
+  Eigen::VectorXd control;         ///< the best m found
+  /// With a pose: the best twist ξ found and its pose P_ξ (scan → body); else empty / nullopt.
+  Eigen::VectorXd pose_twist;
+  std::optional<scan::Pose> pose;          ///< see pose_twist
   Eigen::VectorXd displacement;            ///< its state u
   std::vector<TrackingIteration> history;  ///< accepted iterations (replayed ones included)
   int replayed_evaluations = 0;            ///< served from the checkpoint
@@ -138,7 +166,8 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
                                const Eigen::VectorXd& upper, const Eigen::VectorXd& m0,
                                const ShapeTrackingOptions& options);
 
-/// Minimises J(m) over lower ≤ m ≤ upper from m0 (clamped into the bounds).
+/// Minimises J(m) over lower ≤ m ≤ upper from m0 (clamped into the bounds); with a pose in the
+/// objective, J(m, ξ) jointly, ξ from 0 within options.pose_bounds (the callbacks see m only).
 /// `map_displacement` (optional) is u_T = T(X) − X at the nodes, for the matched floor and
 /// the shape error. Throws StateSolveError if the state solve fails at m0 or at the best
 /// control; the callbacks' exceptions (other than StopRequest) and Interrupted end the run and

@@ -87,7 +87,8 @@ struct TrackingRunOptions {
   /// min(coarse_iterations, max_iterations) iterations, and it ends earlier once ρ̃ decreased by
   /// less than switch_decrease (relative) in two iterations in a row. 1: the user's mesh alone. 0
   /// (the default): 2 where the body has a coarse level of at least 32 elements (the two-level
-  /// starts' rule, fe::grid_levels), else 1 (tracking_levels). Every level started from a coarser
+  /// starts' rule, fe::grid_levels), else 1; 1 for a run from initial_control or with a joint
+  /// pose (tracking_levels). Every level started from a coarser
   /// level's control has the move limit refined_move_limit instead of move_limit: its start is
   /// near its optimum already, and a step as large as a first one's curls the body far from the
   /// state it was started from (docs/formulation.md §4.8).
@@ -98,6 +99,14 @@ struct TrackingRunOptions {
   double refined_move_limit = 0.02;
   ///@}
   fe::StateBackend state_backend = fe::StateBackend::kCholmod;  ///< the state solver
+  /// The starting control (one value per control, clamped into the bounds), e.g. an earlier
+  /// run's: a staged run (docs/formulation.md §8.10). Empty (default): the scene's
+  /// control.initial everywhere. Single-level runs only (levels 1; the automatic levels are 1
+  /// then).
+  Eigen::VectorXd initial_control;
+  /// A camera-frame target (docs/formulation.md §8.10): the pose's move limit as a fraction of
+  /// the control's, in (0, 1] (PoseBounds::move; default 1).
+  double pose_move = 1.0;
   /// A target cloud file (text or PLY) instead of the scene's "target"; empty: the scene's.
   std::string target_file;
   /// The distance's form (docs/formulation.md §8), replacing the target's own as a whole (a
@@ -173,9 +182,12 @@ struct TrackingRunCallbacks : ShapeTrackingCallbacks {
 SceneTarget tracking_target(const fe::Scene& scene, const fe::Mesh& mesh,
                             const TrackingRunOptions& options);
 
-/// The levels of a run of `options` on `scene`: options.levels, or for 0 (automatic) 2 where the
-/// body has a coarse level of at least 32 elements (fe::grid_levels), else 1.
-int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options);
+/// The levels of a run of `options` on `scene` against a target in `frame`: options.levels, or
+/// for 0 (automatic) 2 where the body has a coarse level of at least 32 elements
+/// (fe::grid_levels), else 1; always 1 for a run from options.initial_control or against a
+/// target in the camera's frame (a joint pose), which run on one level.
+int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options,
+                    TargetFrame frame = TargetFrame::body);
 
 /// One tracking run, set up at construction (no file touched) and made by run().
 class TrackingRun {
