@@ -136,8 +136,11 @@ TEST_F(OptimiseCli, KilledAndResumedRunsAreTheUninterruptedRun) {
         EXPECT_TRUE(fs::exists(out / "summary.json"));
       }
       // The first attempts are killed; from the sixth on the run may finish.
+      // --foreground: timeout kills softhd alone and waits for it, so its folder lock is free
+      // when the next attempt starts (without it, timeout also kills itself and returns while
+      // a loaded machine may still be tearing softhd down, its lock held).
       const std::string limit =
-          attempt < 5 ? "timeout -s KILL " + std::to_string(delay(rng)) + " " : "";
+          attempt < 5 ? "timeout --foreground -s KILL " + std::to_string(delay(rng)) + " " : "";
       const std::string cmd = limit + SOFTHD_CLI + " optimise " + scene() + " --out " +
                               out.string() + common + (resume ? " --resume" : "") +
                               " >/dev/null 2>" + (dir_ / "stderr").string();
@@ -241,8 +244,8 @@ TEST_F(OptimiseCli, MultilevelKilledAndResumedRunsAreTheUninterruptedRun) {
       const bool resume = fs::exists(out / "checkpoint_level1.bin");
       // Killed on the coarse level: the user's mesh has no checkpoint yet.
       if (resume && !fs::exists(out / "checkpoint.bin")) ++coarse_resumes;
-      const std::string limit =
-          attempt < 4 ? "timeout -s KILL " + std::to_string(delay(rng)) + " " : "";
+      const std::string limit =  // --foreground: as above
+          attempt < 4 ? "timeout --foreground -s KILL " + std::to_string(delay(rng)) + " " : "";
       const std::string cmd = limit + SOFTHD_CLI + " optimise " + scene() + " --out " +
                               out.string() + common + (resume ? " --resume" : "") +
                               " >/dev/null 2>" + (dir_ / "stderr").string();
