@@ -15,7 +15,8 @@ endif()
 # the tests never run under libFuzzer; it also costs them run time: test_hausdorff_dual took
 # 101 s of CPU with it, 77 s without). CPU (user+sys) of the build, `/usr/bin/time -v
 # cmake --build <tree> -j 2` on a fresh tree configured as here (Dec 2, shared machine):
-# 1032 s before, 765 s with these three.
+# 1032 s before, 765 s with these three; the test run below (ctest -j 2, user+sys) 434 s
+# before, 409 s after (all 553 passing both times).
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}
   -DCMAKE_CXX_COMPILER=${CLANGXX} -DCMAKE_BUILD_TYPE=None
   "-DCMAKE_CXX_FLAGS=-O1 -g1 -Wno-pass-failed" -DSOFTHD_SANITIZE=ON -DSOFTHD_FUZZ=ON
