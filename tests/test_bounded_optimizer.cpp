@@ -102,17 +102,16 @@ TEST(BoundedOptimizer, FailedEvaluationsAreRejectedNotFatal) {
 
 // With a move limit every evaluated point lies within δ (u − l) of the best point known
 // when it was asked for, and the bounded minimiser is still reached.
-TEST(BoundedOptimizer, MoveLimitBoundsEveryStepAndStillConverges) {
-  const int n = 5;
-  Eigen::VectorXd c(n), lo = Eigen::VectorXd::Constant(n, -1e5), hi = Eigen::VectorXd::Zero(n);
-  c << -2e4, -1.5e5, 3e4, -7e4, -9e4;
-  const Eigen::VectorXd expected = c.cwiseMax(lo).cwiseMin(hi);
-  const double delta = 0.05;
-  for (Algorithm a : kAll) {
-    Eigen::VectorXd best = Eigen::VectorXd::Zero(n);
-    double best_f = INFINITY, worst_step = 0.0;
-    const BoundedObjective f = [&](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
-      worst_step = std::max(worst_step, (x - best).cwiseAbs().maxCoeff());
+// |x − c|², recording per variable the largest distance of an evaluated point from the best
+// point evaluated before it (the start, 0, counts as the first best point).
+struct StepWatchingQuadratic {
+  explicit StepWatchingQuadratic(const Eigen::VectorXd& centre)
+      : c(centre),
+        best(Eigen::VectorXd::Zero(centre.size())),
+        worst(Eigen::VectorXd::Zero(centre.size())) {}
+  BoundedObjective objective() {
+    return [this](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+      worst = worst.cwiseMax((x - best).cwiseAbs());
       v = (x - c).squaredNorm();
       if (g) *g = 2 * (x - c);
       if (v < best_f) {
@@ -121,6 +120,20 @@ TEST(BoundedOptimizer, MoveLimitBoundsEveryStepAndStillConverges) {
       }
       return true;
     };
+  }
+  Eigen::VectorXd c, best, worst;
+  double best_f = INFINITY;
+};
+
+TEST(BoundedOptimizer, MoveLimitBoundsEveryStepAndStillConverges) {
+  const int n = 5;
+  Eigen::VectorXd c(n), lo = Eigen::VectorXd::Constant(n, -1e5), hi = Eigen::VectorXd::Zero(n);
+  c << -2e4, -1.5e5, 3e4, -7e4, -9e4;
+  const Eigen::VectorXd expected = c.cwiseMax(lo).cwiseMin(hi);
+  const double delta = 0.05;
+  for (Algorithm a : kAll) {
+    StepWatchingQuadratic q(c);
+    const BoundedObjective f = q.objective();
     BoundedOptimizerOptions o;
     o.algorithm = a;
     o.move_limit = delta;
@@ -128,7 +141,7 @@ TEST(BoundedOptimizer, MoveLimitBoundsEveryStepAndStillConverges) {
     o.max_iterations = 1000;
     o.max_evaluations = 2000;
     const BoundedOptimizerSummary s = minimise(f, Eigen::VectorXd::Zero(n), lo, hi, o);
-    EXPECT_LE(worst_step, delta * 1e5 * (1 + 1e-12))
+    EXPECT_LE(q.worst.maxCoeff(), delta * 1e5 * (1 + 1e-12))
         << to_string(a) << ": " << s.termination << " its " << s.iterations;
     EXPECT_LE((s.x - expected).cwiseAbs().maxCoeff(), 1.0) << to_string(a) << ": " << s.termination;
   }
@@ -143,18 +156,9 @@ TEST(BoundedOptimizer, MoveScaleBoundsEachVariablesSteps) {
   Eigen::VectorXd scale(n);
   scale << 1.0, 1.0, 0.25, 0.25;
   const double delta = 0.1;
-  Eigen::VectorXd best = Eigen::VectorXd::Zero(n), worst = Eigen::VectorXd::Zero(n);
-  double best_f = INFINITY;
-  const BoundedObjective f = [&](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
-    worst = worst.cwiseMax((x - best).cwiseAbs());
-    v = (x - c).squaredNorm();
-    if (g) *g = 2 * (x - c);
-    if (v < best_f) {
-      best_f = v;
-      best = x;
-    }
-    return true;
-  };
+  StepWatchingQuadratic q(c);
+  const BoundedObjective f = q.objective();
+  const Eigen::VectorXd& worst = q.worst;
   BoundedOptimizerOptions o;
   o.move_limit = delta;
   o.move_scale = scale;

@@ -45,6 +45,23 @@ TEST(Pose, LogInvertsExpAcrossTheRange) {
   }
 }
 
+TEST(Pose, LeftJacobianMatchesCentralDifferencesOfExp) {
+  // exp([ω + hδ]×) exp([ω]×)ᵀ = exp([h J_l δ]×) + O(h²), so the central difference of
+  // log(exp([ω ± hδ]×) exp([ω]×)ᵀ) is J_l δ + O(h²) (h = 1e-5: truncation ~1e-10, rounding
+  // ~ε/h = 2e-11); both sides of the series switch at θ = 1e-4 are taken.
+  std::mt19937_64 gen(9);
+  const double h = 1e-5;
+  for (double angle : {0.0, 1e-6, 9.9e-5, 1.01e-4, 0.3, 1.5, 2.8}) {
+    const Eigen::Vector3d w = angle * random_axis(gen);
+    const Eigen::Vector3d d = random_axis(gen);
+    const Eigen::Matrix3d Et = rotation_exp(w).transpose();
+    const Eigen::Vector3d fd =
+        (rotation_log(rotation_exp(w + h * d) * Et) - rotation_log(rotation_exp(w - h * d) * Et)) /
+        (2 * h);
+    EXPECT_LT((rotation_left_jacobian(w) * d - fd).norm(), 1e-8) << "angle " << angle;
+  }
+}
+
 TEST(Pose, MatrixAndTwistRoundTrips) {
   std::mt19937_64 gen(9);
   std::uniform_real_distribution<double> u(-2.0, 2.0);

@@ -6,6 +6,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <functional>
+#include <string>
+#include <vector>
+
 #include "hausdorff_reference.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/error.hpp"
@@ -45,6 +50,27 @@ fe::Assembler strip(int dim) {
                        {{"x0", {}}});
 }
 
+// The Taylor remainders |J(h) − J₀ − h·slope| for h = h₀, h₀/2, …, h₀/16 (J(h) from
+// `at`, which must succeed), and the observed order log₂(r_k / r_{k+1}) of each consecutive
+// pair checked to lie in [lo, hi].
+void expect_taylor_order(double h0, double J0, double slope,
+                         const std::function<ShapeEvaluation(double)>& at, double lo, double hi,
+                         const std::string& what) {
+  std::vector<double> r;
+  for (double h = h0; h > h0 / 32; h /= 2) {
+    const ShapeEvaluation e = at(h);
+    ASSERT_EQ(e.status, EvaluationStatus::ok) << what << ": " << e.failure;
+    r.push_back(std::fabs(e.J - J0 - h * slope));
+  }
+  for (size_t k = 0; k + 1 < r.size(); ++k) {
+    const double order = std::log2(r[k] / r[k + 1]);
+    EXPECT_GE(order, lo) << what << ", steps " << k << "," << k + 1 << " remainders " << r[k] << " "
+                         << r[k + 1];
+    EXPECT_LE(order, hi) << what << ", steps " << k << "," << k + 1 << " remainders " << r[k] << " "
+                         << r[k + 1];
+  }
+}
+
 class ShapeGradient : public ::testing::TestWithParam<Case> {};
 
 TEST_P(ShapeGradient, TaylorRemainderIsSecondOrder) {
@@ -78,17 +104,9 @@ TEST_P(ShapeGradient, TaylorRemainderIsSecondOrder) {
   ASSERT_EQ(e0.status, EvaluationStatus::ok) << e0.failure;
   ASSERT_TRUE(e0.gradient.allFinite());
   const double slope = e0.gradient.dot(dm);
-  std::vector<double> remainder;
-  for (double h = 0.2; h > 0.2 / 32; h /= 2) {
-    const ShapeEvaluation e = J.evaluate(m0 + h * dm, false);
-    ASSERT_EQ(e.status, EvaluationStatus::ok) << e.failure;
-    remainder.push_back(std::fabs(e.J - e0.J - h * slope));
-  }
-  for (size_t k = 0; k + 1 < remainder.size(); ++k) {
-    const double order = std::log2(remainder[k] / remainder[k + 1]);
-    EXPECT_GE(order, 1.9) << "steps " << k << "," << k + 1 << " remainders " << remainder[k] << " "
-                          << remainder[k + 1];
-  }
+  expect_taylor_order(
+      0.2, e0.J, slope, [&](double h) { return J.evaluate(m0 + h * dm, false); }, 1.9, INFINITY,
+      "control");
 }
 
 std::vector<Case> cases() {
@@ -232,32 +250,13 @@ TEST_P(JointGradient, TaylorRemainderIsSecondOrderInControlAndPose) {
   ASSERT_EQ(e0.pose_gradient.size(), n);
   ASSERT_TRUE(e0.gradient.allFinite() && e0.pose_gradient.allFinite());
   const double slope = e0.gradient.dot(dm) + e0.pose_gradient.dot(dxi);
-  std::vector<double> remainder;
-  for (double h = 0.05; h > 0.05 / 32; h /= 2) {
-    const ShapeEvaluation e = J.evaluate(m0 + h * dm, xi0 + h * dxi, false);
-    ASSERT_EQ(e.status, EvaluationStatus::ok) << e.failure;
-    remainder.push_back(std::fabs(e.J - e0.J - h * slope));
-  }
-  for (size_t k = 0; k + 1 < remainder.size(); ++k) {
-    const double order = std::log2(remainder[k] / remainder[k + 1]);
-    EXPECT_GE(order, 1.9) << "steps " << k << "," << k + 1 << " remainders " << remainder[k] << " "
-                          << remainder[k + 1];
-    EXPECT_LE(order, 2.1) << "steps " << k << "," << k + 1 << " remainders " << remainder[k] << " "
-                          << remainder[k + 1];
-  }
+  expect_taylor_order(
+      0.05, e0.J, slope, [&](double h) { return J.evaluate(m0 + h * dm, xi0 + h * dxi, false); },
+      1.9, 2.1, "control and pose");
   // The pose alone (dm = 0) as well: its gradient is not hidden behind the control's.
-  const double pose_slope = e0.pose_gradient.dot(dxi);
-  std::vector<double> pose_remainder;
-  for (double h = 0.05; h > 0.05 / 32; h /= 2) {
-    const ShapeEvaluation e = J.evaluate(m0, xi0 + h * dxi, false);
-    ASSERT_EQ(e.status, EvaluationStatus::ok) << e.failure;
-    pose_remainder.push_back(std::fabs(e.J - e0.J - h * pose_slope));
-  }
-  for (size_t k = 0; k + 1 < pose_remainder.size(); ++k) {
-    const double order = std::log2(pose_remainder[k] / pose_remainder[k + 1]);
-    EXPECT_GE(order, 1.9) << "pose only, steps " << k << "," << k + 1;
-    EXPECT_LE(order, 2.1) << "pose only, steps " << k << "," << k + 1;
-  }
+  expect_taylor_order(
+      0.05, e0.J, e0.pose_gradient.dot(dxi),
+      [&](double h) { return J.evaluate(m0, xi0 + h * dxi, false); }, 1.9, 2.1, "pose only");
 }
 
 INSTANTIATE_TEST_SUITE_P(Pose, JointGradient,

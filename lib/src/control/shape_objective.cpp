@@ -44,23 +44,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// The left Jacobian of exp on rotations: exp([ω + δ]×) = exp([J_l δ]×) exp([ω]×) + O(δ²),
-/// J_l = I + (1 − cos θ)/θ² [ω]× + (θ − sin θ)/θ³ [ω]×² (Taylor series below θ = 1e-4).
-Eigen::Matrix3d left_jacobian(const Eigen::Vector3d& w) {
-  const double t2 = w.squaredNorm();
-  const double t = std::sqrt(t2);
-  double b = 0.0, c = 0.0;
-  if (t < 1e-4) {
-    b = 0.5 - t2 / 24.0 + t2 * t2 / 720.0;
-    c = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0;
-  } else {
-    b = (1.0 - std::cos(t)) / t2;
-    c = (t - std::sin(t)) / (t2 * t);
-  }
-  const Eigen::Matrix3d K = scan::hat(w);
-  return Eigen::Matrix3d::Identity() + b * K + c * K * K;
-}
-
 }  // namespace
 
 struct ShapeObjective::Impl {
@@ -172,7 +155,7 @@ struct ShapeObjective::Impl {
       gs += y.dot(gi);
     }
     Eigen::VectorXd out(xi.size());
-    out.head<3>() = left_jacobian(xi.head<3>()).transpose() * gw;
+    out.head<3>() = scan::rotation_left_jacobian(xi.head<3>()).transpose() * gw;
     out.segment<3>(3) = gv;
     if (xi.size() == 7) out[6] = gs;
     return out;

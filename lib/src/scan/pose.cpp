@@ -37,21 +37,36 @@ Eigen::Vector3d vee(const Eigen::Matrix3d& K) {
   return {K(2, 1) - K(1, 2), K(0, 2) - K(2, 0), K(1, 0) - K(0, 1)};  // 2·vee of the skew part
 }
 
-Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& w) {
-  // Rodrigues: exp([ω]×) = I + a [ω]× + b [ω]×², a = sin θ/θ, b = (1 − cos θ)/θ², θ = |ω|;
-  // below θ = 1e-4 their Taylor series (error < θ⁶/5040).
-  const double t2 = w.squaredNorm();
+namespace {
+
+/// The coefficients of exp and its left Jacobian at θ = |ω|: a = sin θ/θ, b = (1 − cos θ)/θ²,
+/// c = (θ − sin θ)/θ³; below θ = 1e-4 their Taylor series (error < θ⁶/5040).
+struct RodriguesCoefficients {
+  double a, b, c;
+};
+
+RodriguesCoefficients rodrigues_coefficients(double t2) {
   const double t = std::sqrt(t2);
-  double a = 0.0, b = 0.0;
-  if (t < 1e-4) {
-    a = 1.0 - t2 / 6.0 + t2 * t2 / 120.0;
-    b = 0.5 - t2 / 24.0 + t2 * t2 / 720.0;
-  } else {
-    a = std::sin(t) / t;
-    b = (1.0 - std::cos(t)) / t2;
-  }
+  if (t < 1e-4)
+    return {1.0 - t2 / 6.0 + t2 * t2 / 120.0, 0.5 - t2 / 24.0 + t2 * t2 / 720.0,
+            1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0};
+  return {std::sin(t) / t, (1.0 - std::cos(t)) / t2, (t - std::sin(t)) / (t2 * t)};
+}
+
+}  // namespace
+
+Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& w) {
+  // Rodrigues: exp([ω]×) = I + a [ω]× + b [ω]×².
+  const RodriguesCoefficients k = rodrigues_coefficients(w.squaredNorm());
   const Eigen::Matrix3d K = hat(w);
-  return Eigen::Matrix3d::Identity() + a * K + b * K * K;
+  return Eigen::Matrix3d::Identity() + k.a * K + k.b * K * K;
+}
+
+Eigen::Matrix3d rotation_left_jacobian(const Eigen::Vector3d& w) {
+  // J_l = I + b [ω]× + c [ω]×².
+  const RodriguesCoefficients k = rodrigues_coefficients(w.squaredNorm());
+  const Eigen::Matrix3d K = hat(w);
+  return Eigen::Matrix3d::Identity() + k.b * K + k.c * K * K;
 }
 
 Eigen::Vector3d rotation_log(const Eigen::Matrix3d& R) {

@@ -49,6 +49,9 @@ Eigen::Matrix3d hat(const Eigen::Vector3d& w);
 Eigen::Vector3d vee(const Eigen::Matrix3d& K);
 /// exp([ω]×) by Rodrigues' formula (its Taylor series below |ω| = 1e-4).
 Eigen::Matrix3d rotation_exp(const Eigen::Vector3d& w);
+/// The left Jacobian of exp on rotations, exp([ω + δ]×) = exp([J_l δ]×) exp([ω]×) + O(δ²):
+/// J_l = I + (1 − cos θ)/θ² [ω]× + (θ − sin θ)/θ³ [ω]×² (θ = |ω|; series below 1e-4).
+Eigen::Matrix3d rotation_left_jacobian(const Eigen::Vector3d& w);
 /// The ω with |ω| ≤ π and exp([ω]×) = R (R a rotation), accurate near 0 and near π.
 Eigen::Vector3d rotation_log(const Eigen::Matrix3d& R);
 
