@@ -136,20 +136,22 @@ def as_in_the_csv(value):
       "--tikhonov-mass", 1e-12, "--rel-tol", 0, "--coarse-level", "off"],
      dict(alpha=5, eps=2e-3, move_limit=0.2, volumes="deformed", tikhonov_mass=1e-12,
           rel_tol=0, coarse_level="off")),
-    (["--levels", 2], dict(levels=2)),  # a coarse level's rows first, then 5 on the mesh
+    (["--levels", 2], dict(levels=2)),  # a coarse level's rows first, then 8 on the mesh
 ])
 def test_history_equals_the_command_line_tools(scene_file, cli, tmp_path, cli_options,
                                                py_options):
     """The same scene and options through softhd optimise and softhd.optimise: history.csv
-    holds Python's iterations, number for number as written there (the timings aside)."""
+    holds Python's iterations, number for number as written there (the timings aside). Eight
+    iterations: past the solver's renewal after the fifth (docs/formulation.md §4.6), which
+    the command line tool makes as it saves its checkpoint and Python without saving one."""
     path = scene_file(SMALL_PLATE)
-    cli("optimise", path, "--max-iter", 5, "--threads", 1, "--out", tmp_path / "run",
+    cli("optimise", path, "--max-iter", 8, "--threads", 1, "--out", tmp_path / "run",
         "--vtu-every", 0, "--quiet", *cli_options)
     with open(tmp_path / "run" / "history.csv") as f:
         rows = list(csv.DictReader(f))
-    r = softhd.optimise(softhd.Scene.load(path), max_iter=5, threads=1, **py_options)
+    r = softhd.optimise(softhd.Scene.load(path), max_iter=8, threads=1, **py_options)
     assert len(rows) == len(r.history)
-    assert [it.level for it in r.history].count(0) == 5
+    assert [it.level for it in r.history].count(0) == 8
     assert ("levels" in py_options) == (r.history[0].level == 1)
     for row, it in zip(rows, r.history):
         for column in HISTORY_COLUMNS + ["level"]:

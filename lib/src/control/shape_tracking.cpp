@@ -96,9 +96,10 @@ class Recorder {
     if (writer_) writer_->append(e);
     return e.result;
   }
-  /// After an accepted iteration: the warm-start states, unless still replaying.
+  /// After an accepted iteration on the checkpoint schedule: the warm-start states saved
+  /// (when a checkpoint is written) and the solver renewed, unless still replaying.
   void snapshot(int iterations, const fe::State& best) {
-    if (!checkpointing_ || next_ <= log_.evaluations.size()) return;
+    if (checkpointing_ && next_ <= log_.evaluations.size()) return;
     if (writer_) {
       RunSnapshot s;
       s.evaluations = static_cast<std::int64_t>(next_);
@@ -108,7 +109,9 @@ class Recorder {
       writer_->write_states(s);
     }
     // The solver's kept factorisations are not in the checkpoint: a resumed run starts
-    // here with a new solver, so the uninterrupted run does too.
+    // here with a new solver, so the uninterrupted run does too, and so does a run that
+    // saves no checkpoint (Python's, a benchmark's): a run's path does not depend on
+    // whether it is saved.
     objective_.reset_solver();
   }
   /// The warm-start states and the best state the log ended with, once replay is over.

@@ -81,7 +81,8 @@ struct ShapeTrackingOptions {
   /// The warm-start states are saved every this many iterations (and at the end); a
   /// resume continues from the last save, recomputing the evaluations after it. Each save
   /// renews the state solver (its kept factorisation is not saved), which costs a
-  /// factorisation, hence not every iteration.
+  /// factorisation, hence not every iteration. A run without a checkpoint renews it on the
+  /// same schedule, so its path is the saved run's.
   int checkpoint_every = 5;
   /// Continue the run recorded in `checkpoint`: the optimiser starts again and its
   /// evaluations are served from the log (bitwise, x checked) until it runs out, so the
