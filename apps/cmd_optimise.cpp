@@ -78,9 +78,10 @@ options:
                      --coarse-iterations K (default {coarse_iterations}; at most --max-iter)
                      iterations per coarse level, ending earlier once rho decreased by less than {switch_decrease}
                      (relative) twice in a row; then the next finer level from its control
-                     (default {levels}: automatic, 2 where the body has a coarse level of
-                     >= 32 elements, as --coarse-level auto, else 1: the user's mesh alone;
-                     docs/guide.md section 5)
+                     (default {levels}: automatic, 2 where the target has a known map (an
+                     arc, a manufactured state) and the body a coarse level of >= 32
+                     elements, as --coarse-level auto, else 1: the user's mesh alone; 1 for
+                     a cloud without a known map, e.g. a scan; docs/guide.md section 5)
   --refined-move-limit D  the move limit of each level started from a coarser
                      level's control (default {refined_move_limit}; --move-limit is the
                      coarsest level's)

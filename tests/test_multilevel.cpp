@@ -190,8 +190,9 @@ TEST_F(MultilevelRun, LevelsAfterTheCoarsestStepWithinTheRefinedMoveLimit) {
   EXPECT_GT(first_step(options_.move_limit), small) << "the check could not fail";
 }
 
-// levels 0 (the default) is 2 where the box halved along its even axes has at least 32
-// elements (the counts by hand), else 1; an explicit count is kept.
+// levels 0 (the default) is 2 where the target has a known map and the box halved along its
+// even axes has at least 32 elements (the counts by hand), else 1; 1 against a cloud with no
+// known map (a scan) or in the camera's frame; an explicit count is kept.
 TEST_F(MultilevelRun, AutomaticLevelsAreTwoWhereTheCoarseLevelHasAtLeast32Elements) {
   EXPECT_EQ(TrackingRunOptions{}.levels, 0);
   const std::pair<std::string, int> cases[] = {
@@ -207,10 +208,19 @@ TEST_F(MultilevelRun, AutomaticLevelsAreTwoWhereTheCoarseLevelHasAtLeast32Elemen
   for (const auto& [cells, levels] : cases) {
     std::ofstream(file_) << std::string(text).replace(at, 9, cells);
     const fe::Scene scene = fe::load_scene(file_.string());
-    EXPECT_EQ(tracking_levels(scene, TrackingRunOptions{}), levels) << cells;
-    TrackingRunOptions explicit_one;
+    const SceneTarget known = tracking_target(scene, scene.make_mesh(), TrackingRunOptions{});
+    ASSERT_TRUE(known.map_displacement) << "the scene's arc has a known map";
+    SceneTarget scan = known, camera = known;
+    scan.map_displacement.reset();
+    camera.frame = TargetFrame::camera;
+    EXPECT_EQ(tracking_levels(scene, TrackingRunOptions{}, known), levels) << cells;
+    EXPECT_EQ(tracking_levels(scene, TrackingRunOptions{}, scan), 1) << cells;
+    EXPECT_EQ(tracking_levels(scene, TrackingRunOptions{}, camera), 1) << cells;
+    TrackingRunOptions explicit_one, explicit_two;
     explicit_one.levels = 1;
-    EXPECT_EQ(tracking_levels(scene, explicit_one), 1) << cells;
+    explicit_two.levels = 2;
+    EXPECT_EQ(tracking_levels(scene, explicit_one, known), 1) << cells;
+    EXPECT_EQ(tracking_levels(scene, explicit_two, scan), 2) << cells;
   }
 }
 

@@ -126,10 +126,14 @@ ShapeTrackingOptions TrackingRunOptions::tracking() const {
   return t;
 }
 
-int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options, TargetFrame frame) {
+int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options,
+                    const SceneTarget& target) {
   if (options.levels > 0) return options.levels;
   // A given start or a joint pose runs on one level (validate, TrackingRun refuse more).
-  if (options.initial_control.size() > 0 || frame == TargetFrame::camera) return 1;
+  if (options.initial_control.size() > 0 || target.frame == TargetFrame::camera) return 1;
+  // A cloud without a known map (a scan): one level. On noisy one-sided scans the coarse
+  // start ends at a lower ρ̃ but a larger shape error (docs/formulation.md §4.8).
+  if (!target.map_displacement) return 1;
   return fe::grid_levels(scene, fe::GridSequencingOptions{}) > 0 ? 2 : 1;
 }
 
@@ -144,7 +148,7 @@ struct TrackingRun::Impl {
        const TrackingRunOptions& o)
       : scene(s), assembler(a), control(c), options(o), target(std::move(t)) {
     options.validate();
-    options.levels = tracking_levels(scene, options, target.frame);
+    options.levels = tracking_levels(scene, options, target);
     if (target.cloud.dim() != scene.dim())
       throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
                             "D but the scene's body is " + std::to_string(scene.dim()) + "D");

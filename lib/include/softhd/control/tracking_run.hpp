@@ -86,11 +86,12 @@ struct TrackingRunOptions {
   /// their total; the tree tolerance max(tolerance, coarse_tolerance); at most
   /// min(coarse_iterations, max_iterations) iterations, and it ends earlier once ρ̃ decreased by
   /// less than switch_decrease (relative) in two iterations in a row. 1: the user's mesh alone. 0
-  /// (the default): 2 where the body has a coarse level of at least 32 elements (the two-level
-  /// starts' rule, fe::grid_levels), else 1; 1 for a run from initial_control or with a joint
-  /// pose (tracking_levels). Every level started from a coarser
-  /// level's control has the move limit refined_move_limit instead of move_limit: its start is
-  /// near its optimum already, and a step as large as a first one's curls the body far from the
+  /// (the default): 2 where the target has a known map and the body a coarse level of at least
+  /// 32 elements (the two-level starts' rule, fe::grid_levels), else 1; 1 for a cloud without a
+  /// known map (a scan: there the coarse start ends at a lower ρ̃ but a larger shape error), a
+  /// run from initial_control or with a joint pose (tracking_levels). Every level started from a
+  /// coarser level's control has the move limit refined_move_limit instead of move_limit: its start
+  /// is near its optimum already, and a step as large as a first one's curls the body far from the
   /// state it was started from (docs/formulation.md §4.8).
   int levels = 0;
   int coarse_iterations = 30;
@@ -182,12 +183,13 @@ struct TrackingRunCallbacks : ShapeTrackingCallbacks {
 SceneTarget tracking_target(const fe::Scene& scene, const fe::Mesh& mesh,
                             const TrackingRunOptions& options);
 
-/// The levels of a run of `options` on `scene` against a target in `frame`: options.levels, or
-/// for 0 (automatic) 2 where the body has a coarse level of at least 32 elements
-/// (fe::grid_levels), else 1; always 1 for a run from options.initial_control or against a
-/// target in the camera's frame (a joint pose), which run on one level.
+/// The levels of a run of `options` on `scene` against `target`: options.levels, or for 0
+/// (automatic) 2 where the target has a known map (an arc, a manufactured state) and the body
+/// a coarse level of at least 32 elements (fe::grid_levels), else 1; always 1 for a run from
+/// options.initial_control or against a target in the camera's frame (a joint pose), which
+/// run on one level.
 int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options,
-                    TargetFrame frame = TargetFrame::body);
+                    const SceneTarget& target);
 
 /// One tracking run, set up at construction (no file touched) and made by run().
 class TrackingRun {
