@@ -66,12 +66,13 @@ sys.path.insert(0, HERE)
 import synthetic_scan  # noqa: E402  (bench/synthetic_scan.py)
 
 
-def true_nodes(scene_nodes):
-    """The true deformed positions of the finger's nodes: the fine mesh's deformed nodes at the
-    same reference points (the fine mesh is the coarse one refined, so every coarse node is a
-    fine node)."""
+def true_nodes(scene_nodes, fine_deformed=None):
+    """The true deformed positions of the finger's nodes: the fine mesh's deformed nodes
+    (default data/targets/finger_target.ply, m* = -1.5 X3) at the same reference points (the
+    fine mesh is the coarse one refined, so every coarse node is a fine node)."""
     fine_rest = softhd.read_mesh(os.path.join(ROOT, "data/meshes/finger_fine.msh"), order=2).nodes
-    fine_deformed, _ = softhd.read_cloud(os.path.join(ROOT, "data/targets/finger_target.ply"))
+    if fine_deformed is None:
+        fine_deformed, _ = softhd.read_cloud(os.path.join(ROOT, "data/targets/finger_target.ply"))
     nearest = np.empty(len(scene_nodes), dtype=np.int64)
     gap = 0.0
     for s in range(0, len(scene_nodes), 100):  # brute force in blocks of 100 nodes

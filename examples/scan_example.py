@@ -58,6 +58,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 import synthetic_scan  # noqa: E402  (bench/synthetic_scan.py)
+from track_scan import true_nodes  # noqa: E402  (bench/track_scan.py)
 
 try:
     import softhd
@@ -101,21 +102,6 @@ def true_deformation(softhd_bin, bend, out):
     run([softhd_bin, "forward", FINE, "--control", control_file, "--out",
          os.path.join(out, "truth_run"), "--write-cloud", target])
     return target
-
-
-def true_nodes(scene_nodes, fine_deformed):
-    """The true deformed positions of the finger's nodes: the fine mesh refines the coarse one,
-    so every coarse node is a fine node; matched by brute force in blocks of 100."""
-    fine_rest = softhd.read_mesh(FINE_MESH, order=2).nodes
-    nearest = np.empty(len(scene_nodes), dtype=np.int64)
-    gap = 0.0
-    for s in range(0, len(scene_nodes), 100):
-        d2 = ((scene_nodes[s:s + 100, None, :] - fine_rest[None, :, :]) ** 2).sum(-1)
-        nearest[s:s + 100] = d2.argmin(1)
-        gap = max(gap, float(np.sqrt(d2.min(1)).max()))
-    if gap > 1e-6:
-        sys.exit(f"scan_example: the fine mesh does not hold the coarse nodes (gap {gap:g})")
-    return fine_deformed[nearest]
 
 
 def node_errors(nodes, displacements, truth):
