@@ -68,7 +68,6 @@ except ImportError:
 
 FINGER = os.path.join(ROOT, "data/scenes/finger.json")
 FINE = os.path.join(ROOT, "data/targets/finger_fine.json")
-FINE_MESH = os.path.join(ROOT, "data/meshes/finger_fine.msh")
 REPO_TARGET = os.path.join(ROOT, "data/targets/finger_target.ply")  # m* = -1.5 X3 on FINE
 
 
