@@ -72,16 +72,18 @@ options:
                      the mesh with half the cells along the even axes, or for a mesh file
                      of order 2 as P1/Q1 on its vertices (default {coarse_level}: when that
                      mesh has >= 32 elements)
-  --levels N         multilevel optimisation: solve first on the box halved N-1 times (a
-                     mesh file of order 2: N = 2, its P1/Q1 level first) with a
-                     coarse target and tree tolerance max(--tol, {coarse_tol}), at most
-                     --coarse-iterations K (default {coarse_iterations}; at most --max-iter)
-                     iterations per coarse level, ending earlier once rho decreased by less than {switch_decrease}
-                     (relative) twice in a row; then the next finer level from its control
-                     (default {levels}: automatic, 2 where the target has a known map (an
-                     arc, a manufactured state) and the body a coarse level of >= 32
-                     elements, as --coarse-level auto, else 1: the user's mesh alone; 1 for
-                     a cloud without a known map, e.g. a scan; docs/guide.md section 5)
+  --levels N         multilevel optimisation: solve first on the box halved N-1 times
+                     (along its even axes; with none, every axis of >= 4 cells to
+                     (n+1)/2: 25x5x1 -> 13x3x1; a mesh file of order 2: N = 2, its P1/Q1
+                     level first) with a coarse target and tree tolerance
+                     max(--tol, {coarse_tol}), at most --coarse-iterations K (default
+                     {coarse_iterations}; at most --max-iter) iterations per coarse level, ending
+                     earlier once rho decreased by less than {switch_decrease} (relative) twice in
+                     a row; then the next finer level from its control (default {levels}:
+                     automatic, where the target has a known map (an arc, a manufactured
+                     state) 1 + every coarser level of >= 32 elements (bending: 3), else 1:
+                     the user's mesh alone; 1 for a cloud without a known map, e.g. a scan;
+                     docs/guide.md section 5)
   --refined-move-limit D  the move limit of each level started from a coarser
                      level's control (default {refined_move_limit}; --move-limit is the
                      coarsest level's)

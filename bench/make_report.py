@@ -518,8 +518,9 @@ def section_time_to_floor(rows):
             "mesh with ρ̃ ≤ k × the matched floor, and the run's time then (a multilevel run's "
             "start on the user's mesh may already be below k: it is not counted). Issue 31's "
             "goals: bending ≤ 1.25× within 10 s and ≤ 1.01× within 60 s; torsion ≤ 3× within "
-            "15 s and ≤ 1.80× after 120 iterations. `bending --levels 1` is the single-level "
-            "run the default replaced, run just after the default.\n\n")
+            "15 s and ≤ 1.80× after 120 iterations. `bending --levels 2` (the default before "
+            "the rounded halving of docs/formulation.md §4.8) and `--levels 1` (the single "
+            "level) are the runs the default replaced, run just after it.\n\n")
     out = []
     for r in rows:
         def to(k):

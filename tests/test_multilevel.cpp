@@ -190,17 +190,20 @@ TEST_F(MultilevelRun, LevelsAfterTheCoarsestStepWithinTheRefinedMoveLimit) {
   EXPECT_GT(first_step(options_.move_limit), small) << "the check could not fail";
 }
 
-// levels 0 (the default) is 2 where the target has a known map and the box halved along its
-// even axes has at least 32 elements (the counts by hand), else 1; 1 against a cloud with no
-// known map (a scan) or in the camera's frame; an explicit count is kept.
-TEST_F(MultilevelRun, AutomaticLevelsAreTwoWhereTheCoarseLevelHasAtLeast32Elements) {
+// levels 0 (the default) is 1 + the coarser levels of at least 32 elements where the target
+// has a known map (fe::Halving::rounded: the even axes halved, else every axis of >= 4 cells
+// to (n + 1) / 2; the counts by hand), else 1; 1 against a cloud with no known map (a scan)
+// or in the camera's frame; an explicit count is kept.
+TEST_F(MultilevelRun, AutomaticLevelsAreEveryCoarserLevelOfAtLeast32Elements) {
   EXPECT_EQ(TrackingRunOptions{}.levels, 0);
   const std::pair<std::string, int> cases[] = {
       {"[6, 1, 2]", 1},    // (3, 1, 1): 3 elements
       {"[14, 4, 4]", 1},   // (7, 2, 2): 28
       {"[16, 4, 4]", 2},   // (8, 2, 2): 32
       {"[15, 4, 4]", 2},   // (15, 2, 2): 60, the odd axis kept
-      {"[15, 3, 1]", 1}};  // no even axis: no coarse level
+      {"[15, 3, 1]", 1},   // no even axis: (8, 3, 1), 24
+      {"[25, 5, 1]", 2},   // (13, 3, 1): 39, not nested
+      {"[50, 5, 2]", 3}};  // (25, 5, 1): 125, (13, 3, 1): 39, then (7, 2, 1): 14
   std::string text;
   std::getline(std::ifstream(file_), text, '\0');
   const std::string::size_type at = text.find("[6, 1, 2]");

@@ -253,9 +253,10 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     its defaults for every option left None (:func:`optimise_defaults` lists them, e.g. method
     "tree" with tol 1e-2, move_limit 0.1, coarse_level "auto": two-level starts on the coarse level
     (a box with half the cells, a mesh file of order 2 as P1/Q1 on its vertices), levels 0:
-    automatic, 2 where the target has a known map (an arc, a manufactured state) and the body
-    such a coarse level, else 1 (the user's mesh alone; a scan-like cloud runs on one level); levels
-    N > 1 solves first on the N - 1 coarser levels, as ``--levels N``,
+    automatic, where the target has a known map (an arc, a manufactured state) 1 + every coarser
+    level of at least 32 elements (a box halved along its even axes, else every axis of at least 4
+    cells to (n + 1) / 2; bending: 3), else 1 (the user's mesh alone; a scan-like cloud runs on one
+    level); levels N > 1 solves first on the N - 1 coarser levels, as ``--levels N``,
     each level after the coarsest with the move limit refined_move_limit, 0.02, as
     ``--refined-move-limit``). Returns an :class:`OptimiseResult`.
 

@@ -46,6 +46,23 @@ TEST(GridSequencing, ProlongationReproducesQuadraticFields) {
   }
 }
 
+// A rounded level (Halving::rounded: 5 x 3 x 1 is not nested in 9 x 5 x 1) is reached by
+// interpolation at points: still exact on the fields its shape functions reproduce.
+TEST(GridSequencing, ProlongationFromANonNestedBoxReproducesQuadraticFields) {
+  const Eigen::Vector3d lo(0, 0, 0), hi(2.0, 1.0, 0.5);
+  const Mesh coarse = make_box_mesh(lo, hi, Eigen::Vector3i(5, 3, 1), 2);
+  const Mesh fine = make_box_mesh(lo, hi, Eigen::Vector3i(9, 5, 1), 2);
+  Eigen::VectorXd uc(coarse.num_nodes() * 3);
+  for (Eigen::Index n = 0; n < coarse.num_nodes(); ++n)
+    uc.segment<3>(3 * n) = quadratic(coarse.nodes.row(n).transpose());
+  const Eigen::VectorXd uf = prolongate(coarse, uc, fine);
+  double worst = 0.0;
+  for (Eigen::Index n = 0; n < fine.num_nodes(); ++n)
+    worst =
+        std::max(worst, (uf.segment<3>(3 * n) - quadratic(fine.nodes.row(n).transpose())).norm());
+  EXPECT_LT(worst, 1e-12);
+}
+
 TEST(GridSequencing, ControlFieldsAreEvaluatedByTheirOwnInterpolation) {
   const Mesh mesh = make_box_mesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(3, 1, 1),
                                   Eigen::Vector3i(3, 1, 1), 2);
@@ -86,6 +103,24 @@ TEST(GridSequencing, LevelsHalveTheEvenAxesWhileTheCoarseMeshIsLargeEnough) {
   EXPECT_THROW(grid_levels(s, explicit_levels), softhd::InvalidArgument);
   explicit_levels.levels = -2;
   EXPECT_THROW(grid_levels(s, explicit_levels), softhd::InvalidArgument);
+}
+
+// Halving::rounded halves the even axes as nested does, and a box with none every axis of
+// at least 4 cells to (n + 1) / 2 (the bending plate: 50 x 5 x 2 -> 25 x 5 x 1 -> 13 x 3 x 1);
+// coarser_levels counts while the level keeps min_elements (125, 39, then 7 x 2 x 1 = 14).
+TEST(GridSequencing, RoundedHalvingCoarsensABoxWithNoEvenAxis) {
+  Scene s = load_scene(kTorsion);
+  s.cells = (Eigen::VectorXi(3) << 50, 5, 2).finished();
+  EXPECT_EQ(cells_of(coarsened(s, Halving::rounded).cells), std::vector<int>({25, 5, 1}));
+  s.cells = (Eigen::VectorXi(3) << 25, 5, 1).finished();
+  EXPECT_THROW(coarsened(s), softhd::InvalidArgument);  // nested: no even axis
+  EXPECT_EQ(cells_of(coarsened(s, Halving::rounded).cells), std::vector<int>({13, 3, 1}));
+  s.cells = (Eigen::VectorXi(3) << 3, 1, 1).finished();
+  EXPECT_THROW(coarsened(s, Halving::rounded), softhd::InvalidArgument);
+  s.cells = (Eigen::VectorXi(3) << 50, 5, 2).finished();
+  EXPECT_EQ(coarser_levels(s, Halving::rounded, 32), 2);
+  EXPECT_EQ(coarser_levels(s, Halving::rounded, 40), 1);
+  EXPECT_EQ(coarser_levels(s, Halving::nested, 32), 1);  // 25 x 5 x 1, then no even axis
 }
 
 TEST(GridSequencing, SequencedStartReachesTheStateNewtonReachesFromRest) {

@@ -72,7 +72,7 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
     auto p = std::make_unique<CoarseProblem>();
     p->level = level;
     try {
-      p->scene = fe::coarsened(*finer);
+      p->scene = fe::coarsened(*finer, fe::Halving::rounded);
     } catch (const InvalidArgument& e) {
       throw InvalidArgument("levels: " + std::to_string(options.levels) + " asks for " +
                             std::to_string(options.levels - 1) +

@@ -134,7 +134,10 @@ int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options,
   // A cloud without a known map (a scan): one level. On noisy one-sided scans the coarse
   // start ends at a lower ρ̃ but a larger shape error (docs/formulation.md §4.8).
   if (!target.map_displacement) return 1;
-  return fe::grid_levels(scene, fe::GridSequencingOptions{}) > 0 ? 2 : 1;
+  // Else every coarser level (fe::Halving::rounded) of at least 32 elements, the two-level
+  // starts' smallest (fe::GridSequencingOptions::min_elements).
+  return 1 +
+         fe::coarser_levels(scene, fe::Halving::rounded, fe::GridSequencingOptions{}.min_elements);
 }
 
 SceneTarget tracking_target(const fe::Scene& scene, const fe::Mesh& mesh,

@@ -10,8 +10,11 @@ namespace softhd::fe {
 
 namespace {
 
-// The box with half the cells along every even axis.
-Scene halved(const Scene& scene) {
+// The box with half the cells along every even axis; with Halving::rounded, a box with no
+// even axis has every axis of at least 4 cells halved rounding up, n -> (n + 1) / 2 (a coarser
+// box whose grid is not nested in the finer one: the levels exchange fields by interpolation
+// at points, prolongate and control_at, which need no nesting).
+Scene halved(const Scene& scene, Halving halving) {
   Scene coarse = scene;
   bool halved = false;
   for (Eigen::Index k = 0; k < coarse.cells.size(); ++k) {
@@ -20,9 +23,18 @@ Scene halved(const Scene& scene) {
       halved = true;
     }
   }
+  if (!halved && halving == Halving::rounded) {
+    for (Eigen::Index k = 0; k < coarse.cells.size(); ++k) {
+      if (coarse.cells[k] >= 4) {
+        coarse.cells[k] = (coarse.cells[k] + 1) / 2;
+        halved = true;
+      }
+    }
+  }
   if (!halved) {
     std::ostringstream os;
     os << "grid sequencing: no cell count of (" << scene.cells.transpose() << ") can be halved";
+    if (halving == Halving::rounded) os << " (none is even or at least 4)";
     throw InvalidArgument(os.str());
   }
   return coarse;
@@ -80,10 +92,28 @@ std::string describe_level(const Scene& scene) {
   return os.str();
 }
 
-Scene coarsened(const Scene& scene) {
+Scene coarsened(const Scene& scene, Halving halving) {
   // The one choice of the coarse level: halving needs a structured grid, which only a box
   // has; a file mesh drops its order on the same cells instead.
-  return scene.is_box() ? halved(scene) : order_dropped(scene);
+  return scene.is_box() ? halved(scene, halving) : order_dropped(scene);
+}
+
+int coarser_levels(const Scene& scene, Halving halving, int min_elements) {
+  int levels = 0;
+  Scene s = scene;
+  while (true) {
+    Scene c;
+    try {
+      c = coarsened(s, halving);
+    } catch (const InvalidArgument&) {
+      return levels;
+    }
+    const Eigen::Index elements = c.is_box() ? c.cells.prod() : c.file_mesh->num_elements();
+    if (elements < min_elements) return levels;
+    ++levels;
+    if (!c.is_box()) return levels;  // a P1/Q1 level has no coarser one
+    s = std::move(c);
+  }
 }
 
 int grid_levels(const Scene& scene, const GridSequencingOptions& options) {

@@ -76,8 +76,10 @@ struct TrackingRunOptions {
   CoarseLevel coarse_level = CoarseLevel::automatic;  ///< two-level starts
   ///@{
   /// Multilevel optimisation (docs/formulation.md §4.8): with levels = N > 1 the control
-  /// problem is solved first on the N − 1 coarser levels of fe::coarsened (the box halved
-  /// N − 1 times; a mesh file of order 2 its P1/Q1 level), then on each finer level in turn,
+  /// problem is solved first on the N − 1 coarser levels of fe::coarsened with
+  /// fe::Halving::rounded (the box halved N − 1 times, along its even axes, else every axis of
+  /// at least 4 cells to (n + 1) / 2; a mesh file of order 2 its P1/Q1 level), then on each
+  /// finer level in turn,
   /// each from the control of the level below prolongated (vertex controls interpolated,
   /// element controls the containing coarse element's; unchanged from a P1/Q1 level),
   /// finishing on the user's mesh, target and tolerance with max_iterations. A coarse level
@@ -86,8 +88,9 @@ struct TrackingRunOptions {
   /// their total; the tree tolerance max(tolerance, coarse_tolerance); at most
   /// min(coarse_iterations, max_iterations) iterations, and it ends earlier once ρ̃ decreased by
   /// less than switch_decrease (relative) in two iterations in a row. 1: the user's mesh alone. 0
-  /// (the default): 2 where the target has a known map and the body a coarse level of at least
-  /// 32 elements (the two-level starts' rule, fe::grid_levels), else 1; 1 for a cloud without a
+  /// (the default): where the target has a known map, 1 + every coarser level of at least 32
+  /// elements (fe::coarser_levels; the two-level starts' smallest mesh), else 1; 1 for a cloud
+  /// without a
   /// known map (a scan: there the coarse start ends at a lower ρ̃ but a larger shape error), a
   /// run from initial_control or with a joint pose (tracking_levels). Every level started from a
   /// coarser level's control has the move limit refined_move_limit instead of move_limit: its start
@@ -184,8 +187,9 @@ SceneTarget tracking_target(const fe::Scene& scene, const fe::Mesh& mesh,
                             const TrackingRunOptions& options);
 
 /// The levels of a run of `options` on `scene` against `target`: options.levels, or for 0
-/// (automatic) 2 where the target has a known map (an arc, a manufactured state) and the body
-/// a coarse level of at least 32 elements (fe::grid_levels), else 1; always 1 for a run from
+/// (automatic) 1 + the body's coarser levels of at least 32 elements (fe::coarser_levels with
+/// fe::Halving::rounded) where the target has a known map (an arc, a manufactured state), else
+/// 1; always 1 for a run from
 /// options.initial_control or against a target in the camera's frame (a joint pose), which
 /// run on one level.
 int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options,

@@ -51,12 +51,23 @@ struct GridSequencingReport {
   std::string BriefReport() const;
 };
 
-/// The next coarser level of `scene`: a box with half the cells along every axis whose cell
-/// count is even; a file mesh of order 2 as P1/Q1 on its vertices (linear_mesh: the same
-/// materials per region, constraints by name on the vertex nodes of their sets, fibre
-/// fields per node restricted to the vertices, the linear cell's default quadrature).
-/// Throws InvalidArgument if there is none (no even axis; a file mesh of order 1).
-Scene coarsened(const Scene& scene);
+/// How a box is halved. `nested` (grid sequencing's): along its even axes only, so the coarse
+/// grid's nodes are nodes of the fine one. `rounded` (multilevel optimisation's levels): as
+/// `nested` where some axis is even, else every axis of at least 4 cells to (n + 1) / 2, a
+/// coarser box that is not nested (25 x 5 x 1 -> 13 x 3 x 1); fields move between such levels
+/// by interpolation at points (prolongate, control_at), which needs no nesting.
+enum class Halving { nested, rounded };
+
+/// The next coarser level of `scene`: a box halved as `halving` says; a file mesh of order 2
+/// as P1/Q1 on its vertices (linear_mesh: the same materials per region, constraints by name
+/// on the vertex nodes of their sets, fibre fields per node restricted to the vertices, the
+/// linear cell's default quadrature). Throws InvalidArgument if there is none (a box with no
+/// axis to halve; a file mesh of order 1).
+Scene coarsened(const Scene& scene, Halving halving = Halving::nested);
+
+/// How many times in a row coarsened(·, halving) goes on with at least `min_elements`
+/// elements on the coarser level (a file mesh: 1 or 0, its P1/Q1 level).
+int coarser_levels(const Scene& scene, Halving halving, int min_elements);
 
 /// What the level `scene` is, for reports: "cells 25 2 1" (a box), or "P1 on the vertices:
 /// tet4, 812 nodes" (a file mesh's P1/Q1 level), or "tet10, 4849 nodes" (any other).
