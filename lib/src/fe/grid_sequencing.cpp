@@ -124,20 +124,9 @@ int grid_levels(const Scene& scene, const GridSequencingOptions& options) {
     return options.levels;
   }
   // A file mesh of order 2: its P1/Q1 level (as many elements as the mesh), measured faster
-  // than the start from rest on the finger (bench/bench_p_sequencing.py).
-  if (!scene.is_box())
-    return scene.order == 2 && scene.file_mesh->num_elements() >= options.min_elements ? 1 : 0;
-  int levels = 0;
-  Scene s = scene;
-  while (true) {
-    bool even = false;
-    for (Eigen::Index k = 0; k < s.cells.size(); ++k) even = even || s.cells[k] % 2 == 0;
-    if (!even) return levels;
-    const Scene c = coarsened(s);
-    if (c.cells.prod() < options.min_elements) return levels;
-    s = c;
-    ++levels;
-  }
+  // than the start from rest on the finger (bench/bench_p_sequencing.py); a box halved along
+  // its even axes while the coarser mesh keeps min_elements.
+  return coarser_levels(scene, Halving::nested, options.min_elements);
 }
 
 Eigen::VectorXd control_at(const Mesh& mesh, ControlKind kind, const Eigen::VectorXd& m,
