@@ -99,19 +99,21 @@ Scene coarsened(const Scene& scene, Halving halving) {
 }
 
 int coarser_levels(const Scene& scene, Halving halving, int min_elements) {
+  // A file mesh: its P1/Q1 level (order_dropped: as many elements), which has no coarser one;
+  // answered without building it.
+  if (!scene.is_box())
+    return scene.order == 2 && scene.file_mesh->num_elements() >= min_elements ? 1 : 0;
   int levels = 0;
   Scene s = scene;
   while (true) {
     Scene c;
     try {
-      c = coarsened(s, halving);
+      c = halved(s, halving);  // a box's cells only: throws where no axis can be halved
     } catch (const InvalidArgument&) {
       return levels;
     }
-    const Eigen::Index elements = c.is_box() ? c.cells.prod() : c.file_mesh->num_elements();
-    if (elements < min_elements) return levels;
+    if (c.cells.prod() < min_elements) return levels;
     ++levels;
-    if (!c.is_box()) return levels;  // a P1/Q1 level has no coarser one
     s = std::move(c);
   }
 }
