@@ -19,15 +19,24 @@ the same run against the clean, complete target in the body's frame).
    against the body as it is now (at rest in round 1), with the one-sided distance
    scan_to_body (the scan sees one side); softhd.optimise then fits the control to the aligned
    scan (scan_to_body, the body's moving cloud its boundary, a soft cap at 3 x the 90 %
-   quantile of the scan's distances). Points outside the body's box inflated by 10 % are
-   cropped after each alignment.
+   quantile of the scan's distances). Points outside the body's box inflated by --crop-margin
+   (0.4) of its diagonal are cropped after each alignment.
    With --joint instead: one alignment against the body at rest and the crop with its pose, then
    ONE optimise whose scene target keeps the scan in the camera's frame ("frame": "camera",
    "pose": align's pose file), refining the pose jointly with the control (docs/formulation.md
    §8.10); the same distance, boundary cloud and cap rule (3 x the 90 % quantile at the start,
    "cap": {"quantile": 0.9, "factor": 3}). Prints the final pose's rotation error.
+   --start ladder: the start pose from align against the body under uniform controls between
+   the initial control and its far bound (ladder_align), the lowest rho kept, with that control
+   as the start; --hold-first: the first stage with pose_move 0.001 (the pose nearly held while
+   the control bends; --hold-all: every stage so); --distance visible: the joint runs' distance (the camera the pose's).
 4. The same run against the clean, complete target in the body's frame (the scene's own),
    and the node errors of both against the true deformed nodes.
+
+The measurements below were made with the crop's margin at 0.1 of the diagonal, which cut off
+the bent tip (it rises 20 mm above the rest box of height 11.5 mm) and so biased every fit; with
+0.4, and the measurements that do reach the goal with the pose held at the truth, see
+docs/formulation.md §8.10, "Measured: the crop, the cap and deformed starts".
 
 In turns, a rigid offset left by an alignment is partly absorbed by the control. Measured (seed
 1, full view, 3 rounds of 15 iterations): the first alignment, against the body at rest, is 23
@@ -89,8 +98,8 @@ def node_errors(nodes, displacements, truth):
     return float(e.max()), float(np.sqrt((e ** 2).mean()))
 
 
-def clean_scan(scan, L, log):
-    off_table = softhd.remove_dominant_plane(scan, distance=0.01 * L)
+def clean_scan(scan, L, log, plane=0.01):
+    off_table = softhd.remove_dominant_plane(scan, distance=plane * L)
     kept = scan[off_table]
     inliers = softhd.remove_statistical_outliers(kept, k=20, ratio=2.0)
     log(f"clean-up: {len(scan)} points, table removed {len(scan) - len(off_table)}, "
@@ -125,28 +134,50 @@ def probe(scene, scan_file, P_start, P_true, out, log):
             log(f"probe: rho at {label}, {name}: {r.rho_start:.4g}")
 
 
+def ladder_align(scene, scan, P_true, log, fractions=(0.0, 0.125, 0.25, 0.5, 1.0)):
+    """align against the body under uniform controls between the initial control and the bound
+    farthest from it (the finger: m = 0, -2.5, -5, -10, -20), keeping the pose of lowest rho
+    (the scan's one-sided distance); returns (align's dict, that uniform control)."""
+    lo, hi = scene.control_bounds
+    m0 = float(np.mean(scene.control_initial))
+    far = float(np.min(lo)) if abs(np.min(lo) - m0) >= abs(np.max(hi) - m0) else float(np.max(hi))
+    best = None
+    for f in fractions:
+        m = np.full(scene.num_controls, m0 + f * (far - m0))
+        body = scene.mesh.nodes + scene.forward(m).displacements
+        pose = softhd.align(body, scan, distance="scan_to_body")
+        log(f"ladder: m = {m[0]:.4g}: rho {pose['rho']:.4g}, rotation error "
+            f"{rotation_error(pose['matrix'][:3, :3], P_true):.2f} deg")
+        if best is None or pose["rho"] < best[0]["rho"]:
+            best = (pose, m)
+    return best
+
+
 def joint_run(scene, scan, areas, P_true, L, a, log):
     """align at rest, the crop with that pose, then one optimise with the pose refined jointly
     (a scene target in the camera's frame); returns the displacements and the scan moved by the
     final pose."""
     nodes = scene.mesh.nodes
-    pose = softhd.align(nodes, scan, distance="scan_to_body")
-    log(f"joint: align at rest {pose['status']}, rotation error "
+    initial = None
+    if a.start == "ladder":
+        pose, initial = ladder_align(scene, scan, P_true, log)
+    else:
+        pose = softhd.align(nodes, scan, distance="scan_to_body")
+    log(f"joint: align {pose['status']}, rotation error "
         f"{rotation_error(pose['matrix'][:3, :3], P_true):.3f} deg, overlap {pose['overlap']:.3f}")
     # The crop of the alternation, made with the start pose: the scan points outside the body's
     # box inflated by 10 % once moved by it (far points, table and outliers left by the
     # clean-up, would otherwise dominate rho: at the true pose and control rho was 17.96, above
     # the body at rest at align's pose, 16.60).
     R, t = pose["matrix"][:3, :3], pose["matrix"][:3, 3]
-    inside = softhd.crop_to_box(scan @ R.T + t, nodes.min(0), nodes.max(0), margin=0.1)
+    inside = softhd.crop_to_box(scan @ R.T + t, nodes.min(0), nodes.max(0), margin=a.crop_margin)
     if not a.no_crop:
         log(f"joint: cropped with the start pose: kept {len(inside)} of {len(scan)}")
         scan, areas = scan[inside], areas[inside]
-    initial = None
     if a.staged:  # stage 1: the control with the pose fixed, then align against that body
         R, t = pose["matrix"][:3, :3], pose["matrix"][:3, 3]
         aligned = scan @ R.T + t
-        inside = softhd.crop_to_box(aligned, nodes.min(0), nodes.max(0), margin=0.1)
+        inside = softhd.crop_to_box(aligned, nodes.min(0), nodes.max(0), margin=a.crop_margin)
         target = (aligned[inside], areas[inside])
         rest = softhd.distance(nodes, target[0], distance="scan_to_body", fields=True)
         cap = 3.0 * float(np.quantile(rest.field_target, 0.9))
@@ -164,7 +195,7 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
     out = os.path.abspath(a.out)
     pose_file, scan_file = os.path.join(out, "pose_start.txt"), os.path.join(out, "scan_clean.ply")
     softhd.write_cloud(scan_file, scan, areas)
-    P, cap = pose["matrix"], {"quantile": 0.9, "factor": 3.0}
+    P, cap = pose["matrix"], {"quantile": 0.9, "factor": a.cap_factor}
     if a.probe:
         probe(scene, scan_file, P, P_true, out, log)
     for stage in range(1, a.cap_stages + 1):
@@ -173,13 +204,14 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
             j = json.load(f)
         j["mesh"]["file"] = os.path.join(ROOT, "data/meshes/finger.msh")
         j["target"] = {"kind": "cloud", "file": scan_file, "frame": "camera", "pose": pose_file,
-                       "distance": "scan_to_body", "surface": True, "cap": cap}
+                       "distance": a.distance, "surface": True, "cap": cap}
         path = os.path.join(out, "joint_scene.json")
         with open(path, "w") as f:
             json.dump(j, f, indent=1)
         eps = a.first_eps * L if stage == 1 and a.first_eps else None
+        move = 1e-3 if a.hold_all or (stage == 1 and a.hold_first) else a.pose_move
         r = softhd.optimise(softhd.Scene.load(path), max_iter=a.max_iter, algorithm=a.algorithm,
-                            initial=initial, eps=eps, pose_move=a.pose_move)
+                            initial=initial, eps=eps, pose_move=move)
         P = r.pose
         centre = scan.mean(0)  # the pose's error where the body is (the camera is 3 L away)
         shift = np.linalg.norm((P[:3, :3] - P_true[:3, :3]) @ centre + P[:3, 3] - P_true[:3, 3])
@@ -192,7 +224,7 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         # The next stage's cap from this state's fields (scan moved by this pose, this body).
         moved = scan @ P[:3, :3].T + P[:3, 3]
         d = softhd.distance(nodes + r.displacements, moved, distance="scan_to_body", fields=True)
-        cap = 3.0 * float(np.quantile(d.field_target, 0.9))
+        cap = a.cap_factor * float(np.quantile(d.field_target, 0.9))
         initial = r.control
     return r.displacements, (scan @ P[:3, :3].T + P[:3, 3], areas)
 
@@ -223,11 +255,25 @@ def main():
     ap.add_argument("--pose-move", type=float, default=None,
                     help="--joint: the pose's move limit as a fraction of the control's")
     ap.add_argument("--algorithm", default=None, help="--joint: the optimiser (default mma)")
-    ap.add_argument("--start", choices=["align", "true"], default="align",
+    ap.add_argument("--start", choices=["align", "ladder", "true"], default="align",
                     help="--joint: the start pose, align's at rest or (a diagnostic) the true one")
     ap.add_argument("--clean-rms", type=float, default=None,
                     help="the clean run's node error rms from an earlier run (skips that run; it "
                          "does not depend on the seed or the view)")
+    ap.add_argument("--distance", choices=["scan_to_body", "visible"], default="scan_to_body",
+                    help="--joint: the joint run's distance (visible: the camera is the pose's)")
+    ap.add_argument("--cap-factor", type=float, default=3.0,
+                    help="--joint: the cap is this times the 90 %% quantile of the distances")
+    ap.add_argument("--hold-first", action="store_true",
+                    help="--joint: the first stage with pose_move 0.001 (the pose nearly held)")
+    ap.add_argument("--hold-all", action="store_true",
+                    help="--joint: every stage with pose_move 0.001 (with --start true: the pose "
+                         "of a calibrated camera)")
+    ap.add_argument("--crop-margin", type=float, default=0.4,
+                    help="the crop: the body's box inflated by this fraction of its diagonal "
+                         "(default 0.4; 0.1 cut the bent tip off, see the docstring)")
+    ap.add_argument("--plane", type=float, default=0.01,
+                    help="the table's plane threshold, a fraction of L")
     ap.add_argument("--out", default="results/track_scan")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -244,7 +290,7 @@ def main():
     log(f"view: {len(scan)} points in the camera's frame: {info['kept'] - info['table']} of the "
         f"body, {info['table']} of the table, {info['outliers']} outliers; L = {L:.4g}")
 
-    scan = clean_scan(scan, L, log)
+    scan = clean_scan(scan, L, log, a.plane)
     areas = softhd.area_weights(scan, "delaunay")
     u = np.zeros_like(nodes)
     a.truth = truth
@@ -256,7 +302,7 @@ def main():
         R, t = pose["matrix"][:3, :3], pose["matrix"][:3, 3]
         angle = np.degrees(np.arccos(np.clip((np.trace(R @ P_true[:3, :3].T) - 1) / 2, -1, 1)))
         aligned = scan @ R.T + t
-        inside = softhd.crop_to_box(aligned, body.min(0), body.max(0), margin=0.1)
+        inside = softhd.crop_to_box(aligned, body.min(0), body.max(0), margin=a.crop_margin)
         target = (aligned[inside], areas[inside])
         log(f"round {k}: align {pose['status']}, rotation error {angle:.3f} deg, "
             f"overlap {pose['overlap']:.3f}, kept {len(inside)} of {len(aligned)} after the crop")

@@ -22,7 +22,7 @@ the recovered shape, with pictures.
    (softhd.remove_statistical_outliers, k = 20, ratio 2): DIR/scan_clean.ply.
 4. Pose: `softhd align data/scenes/finger.json DIR/scan_clean.ply --distance scan_to_body
    --out DIR/align` against the body at rest (one-sided: the scan sees one side only).
-   The points that this pose puts outside the body's box inflated by 10 % are dropped:
+   The points that this pose puts outside the body's box inflated by --crop-margin (0.4) of its diagonal are dropped:
    DIR/scan_crop.ply, still in the camera's frame.
 5. Pose and control together: DIR/scene.json is the finger's scene with the target
        {"kind": "cloud", "file": "scan_crop.ply", "frame": "camera", "pose": "align/pose.txt",
@@ -260,6 +260,10 @@ def main():
                     help="outliers as a fraction of the visible points (default 0.03)")
     ap.add_argument("--plane", type=float, default=0.03,
                     help="clean-up: the table plane's distance as a fraction of L (default 0.03)")
+    ap.add_argument("--crop-margin", type=float, default=0.4,
+                    help="the crop after align: the body's box inflated by this fraction of its "
+                         "diagonal (default 0.4: it must cover the deformation; at 0.1 the bent "
+                         "tip was cut off)")
     ap.add_argument("--align-only", action="store_true",
                     help="stop after align (prints its pose error; a cheap look at a camera)")
     ap.add_argument("--max-iter", type=int, default=40, help="iterations per stage (default 40)")
@@ -321,11 +325,11 @@ def main():
         f"centroid ({shift0 / L:.3g} L)")
     if a.align_only:
         return
-    inside = softhd.crop_to_box(moved(P0, clean), rest.min(0), rest.max(0), margin=0.1)
+    inside = softhd.crop_to_box(moved(P0, clean), rest.min(0), rest.max(0), margin=a.crop_margin)
     crop = clean[inside]
     crop_file = os.path.join(out, "scan_crop.ply")
     softhd.write_cloud(crop_file, crop)
-    log(f"crop (body's box + 10 %, align's pose): kept {len(crop)} of {len(clean)}")
+    log(f"crop (body's box + {a.crop_margin:g} of its diagonal, align's pose): kept {len(crop)} of {len(clean)}")
 
     # 5. Pose and control together, in stages.
     pose_file = os.path.join(align_dir, "pose.txt")
