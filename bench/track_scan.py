@@ -248,7 +248,8 @@ def main():
                          "round 1), re-align against that body, then the joint run from both")
     ap.add_argument("--cap-stages", type=int, default=1,
                     help="--joint: K joint runs, each from the last one's control and pose with "
-                         "the cap 3 x the 90 %% quantile of the scan's distances to its body")
+                         "the cap --cap-factor x the 90 %% quantile of the scan's distances to "
+                         "its body")
     ap.add_argument("--first-eps", type=float, default=None,
                     help="--joint: epsilon of the first joint stage as a fraction of L (later "
                          "stages: the default)")
@@ -256,7 +257,8 @@ def main():
                     help="--joint: the pose's move limit as a fraction of the control's")
     ap.add_argument("--algorithm", default=None, help="--joint: the optimiser (default mma)")
     ap.add_argument("--start", choices=["align", "ladder", "true"], default="align",
-                    help="--joint: the start pose, align's at rest or (a diagnostic) the true one")
+                    help="--joint: the start pose: align's at rest, ladder_align's (against bodies "
+                         "under uniform controls), or (a diagnostic) the true one")
     ap.add_argument("--clean-rms", type=float, default=None,
                     help="the clean run's node error rms from an earlier run (skips that run; it "
                          "does not depend on the seed or the view)")
