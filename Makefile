@@ -7,7 +7,7 @@ JOBS ?= $(shell nproc)
 CMAKE_EXTRA ?=
 DEPS_FLAGS ?= $(if $(findstring SOFTHD_WITH_MPI=ON,$(CMAKE_EXTRA)),--mpi,)
 
-.PHONY: deps build test demo example-scan bench bench-quick fuzz docs clean format
+.PHONY: deps build test demo example-scan bench bench-quick tools fuzz docs clean format
 
 deps:
 	@scripts/install-deps.sh $(DEPS_FLAGS)
@@ -48,6 +48,11 @@ bench: build
 
 bench-quick: build
 	@scripts/run_benchmarks.sh --quick $(BUILD_DIR) $(BUILD_DIR)/bench-quick $(BUILD_DIR)/bench-quick/benchmarks.md
+
+# The measurement tools the docs cite (tools/: bench_state, bench_cloud_pair, bench_pass_sample,
+# and bench_mpi_sums in an MPI build) into $(BUILD_DIR)/tools/.
+tools: build
+	@cmake --build $(BUILD_DIR) -j $(JOBS) --target tools
 
 # libFuzzer targets (clang, ASan+UBSan) in their own tree, each run for FUZZ_SECONDS.
 FUZZ_DIR ?= build-fuzz

@@ -3,7 +3,7 @@
 
 The body: the deformed finger (data/targets/finger_target.ply: the finger's state under a
 known control, solved on a 2x finer mesh; 33 304 nodes), randomly subsampled to --body-points.
-Each pose k (seed k) is a random camera (bench/synthetic_scan.py), each view "full" (all it
+Each pose k (seed k) is a random camera (softhd.synthetic), each view "full" (all it
 sees) and "half" (the left half of its image only); the scan: --scan-points visible points
 of the full body, noise 0.5 % of the body's size L per coordinate, 3 % outliers uniform in
 the inflated box, in the camera frame. Both aligners get the same body and scan clouds:
@@ -59,10 +59,9 @@ def main():
     ap.add_argument("--score", default="visible", help="softhd's candidate score: visible | rho")
     a = ap.parse_args()
     sys.path.insert(0, os.path.join(os.path.abspath(a.build), "python"))
-    sys.path.insert(0, HERE)
     sys.path.insert(0, os.path.join(HERE, "peers"))
     import softhd
-    import synthetic_scan
+    from softhd import synthetic
     methods = a.methods.split(",")
     if "open3d" in methods and not have("open3d"):
         print("bench_align: open3d rows skipped (python3-open3d is not installed)", file=sys.stderr)
@@ -72,12 +71,12 @@ def main():
     fine, _ = softhd.read_cloud(BODY)
     rng = np.random.default_rng(12345)
     body = fine[np.sort(rng.choice(len(fine), min(a.body_points, len(fine)), replace=False))]
-    L = synthetic_scan.body_size(body)
+    L = synthetic.body_size(body)
     centre = body.mean(0)
     rows = []
     for k in range(a.poses):
         for view in ("full", "half"):
-            scan, P, info = synthetic_scan.view(fine, 1000 + k, view, noise=0.005, outliers=0.03,
+            scan, P, info = synthetic.view(fine, 1000 + k, view, noise=0.005, outliers=0.03,
                                                 points=a.scan_points)
             for m in methods:
                 t0 = time.perf_counter()

@@ -488,7 +488,7 @@ def section_align(rows):
     """softhd align against Open3D (bench/bench_align.py, issue 32)."""
     text = ("## Pose of a scan: softhd align against Open3D (issue 32)\n\n"
             "The deformed finger (data/targets/finger_target.ply, 4000 of its points as the "
-            "body), random cameras (bench/synthetic_scan.py), views full and half (the left "
+            "body), random cameras (softhd.synthetic), views full and half (the left "
             "half of the image), 2000 visible points, noise 0.5 % of the body's size L, 3 % "
             "outliers. softhd: `softhd.align` (distance, cap and candidate score in align.log; "
             "the default score is the visible-surface score of docs/formulation.md §8.5); Open3D: "

@@ -12,7 +12,7 @@ the recovered shape, with pictures.
 1. The truth. The finger of data/scenes/finger.json bent by the control m*(X) = -B X3, solved
    on the 2x finer mesh of data/targets/finger_fine.json by `softhd forward` (for B = 1.5 the
    repository's data/targets/finger_target.ply is that solve already).
-2. The scan. bench/synthetic_scan.py views the deformed fine nodes from a random camera (seed
+2. The scan. softhd.synthetic views the deformed fine nodes from a random camera (seed
    S): only the visible points, Gaussian noise F L (L the body's size), outliers, a table
    plane under the finger; DIR/scan.ply is in the camera's frame, DIR/pose_true.txt the pose
    the example must recover (camera -> body).
@@ -56,12 +56,9 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-sys.path.insert(0, os.path.join(ROOT, "bench"))
-import synthetic_scan  # noqa: E402  (bench/synthetic_scan.py)
-from track_scan import true_nodes  # noqa: E402  (bench/track_scan.py)
-
 try:
     import softhd
+    from softhd import synthetic
 except ImportError:
     sys.exit("scan_example: cannot import softhd; run with PYTHONPATH=build/python "
              "(make example-scan builds it)")
@@ -290,13 +287,14 @@ def main():
     rest = scene.mesh.nodes
     truth_file = true_deformation(a.softhd, a.bend, out)
     fine_deformed, _ = softhd.read_cloud(truth_file)
-    truth = true_nodes(rest, fine_deformed)
+    fine_rest = softhd.read_mesh(os.path.join(ROOT, "data/meshes/finger_fine.msh"), order=2).nodes
+    truth = synthetic.matched_nodes(rest, fine_rest, fine_deformed)
     L = float(np.linalg.norm(rest.max(0) - rest.min(0)))  # what a user knows: the body at rest
     log(f"truth: m* = -{a.bend:g} X3 on the fine mesh ({truth_file}); the tip moves "
         f"{np.linalg.norm(truth - rest, axis=1).max():.3g} mm; L = {L:.4g} mm")
 
     # 2. The scan, in the camera's frame.
-    scan, P_true, info = synthetic_scan.view(fine_deformed, a.seed, a.view, noise=a.noise,
+    scan, P_true, info = synthetic.view(fine_deformed, a.seed, a.view, noise=a.noise,
                                              outliers=a.outliers, table=True)
     softhd.write_cloud(os.path.join(out, "scan.ply"), scan)
     np.savetxt(os.path.join(out, "pose_true.txt"), P_true, fmt="%.17g")

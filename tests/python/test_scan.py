@@ -47,3 +47,40 @@ def test_plane_and_area_weights(rng):
         softhd.area_weights(sphere, "voronoi")
     with pytest.raises(softhd.InvalidArgument, match="k must"):
         softhd.remove_statistical_outliers(sphere, k=0)
+
+
+def test_synthetic_view_is_a_rigidly_moved_visible_subset(rng):
+    """Without noise or outliers a view is a subset of the body moved by the inverse of the
+    pose it returns; with them, the counts and noise level are the ones asked for."""
+    from softhd import synthetic
+    body = rng.uniform([0, 0, 0], [4, 1, 0.5], size=(3000, 3))
+    scan, P, info = synthetic.view(body, seed=3, noise=0.0, outliers=0.0)
+    R, t = P[:3, :3], P[:3, 3]
+    assert np.allclose(R.T @ R, np.eye(3), atol=1e-12) and np.linalg.det(R) > 0
+    back = scan @ R.T + t  # x = R y + t
+    d = np.sqrt(((back[:, None, :] - body[None, :, :]) ** 2).sum(-1)).min(1)
+    assert d.max() < 1e-9 * synthetic.body_size(body)
+    assert 0 < len(scan) == info["kept"] == info["visible"] < len(body)
+    again, P2, _ = synthetic.view(body, seed=3, noise=0.0, outliers=0.0)
+    assert np.array_equal(scan, again) and np.array_equal(P, P2)  # deterministic
+    noisy, P3, info3 = synthetic.view(body, seed=3, noise=0.01, outliers=0.1, points=400)
+    assert info3["kept"] == 400 and info3["outliers"] == 40 and len(noisy) == 440
+    back = noisy[:400] @ P3[:3, :3].T + P3[:3, 3]
+    d = np.sqrt(((back[:, None, :] - body[None, :, :]) ** 2).sum(-1)).min(1)
+    L = synthetic.body_size(body)
+    # noise 0.01 L per coordinate: the distance to the body is at most about 4 sigma sqrt(3)
+    assert 0.002 * L < np.median(d) and d.max() < 0.08 * L
+
+
+def test_synthetic_matched_nodes_finds_the_fine_nodes(rng):
+    from softhd import synthetic
+    fine_rest = rng.uniform(size=(500, 3))
+    fine_deformed = fine_rest ** 2 + 1.0
+    pick = rng.permutation(500)[:60]
+    assert np.array_equal(synthetic.matched_nodes(fine_rest[pick], fine_rest, fine_deformed),
+                          fine_deformed[pick])
+    with pytest.raises(ValueError, match="does not hold"):
+        synthetic.matched_nodes(fine_rest[pick] + 0.01, fine_rest, fine_deformed)
+    top, rms = synthetic.node_errors(fine_rest[:2], np.zeros((2, 3)),
+                                     fine_rest[:2] + [[3.0, 4.0, 0.0], [0.0, 0.0, 0.0]])
+    assert top == 5.0 and abs(rms - np.sqrt(12.5)) < 1e-15

@@ -126,7 +126,7 @@ int grid_levels(const Scene& scene, const GridSequencingOptions& options) {
     return options.levels;
   }
   // A file mesh of order 2: its P1/Q1 level (as many elements as the mesh), measured faster
-  // than the start from rest on the finger (bench/bench_p_sequencing.py); a box halved along
+  // than the start from rest on the finger (studies/bench_p_sequencing.py); a box halved along
   // its even axes while the coarser mesh keeps min_elements.
   return coarser_levels(scene, Halving::nested, options.min_elements);
 }

@@ -143,7 +143,7 @@ void fill_simplex(ReferenceElement* r) {
     r->node_support.push_back({std::min(i, j), std::max(i, j)});
   }
   r->reference_measure = dim == 2 ? 0.5 : 1.0 / 6.0;
-  // Measured (docs/formulation.md §7.2, bench/bench_quadrature.py): P1 states are the same at
+  // Measured (docs/formulation.md §7.2, studies/bench_quadrature.py): P1 states are the same at
   // every degree (F constant), 2 keeps the mass matrix and ∫ m² exact; P2 at 4 is within
   // 1e-10 of degree 8 (degree 2: 5e-6 on tetrahedra, and twice the Newton iterations).
   r->default_quadrature_degree = r->order == 1 ? 2 : 4;

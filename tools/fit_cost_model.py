@@ -12,7 +12,7 @@ By default only the value rows are fitted: there both passes sum S alone, the un
 the library's weights (dual_tree_internal.hpp; passes with gradient sums divide the
 basis and planning weights by kGradPairCost).
 
-    bench/fit_cost_model.py LADDER.csv [--min-n 3000] [--mode value|value+grad|all]
+    tools/fit_cost_model.py LADDER.csv [--min-n 3000] [--mode value|value+grad|all]
 """
 import argparse
 import csv

@@ -2,14 +2,14 @@
 """Tracking from one depth view, measured (issue 32's goal: the node error within 1.5x that of
 the same run against the clean, complete target in the body's frame).
 
-    PYTHONPATH=build/python /usr/bin/python3 bench/track_scan.py [--seed S] [--view full|half]
+    PYTHONPATH=build/python /usr/bin/python3 studies/track_scan.py [--seed S] [--view full|half]
         [--max-iter N] [--rounds K] [--out DIR] [--clean-rms R]
         [--joint [--staged] [--start align|true] [--cap-stages K] [--first-eps F]
                  [--algorithm A]]
 
 1. The view. The finger of data/scenes/finger.json, deformed by m*(X) = -1.5 X3 on a 2x finer
    mesh (data/targets/finger_target.ply), is seen by a synthetic depth camera
-   (bench/synthetic_scan.py): the points the camera sees, noise 0.5 % of the body's size L,
+   (softhd.synthetic): the points the camera sees, noise 0.5 % of the body's size L,
    3 % outliers, a table plane under the finger, a random camera pose. The scan is in the
    camera's frame.
 2. Clean-up, in the camera's frame: the table (softhd.remove_dominant_plane) and the stray
@@ -72,7 +72,7 @@ import softhd
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
-import synthetic_scan  # noqa: E402  (bench/synthetic_scan.py)
+from softhd import synthetic as synthetic_scan  # noqa: E402
 
 
 def true_nodes(scene_nodes, fine_deformed=None):
@@ -82,20 +82,10 @@ def true_nodes(scene_nodes, fine_deformed=None):
     fine_rest = softhd.read_mesh(os.path.join(ROOT, "data/meshes/finger_fine.msh"), order=2).nodes
     if fine_deformed is None:
         fine_deformed, _ = softhd.read_cloud(os.path.join(ROOT, "data/targets/finger_target.ply"))
-    nearest = np.empty(len(scene_nodes), dtype=np.int64)
-    gap = 0.0
-    for s in range(0, len(scene_nodes), 100):  # brute force in blocks of 100 nodes
-        d2 = ((scene_nodes[s:s + 100, None, :] - fine_rest[None, :, :]) ** 2).sum(-1)
-        nearest[s:s + 100] = d2.argmin(1)
-        gap = max(gap, float(np.sqrt(d2.min(1)).max()))
-    if gap > 1e-6:
-        sys.exit(f"track_scan: the fine mesh does not hold the coarse nodes (gap {gap:g})")
-    return fine_deformed[nearest]
+    return synthetic_scan.matched_nodes(scene_nodes, fine_rest, fine_deformed)
 
 
-def node_errors(nodes, displacements, truth):
-    e = np.linalg.norm(nodes + displacements - truth, axis=1)
-    return float(e.max()), float(np.sqrt((e ** 2).mean()))
+node_errors = synthetic_scan.node_errors
 
 
 def clean_scan(scan, L, log, plane=0.01):

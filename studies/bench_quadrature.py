@@ -10,7 +10,7 @@ and the tip displacement, and their relative differences from degree 8 (the refe
 the integrands are not polynomials, so no degree is exact). A degree at which the solve
 fails or inverts an element is reported as such.
 
-  bench/bench_quadrature.py BUILD_DIR [--csv FILE] [--threads T]
+  studies/bench_quadrature.py BUILD_DIR [--csv FILE] [--threads T]
 
 Prints a CSV: case, degree, points (per element), converged, newton (iterations), seconds
 (solve), s_per_newton, energy, tip (|u| at the probe), rel_energy, rel_tip (|u - u_8| /

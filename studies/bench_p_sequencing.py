@@ -13,7 +13,7 @@ solve time of each start and their ratio (also the ratio of the best times and o
 median process CPU times, which a loaded machine disturbs less). Both starts must reach the same
 equilibrium (energies equal to 1e-9 relative), else the script fails.
 
-  bench/bench_p_sequencing.py BUILD_DIR [--repeats N] [--threads T] [--controls=-5,-10,-20]
+  studies/bench_p_sequencing.py BUILD_DIR [--repeats N] [--threads T] [--controls=-5,-10,-20]
                               [--meshes finger,finger50k] [--csv FILE]
 """
 import argparse

@@ -11,7 +11,7 @@ samples), statistical outliers (20 neighbours, ratio 2). Printed: for each tool,
 points kept (those more than 0.01 above the table), the table and outlier points left, and
 the seconds of each step.
 
-usage: PYTHONPATH=build/python bench/bench_scan_cleanup.py [--seed S]
+usage: PYTHONPATH=build/python studies/bench_scan_cleanup.py [--seed S]
 Skipped with one line when Open3D (Debian python3-open3d) is missing.
 """
 import argparse

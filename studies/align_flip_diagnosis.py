@@ -7,7 +7,7 @@ shows the camera at the scan frame's origin, over the pixels holding scan points
 mean nearest distance to the scan (capped at 0.05 L) / L. A prototype of the C++ score of
 docs/formulation.md section 8.5 (which also adds the scan's side).
 
-  bench/align_flip_diagnosis.py BUILD_DIR [SEED ...] [--score visible|rho]
+  studies/align_flip_diagnosis.py BUILD_DIR [SEED ...] [--score visible|rho]
 """
 import argparse
 import os
@@ -25,9 +25,8 @@ def main():
     ap.add_argument("--score", default="visible")
     a = ap.parse_args()
     sys.path.insert(0, os.path.join(os.path.abspath(a.build), "python"))
-    sys.path.insert(0, HERE)
     import softhd
-    import synthetic_scan
+    from softhd import synthetic as synthetic_scan
     from scipy.spatial import cKDTree
     fine, _ = softhd.read_cloud(os.path.join(HERE, "..", "data", "targets", "finger_target.ply"))
     rng = np.random.default_rng(12345)  # as bench_align.py

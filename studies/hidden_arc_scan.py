@@ -1,13 +1,13 @@
 #!/usr/bin/python3
 """A scan-like target the project's scenes do not hold (issue 31's hidden targets, a stand-in):
 the bending plate (data/scenes/bending.json) against a 120-degree arc seen by one synthetic
-camera (bench/synthetic_scan.py: 6000 visible points, noise 0.5 % of the body's size, no
+camera (softhd.synthetic: 6000 visible points, noise 0.5 % of the body's size, no
 outliers), put back into the body's frame. Runs `softhd optimise` on it and prints one JSON
 line: the final rho, the iterations, the time and the node error (largest and rms) against
 the exact arc map (docs/formulation.md §5.2). Used for the §4.8 table (one level by default
 for a cloud without a known map).
 
-    PYTHONPATH=build/python /usr/bin/python3 bench/hidden_arc_scan.py [--seed S]
+    PYTHONPATH=build/python /usr/bin/python3 studies/hidden_arc_scan.py [--seed S]
         [--distance symmetric|scan_to_body] [--max-iter N] [--out DIR] [-- OPTIMISE_OPTIONS...]
 
 e.g. `... --seed 2 --distance scan_to_body -- --levels 2` against `-- --levels 1`.
@@ -25,7 +25,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 import softhd  # noqa: E402
-import synthetic_scan  # noqa: E402
+from softhd import synthetic as synthetic_scan  # noqa: E402
 
 THETA, LENGTH, WIDTH, THICK = 2 * np.pi / 3, 10.0, 2.0, 0.1
 

@@ -1,35 +1,28 @@
-#!/usr/bin/python3
-"""A synthetic depth view of a body (issue 32): the points a camera sees, in its frame.
+"""Synthetic depth views of a body, for tests, examples and benchmarks of scan tracking.
 
-From a body cloud (text or PLY; e.g. a deformed body's nodes, data/targets/finger_target.ply,
-or `softhd forward --write-cloud`), with a deterministic seed:
+view(body_points, seed, ...) returns the points one random camera sees, in the camera's frame,
+with the true pose (camera frame -> body frame):
   1. a random camera: direction uniform on the upper half sphere (z > 0.2: a table lies under
-     the body) around the body's centre, at --distance times the body's size L, looking at
+     the body) around the body's centre, at `distance` times the body's size L, looking at
      the centre (random roll);
   2. optionally a table: a plane under the body (its lowest z minus L/100) over its
-     footprint inflated 1.3 times, sampled as densely as the body's points;
-  3. visibility by a z-buffer: the points projected (pinhole) onto a --pixels square
-     image that frames the body; a point is kept when its depth is within --depth-tol L of
-     the nearest depth in its pixel (interior nodes and the far side drop out);
-     --view half keeps only the left half of the image (half the body out of frame);
-  4. --points: a random subsample of the visible points;
-  5. noise: Gaussian, standard deviation --noise L per coordinate; outliers: --outliers
-     times the count, uniform in the body's bounding box inflated 1.5 times;
-  6. the scan is written in the camera's frame (PLY, volumes 1), the true pose P (camera
-     frame -> body frame, x = R y + t) as a 4x4 text matrix (softhd align's pose.txt form).
+     footprint inflated 1.3 times, with half as many points as the body;
+  3. visibility by a z-buffer: the points projected (pinhole) onto a `pixels` square image
+     that frames the body; a point is kept when its depth is within `depth_tol` L of the
+     nearest depth in its pixel (interior nodes and the far side drop out); view_kind
+     "half" keeps only the left half of the image (half the body out of frame);
+  4. `points`: a random subsample of the visible points;
+  5. noise: Gaussian, standard deviation `noise` L per coordinate; outliers: `outliers`
+     times the count, uniform in the body's bounding box inflated 1.5 times.
+The pose P is a 4x4 matrix with x = R y + t (softhd.align's pose form).
 
-Usable as a module: view(body_points, seed, ...) returns (scan, P, info).
+matched_nodes(nodes, fine_rest, fine_deformed) gives the true deformed positions of a coarse
+mesh's nodes from a finer mesh that contains them (the reference of a node error), and
+node_errors(...) the largest and RMS distance to them.
 
-  bench/synthetic_scan.py BODY --out-scan SCAN.ply --out-pose POSE.txt [--seed S]
-      [--view full|half] [--noise F] [--outliers F] [--table] [--points N] [--pixels P]
+Deterministic for a fixed seed (NumPy's default_rng).
 """
-import argparse
-import os
-import sys
-
 import numpy as np
-
-HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def body_size(points):
@@ -112,30 +105,25 @@ def view(body, seed, view_kind="full", noise=0.005, outliers=0.03, table=False, 
     return scan, P, info
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    ap.add_argument("body")
-    ap.add_argument("--out-scan", required=True)
-    ap.add_argument("--out-pose", required=True)
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--view", choices=["full", "half"], default="full")
-    ap.add_argument("--noise", type=float, default=0.005)
-    ap.add_argument("--outliers", type=float, default=0.03)
-    ap.add_argument("--table", action="store_true")
-    ap.add_argument("--points", type=int, default=0)
-    ap.add_argument("--pixels", type=int, default=120)
-    a = ap.parse_args()
-    sys.path.insert(0, os.environ.get("SOFTHD_PYTHONPATH", os.path.join(HERE, "..", "build", "python")))
-    import softhd
-    body, _ = softhd.read_cloud(a.body)
-    if body.shape[1] != 3:
-        sys.exit(f"synthetic_scan: '{a.body}' is {body.shape[1]}D, a view needs 3D")
-    scan, P, info = view(body, a.seed, a.view, a.noise, a.outliers, a.table, a.points, a.pixels)
-    softhd.write_cloud(a.out_scan, scan)
-    np.savetxt(a.out_pose, P, fmt="%.17g")
-    print(f"wrote {a.out_scan} ({len(scan)} points: {info['kept']} visible of {info['visible']},"
-          f" {info['table']} on the table, {info['outliers']} outliers), {a.out_pose}")
+def matched_nodes(nodes, fine_rest, fine_deformed):
+    """The deformed positions of `nodes` (N, d) taken from a finer mesh: its rest nodes
+    `fine_rest` (M, d) and deformed nodes `fine_deformed` (M, d), matched by the nearest rest
+    node. Raises ValueError if some node is not a node of the fine mesh (gap over 1e-6 of its
+    size): the fine mesh must be the coarse one refined."""
+    nodes = np.asarray(nodes, dtype=float)
+    fine_rest = np.asarray(fine_rest, dtype=float)
+    nearest = np.empty(len(nodes), dtype=np.int64)
+    gap = 0.0
+    for s in range(0, len(nodes), 100):  # brute force in blocks of 100 nodes
+        d2 = ((nodes[s:s + 100, None, :] - fine_rest[None, :, :]) ** 2).sum(-1)
+        nearest[s:s + 100] = d2.argmin(1)
+        gap = max(gap, float(np.sqrt(d2.min(1)).max()))
+    if gap > 1e-6 * body_size(fine_rest):
+        raise ValueError(f"matched_nodes: the fine mesh does not hold the nodes (gap {gap:g})")
+    return np.asarray(fine_deformed, dtype=float)[nearest]
 
 
-if __name__ == "__main__":
-    main()
+def node_errors(nodes, displacements, truth):
+    """(max, rms) of |nodes + displacements - truth| over the nodes."""
+    e = np.linalg.norm(nodes + displacements - truth, axis=1)
+    return float(e.max()), float(np.sqrt((e ** 2).mean()))

@@ -2,7 +2,7 @@
 """Outliers in a body-frame target, measured (issue 32's goal: with 5 % uniform outliers the
 node error within 1.2x that of the clean run; without the robust option, the degradation).
 
-    PYTHONPATH=build/python /usr/bin/python3 bench/outlier_robustness.py [--fraction F]
+    PYTHONPATH=build/python /usr/bin/python3 studies/outlier_robustness.py [--fraction F]
         [--max-iter N] [--seed S]
 
 The finger (data/scenes/finger.json) against its own target (the deformed nodes of a 2x finer
@@ -10,7 +10,7 @@ mesh, data/targets/finger_target.ply) three times, each run `softhd.optimise` wi
 options: the clean target; the target with F uniform outliers (in its bounding box inflated
 1.5 times, each with the target's mean volume) and the symmetric distance as it is; the same
 with the soft cap at 3 x the 90 % quantile of the target's distances to the body at rest. The node
-errors are against the true deformed nodes (bench/track_scan.py's true_nodes).
+errors are against the true deformed nodes (studies/track_scan.py's true_nodes).
 
 Measured (30 iterations, seed 1, one thread): node error rms clean 0.0924, 5 % outliers without
 a cap 0.0941 (1.02x), with the cap 0.104 (1.13x). The finger's bounded control cannot chase the
