@@ -130,7 +130,8 @@ scene targets ("target" in the scene file):
 
 writes: history.csv, control.csv (readable by 'softhd forward --control'),
 body_NNNN.vtu, target.vtu, body.pvd, body_final.ply, target.ply, summary.json,
-checkpoint.bin, and convergence.png when python3 with matplotlib is available.
+checkpoint.bin, and the pictures convergence.png and shape.png (the final body against the
+target) when python3 with matplotlib is available.
 
 exit status: 0 done (also when stopped by --max-iter or --max-seconds); 1 numerical
 failure (the state solve at the start or at the best control failed); 2 bad input or
@@ -406,10 +407,10 @@ int run_optimise(const std::vector<std::string>& tokens) {
   // No shell: the folder is one argument, whatever characters it holds.
   const int status = run_quietly({"/usr/bin/python3", SOFTHD_PLOT_SCRIPT, out.string()});
   if (status != 0 && !a.quiet)
-    std::fprintf(stderr, "  (convergence.png not drawn: %s)\n",
+    std::fprintf(stderr, "  (convergence.png and shape.png not drawn: %s)\n",
                  status == 3    ? "needs python3-matplotlib"
                  : status == -1 ? "cannot run /usr/bin/python3"
-                                : "scripts/plot_convergence.py failed");
+                                : "scripts/plot_run.py failed");
 #endif
   if (!a.quiet) {
     for (const LevelReport& l : s.levels) std::fprintf(stderr, "  %s\n", l.BriefReport().c_str());

@@ -7,7 +7,6 @@ cd "$(dirname "$0")/.."
 out=results/bending
 "$build/apps/softhd" optimise data/scenes/bending.json --out "$out" --max-iter 200 \
   --max-seconds 280 --vtu-every 25
-/usr/bin/python3 scripts/plot_shape.py "$out"
 echo
 echo "Look at: $out/summary.json (numbers), $out/convergence.png and $out/shape.png"
 echo "(pictures), $out/body.pvd and $out/target.vtu in ParaView."

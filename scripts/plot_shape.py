@@ -1,14 +1,17 @@
 #!/usr/bin/env python3
 """Draws shape.png from a softhd optimise output directory: the final deformed body
-(body_final.ply) against the target cloud (target.ply), side view and 3D view."""
+(body_final.ply) against the target cloud (target.ply): a side view on the two axes of\nlargest extent, and a 3D view."""
 import os
 import struct
 import sys
 
-import matplotlib
+try:
+    import matplotlib
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: E402
+except ImportError:
+    sys.exit(3)  # softhd optimise reports "needs python3-matplotlib" for exit status 3
 
 
 def read_ply(path):
@@ -32,18 +35,29 @@ def read_ply(path):
             [r[ix[2]] for r in rows] if ix[2] is not None else [0.0] * n]
 
 
+def side_axes(body, target):
+    """The two coordinate axes of the largest extent of body and target together: the
+    view that shows the most of the shape (x1-x3 for a plate bending up, x1-x2 in 2D)."""
+    extent = []
+    for k in range(3):
+        values = body[k] + target[k]
+        extent.append(max(values) - min(values))
+    first, second = sorted(sorted(range(3), key=lambda k: -extent[k])[:2])
+    return first, second
+
+
 def main(directory):
     body = read_ply(os.path.join(directory, "body_final.ply"))
     target = read_ply(os.path.join(directory, "target.ply"))
-    fig = plt.figure(figsize=(12, 5))
+    h, v = side_axes(body, target)
+    fig = plt.figure(figsize=(12, 5.4))
     side = fig.add_subplot(1, 2, 1)
-    side.scatter(target[0], target[2], s=1, c="0.7", label="target cloud")
-    side.scatter(body[0], body[2], s=2, c="C0", label="optimised body (nodes)")
+    side.scatter(target[h], target[v], s=1, c="0.7", label="target cloud")
+    side.scatter(body[h], body[v], s=2, c="C0", label="optimised body (nodes)")
     side.set_aspect("equal")
-    side.set_xlabel("x1")
-    side.set_ylabel("x3")
+    side.set_xlabel("x%d" % (h + 1))
+    side.set_ylabel("x%d" % (v + 1))
     side.set_title("side view")
-    side.legend(loc="best", markerscale=5)
     view = fig.add_subplot(1, 2, 2, projection="3d")
     view.scatter(target[0], target[1], target[2], s=0.5, c="0.7")
     view.scatter(body[0], body[1], body[2], s=1, c="C0")
@@ -51,7 +65,9 @@ def main(directory):
     view.set_ylabel("x2")
     view.set_zlabel("x3")
     view.set_title("3D view")
-    fig.tight_layout()
+    # The legend below the pictures, never on the data.
+    fig.legend(*side.get_legend_handles_labels(), loc="lower center", ncol=2, markerscale=5)
+    fig.tight_layout(rect=(0, 0.07, 1, 1))
     fig.savefig(os.path.join(directory, "shape.png"), dpi=110)
 
 

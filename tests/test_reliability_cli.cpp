@@ -87,6 +87,7 @@ TEST_F(Reliability, ThePlotTakesAnyFolderName) {
   EXPECT_FALSE(fs::exists(dir_ / "PWNED2"));
   EXPECT_EQ(err.find("not drawn"), std::string::npos) << err;
   EXPECT_TRUE(fs::exists(out / "convergence.png")) << err;
+  EXPECT_TRUE(fs::exists(out / "shape.png")) << err;  // every run draws its final shape
 }
 
 // Item 4: a second run in the folder of a running one is refused, naming the process.
