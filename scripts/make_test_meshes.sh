@@ -20,6 +20,7 @@ done
 g box_hex27.geo -3 -format msh41 -o box_hex27_v41.msh
 g cylinder_tet.geo -3 -order 2 -format msh41 -o cylinder_tet10_v41.msh  # curved tet10
 g plate_2d.geo -2 -format msh41 -o plate_2d_v41.msh
+g two_boxes.geo -3 -format msh41 -o two_boxes_nonconforming.msh
 g plate_2d.geo -2 -format msh22 -o plate_2d_v22.msh
 g sparse.geo -0                       # writes sparse.msh itself (after Coherence Mesh)
 g fields.geo -0 && mv fields_bin_0.msh fields_bin.msh   # fields.msh is hand-written

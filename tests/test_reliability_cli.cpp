@@ -142,4 +142,29 @@ TEST_F(Reliability, SmallInputChecks) {
   expect_refused("distance far.txt b.txt", "far.txt cloud: point 2 has a coordinate of magnitude");
 }
 
+// A body that nothing holds and volumes that share no nodes are refused before any solve,
+// by forward and optimise alike: one tetrahedron clamped at a vertex (free to turn about it),
+// and two Gmsh boxes meshed without BooleanFragments.
+TEST_F(Reliability, UnheldAndNonConformingBodiesAreRefused) {
+  std::ofstream(dir_ / "tet.msh") << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n"
+                                     "0 1 \"tip\"\n3 2 \"body\"\n$EndPhysicalNames\n$Nodes\n4\n"
+                                     "1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n$Elements\n2\n"
+                                     "1 15 2 1 1 1\n2 4 2 2 2 1 2 3 4\n$EndElements\n";
+  const std::string body = R"(
+    "material": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3}, "fibers": [1, 0, 0],
+    "control": {"space": "vertex", "lower": -1, "upper": 0}})";
+  std::ofstream(dir_ / "tet.json") << R"({"mesh": {"type": "gmsh", "file": "tet.msh"},
+    "clamp": ["tip"],)" << body;
+  const std::string needle =
+      "key 'clamp/constraints' does not hold the body: 'tip' leaves region 'body' free to move "
+      "rigidly (3 of its 6 rigid motions";
+  expect_refused("forward tet.json", needle);
+  expect_refused("optimise tet.json --max-iter 1 --quiet", needle);
+  const std::string mesh =
+      std::string(SOFTHD_SOURCE_DIR) + "/tests/data/meshes/two_boxes_nonconforming.msh";
+  std::ofstream(dir_ / "two.json")
+      << R"({"mesh": {"type": "gmsh", "file": ")" << mesh << R"("}, "clamp": ["base"],)" << body;
+  expect_refused("forward two.json", "regions 'left' and 'right' touch at");
+}
+
 }  // namespace

@@ -13,6 +13,7 @@
 #include "softhd/error.hpp"
 #include "softhd/fe/boundary.hpp"
 #include "softhd/fe/cloud.hpp"
+#include "softhd/fe/dofs.hpp"
 #include "softhd/fe/gmsh_mesh.hpp"
 
 using namespace softhd::fe;
@@ -127,4 +128,108 @@ TEST(Boundary, RefusesTwoDimensionsAndWrongSizes) {
   EXPECT_THROW(boundary_facets(m2), softhd::InvalidArgument);
   const Mesh m3 = fe_test::box(3, 1, {1.0, 1.0, 1.0}, {1, 1, 1});
   EXPECT_THROW(boundary_surface(m3, Eigen::VectorXd::Zero(5)), softhd::InvalidArgument);
+}
+
+// A body that nothing holds (docs/formulation.md §7): check_rigid_motions refuses constraints
+// that leave a rigid motion of a connected part free. The cases' free motions are known by
+// hand: a node fixes translations only; an edge along z leaves the rotation about z; planes
+// held in their normal component (symmetry planes) x = 0 and y = 0 leave the translation
+// along z; a second, disjoint box is held by nothing.
+namespace {
+
+Mesh unit_box(int dim) {
+  return make_box_mesh(Eigen::VectorXd::Zero(dim), Eigen::VectorXd::Ones(dim),
+                       Eigen::VectorXi::Constant(dim, 2), 1);
+}
+
+// The nodes of `m` where pred(X) holds, as the boundary set `name`.
+template <class Pred>
+void add_set(Mesh* m, const std::string& name, Pred pred) {
+  std::vector<int>& s = m->boundary_nodes[name];
+  for (Eigen::Index n = 0; n < m->num_nodes(); ++n)
+    if (pred(Eigen::VectorXd(m->nodes.row(n).transpose()))) s.push_back(static_cast<int>(n));
+}
+
+std::string refusal(const Mesh& m, const std::vector<DirichletConstraint>& c) {
+  try {
+    check_rigid_motions(m, c);
+  } catch (const softhd::InvalidArgument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(RigidMotions, HeldBodiesPass) {
+  Mesh m = unit_box(3);
+  EXPECT_EQ(refusal(m, {{"x0", {}}}), "");
+  // Three symmetry planes, each held in its normal component: all six motions fixed.
+  EXPECT_EQ(refusal(m, {{"x0", {0}}, {"y0", {1}}, {"z0", {2}}}), "");
+  EXPECT_EQ(refusal(unit_box(2), {{"x0", {}}}), "");
+  // A face far smaller than the body still fixes it (rank, not size).
+  Mesh slab = make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d(100.0, 1.0, 1.0),
+                            Eigen::Vector3i(100, 1, 1), 1);
+  EXPECT_EQ(refusal(slab, {{"x0", {}}}), "");
+}
+
+TEST(RigidMotions, FreeMotionsAreRefusedNamingThePart) {
+  Mesh m = unit_box(3);
+  add_set(&m, "corner", [](const Eigen::VectorXd& X) { return X.norm() < 1e-12; });
+  add_set(&m, "edge", [](const Eigen::VectorXd& X) { return X[0] == 0.0 && X[1] == 0.0; });
+  m.boundary_nodes["pad"];  // a group with no node of the body
+  std::string e = refusal(m, {{"corner", {}}});
+  EXPECT_NE(e.find("'corner' leaves region 'body' free"), std::string::npos) << e;
+  EXPECT_NE(e.find("3 of its 6 rigid motions"), std::string::npos) << e;
+  e = refusal(m, {{"edge", {}}});
+  EXPECT_NE(e.find("1 of its 6 rigid motions, e.g. a rotation about an axis along (0, 0, 1)"),
+            std::string::npos)
+      << e;
+  e = refusal(m, {{"x0", {0}}, {"y0", {1}}});
+  EXPECT_NE(e.find("'x0', 'y0' leave region 'body' free"), std::string::npos) << e;
+  EXPECT_NE(e.find("1 of its 6 rigid motions, e.g. a translation along (0, 0, 1)"),
+            std::string::npos)
+      << e;
+  e = refusal(m, {{"x0", {}}, {"pad", {}}});
+  EXPECT_NE(e.find("group 'pad' has no node of the body"), std::string::npos) << e;
+  Mesh flat = unit_box(2);
+  add_set(&flat, "corner", [](const Eigen::VectorXd& X) { return X.norm() < 1e-12; });
+  e = refusal(flat, {{"corner", {}}});
+  EXPECT_NE(e.find("1 of its 3 rigid motions, e.g. a rotation"), std::string::npos) << e;
+}
+
+TEST(RigidMotions, EveryConnectedPartMustBeHeld) {
+  // Two unit boxes 1 apart: "left" clamped at x = 0, "right" held by nothing.
+  const Mesh a = unit_box(3);
+  Mesh m = a;
+  m.nodes.conservativeResize(2 * a.num_nodes(), 3);
+  m.nodes.bottomRows(a.num_nodes()) = a.nodes.rowwise() + Eigen::RowVector3d(2.0, 0.0, 0.0);
+  m.elements.conservativeResize(2 * a.num_elements(), Eigen::NoChange);
+  m.elements.bottomRows(a.num_elements()) = a.elements.array() + static_cast<int>(a.num_nodes());
+  m.element_region = Eigen::VectorXi::Zero(2 * a.num_elements());
+  m.element_region.tail(a.num_elements()).setOnes();
+  m.region_names = {"left", "right"};
+  m.cells.resize(0);  // no longer the structured box
+  EXPECT_NE(refusal(m, {{"x0", {}}}).find("nothing holds region 'right'"), std::string::npos);
+  m.element_region.setZero();  // one region in two parts: the part is named by its place
+  const std::string e = refusal(m, {{"x0", {}}});
+  EXPECT_NE(e.find("nothing holds the part of region 'left' around (2.5, 0.5, 0.5)"),
+            std::string::npos)
+      << e;
+  add_set(&m, "far", [](const Eigen::VectorXd& X) { return X[0] == 3.0; });
+  EXPECT_EQ(refusal(m, {{"x0", {}}, {"far", {}}}), "");
+}
+
+TEST(RigidMotions, AVolumeGroupAsAClampIsNamedAsSuch) {
+  Mesh m = unit_box(3);
+  m.cells.resize(0);  // as from a Gmsh file, whose regions are physical volumes
+  try {
+    m.face("body");
+    ADD_FAILURE();
+  } catch (const softhd::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("'body' is a region of the body (a physical volume), "
+                                         "not a boundary group: a clamp needs a surface group"),
+              std::string::npos)
+        << e.what();
+  }
 }

@@ -4,10 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <fstream>
 #include <map>
 #include <set>
+#include <sstream>
 
 #include "softhd/error.hpp"
 #include "softhd/fe/assembly.hpp"
@@ -283,6 +286,128 @@ TEST(GmshMesh, AControlRestrictedToARegionActsThereOnly) {
   } catch (const FileError& e) {
     EXPECT_NE(std::string(e.what()).find("body, layer"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("control.region"), std::string::npos) << e.what();
+  }
+}
+
+// Two unit cubes of six tetrahedra each (Kuhn's split along the main diagonal), "left" on
+// [0, 1]³ and "right" on [1 + gap, 2 + gap] × [0, 1]², as MSH 2.2 text. `shared`: the right
+// cube uses the left one's nodes at x = 1 (gap 0, a conforming mesh); otherwise it has nodes
+// of its own. Lower-dimensional groups: "base" (the face x = 0), "corner" (a point at the
+// origin), "edge" (the line x = y = 0), "pad" (a triangle on nodes no tetrahedron uses) and
+// "empty" (a name without elements).
+std::string two_cubes(double gap, bool shared) {
+  std::vector<Eigen::Vector3d> X;
+  std::vector<std::array<int, 8>> cube(2);  // node ids (1-based) by corner bits (x, y, z)
+  for (int c = 0; c < 2; ++c)
+    for (int k = 0; k < 8; ++k) {
+      if (c == 1 && shared && !(k & 1)) {
+        cube[1][k] = cube[0][k | 1];
+        continue;
+      }
+      X.emplace_back(c * (1.0 + gap) + (k & 1), (k >> 1) & 1, (k >> 2) & 1);
+      cube[c][k] = static_cast<int>(X.size());
+    }
+  const int pad = static_cast<int>(X.size()) + 1;
+  for (const Eigen::Vector3d& p :
+       {Eigen::Vector3d(5, 5, 5), Eigen::Vector3d(6, 5, 5), Eigen::Vector3d(5, 6, 5)})
+    X.push_back(p);
+  std::vector<std::string> el = {
+      "15 2 3 3 " + std::to_string(cube[0][0]),
+      "1 2 4 4 " + std::to_string(cube[0][0]) + " " + std::to_string(cube[0][4]),
+      "2 2 11 11 " + std::to_string(cube[0][0]) + " " + std::to_string(cube[0][2]) + " " +
+          std::to_string(cube[0][6]),
+      "2 2 11 11 " + std::to_string(cube[0][0]) + " " + std::to_string(cube[0][6]) + " " +
+          std::to_string(cube[0][4]),
+      "2 2 12 12 " + std::to_string(pad) + " " + std::to_string(pad + 1) + " " +
+          std::to_string(pad + 2)};
+  const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (int c = 0; c < 2; ++c)
+    for (const auto& p : perms) {
+      std::array<int, 4> t = {0, 1 << p[0], (1 << p[0]) | (1 << p[1]), 7};
+      auto at = [&](int k) { return X[cube[c][t[k]] - 1]; };
+      if ((at(1) - at(0)).cross(at(2) - at(0)).dot(at(3) - at(0)) < 0) std::swap(t[2], t[3]);
+      std::string line = "4 2 " + std::to_string(c + 1) + " " + std::to_string(c + 1);
+      for (int k : t) line += " " + std::to_string(cube[c][k]);
+      el.push_back(line);
+    }
+  std::ostringstream s;
+  s << "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n7\n0 3 \"corner\"\n"
+    << "1 4 \"edge\"\n2 11 \"base\"\n2 12 \"pad\"\n2 13 \"empty\"\n3 1 \"left\"\n"
+    << "3 2 \"right\"\n$EndPhysicalNames\n$Nodes\n"
+    << X.size() << "\n";
+  for (std::size_t n = 0; n < X.size(); ++n)
+    s << n + 1 << " " << X[n][0] << " " << X[n][1] << " " << X[n][2] << "\n";
+  s << "$EndNodes\n$Elements\n" << el.size() << "\n";
+  for (std::size_t e = 0; e < el.size(); ++e) s << e + 1 << " " << el[e] << "\n";
+  s << "$EndElements\n";
+  return s.str();
+}
+
+// The scene on two_cubes(gap, shared), clamped at `clamp` (a JSON array); its error or "".
+std::string scene_error(double gap, bool shared, const std::string& clamp) {
+  const std::string dir = ::testing::TempDir();
+  std::ofstream(dir + "/two_cubes.msh") << two_cubes(gap, shared);
+  const std::string scene = R"({"mesh": {"type": "gmsh", "file": "two_cubes.msh"},
+    "material": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3},
+    "fibers": [1, 0, 0], "clamp": )" +
+                            clamp + R"(,
+    "control": {"space": "vertex", "lower": -1, "upper": 0}})";
+  try {
+    parse_scene(scene, dir + "/two.json");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// A body that nothing holds (docs/formulation.md §7) is refused before any solve, naming the
+// group or the part: a clamp group with no node of the body, a clamp on a point or a line
+// (rotations free), a second volume the clamp does not reach; a volume group as a clamp is
+// named as such. The conforming two-cube body clamped at its base face is accepted.
+TEST(GmshMesh, ABodyThatNothingHoldsIsRefused) {
+  EXPECT_EQ(scene_error(0.0, true, R"(["base"])"), "");
+  auto expect = [](const std::string& e, const std::string& needle) {
+    EXPECT_NE(e.find(needle), std::string::npos) << e;
+    EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+  };
+  expect(scene_error(0.0, true, R"(["pad"])"),
+         "key 'clamp/constraints' does not hold the body: group 'pad' has no node");
+  expect(scene_error(0.0, true, R"(["base", "empty"])"), "group 'empty' has no node of the body");
+  expect(scene_error(0.0, true, R"(["corner"])"),
+         "'corner' leaves regions 'left', 'right' free to move rigidly (3 of its 6");
+  expect(scene_error(0.0, true, R"(["edge"])"),
+         "'edge' leaves regions 'left', 'right' free to move rigidly (1 of its 6 rigid motions, "
+         "e.g. a rotation about an axis along (0, 0, 1))");
+  expect(scene_error(0.5, false, R"(["base"])"), "nothing holds region 'right'");
+  expect(scene_error(0.0, true, R"(["left"])"),
+         "'left' is a region of the body (a physical volume), not a boundary group");
+}
+
+// Two volumes meshed without BooleanFragments touch at nodes they do not share: refused,
+// naming both regions and the fix. The cube pair has 4 such pairs (the corners of x = 1).
+TEST(GmshMesh, VolumesThatDoNotShareTheirInterfaceNodesAreRefused) {
+  const io::MshFile conforming = io::parse_msh(two_cubes(0.0, true), "two.msh");
+  EXPECT_EQ(mesh_from_gmsh(conforming).num_nodes(), 12);
+  try {
+    mesh_from_gmsh(io::parse_msh(two_cubes(0.0, false), "two.msh"));
+    ADD_FAILURE() << "a non-conforming mesh was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("regions 'left' and 'right' touch at 4 coincident nodes "
+                                   "that they do not share (e.g. nodes 2 and 9 at (1, 0, 0))"),
+        std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("BooleanFragments"), std::string::npos) << e.what();
+  }
+  // The same from Gmsh (tests/data/meshes/two_boxes.geo), with the file named.
+  try {
+    read_gmsh_mesh(mesh_path("two_boxes_nonconforming.msh"));
+    ADD_FAILURE() << "a non-conforming mesh was accepted";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("two_boxes_nonconforming.msh: mesh: regions 'left' and "
+                                         "'right' touch at"),
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -2,6 +2,7 @@
 ValueError, FileError an OSError."""
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -76,6 +77,22 @@ def test_resource_limit(scene_file):
         softhd.Scene.load(scene_file(SMALL_2D), max_memory_gib=1e-6)
     with pytest.raises(ValueError, match="max_memory_gib"):
         softhd.Scene.load(scene_file(SMALL_2D), max_memory_gib=0)
+
+
+def test_a_body_that_nothing_holds_is_refused_on_load(tmp_path, scene_file, source_dir):
+    # One tetrahedron clamped at a vertex: free to turn about it, refused before any solve.
+    (tmp_path / "tet.msh").write_text(
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n0 1 \"tip\"\n"
+        "3 2 \"body\"\n$EndPhysicalNames\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n"
+        "4 0 0 1\n$EndNodes\n$Elements\n2\n1 15 2 1 1 1\n2 4 2 2 2 1 2 3 4\n$EndElements\n")
+    tet = dict(SMALL_2D, mesh={"type": "gmsh", "file": "tet.msh"}, clamp=["tip"])
+    with pytest.raises(softhd.FileError, match="'tip' leaves region 'body' free to move rigidly"):
+        softhd.Scene.load(scene_file(tet))
+    # Two volumes meshed without BooleanFragments.
+    apart = dict(tet, clamp=["base"], mesh={"type": "gmsh", "file": os.path.join(
+        source_dir, "tests", "data", "meshes", "two_boxes_nonconforming.msh")})
+    with pytest.raises(softhd.FileError, match="regions 'left' and 'right' touch at"):
+        softhd.Scene.load(scene_file(apart))
 
 
 def test_forward_errors(scene_file):

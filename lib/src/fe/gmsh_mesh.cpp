@@ -4,7 +4,9 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <sstream>
 
+#include "../common/matrix_rows.hpp"
 #include "softhd/error.hpp"
 
 namespace softhd::fe {
@@ -214,7 +216,80 @@ std::map<std::string, std::vector<int>> boundary_sets(const io::MshFile& f, int 
     }
     out[name] = std::vector<int>(nodes.begin(), nodes.end());
   }
+  for (const io::MshPhysicalGroup& g : f.physical_groups)  // named groups without elements
+    if (g.dim < dim) out.emplace(group_name(f, g.dim, g.tag), std::vector<int>());
   return out;
+}
+
+// Collects the points within squared distance r2 (nanoflann's result-set interface).
+struct WithinRadius {
+  double r2;
+  std::vector<size_t>* found;
+  void init() {}
+  void clear() { found->clear(); }
+  size_t size() const { return found->size(); }
+  bool full() const { return true; }
+  bool addPoint(double d2, size_t i) {
+    if (d2 <= r2) found->push_back(i);
+    return true;
+  }
+  double worstDist() const { return r2; }
+};
+
+std::string point(const Eigen::VectorXd& x) {  // "(x, y, z)", 6 significant digits
+  std::ostringstream s;
+  s.precision(6);
+  for (Eigen::Index i = 0; i < x.size(); ++i) s << (i ? ", " : "(") << x[i];
+  return s.str() + ")";
+}
+
+// Refuses nodes of the file that lie within 1e-9 of the bounding-box diagonal of one another
+// (docs/formulation.md §7): elements that touch there do not share nodes, so nothing joins
+// them. A k-d tree over the nodes, O(n log n). Names the regions of the first pair's nodes.
+void check_conforming(const io::MshFile& f, const NodeTable& t, const Mesh& m) {
+  const Eigen::Index N = static_cast<Eigen::Index>(t.file_of.size());
+  if (N < 2) return;
+  const Eigen::MatrixXd X = m.nodes.topRows(N);  // the file's nodes (new ones come after)
+  const double tol = 1e-9 * (X.colwise().maxCoeff() - X.colwise().minCoeff()).norm();
+  const softhd::detail::MatrixRows rows{&X};
+  const softhd::detail::MatrixRowsTree<> tree(static_cast<int>(X.cols()), rows,
+                                              nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  std::vector<size_t> found;
+  WithinRadius within{tol * tol, &found};
+  std::map<std::pair<int, int>, Eigen::Index> pairs;  // regions (a ≤ b) -> coincident pairs
+  std::pair<Eigen::Index, Eigen::Index> first{-1, -1};
+  std::vector<int> region(static_cast<size_t>(N), 0);  // of an element using the node
+  for (Eigen::Index e = 0; e < m.num_elements(); ++e)
+    for (Eigen::Index a = 0; a < m.elements.cols(); ++a)
+      if (m.elements(e, a) < N) region[m.elements(e, a)] = m.element_region[e];
+  for (Eigen::Index i = 0; i < N; ++i) {
+    const Eigen::VectorXd x = X.row(i).transpose();
+    found.clear();
+    tree.radiusSearchCustomCallback(x.data(), within);
+    for (size_t j : found) {
+      if (static_cast<Eigen::Index>(j) <= i) continue;
+      const int a = region[i], b = region[j];
+      if (first.first < 0) first = {i, static_cast<Eigen::Index>(j)};
+      ++pairs[{std::min(a, b), std::max(a, b)}];
+    }
+  }
+  if (first.first < 0) return;
+  const int a = region[first.first], b = region[first.second];
+  const Eigen::Index n = pairs[{std::min(a, b), std::max(a, b)}];
+  auto tag = [&](Eigen::Index i) {
+    return std::to_string(f.node_tags[static_cast<size_t>(t.file_of[static_cast<size_t>(i)])]);
+  };
+  const std::string where = std::to_string(n) + " coincident nodes that they do not share (e.g. " +
+                            "nodes " + tag(first.first) + " and " + tag(first.second) + " at " +
+                            point(X.row(first.first).transpose()) + ")";
+  if (a == b)
+    fail("region '" + m.region_names[a] + "' has " + where +
+         ": its elements are not joined there; remove the duplicate nodes (Coherence Mesh in "
+         "Gmsh, or BooleanFragments on its parts before meshing)");
+  fail("regions '" + m.region_names[std::min(a, b)] + "' and '" + m.region_names[std::max(a, b)] +
+       "' touch at " + where +
+       ": nothing joins them; mesh them with BooleanFragments (Coherence in a .geo file) so "
+       "that they share their interface nodes");
 }
 
 // The vertices of the mesh (element corners, in node order) and each element's corners.
@@ -282,7 +357,9 @@ Mesh build_mesh(const io::MshFile& f, const GmshMeshOptions& o, NodeTable* table
 Mesh mesh_from_gmsh(const io::MshFile& f, const GmshMeshOptions& o) {
   NodeTable t;
   std::vector<std::int64_t> tags;
-  return build_mesh(f, o, &t, &tags);
+  Mesh m = build_mesh(f, o, &t, &tags);
+  check_conforming(f, t, m);
+  return m;
 }
 
 FiberField gmsh_fiber_field(const io::MshFile& f, const std::string& name,

@@ -12,6 +12,11 @@ namespace softhd::fe {
 const std::vector<int>& Mesh::face(const std::string& name) const {
   auto it = boundary_nodes.find(name);
   if (it == boundary_nodes.end()) {
+    for (const std::string& r : region_names)  // a Gmsh file's region (a box lists its faces)
+      if (r == name && !structured())
+        throw InvalidArgument("mesh: '" + name + "' is a region of the body (a physical " +
+                              (dim == 3 ? "volume" : "surface") + "), not a boundary group: " +
+                              "a clamp needs a " + (dim == 3 ? "surface" : "curve") + " group");
     std::string names;
     for (const auto& [n, nodes] : boundary_nodes) names += (names.empty() ? "" : ", ") + n;
     throw InvalidArgument("mesh: unknown boundary face '" + name + "' (expected one of " +

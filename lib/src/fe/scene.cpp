@@ -410,6 +410,11 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
   } catch (const InvalidArgument& e) {
     r.fail("clamp/constraints", std::string("is invalid: ") + e.what());
   }
+  try {  // every connected part held against rigid motions (docs/formulation.md §7)
+    check_rigid_motions(body, s.constraints);
+  } catch (const InvalidArgument& e) {
+    r.fail("clamp/constraints", std::string("does not hold the body: ") + e.what());
+  }
   return s;
 }
 

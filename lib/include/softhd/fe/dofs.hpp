@@ -36,4 +36,12 @@ struct DofMap {
 /// Throws InvalidArgument naming an unknown face or an out-of-range component.
 DofMap make_dof_map(const Mesh& mesh, const std::vector<DirichletConstraint>& constraints);
 
+/// Checks that the constraints hold the body (docs/formulation.md §7): for every connected
+/// part of the mesh (elements joined by shared nodes) the fixed dofs must fix its rigid
+/// motions — the 6 (3D) or 3 (2D) translations and rotations restricted to the fixed dofs have
+/// full rank. Throws InvalidArgument with one line naming the part (its regions) and the
+/// groups that hold it, or a constraint group that has no node of the body; also what
+/// make_dof_map throws.
+void check_rigid_motions(const Mesh& mesh, const std::vector<DirichletConstraint>& constraints);
+
 }  // namespace softhd::fe
