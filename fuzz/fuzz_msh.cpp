@@ -1,4 +1,5 @@
-// libFuzzer target: the Gmsh MSH reader (4.1 ASCII and binary, 2.2 ASCII).
+// libFuzzer target: the Gmsh MSH reader (4.1 ASCII and binary, 2.2 ASCII) and its scan of
+// the counts.
 #include <cmath>
 
 #include "fuzz_common.hpp"
@@ -33,6 +34,10 @@ void check_msh(const softhd::io::MshFile& m) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   return softhd::fuzz::run(data, size, [](const std::string& bytes) {
-    check_msh(softhd::io::parse_msh(bytes, "fuzz.msh"));
+    softhd::io::MshCounts counts;  // the scan before the parse (read_msh's memory check)
+    const bool scanned = softhd::io::scan_msh_counts(bytes, &counts);
+    const softhd::io::MshFile m = softhd::io::parse_msh(bytes, "fuzz.msh");
+    check_msh(m);
+    if (scanned && counts.nodes != static_cast<std::size_t>(m.nodes.rows())) std::abort();
   });
 }

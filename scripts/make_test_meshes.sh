@@ -19,6 +19,8 @@ for order in 1 2; do
 done
 g box_hex27.geo -3 -format msh41 -o box_hex27_v41.msh
 g cylinder_tet.geo -3 -order 2 -format msh41 -o cylinder_tet10_v41.msh  # curved tet10
+g save_all.geo -3 -format msh41 -o save_all.msh  # one volume in no physical group
+cp save_all.msh ../../../fuzz/corpus/msh/save_all_v41.msh
 g plate_2d.geo -2 -format msh41 -o plate_2d_v41.msh
 g two_boxes.geo -3 -format msh41 -o two_boxes_nonconforming.msh
 g plate_2d.geo -2 -format msh22 -o plate_2d_v22.msh

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <string>
 
 #include "expect_error.hpp"
@@ -358,4 +359,68 @@ TEST(Msh, TruncatedBinaryNamesTheSectionAndByte) {
 
 TEST(Msh, MissingFileIsAFileError) {
   expect_error<FileError>([] { softhd::io::read_msh(mesh_path("no_such.msh")); }, "cannot open '");
+}
+
+// A byte order mark (some editors write one) is skipped; a file that is not a mesh file is
+// refused on its first bytes: a device (/dev/zero was read until memory ran out), a folder,
+// a point cloud.
+TEST(Msh, ByteOrderMarkDevicesAndOtherFiles) {
+  const std::string text = slurp("fields.msh");
+  const MshFile plain = softhd::io::parse_msh(text, "a.msh");
+  const MshFile marked = softhd::io::parse_msh("\xEF\xBB\xBF" + text, "b.msh");
+  expect_same_mesh(plain, marked);
+  expect_parse_error("\xEF\xBB\xBF", "bad.msh:1: not a Gmsh mesh file");
+  expect_error<FileError>([] { softhd::io::read_msh("/dev/zero"); },
+                          "'/dev/zero' is not a regular file");
+  expect_error<FileError>([] { softhd::io::read_msh(::testing::TempDir()); },
+                          "is not a regular file");
+  const std::string cloud = ::testing::TempDir() + "/cloud.msh";
+  {
+    std::ofstream out(cloud);
+    out << "\n# a point cloud\n";
+    for (int i = 0; i < 20000; ++i) out << i << " 0.5 0.25\n";
+  }
+  expect_error<FileError>([&] { softhd::io::read_msh(cloud); },
+                          cloud + ":2: not a Gmsh mesh file (it does not start with $MeshFormat)");
+}
+
+// Two data blocks of one name: the field a scene names would be the last one, silently.
+TEST(Msh, ADataBlockNameIsGivenOnce) {
+  const std::string text = slurp("fields.msh");
+  expect_parse_error(replaced(text, "\"stiffness\"", "\"fibres\""),
+                     "bad.msh:47: a second data block named 'fibres'");
+}
+
+// The counts of scan_msh_counts are those of the parse (nodes, and elements per type), in
+// every encoding; the counts check of read_msh runs before the parse.
+TEST(Msh, ScannedCountsAreTheParsedOnes) {
+  for (const char* name : {"cube_tet4_v41.msh", "cube_tet4_v41_bin.msh", "cube_tet4_v22.msh",
+                           "cube_tet10_v41.msh", "cube_tet10_v41_bin.msh", "cube_tet10_v22.msh",
+                           "box_hex27_v41.msh", "plate_2d_v22.msh", "fields.msh", "sparse.msh"}) {
+    const MshFile m = read(name);
+    std::map<int, std::size_t> per_type;
+    for (const MshElementBlock& b : m.blocks)
+      per_type[b.gmsh_type] += static_cast<std::size_t>(b.nodes.rows());
+    softhd::io::MshCounts c;
+    ASSERT_TRUE(softhd::io::scan_msh_counts(slurp(name), &c)) << name;
+    EXPECT_EQ(c.nodes, static_cast<std::size_t>(m.nodes.rows())) << name;
+    for (auto& [type, n] : c.elements)  // the kept types (skipped ones are counted too)
+      if (softhd::io::gmsh_nodes_per_element(type) > 0) EXPECT_EQ(n, per_type[type]) << name;
+    for (auto& [type, n] : per_type) EXPECT_EQ(c.elements[type], n) << name << type;
+  }
+  softhd::io::MshCounts c;
+  EXPECT_FALSE(softhd::io::scan_msh_counts("solid cube\n", &c));
+  const std::string text = slurp("cube_tet4_v41.msh");
+  EXPECT_FALSE(softhd::io::scan_msh_counts(text.substr(0, text.find("$Elements") + 12), &c));
+  bool called = false;
+  expect_error<FileError>(
+      [&] {
+        softhd::io::read_msh(mesh_path("cube_tet4_v41.msh"), [&](const softhd::io::MshCounts& k) {
+          called = true;
+          EXPECT_EQ(k.nodes, 166u);  // the file's $Nodes header
+          throw FileError("refused");
+        });
+      },
+      "refused");
+  EXPECT_TRUE(called);
 }

@@ -133,6 +133,8 @@ TEST(PcdReader, RefusesMalformedFilesNamingTheLine) {
       {"FIELDS x y z\nSIZE 4 4 3\nTYPE F F F\n" + tail, "m.pcd:7: field 'z': type F cannot"},
       {"FIELDS x y\nSIZE 4 4\nTYPE F F\n" + tail, "m.pcd: the FIELDS line needs x, y and z"},
       {kHeader3 + "WIDTH 2\nHEIGHT 1\nPOINTS 3\nDATA ascii\n", "m.pcd:10: WIDTH x HEIGHT = 2"},
+      {kHeader3 + "WIDTH 4294967296\nHEIGHT 4294967297\nPOINTS 4294967296\nDATA ascii\n",
+       "m.pcd:10: WIDTH x HEIGHT = 4294967296 x 4294967297 is too large"},
       {kHeader3 + "WIDTH 1\nPOINTS 1\n", "m.pcd: missing DATA line"},
       {kHeader3 + "WIDTH 1\nDATA lzf\n", "m.pcd:8: unknown DATA 'lzf'"},
       {kHeader3 + "COLOUR 1\n", "m.pcd:7: unexpected header line starting with 'COLOUR'"},

@@ -167,4 +167,23 @@ TEST_F(Reliability, UnheldAndNonConformingBodiesAreRefused) {
   expect_refused("forward two.json", "regions 'left' and 'right' touch at");
 }
 
+// Mesh files: --max-memory guards a Gmsh mesh as it guards a box (forward and optimise),
+// from the file's counts; a device given as mesh.file is refused, not read.
+TEST_F(Reliability, MeshFileChecks) {
+  const std::string mesh = std::string(SOFTHD_SOURCE_DIR) + "/tests/data/meshes/cube_tet4_v41.msh";
+  std::string text = kScene;
+  const std::size_t from = text.find("{ \"type\": \"box\"");
+  text.replace(from, text.find('}', from) + 1 - from,
+               "{ \"type\": \"gmsh\", \"file\": \"" + mesh + "\" }");
+  text.replace(text.find("NAME"), 4, "file");
+  text.replace(text.find("[\"x0\"]"), 6, "[\"base\"]");
+  std::ofstream(dir_ / "file.json") << text;
+  const std::string refused = mesh + ": the mesh has 166 nodes and 481 elements: it needs about ";
+  expect_refused("forward file.json --max-memory 1e-6", refused);
+  expect_refused("optimise file.json --max-memory 1e-6", refused);
+  text.replace(text.find(mesh), mesh.size(), "/dev/zero");
+  std::ofstream(dir_ / "zero.json") << text;
+  expect_refused("forward zero.json", "'/dev/zero' is not a regular file");
+}
+
 }  // namespace

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>
@@ -409,6 +410,175 @@ TEST(GmshMesh, VolumesThatDoNotShareTheirInterfaceNodesAreRefused) {
               std::string::npos)
         << e.what();
   }
+}
+
+// `what` throws an InvalidArgument whose message holds `needle`.
+template <class F>
+void expect_refused(F what, const std::string& needle) {
+  try {
+    what();
+    ADD_FAILURE() << "accepted; expected: " << needle;
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+  }
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// A file written by `gmsh -save_all` with a volume in no physical group: its tetrahedra
+// joined region 'body' silently. Refused, naming the entity, in the file's name.
+TEST(GmshMesh, AVolumeInNoPhysicalGroupIsRefusedNamingIt) {
+  const io::MshFile f = io::read_msh(mesh_path("save_all.msh"));
+  expect_refused([&] { mesh_from_gmsh(f); },
+                 "mesh: entity 2 of dimension 3 is in no physical group while other parts of the "
+                 "body are (a file saved with -save_all?): add it to a Physical Volume");
+  expect_refused([&] { read_gmsh_mesh(mesh_path("save_all.msh")); },
+                 "save_all.msh: mesh: entity 2");
+  // Without any physical group the whole file is the one region "body", as before.
+  io::MshFile none = f;
+  for (io::MshElementBlock& b : none.blocks) b.physical_tags.clear();
+  EXPECT_EQ(mesh_from_gmsh(none).region_names, std::vector<std::string>{"body"});
+}
+
+// Two physical volumes of one name: "materials.body" named one and control.region acted on
+// the first only. Refused when the mesh is read.
+TEST(GmshMesh, TwoRegionsOfOneNameAreRefused) {
+  std::string text = slurp(mesh_path("cube_tet4_v41.msh"));
+  text.replace(text.find("3 2 \"layer\""), 11, "3 2 \"body\"");
+  expect_refused([&] { mesh_from_gmsh(io::parse_msh(text, "twice.msh")); },
+                 "mesh: physical groups 1 and 2 of dimension 3 are both named 'body': region "
+                 "names must differ");
+}
+
+// An element listed twice (another tag, the same nodes in any order): the unit cube's volume
+// was 1 + the element's. Refused naming both Gmsh tags.
+TEST(GmshMesh, AnElementListedTwiceIsRefusedNamingItsTags) {
+  io::MshFile f = io::read_msh(mesh_path("cube_tet4_v41.msh"));
+  EXPECT_NEAR(volume(mesh_from_gmsh(f)), 1.0, 1e-12);
+  std::int64_t last = 0, first = -1;
+  for (const io::MshElementBlock& b : f.blocks)
+    for (std::int64_t t : b.element_tags) last = std::max(last, t);
+  for (const io::MshElementBlock& b : f.blocks)
+    if (b.dim == 3 && first < 0) {
+      io::MshElementBlock copy = b;
+      copy.nodes = b.nodes.topRows(1);
+      std::swap(copy.nodes(0, 0), copy.nodes(0, 3));  // the same nodes, another order
+      copy.element_tags = {last + 1};
+      first = b.element_tags[0];
+      f.blocks.push_back(copy);
+      break;
+    }
+  expect_refused([&] { mesh_from_gmsh(f); }, "mesh: elements " + std::to_string(first) + " and " +
+                                                 std::to_string(last + 1) +
+                                                 " have the same nodes (an element listed twice)");
+}
+
+// The scale: 1e-200 was reported as "inverted", 1e300 gave a volume of inf; both are outside
+// the range the message gives. Coordinates that overflow or underflow once scaled are refused
+// naming the span; a scene prints sizes with %g (1e-12, not 0.000000).
+TEST(GmshMesh, TheScaleIsWithinARangeAndSizesAreShownWithExponents) {
+  GmshMeshOptions o;
+  for (double scale : {1e-200, 1e300, 0.0, -1.0}) {
+    o.scale = scale;
+    expect_refused([&] { read_gmsh_mesh(mesh_path("cube_tet4_v41.msh"), o); },
+                   "scale must be in [1e-12, 1e12], got ");
+  }
+  o.scale = 1e-12;
+  double v = 0.0;
+  read_gmsh_mesh(mesh_path("cube_tet4_v41.msh"), o, &v);
+  EXPECT_NEAR(v, 1e-36, 1e-48);  // (1e-12)^3
+  io::MshFile f = io::read_msh(mesh_path("cube_tet4_v41.msh"));
+  f.nodes *= 1e300;
+  o.scale = 1e12;
+  expect_refused([&] { mesh_from_gmsh(f, o); }, "mesh: the mesh spans inf (scale 1e+12)");
+  f.nodes *= 1e-300;
+  f.nodes *= 1e-150;  // coordinates up to 1e-150
+  o.scale = 1e-12;
+  expect_refused([&] { mesh_from_gmsh(f, o); }, "mesh: the mesh spans 1e-162 (scale 1e-12)");
+  const std::string scene = R"({"mesh": {"type": "gmsh", "file": ")" +
+                            mesh_path("cube_tet4_v41.msh") + R"(", "scale": SCALE},
+    "material": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3},
+    "fibers": [1, 0, 0], "clamp": ["base"],
+    "control": {"space": "vertex", "lower": -1, "upper": 0}})";
+  auto with = [&](const std::string& scale) {
+    std::string t = scene;
+    t.replace(t.find("SCALE"), 5, scale);
+    return parse_scene(t, ::testing::TempDir() + "/s.json");
+  };
+  expect_refused([&] { with("1e-200"); }, "key 'mesh.scale' must be in [1e-12, 1e12], got 1e-200");
+  expect_refused([&] { with("1e-12"); }, "key 'mesh.scale' gives a body of size 1e-12: softhd");
+  expect_refused([&] { with("1e12"); }, "key 'mesh.scale' gives a body of size 1e+12: softhd");
+}
+
+// The memory estimate from the file's counts: on a Gmsh hex27 box the box's own estimate
+// (the same counts and bytes), and on the tetrahedral cube, at its order and elevated, the
+// estimate from its exact counts (nodes, and node pairs sharing an element, counted here).
+TEST(GmshMesh, TheMemoryEstimateFromTheCountsIsTheMeshes) {
+  io::MshCounts counts;
+  ASSERT_TRUE(io::scan_msh_counts(slurp(mesh_path("box_hex27_v41.msh")), &counts));
+  const MeshSize box = box_mesh_size(Eigen::Vector3d(4, 2, 2), 2);
+  const MeshSize file = gmsh_mesh_size(counts);
+  EXPECT_EQ(file.nodes, box.nodes);
+  EXPECT_EQ(file.elements, box.elements);
+  EXPECT_EQ(file.dofs, box.dofs);
+  EXPECT_EQ(file.quadrature_points, box.quadrature_points);
+  EXPECT_DOUBLE_EQ(file.bytes, box.bytes);
+  ASSERT_TRUE(io::scan_msh_counts(slurp(mesh_path("cube_tet4_v41.msh")), &counts));
+  for (int order : {1, 2}) {
+    GmshMeshOptions o;
+    o.order = order;
+    const Mesh m = read("cube_tet4_v41.msh", order);
+    std::set<std::pair<int, int>> pairs;
+    for (Eigen::Index e = 0; e < m.num_elements(); ++e)
+      for (Eigen::Index a = 0; a < m.elements.cols(); ++a)
+        for (Eigen::Index b = 0; b < m.elements.cols(); ++b)
+          pairs.insert({m.elements(e, a), m.elements(e, b)});
+    const ReferenceGeometry g(m);
+    const MeshSize exact =
+        mesh_size(3, static_cast<double>(m.num_nodes()), static_cast<double>(m.num_elements()),
+                  m.nodes_per_element(), 4, static_cast<int>(g.weights().cols()),
+                  static_cast<double>(pairs.size()));
+    const MeshSize estimate = gmsh_mesh_size(counts, o);
+    EXPECT_EQ(estimate.elements, m.num_elements());
+    EXPECT_NEAR(estimate.nodes, m.num_nodes(), 0.25 * m.num_nodes()) << order;
+    EXPECT_NEAR(estimate.bytes, exact.bytes, 0.25 * exact.bytes) << order;
+  }
+}
+
+// A file mesh above the memory limit is refused with the box's message, from the counts,
+// before its elements are parsed (a copy whose element rows are broken still gets it), in
+// read_gmsh_mesh and in a scene (the CLI's --max-memory and Python's max_memory_gib).
+TEST(GmshMesh, AFileMeshAboveTheMemoryLimitIsRefusedBeforeItsElementsAreRead) {
+  const std::string path = ::testing::TempDir() + "/broken_elements.msh";
+  std::string text = slurp(mesh_path("cube_tet4_v41.msh"));
+  const std::size_t tets = text.find("\n3 1 4 ");  // the first tetrahedron block's header
+  ASSERT_NE(tets, std::string::npos);
+  const std::size_t row = text.find('\n', tets + 1) + 1;
+  text.replace(row, text.find(' ', row) - row, "x");  // its first element tag
+  std::ofstream(path, std::ios::binary) << text;
+  expect_refused([&] { read_gmsh_mesh(path); }, "broken_elements.msh:");  // a FileError
+  try {
+    read_gmsh_mesh(path, {}, nullptr, 1e3);
+    ADD_FAILURE() << "not refused";
+  } catch (const ResourceError& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": the mesh has 166 nodes and 481 elements: it "
+                                                "needs about "),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("GiB, above the memory limit of 9.31e-07 GiB (raise the "
+                                         "limit: --max-memory GIB)"),
+              std::string::npos)
+        << e.what();
+  }
+  const std::string scene = R"({"mesh": {"type": "gmsh", "file": ")" + path + R"("},
+    "material": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3},
+    "fibers": [1, 0, 0], "clamp": ["base"],
+    "control": {"space": "vertex", "lower": -1, "upper": 0}})";
+  EXPECT_THROW(parse_scene(scene, ::testing::TempDir() + "/s.json", 1e3), ResourceError);
 }
 
 }  // namespace

@@ -101,8 +101,16 @@ def test_read_mesh_errors_name_the_file(source_dir, tmp_path):
     for order in (0, 3, True, "2"):
         with pytest.raises(softhd.InvalidArgument, match="order"):
             softhd.read_mesh(mesh_path(source_dir, "cube_tet4_v41.msh"), order=order)
-    with pytest.raises(softhd.InvalidArgument, match="scale"):
-        softhd.read_mesh(mesh_path(source_dir, "cube_tet4_v41.msh"), scale=0.0)
+    for scale in (0.0, 1e-200, 1e300):
+        with pytest.raises(softhd.InvalidArgument, match=r"scale must be in \[1e-12, 1e12\]"):
+            softhd.read_mesh(mesh_path(source_dir, "cube_tet4_v41.msh"), scale=scale)
+
+
+def test_a_file_mesh_above_max_memory_gib_is_refused(source_dir):
+    scene = os.path.join(source_dir, "data", "scenes", "finger.json")
+    with pytest.raises(softhd.ResourceError,
+                       match=r"finger.msh: the mesh has \d+ nodes and \d+ elements: it needs about"):
+        softhd.Scene.load(scene, max_memory_gib=1e-3)
 
 
 @pytest.fixture(scope="module")

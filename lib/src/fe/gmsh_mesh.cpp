@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 #include <sstream>
@@ -14,6 +15,13 @@ namespace softhd::fe {
 namespace {
 
 [[noreturn]] void fail(const std::string& what) { throw InvalidArgument("mesh: " + what); }
+
+// A number for messages: %g (6 significant digits, an exponent when large or small).
+std::string shown(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", x);
+  return text;
+}
 
 // The cell type whose Gmsh code is `gmsh_type`, or false.
 bool cell_of_gmsh(int gmsh_type, CellType* cell) {
@@ -68,6 +76,46 @@ CellType body_cell(const io::MshFile& f, int* dim) {
   return cell;
 }
 
+// The physical tags of the body's dimension, sorted, and their names (the regions; "body"
+// if there are none). Refuses an entity in two of them; an entity in none beside entities
+// in one (Gmsh's -save_all writes it: its elements would join a region silently; it is
+// refused rather than made a region of its own, as the file does not say what it is); and
+// two groups of one name (a scene names regions).
+std::vector<int> body_regions(const io::MshFile& f, int dim, std::vector<std::string>* names) {
+  const char* group = dim == 3 ? "Physical Volume" : "Physical Surface";
+  std::vector<int> tags;
+  const io::MshElementBlock* untagged = nullptr;
+  for (const io::MshElementBlock& b : f.blocks) {
+    if (b.dim != dim) continue;
+    if (b.physical_tags.size() > 1)
+      fail("entity " + std::to_string(b.entity) + " belongs to " +
+           std::to_string(b.physical_tags.size()) +
+           " physical groups of the body's dimension: give each part of the body one");
+    if (b.physical_tags.empty()) {
+      if (!untagged) untagged = &b;
+    } else if (std::find(tags.begin(), tags.end(), b.physical_tags[0]) == tags.end()) {
+      tags.push_back(b.physical_tags[0]);
+    }
+  }
+  if (untagged && !tags.empty())
+    fail("entity " + std::to_string(untagged->entity) + " of dimension " + std::to_string(dim) +
+         " is in no physical group while other parts of the body are (a file saved with "
+         "-save_all?): add it to a " +
+         group + ", or remove it");
+  std::sort(tags.begin(), tags.end());
+  names->clear();
+  for (std::size_t k = 0; k < tags.size(); ++k) {
+    names->push_back(group_name(f, dim, tags[k]));
+    for (std::size_t j = 0; j < k; ++j)
+      if ((*names)[j] == names->back())
+        fail("physical groups " + std::to_string(tags[j]) + " and " + std::to_string(tags[k]) +
+             " of dimension " + std::to_string(dim) + " are both named '" + names->back() +
+             "': region names must differ (rename one, or make them one " + group + ")");
+  }
+  if (names->empty()) names->push_back("body");
+  return tags;
+}
+
 // Elements of the body in the internal local order, node ids of the file, and the region
 // of each (its block's physical group); fills region names.
 void body_elements(const io::MshFile& f, int dim, CellType cell, Connectivity* elements,
@@ -75,22 +123,9 @@ void body_elements(const io::MshFile& f, int dim, CellType cell, Connectivity* e
                    std::vector<std::int64_t>* tags_out) {
   const ReferenceElement& ref = reference_element(cell);
   Eigen::Index count = 0;
-  std::vector<int> tags;  // physical tags of the top dimension, in first-seen order
-  for (const io::MshElementBlock& b : f.blocks) {
-    if (b.dim != dim) continue;
-    count += b.nodes.rows();
-    if (b.physical_tags.size() > 1)
-      fail("entity " + std::to_string(b.entity) + " belongs to " +
-           std::to_string(b.physical_tags.size()) +
-           " physical groups of the body's dimension: give each part of the body one");
-    if (!b.physical_tags.empty() &&
-        std::find(tags.begin(), tags.end(), b.physical_tags[0]) == tags.end())
-      tags.push_back(b.physical_tags[0]);
-  }
-  std::sort(tags.begin(), tags.end());
-  names->clear();
-  for (int t : tags) names->push_back(group_name(f, dim, t));
-  if (names->empty()) names->push_back("body");
+  for (const io::MshElementBlock& b : f.blocks)
+    if (b.dim == dim) count += b.nodes.rows();
+  const std::vector<int> tags = body_regions(f, dim, names);
   elements->resize(count, ref.nodes);
   region->resize(count);
   Eigen::Index e = 0;
@@ -105,6 +140,28 @@ void body_elements(const io::MshFile& f, int dim, CellType cell, Connectivity* e
       (*region)[e] = r;
       tags_out->push_back(b.element_tags[static_cast<std::size_t>(i)]);
     }
+  }
+}
+
+// Refuses two elements on the same nodes (one element listed twice under two tags: its
+// volume would count twice), naming their Gmsh tags. Sorts the rows' node sets: O(E log E).
+void check_repeated(const Connectivity& elements, const std::vector<std::int64_t>& tags) {
+  Connectivity sets = elements;
+  for (Eigen::Index e = 0; e < sets.rows(); ++e) std::sort(sets.row(e).begin(), sets.row(e).end());
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(sets.rows()));
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = static_cast<Eigen::Index>(k);
+  const auto less = [&](Eigen::Index a, Eigen::Index b) {
+    return std::lexicographical_compare(sets.row(a).begin(), sets.row(a).end(), sets.row(b).begin(),
+                                        sets.row(b).end());
+  };
+  std::sort(order.begin(), order.end(), less);
+  for (std::size_t k = 1; k < order.size(); ++k) {
+    if (less(order[k - 1], order[k])) continue;
+    std::int64_t a = tags[static_cast<std::size_t>(order[k - 1])];
+    std::int64_t b = tags[static_cast<std::size_t>(order[k])];
+    if (a > b) std::swap(a, b);
+    fail("elements " + std::to_string(a) + " and " + std::to_string(b) +
+         " have the same nodes (an element listed twice): remove one");
   }
 }
 
@@ -175,8 +232,8 @@ Connectivity elevate(const Connectivity& corners, CellType quadratic, const Eige
 void GmshMeshOptions::validate() const {
   if (order != 0 && order != 1 && order != 2)
     throw InvalidArgument("mesh options: order must be 0 (the file's), 1 or 2");
-  if (!(scale > 0.0) || !std::isfinite(scale))
-    throw InvalidArgument("mesh options: scale must be finite and > 0");
+  if (!(scale >= kMinScale && scale <= kMaxScale))
+    throw InvalidArgument("mesh options: scale must be in [1e-12, 1e12], got " + shown(scale));
 }
 
 namespace {
@@ -324,6 +381,7 @@ Mesh build_mesh(const io::MshFile& f, const GmshMeshOptions& o, NodeTable* table
   Mesh m;
   Connectivity el;
   body_elements(f, dim, file_cell, &el, &m.element_region, &m.region_names, element_tags);
+  check_repeated(el, *element_tags);
   const int order = o.order == 0 ? fref.order : o.order;
   m.cell = order == fref.order ? file_cell : order == 1 ? fref.linear : fref.quadratic;
   m.dim = dim;
@@ -337,6 +395,10 @@ Mesh build_mesh(const io::MshFile& f, const GmshMeshOptions& o, NodeTable* table
   Eigen::MatrixXd X(static_cast<Eigen::Index>(t.file_of.size()), dim);
   for (Eigen::Index n = 0; n < X.rows(); ++n)
     X.row(n) = o.scale * f.nodes.row(t.file_of[n]).head(dim);
+  const double extent = (X.colwise().maxCoeff() - X.colwise().minCoeff()).maxCoeff();
+  if (extent != 0.0 && !std::isnormal(std::pow(extent, dim)))  // 0: degenerate, said later
+    fail("the mesh spans " + shown(extent) + " (scale " + shown(o.scale) +
+         "): its lengths and volumes must be normal doubles (change the scale or units)");
   const Eigen::Index new_base = X.rows();
   if (order > fref.order) el = elevate(el, m.cell, X, &t);
   m.nodes.resize(new_base + static_cast<Eigen::Index>(t.new_position.size()), dim);
@@ -411,9 +473,48 @@ FiberField gmsh_fiber_field(const io::MshFile& f, const std::string& name,
   return field;
 }
 
-Mesh read_gmsh_mesh(const std::string& path, const GmshMeshOptions& options, double* volume) {
+MeshSize gmsh_mesh_size(const io::MshCounts& counts, const GmshMeshOptions& o) {
+  int dim = 0;  // the body: the solved-on type of the top dimension with the most elements
+  double E = 0.0;
+  CellType cell = CellType::kTet4;
+  for (const auto& [type, n] : counts.elements) {
+    CellType c;
+    if (!cell_of_gmsh(type, &c)) continue;
+    const int d = reference_element(c).dim;
+    if (d > dim || (d == dim && static_cast<double>(n) > E))
+      dim = d, E = static_cast<double>(n), cell = c;
+  }
+  if (dim == 0) return {};
+  const ReferenceElement& file = reference_element(cell);
+  const int order = o.order == 0 ? file.order : o.order;
+  const ReferenceElement& ref = reference_element(order == 1 ? file.linear : file.quadratic);
+  // Euler's formula V - edges + faces (- cells) ~ 0, each facet shared by two cells: edges
+  // ~ V + E (triangles, tetrahedra, quadrilaterals), V + 2E (hexahedra); second-order
+  // nodes: the vertices and one per edge, and for Q2 one per face and cell.
+  const double k = ref.simplex ? 1.0 : dim == 2 ? 2.0 : 6.0;
+  const double file_nodes = static_cast<double>(counts.nodes);
+  const double V = file.order == 1 ? file_nodes : std::max(1.0, (file_nodes - k * E) / 2.0);
+  const double N = order == 1 ? V : file.order == 2 ? file_nodes : 2.0 * V + k * E;
+  // Ordered node pairs sharing a cell: P1 V + 2 edges = 3V + 2E; P2 adds the edge nodes'
+  // pairs, counted per face and cell: 8V + 19E (triangles), 8V + 37E (tetrahedra); Q
+  // cells as the box, (2p+1)^dim per node.
+  const double pairs = !ref.simplex ? N * std::pow(2.0 * order + 1.0, dim)
+                       : order == 1 ? 3.0 * V + 2.0 * E
+                                    : 8.0 * V + (dim == 2 ? 19.0 : 37.0) * E;
+  Eigen::MatrixXd points;
+  Eigen::VectorXd weights;
+  cell_quadrature(ref.type, ref.default_quadrature_degree, &points, &weights);
+  return mesh_size(dim, N, E, ref.nodes, static_cast<int>(ref.vertex_nodes.size()),
+                   static_cast<int>(points.rows()), pairs);
+}
+
+Mesh read_gmsh_mesh(const std::string& path, const GmshMeshOptions& options, double* volume,
+                    double memory_limit) {
   options.validate();
-  const io::MshFile file = io::read_msh(path);  // FileError names the file
+  const auto check = [&](const io::MshCounts& counts) {
+    check_mesh_size(gmsh_mesh_size(counts, options), memory_limit, path + ": the mesh");
+  };
+  const io::MshFile file = io::read_msh(path, check);  // FileError names the file
   try {
     Mesh m = mesh_from_gmsh(file, options);
     const ReferenceGeometry g(m, GradientStorage::kOnDemand);  // checks det dX/dξ > 0

@@ -33,6 +33,24 @@ int Mesh::region(const std::string& name) const {
   throw InvalidArgument("mesh: unknown region '" + name + "' (expected one of " + names + ")");
 }
 
+MeshSize mesh_size(int dim, double nodes, double elements, int nodes_per_element, int vertices,
+                   int quadrature_points, double pairs) {
+  const double nen = nodes_per_element;
+  const double dofs = nodes * dim;
+  const double quadrature = elements * quadrature_points;
+  const double tangent_nonzeros = pairs * dim * dim;  // a dim x dim block per node pair
+  MeshSize s;
+  constexpr double kInt64 = 9.2e18;  // the counts are exact below this
+  s.nodes = static_cast<std::int64_t>(std::min(nodes, kInt64));
+  s.elements = static_cast<std::int64_t>(std::min(elements, kInt64));
+  s.dofs = static_cast<std::int64_t>(std::min(dofs, kInt64));
+  s.quadrature_points = static_cast<std::int64_t>(std::min(quadrature, kInt64));
+  s.bytes = nodes * dim * 8.0 + elements * (nen + vertices) * 4.0 +
+            quadrature * (dim * nen * 8.0 + 24.0) + 3.0 * tangent_nonzeros * 12.0 +
+            10.0 * dofs * 8.0;
+  return s;
+}
+
 MeshSize box_mesh_size(const Eigen::VectorXd& cells, int order) {
   const int dim = static_cast<int>(cells.size());
   double nodes = 1.0, elements = 1.0;
@@ -40,21 +58,10 @@ MeshSize box_mesh_size(const Eigen::VectorXd& cells, int order) {
     nodes *= order * cells[d] + 1.0;
     elements *= cells[d];
   }
-  const double nen = std::pow(order + 1.0, dim), qp_per_element = nen;
-  const double dofs = nodes * dim;
-  const double quadrature = elements * qp_per_element;
+  const int nen = static_cast<int>(std::pow(order + 1, dim));
   // The tangent couples a node with the (2p+1)^dim nodes of the elements around it.
-  const double tangent_nonzeros = dofs * dim * std::pow(2.0 * order + 1.0, dim);
-  MeshSize s;
-  constexpr double kInt64 = 9.2e18;  // the counts are exact below this
-  s.nodes = static_cast<std::int64_t>(std::min(nodes, kInt64));
-  s.elements = static_cast<std::int64_t>(std::min(elements, kInt64));
-  s.dofs = static_cast<std::int64_t>(std::min(dofs, kInt64));
-  s.quadrature_points = static_cast<std::int64_t>(std::min(quadrature, kInt64));
-  s.bytes = nodes * dim * 8.0 + elements * (nen + std::pow(2.0, dim)) * 4.0 +
-            quadrature * (dim * nen * 8.0 + 24.0) + 3.0 * tangent_nonzeros * 12.0 +
-            10.0 * dofs * 8.0;
-  return s;
+  return mesh_size(dim, nodes, elements, nen, 1 << dim, nen,
+                   nodes * std::pow(2.0 * order + 1.0, dim));
 }
 
 void check_mesh_size(const MeshSize& size, double memory_limit, const std::string& what) {

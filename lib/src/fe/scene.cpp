@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -96,6 +97,13 @@ std::shared_ptr<const Material> read_material(const Reader& r, const json& m, st
          "must be \"mooney_rivlin\" or \"transversely_isotropic\", got \"" + *model + "\"");
 }
 
+// A number for messages: %g (6 significant digits, an exponent when large or small).
+std::string shown(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", x);
+  return text;
+}
+
 // A scene's name names its default output folder (results/<name>): a plain file name of
 // letters, digits, '.', '_', '+' and '-', not starting with '.' or '-', at most 100 characters.
 bool plain_file_name(const std::string& name) {
@@ -129,7 +137,7 @@ void check_scales(const Reader& r, const Scene& s) {
   const double size = (s.upper - s.lower).maxCoeff();
   const char* where = s.is_box() ? "mesh.upper" : "mesh.scale";
   if (!(size >= kMinLength && size <= kMaxLength))
-    r.fail(where, "gives a body of size " + std::to_string(size) +
+    r.fail(where, "gives a body of size " + shown(size) +
                       ": softhd solves bodies from 1e-6 to 1e6 in size (change units)");
   for (int d = 0; d < s.dim(); ++d)
     if (!(std::abs(s.lower[d]) <= 1e3 * kMaxLength))
@@ -139,7 +147,7 @@ void check_scales(const Reader& r, const Scene& s) {
     const double stress = m->stiffness_scale();
     if (!(stress >= kMinStress && stress <= kMaxStress))
       r.fail(s.materials.size() > 1 ? "materials" : "material",
-             "has a stiffness of " + std::to_string(stress) +
+             "has a stiffness of " + shown(stress) +
                  ": softhd solves stiffnesses from 1e-6 to 1e12 (change units)");
   }
 }
@@ -171,7 +179,7 @@ void parse_box_mesh(const Reader& r, const json& mesh, double memory_limit, Scen
 }
 
 // mesh.type "gmsh": the file (relative to the scene's folder) read and turned into the mesh.
-void parse_gmsh_mesh(const Reader& r, const json& mesh, Scene* s) {
+void parse_gmsh_mesh(const Reader& r, const json& mesh, double memory_limit, Scene* s) {
   r.keys(mesh, "mesh", {"type", "file", "order", "scale", "quadrature_degree"});
   GmshMeshOptions o;
   if (mesh.contains("order")) {
@@ -181,12 +189,13 @@ void parse_gmsh_mesh(const Reader& r, const json& mesh, Scene* s) {
   }
   if (mesh.contains("scale")) {
     o.scale = r.number(mesh, "scale", "mesh.scale");
-    if (!(o.scale > 0.0) || !std::isfinite(o.scale)) r.fail("mesh.scale", "must be > 0");
+    if (!(o.scale >= GmshMeshOptions::kMinScale && o.scale <= GmshMeshOptions::kMaxScale))
+      r.fail("mesh.scale", "must be in [1e-12, 1e12], got " + shown(o.scale));
   }
   const std::filesystem::path dir = std::filesystem::path(s->source).parent_path();
   s->mesh_file = (dir / r.string(mesh, "file", "mesh.file")).lexically_normal().string();
   s->gmsh_options = o;
-  s->file_mesh = std::make_shared<Mesh>(read_gmsh_mesh(s->mesh_file, o, &s->volume));
+  s->file_mesh = std::make_shared<Mesh>(read_gmsh_mesh(s->mesh_file, o, &s->volume, memory_limit));
   const Mesh& m = *s->file_mesh;
   s->order = m.order;
   s->lower = m.nodes.colwise().minCoeff().transpose();
@@ -388,7 +397,7 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
   if (type == "box")
     parse_box_mesh(r, mesh, memory_limit, &s);
   else if (type == "gmsh")
-    parse_gmsh_mesh(r, mesh, &s);
+    parse_gmsh_mesh(r, mesh, memory_limit, &s);
   else
     r.fail("mesh.type", "must be \"box\" or \"gmsh\", got \"" + type + "\"");
   if (mesh.contains("quadrature_degree")) {

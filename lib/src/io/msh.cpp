@@ -9,6 +9,8 @@
 #include <climits>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
+#include <memory>
 #include <numeric>
 #include <set>
 
@@ -131,16 +133,12 @@ int node_index(const Parse& p, std::int64_t tag) {
   return static_cast<int>(it - tags.begin());
 }
 
-}  // namespace msh_detail
-
-namespace {
-
-using msh_detail::Input;
-using msh_detail::Mark;
-using msh_detail::Parse;
-
 void read_format(Parse& p) {
   Input& in = p.in;
+  in.skip_prefix("\xEF\xBB\xBF");  // a UTF-8 byte order mark, as some editors write
+  if (in.at_end() || in.token("$MeshFormat") != "$MeshFormat") {
+    in.fail("not a Gmsh mesh file (it does not start with $MeshFormat)");
+  }
   const std::string_view version = in.token("the MSH version");
   if (version == "4.1") {
     p.out.version = 4.1;
@@ -165,6 +163,14 @@ void read_format(Parse& p) {
   }
   in.expect("$EndMeshFormat");
 }
+
+}  // namespace msh_detail
+
+namespace {
+
+using msh_detail::Input;
+using msh_detail::Mark;
+using msh_detail::Parse;
 
 void read_physical_names(Parse& p) {
   Input& in = p.in;
@@ -217,7 +223,13 @@ void read_data(Parse& p, bool per_element) {
   }
   MshDataBlock d;
   d.per_element = per_element;
+  const Mark at = in.mark();
   const std::size_t rows = read_data_header(p, d);
+  for (const MshDataBlock& other : p.out.data)  // a field is looked up by its name
+    if (other.name == d.name)
+      in.fail_at(at, "a second data block named '" + d.name.substr(0, 60) +
+                         "' (softhd reads one block, one time step, per name: rename or "
+                         "remove one)");
   d.tags.reserve(rows);
   d.values.resize(static_cast<Eigen::Index>(rows), d.components);
   for (std::size_t r = 0; r < rows; ++r) {
@@ -320,10 +332,7 @@ MshFile parse_msh(const std::string& bytes, const std::string& source) {
   out.source = source;
   Input in(bytes, source);
   Parse p(in, out);
-  if (in.at_end() || in.token("$MeshFormat") != "$MeshFormat") {
-    in.fail("not a Gmsh mesh file (it does not start with $MeshFormat)");
-  }
-  read_format(p);
+  msh_detail::read_format(p);
   while (!in.at_end()) {
     in.set_section("");
     const std::string_view t = in.token("a section");
@@ -339,16 +348,46 @@ MshFile parse_msh(const std::string& bytes, const std::string& source) {
   return out;
 }
 
-MshFile read_msh(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) throw FileError("cannot open '" + path + "': " + std::strerror(errno));
+namespace {
+
+// Refuses `head` (the first 64 KiB of `path`, or all of it) unless, after a UTF-8 byte
+// order mark and blanks, it starts with $MeshFormat, with parse_msh's message: a point
+// cloud or any other large file is refused before it is read whole.
+void check_head(const std::string& head, const std::string& path) {
+  const std::size_t start = head.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;
+  const std::size_t text = head.find_first_not_of(" \t\r\n\v\f", start);
+  if (text != std::string::npos && head.compare(text, 11, "$MeshFormat") == 0) return;
+  const auto line = std::count(
+      head.begin(), head.begin() + static_cast<std::ptrdiff_t>(std::min(text, head.size())), '\n');
+  throw FileError(path + ":" + std::to_string(line + 1) +
+                  ": not a Gmsh mesh file (it does not start with $MeshFormat)");
+}
+
+}  // namespace
+
+MshFile read_msh(const std::string& path, const MshCountsCheck& check) {
+  std::error_code ec;
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);
+  if (!ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+    throw FileError("'" + path + "' is not a regular file (a mesh is read from a file)");
+  const std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"),
+                                                          &std::fclose);
+  if (!f) throw FileError("cannot open '" + path + "': " + std::strerror(errno));
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  const bool sized = !ec;
   std::string data;
   char buffer[1 << 16];
   std::size_t got = 0;
-  while ((got = std::fread(buffer, 1, sizeof buffer, f)) > 0) data.append(buffer, got);
-  const bool failed = std::ferror(f) != 0;
-  std::fclose(f);
-  if (failed) throw FileError("cannot read '" + path + "'");
+  while ((got = std::fread(buffer, 1, sizeof buffer, f.get())) > 0) {
+    if (data.empty()) {
+      check_head(std::string(buffer, got), path);
+      if (sized) data.reserve(static_cast<std::size_t>(size));  // no copies as it grows
+    }
+    data.append(buffer, got);
+  }
+  if (std::ferror(f.get()) != 0) throw FileError("cannot read '" + path + "'");
+  MshCounts counts;
+  if (check && scan_msh_counts(data, &counts)) check(counts);
   return parse_msh(data, path);
 }
 

@@ -59,6 +59,12 @@ void Input::expect(std::string_view word) {
   if (got != word) fail("expected " + w + ", got " + shown(got));
 }
 
+bool Input::skip_prefix(std::string_view prefix) {
+  if (std::string_view(bytes_).substr(pos_, prefix.size()) != prefix) return false;
+  pos_ += prefix.size();
+  return true;
+}
+
 void Input::end_line(bool only_blanks) {
   while (pos_ < bytes_.size() && bytes_[pos_] != '\n') {
     if (only_blanks && !is_space(bytes_[pos_])) {

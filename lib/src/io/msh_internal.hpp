@@ -42,6 +42,8 @@ class Input {
   std::string_view token(const char* what);
   /// Fails unless the next token is `word`.
   void expect(std::string_view word);
+  /// Skips `prefix` if the input goes on with it (no whitespace skipped); true if it did.
+  bool skip_prefix(std::string_view prefix);
   /// Skips blanks to the end of the current line and past its newline (before binary
   /// data, and to skip the rest of a line); fails on other text if `only_blanks`.
   void end_line(bool only_blanks);
@@ -118,6 +120,9 @@ std::pair<int, int> other_element_type(int gmsh_type);
 void set_nodes(Parse& p, std::vector<std::int64_t>& tags, std::vector<double>& xyz, const Mark& at);
 /// The compacted index of node `tag`; fails (at the current token) if undefined.
 int node_index(const Parse& p, std::int64_t tag);
+
+/// Skips a UTF-8 byte order mark, checks the $MeshFormat token and reads the section.
+void read_format(Parse& p);
 
 void read_entities_v4(Parse& p);
 void read_nodes_v4(Parse& p);

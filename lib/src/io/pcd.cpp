@@ -2,6 +2,7 @@
 // (LZF) data (docs/formulation.md §6.1).
 
 #include <charconv>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -163,6 +164,10 @@ PcdHeader parse_pcd_header(const std::string& path, const std::string& data,
       if (h.fields.empty() || !have_size || !have_type)
         fail_at(path, line, "DATA before the FIELDS, SIZE and TYPE lines");
       if (!have_width) fail_at(path, line, "DATA before the WIDTH line");
+      if (height != 0 && width > ULLONG_MAX / height)
+        fail_at(path, line,
+                "WIDTH x HEIGHT = " + std::to_string(width) + " x " + std::to_string(height) +
+                    " is too large");
       if (!have_points) h.points = width * height;
       if (width * height != h.points)
         fail_at(path, line,

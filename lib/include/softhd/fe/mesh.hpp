@@ -79,6 +79,13 @@ struct MeshSize {
   double bytes = 0.0;
 };
 
+/// The MeshSize of a mesh in `dim` dimensions with `nodes` nodes and `elements` cells of
+/// `nodes_per_element` nodes (`vertices` of them corners) and `quadrature_points` points
+/// each, where `pairs` ordered node pairs (a node with itself included) share a cell: the
+/// tangent holds a dim x dim block per pair.
+MeshSize mesh_size(int dim, double nodes, double elements, int nodes_per_element, int vertices,
+                   int quadrature_points, double pairs);
+
 /// The counts of make_box_mesh(lo, hi, cells, order) without building it. `cells` may
 /// hold any values >= 1 (computed in floating point where the products could overflow).
 MeshSize box_mesh_size(const Eigen::VectorXd& cells, int order);

@@ -11,7 +11,10 @@
 /// and byte offset (binary), and what is wrong.
 
 #include <Eigen/Core>
+#include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -92,9 +95,30 @@ struct MshFile {
   const MshPhysicalGroup* group(int dim, const std::string& name) const;
 };
 
-/// Parses the bytes of a mesh file; `source` names it in messages. Throws FileError.
+/// What a file's section headers tell before its nodes and elements are read: the node
+/// count of $Nodes and the element count per Gmsh type (MSH 4.1: each block's header, its
+/// rows skipped; MSH 2.2: each element's type field). Nothing is stored per node or element.
+struct MshCounts {
+  std::size_t nodes = 0;                ///< nodes the file defines
+  std::map<int, std::size_t> elements;  ///< Gmsh type code -> elements of that type
+};
+
+/// The counts of a mesh file's bytes (a scan of a fraction of the parse's cost), or false
+/// if the scan stops on something malformed (parse_msh then names it).
+bool scan_msh_counts(const std::string& bytes, MshCounts* counts);
+
+/// Parses the bytes of a mesh file; `source` names it in messages (a UTF-8 byte order mark
+/// before $MeshFormat is skipped). Throws FileError.
 MshFile parse_msh(const std::string& bytes, const std::string& source);
-/// Reads and parses a mesh file. Throws FileError (also when it cannot be opened).
-MshFile read_msh(const std::string& path);
+
+/// Called by read_msh with the file's counts before its nodes and elements are parsed; it
+/// may throw to refuse the file (e.g. a memory estimate).
+using MshCountsCheck = std::function<void(const MshCounts&)>;
+
+/// Reads and parses a mesh file. Throws FileError (also when it cannot be opened, is not a
+/// regular file, or does not start with $MeshFormat: checked on its first bytes, so a
+/// device or a large file of another kind is not read). `check`, if set, gets the counts
+/// of the whole file before the parse.
+MshFile read_msh(const std::string& path, const MshCountsCheck& check = nullptr);
 
 }  // namespace softhd::io
