@@ -50,7 +50,7 @@ void uncertified_by_move_limit(const BoundedOptimizerOptions& options, BoundedOp
   if (!(tolerance && options.move_limit > 0.0 && options.move_limit < kCertifyingMoveLimit)) return;
   char text[160];
   std::snprintf(text, sizeof text,
-                " under the move limit %g, below %g: not a minimum (raise the move limit)",
+                " (move limit %g, below %g: steps too short to tell a minimum; raise it)",
                 options.move_limit, kCertifyingMoveLimit);
   s->status = OptimizerStatus::move_limit;
   s->termination += text;
