@@ -195,6 +195,7 @@ TEST_F(MultilevelRun, LevelsAfterTheCoarsestStepWithinTheRefinedMoveLimit) {
 // minimum) ends with status move_limit, its level report saying why.
 TEST_F(MultilevelRun, ALevelStoppedUnderATinyMoveLimitIsNotConverged) {
   options_.levels = 2;
+  options_.coarse_iterations = 3;
   options_.max_iterations = 30;
   options_.relative_change = 1e-6;
   options_.refined_move_limit = 1e-6;
