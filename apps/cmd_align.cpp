@@ -47,7 +47,9 @@ options:
   --alpha A, --beta B, --gamma G
                     the functional's exponents (defaults 4, 4, 2)
   --no-global       no global start: refine from --initial (default the identity)
-  --initial FILE    starting pose, a 4x4 matrix file as pose.txt (with --no-global)
+  --initial FILE    a starting pose, a 4x4 matrix file as pose.txt: with --no-global the
+                    only start; else one more candidate, refined and compared with the
+                    global start's (rigid, scale 1, unless --similarity)
   --rotations K     global start: grid rotations (default 48, plus 4 principal-axis ones)
   --refine-points N points of each cloud in the refinement, 0: all (default 1000)
   --keep K          global start: distinct candidates refined and compared (default 4)
@@ -66,7 +68,8 @@ options:
 
 exit status: 0 done; 1 numerical failure; 2 bad input or refused (one line on stderr
 names the file, line or flag): a pose file that is not a 4x4 scaled rotation, NaN
-coordinates, scale bounds that exclude 1, a 2D cloud.
+coordinates, scale bounds that exclude 1, a 2D cloud, a body or scan whose points do not
+span a plane (a single point, coincident or collinear points fix no pose).
 )";
 
 bool is_scene(const std::string& path) {
@@ -164,7 +167,20 @@ int run_align(const std::vector<std::string>& tokens) {
     throw UsageError("expected SCENE_OR_CLOUD and SCAN, got " + std::to_string(files.size()) +
                      " files (see --help)");
   if (!out_dir) throw UsageError("--out DIR is required (see --help)");
-  if (initial) o.initial = read_pose(*initial);
+  if (o.form.sides == Sides::visible)
+    throw UsageError(
+        "--distance visible is not supported by align (it has no camera model); use "
+        "scan_to_body for a partial view");
+  if (initial) {
+    o.initial = read_pose(*initial);
+    if (o.kind == scan::PoseKind::rigid && !o.initial->rigid()) {
+      std::ostringstream msg;
+      msg.precision(10);
+      msg << *initial << ": the pose has scale " << o.initial->s
+          << "; a rigid alignment keeps scale 1 (give --similarity, or a rigid pose)";
+      throw InvalidArgument(msg.str());
+    }
+  }
   if (o.scale_min <= 0.0 || o.scale_min > 1.0)
     throw UsageError("--scale-min must be in (0, 1] (the bounds must include 1), got " +
                      std::to_string(o.scale_min));
@@ -178,6 +194,8 @@ int run_align(const std::vector<std::string>& tokens) {
   require_3d(scan, files[1]);
   check_coordinates(body, files[0]);
   check_coordinates(scan, files[1]);
+  scan::check_fixes_pose(body, files[0]);
+  scan::check_fixes_pose(scan, files[1]);
   const double L = scan::body_size(body);
   o.distance.params.epsilon = eps ? parse_number(*eps, "--eps") : 1e-3 * L;
   o.validate();

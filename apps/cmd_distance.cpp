@@ -191,6 +191,11 @@ int run_distance(const std::vector<std::string>& tokens) {
                           "D but '" + files[1] + "' is " + std::to_string(Y.dim()) + "D");
   }
   Y = clean_target(X, Y, files[1], clean, weights, notes);
+  try {
+    check_cap_length(form.cap, X, Y);
+  } catch (const InvalidArgument& e) {
+    throw UsageError(std::string("--cap: ") + e.what());
+  }
   if (speaker)
     for (const std::string& n : notes) std::cerr << "softhd distance: " << n << '\n';
   if (visible_path) {

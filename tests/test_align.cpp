@@ -296,6 +296,54 @@ TEST(Align, OptionsRefusedNamingTheField) {
   test::expect_error<InvalidArgument>([] { candidate_score_from_string("best"); }, "score 'best'");
   const PointCloud flat(Eigen::MatrixXd::Ones(4, 3));
   test::expect_error<InvalidArgument>([&] { align(flat, body, AlignOptions{}); }, "coincide");
+  o = AlignOptions{};
+  o.initial = Pose();
+  o.initial->s = 1.5;  // a rigid alignment from a scaled start
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "initial pose has scale 1.5");
+  o.kind = PoseKind::similarity;
+  EXPECT_NO_THROW(align(body, body, o));
+}
+
+// A scan that fixes no pose: one point, coincident points, collinear points (exactly, and to
+// 1e-9 of their length), refused; points spanning a plane are not.
+TEST(Align, ScanThatFixesNoPoseIsRefused) {
+  const PointCloud body = asymmetric_body(60, 7);
+  auto refused = [&](const Eigen::MatrixXd& points, const std::string& needle) {
+    test::expect_error<InvalidArgument>([&] { align(body, PointCloud(points), AlignOptions{}); },
+                                        "align: the scan: " + needle);
+  };
+  refused(Eigen::RowVector3d(0.2, 0.1, 0.0), "it has a single point");
+  refused(Eigen::MatrixXd::Constant(5, 3, 0.3), "its 5 points coincide");
+  Eigen::MatrixXd line(4, 3);
+  line << 0, 0, 0, 1, 2, 3, 2, 4, 6, -1, -2, -3;
+  refused(line, "its 4 points are collinear");
+  line(3, 0) += 1e-9;  // a spread across the line of about 2e-10 of the length along it
+  refused(line, "its 4 points are collinear");
+  line(3, 0) += 1e-3;
+  EXPECT_NO_THROW(check_fixes_pose(PointCloud(line), "scan"));
+  test::expect_error<InvalidArgument>(
+      [&] { align(PointCloud(Eigen::MatrixXd::Ones(3, 3)), body, AlignOptions{}); },
+      "align: the body: its 3 points coincide");
+}
+
+// With the global start, `initial` is one more candidate: without refinement (0 iterations, no
+// nearest-point finish) the exact pose given as `initial` wins over the global start's, whose
+// minimiser of ρ̃ is biased for half the body's points (DistanceMinimiserAloneIsCloseButBiased).
+TEST(Align, InitialCompetesWithTheGlobalStart) {
+  const PointCloud body = asymmetric_body(300, 3);
+  std::mt19937_64 gen(5);
+  const Pose P = random_pose(gen);
+  const PointCloud scan = camera_subset(body, P, 2);
+  AlignOptions o = fast_options();
+  o.rotations = 0;
+  o.keep = 1;
+  o.max_iterations = 0;
+  o.nearest_iterations = 0;
+  const AlignSummary global = align(body, scan, o);
+  EXPECT_GT((global.pose.matrix() - P.matrix()).norm(), 1e-9);  // the global start alone
+  o.initial = P;
+  const AlignSummary s = align(body, scan, o);
+  EXPECT_LT((s.pose.matrix() - P.matrix()).norm(), 1e-12);
 }
 
 }  // namespace

@@ -212,6 +212,44 @@ TEST(BoundedOptimizer, StopsOnIterationsTargetAndFailedStart) {
   EXPECT_FALSE(s.converged());
 }
 
+// A move limit below kCertifyingMoveLimit: its steps are too short for a small change of J, or
+// none, to tell a minimum. A quadratic (minimum 0 at c) stopped on the relative change far from
+// c, and the same quadratic rounded to 1e-4 (a noisy J, as the tree method's) stopped without
+// progress at its start, are status move_limit, not converged; with the default-sized move limit
+// both converge to c.
+TEST(BoundedOptimizer, TinyMoveLimitIsNotConvergence) {
+  const Eigen::Vector3d c(0.5, -0.3, 0.2);
+  auto quadratic = [&](double quantum) -> BoundedObjective {
+    return [&c, quantum](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+      v = (x - c).squaredNorm();
+      if (quantum > 0.0) v = quantum * std::round(v / quantum);
+      if (g) *g = 2.0 * (x - c);
+      return true;
+    };
+  };
+  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(3, -1), hi = Eigen::VectorXd::Ones(3);
+  const Eigen::VectorXd x0 = Eigen::VectorXd::Zero(3);
+  BoundedOptimizerOptions o;
+  o.relative_change = 1e-3;
+  o.max_iterations = 500;
+  o.max_evaluations = 5000;
+  for (double quantum : {0.0, 1e-4}) {
+    o.move_limit = 1e-6;
+    BoundedOptimizerSummary s = minimise(quadratic(quantum), x0, lo, hi, o);
+    EXPECT_EQ(s.status, OptimizerStatus::move_limit) << s.termination;
+    EXPECT_FALSE(s.converged());
+    EXPECT_GT(s.final_value, 0.3);  // still near J(0) = 0.38
+    EXPECT_NE(s.termination.find("(move limit 1e-06, below 0.001: steps too short"),
+              std::string::npos)
+        << s.termination;
+    EXPECT_EQ(to_string(s.status), "move_limit");
+    o.move_limit = 0.1;
+    s = minimise(quadratic(quantum), x0, lo, hi, o);
+    EXPECT_TRUE(s.converged()) << s.termination;
+    EXPECT_LT((s.x - c).norm(), 0.02) << s.termination;
+  }
+}
+
 // An iteration observer that throws StopRequest ends the run after that iteration, with
 // the best point so far and its own termination.
 TEST(BoundedOptimizer, ObserverCanStopTheRun) {

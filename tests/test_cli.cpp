@@ -239,6 +239,27 @@ TEST_F(Cli, AlignRecoversAMovedCopyAndRefusesBadInput) {
   expect_bad_input("align " + good + " " + good, "--out DIR is required");
 }
 
+// A body or scan that fixes no pose (a single point, coincident or collinear points) is refused
+// naming its file, as are --distance visible (align has no camera) and a scaled --initial for a
+// rigid alignment: exit 2 and one line.
+TEST_F(Cli, AlignRefusesCloudsThatFixNoPose) {
+  const std::string good = write("good.txt", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
+  const std::string one = write("one.txt", "0.5 0.2 0.1\n");
+  const std::string line = write("line.txt", "0 0 0\n1 2 3\n2 4 6\n");
+  const std::string same = write("same.txt", "1 2 3\n1 2 3\n1 2 3\n");
+  const std::string out = " --out " + path("bad");
+  expect_bad_input("align " + good + " " + one + out, "one.txt: it has a single point");
+  expect_bad_input("align " + good + " " + line + out, "line.txt: its 3 points are collinear");
+  expect_bad_input("align " + good + " " + same + out, "same.txt: its 3 points coincide");
+  expect_bad_input("align " + same + " " + good + out, "same.txt: its 3 points coincide");
+  expect_bad_input("align " + good + " " + good + out + " --distance visible",
+                   "--distance visible is not supported by align");
+  expect_bad_input("align " + good + " " + good + out + " --initial " +
+                       write("big.txt", "2 0 0 0\n0 2 0 0\n0 0 2 0\n0 0 0 1\n"),
+                   "big.txt: the pose has scale 2; a rigid alignment keeps scale 1");
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+}
+
 // The distance forms (docs/formulation.md §8): the flags give the library's numbers, and their
 // misuse is one line naming the flag, the file or its line.
 TEST_F(Cli, DistanceFormsMatchTheLibraryAndRefuseMisuse) {
@@ -275,6 +296,11 @@ TEST_F(Cli, DistanceFormsMatchTheLibraryAndRefuseMisuse) {
   expect_bad_input("distance " + xy + " --visible " + seen, "--visible needs --distance visible");
   expect_bad_input("distance " + xy + " --cap -1", "--cap/--cap-q: distance cap.c must be");
   expect_bad_input("distance " + xy + " --cap 1 --cap-q 0", "distance cap.q must be");
+  // Below the accepted ranges (docs/formulation.md §8.3) rho was 0 or the constant cap.
+  expect_bad_input("distance " + xy + " --cap 1 --cap-q 1e-300",
+                   "distance cap.q must be finite and >= 0.001");
+  expect_bad_input("distance " + xy + " --cap 1e-300",
+                   "--cap: distance cap (cap.c) 1e-300 is below");
   expect_bad_input(
       "distance " + xy + " --distance visible --visible " + write("bad.txt", "1\n0\nyes\n"),
       "bad.txt:3: expected 0 or 1, got 'yes'");

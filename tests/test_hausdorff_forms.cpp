@@ -513,5 +513,36 @@ TEST(HausdorffForms, InvalidFormsAreRefusedNamingTheField) {
   EXPECT_EQ(to_string(Sides::visible), "visible");
 }
 
+// The cap's accepted range (docs/formulation.md §8.3): q ≥ 1e-3, where the scaled ψ stays a
+// normal double and accurate (checked against the direct formula in long double); c ≥
+// L 2^(−1022/(q+1)) (L the clouds' common bounding-box diagonal), where the slope ψ'(L) is
+// still a normal double. Below either, ρ̃ was 0 or the constant c.
+TEST(HausdorffForms, CapRangeFollowsTheScaledEvaluation) {
+  const PointCloud X = random_cloud(10, 3, 15), Y = random_cloud(12, 3, 16);
+  HausdorffRequest req;
+  req.form.cap = {1.0, 1e-300};
+  expect_error<InvalidArgument>([&] { hausdorff(X, Y, {}, req); },
+                                "cap.q must be finite and >= 0.001");
+  const double q = SoftCap::kMinQ;
+  for (double d : {0.01, 0.5, 1.0, 3.0})
+    EXPECT_LT(relative_error(detail::soft_cap(d, 1.0, q), direct_cap(d, SoftCap{1.0, q})), 1e-12)
+        << d;
+  req.form.cap = {1.0, q};
+  EXPECT_GT(hausdorff(X, Y, {}, req).rho, 0.0);
+
+  Eigen::MatrixXd both(X.size() + Y.size(), 3);
+  both << X.points(), Y.points();
+  const double L = (both.colwise().maxCoeff() - both.colwise().minCoeff()).norm();
+  const double smallest = L * std::exp2(-1022.0 / 5.0);  // q = 4
+  EXPECT_GE(detail::soft_cap_derivative(L, 2.0 * smallest, 4.0),
+            std::numeric_limits<double>::min());
+  req.form.cap = {1e-300, 4.0};
+  expect_error<InvalidArgument>([&] { hausdorff(X, Y, {}, req); }, "give 0 (no cap) or a cap >=");
+  req.form.cap = {0.5 * smallest, 4.0};
+  expect_error<InvalidArgument>([&] { hausdorff(X, Y, {}, req); }, "distance cap (cap.c)");
+  req.form.cap = {2.0 * smallest, 4.0};
+  EXPECT_NO_THROW(hausdorff(X, Y, {}, req));
+}
+
 }  // namespace
 }  // namespace softhd::test

@@ -190,6 +190,24 @@ TEST_F(MultilevelRun, LevelsAfterTheCoarsestStepWithinTheRefinedMoveLimit) {
   EXPECT_GT(first_step(options_.move_limit), small) << "the check could not fail";
 }
 
+// A level stopped under a move limit below kCertifyingMoveLimit is not converged: the user's
+// mesh started from the coarse level with refined_move_limit 1e-6 (steps too short to tell a
+// minimum) ends with status move_limit, its level report saying why.
+TEST_F(MultilevelRun, ALevelStoppedUnderATinyMoveLimitIsNotConverged) {
+  options_.levels = 2;
+  options_.coarse_iterations = 3;
+  options_.max_iterations = 30;
+  options_.relative_change = 1e-6;
+  options_.refined_move_limit = 1e-6;
+  const TrackingRunSummary s = run_tracking(scene_, options_);
+  EXPECT_EQ(s.status, OptimizerStatus::move_limit) << s.termination;
+  EXPECT_FALSE(s.converged());
+  ASSERT_EQ(s.levels.size(), 2u);
+  EXPECT_NE(s.levels[1].termination.find("(move limit 1e-06, below 0.001: steps too short"),
+            std::string::npos)
+      << s.levels[1].termination;
+}
+
 // levels 0 (the default) is 1 + the coarser levels of at least 32 elements where the target
 // has a known map (fe::Halving::rounded: the even axes halved, else every axis of >= 4 cells
 // to (n + 1) / 2; the counts by hand), else 1; 1 against a cloud with no known map (a scan)

@@ -486,11 +486,13 @@ TEST_F(OptimiseCli, CameraFrameTargetRefinesThePoseWithTheControl) {
   EXPECT_TRUE(fs::exists(fs::path(out2) / "target_aligned.ply"));
 
   std::ofstream(dir_ / "bad_pose.txt") << "1 0 0 0\n0 2 0 0\n0 0 1 0\n0 0 0 1\n";
+  std::ofstream(dir_ / "tiny_pose.txt") << "1e-100 0 0 0\n0 1e-100 0 0\n0 0 1e-100 0\n0 0 0 1\n";
   for (const auto& [key, value, needle] :
        std::vector<std::tuple<std::string, nlohmann::json, std::string>>{
            {"frame", "world", "target.frame must be \"body\" or \"camera\""},
            {"align", "affine", "target.align must be \"rigid\" or \"similarity\""},
            {"pose", "bad_pose.txt", "not a scaled rotation"},
+           {"pose", "tiny_pose.txt", "tiny_pose.txt' has scale 1e-100, but a rigid pose"},
            {"pose", "no_such_pose.txt", "cannot open the pose file"}}) {
     nlohmann::json t = seen;
     t[key] = value;

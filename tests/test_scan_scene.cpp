@@ -140,6 +140,15 @@ TEST(ScanScene, CameraFrameKeys) {
   std::ofstream(testing::TempDir() + "/scan_scene_bad_pose.txt") << "1 0 0 0\n0 1 0 0\n0 0 1\n";
   refuses(R"("frame": "camera", "pose": "scan_scene_bad_pose.txt")",
           "scan_scene_bad_pose.txt:3: expected 4 numbers, got 3");
+  // A rigid start pose has scale 1; a similarity's lies in [0.5, 2] (PoseBounds): refused naming
+  // the pose file, the scale in decimals.
+  std::ofstream(testing::TempDir() + "/scan_scene_tiny_pose.txt")
+      << "1e-100 0 0 0\n0 1e-100 0 0\n0 0 1e-100 0\n0 0 0 1\n";
+  refuses(R"("frame": "camera", "pose": "scan_scene_tiny_pose.txt")",
+          "scan_scene_tiny_pose.txt' has scale 1e-100, but a rigid pose");
+  refuses(R"("frame": "camera", "align": "similarity", "pose": "scan_scene_tiny_pose.txt")",
+          "scan_scene_tiny_pose.txt' has scale 1e-100, outside the similarity's scale bounds "
+          "[0.5, 2]");
   const fe::Scene arc = fe::parse_scene(R"({
     "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [2, 1, 0.2], "cells": [2, 1, 1], "order": 1 },
     "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },

@@ -352,6 +352,16 @@ TEST(ShapeObjective, PoseOptionsAreChecked) {
   o.camera = Eigen::Vector3d(0, 0, 5);  // a pose brings its own camera
   EXPECT_THROW(ShapeObjective(A, space, HausdorffTarget(bent_target()), o), InvalidArgument);
   o.camera.reset();
+  o.pose->s = 1e-100;  // a rigid pose (the default pose_kind) has scale 1
+  try {
+    ShapeObjective(A, space, HausdorffTarget(bent_target()), o);
+    ADD_FAILURE() << "a rigid pose of scale 1e-100 was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("got scale 1e-100"), std::string::npos) << e.what();
+  }
+  o.pose->s = 1.0 + 1e-12;  // within the tolerance
+  EXPECT_NO_THROW(ShapeObjective(A, space, HausdorffTarget(bent_target()), o));
+  o.pose->s = 1.0;
   ShapeObjective J(A, space, HausdorffTarget(bent_target()), o);
   EXPECT_THROW(J.evaluate(Eigen::VectorXd::Zero(space.size()), Eigen::VectorXd::Zero(7), false),
                InvalidArgument);

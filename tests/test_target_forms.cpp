@@ -71,6 +71,8 @@ TEST(TargetForms, BadKeysAreRefusedInOneLineNamingTheKey) {
   refuse(R"(, "cap": {"quantile": 0.5, "factor": 0})", "target.cap.factor must be a number > 0");
   refuse(R"(, "cap": {"quantile": 0.5, "factor": 2, "q": 3})", "unknown key 'q'");
   refuse(R"(, "cap_q": 0)", "target.cap_q must be a number > 0");
+  // Below 0.001 the scaled soft cap underflows (docs/formulation.md §8.3): rho was 0.
+  refuse(R"(, "cap_q": 1e-300)", "target.cap_q must be >= 0.001");
 }
 
 // The quantile rule gives c = F × the Q-quantile of d̃_X(y_j) of the body at rest, and the

@@ -61,6 +61,20 @@ def _volumes(v, name):
     return None if v is None else _as_float64(v, name)
 
 
+def _mask(v, name):
+    """A C-contiguous bool array of `v`: booleans, or numbers that are all 0 or 1."""
+    arr = _np.asarray(v)
+    if arr.dtype == bool:
+        return _np.ascontiguousarray(arr)
+    if arr.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must hold booleans (or 0/1), got dtype {arr.dtype}")
+    bad = _np.flatnonzero((arr != 0) & (arr != 1))
+    if bad.size:
+        raise InvalidArgument(f"{name} must hold booleans (or 0/1), got {arr.flat[bad[0]]!r} at "
+                              f"index {bad[0]}")
+    return _np.ascontiguousarray(arr, dtype=bool)
+
+
 class Target:
     """A target cloud Y (volumes VY) prepared for many evaluations: its k-d trees are built once.
 
@@ -98,7 +112,7 @@ class Target:
         X (and VX) follow the module's array rule (no copy of C-contiguous float64).
         """
         if visible is not None:
-            visible = _np.ascontiguousarray(visible, dtype=bool)
+            visible = _mask(visible, "visible")
         return self._target.evaluate(_as_float64(X, "X"), _volumes(VX, "VX"), fields=fields,
                                      gradient=gradient, gradient_volumes=gradient_volumes,
                                      gradient_target=gradient_target, distance=distance,
@@ -137,7 +151,9 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
     """The pose that takes ``scan`` (M, 3), in the camera's frame, onto ``body`` (N, 3)
     (docs/formulation.md section 8, as ``softhd align``): y -> s R y + t minimising rho over a
     twist, after a global start over ``rotations`` grid rotations (unless ``global_start`` is
-    False: then from ``initial``, a (4, 4) matrix, default the identity).
+    False: then from ``initial``, a (4, 4) matrix, default the identity). With the global start,
+    ``initial`` is one more candidate, refined and compared with the global start's. A rigid
+    alignment needs a rigid ``initial`` (scale 1).
 
     similarity: also a scale s in [scale_min, scale_max] (the bounds must include 1).
     distance: "symmetric" or "scan_to_body" (rho = A, for partial views); cap: the soft cap
@@ -153,7 +169,8 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
     inlier distance of the body), ``inlier_distance``, ``rmse`` (of those points' true
     nearest distances), ``residuals`` (M,: every moved scan point's true nearest distance to
     the body), ``status``, ``iterations``, ``seconds``. Raises InvalidArgument for bounds
-    that exclude 1, a wrong ``initial``, non-3D or non-finite clouds.
+    that exclude 1, a wrong ``initial``, non-3D or non-finite clouds, and a body or scan whose
+    points do not span a plane (a single point, coincident or collinear points fix no pose).
     """
     init = None if initial is None else _as_float64(initial, "initial")
     d = _core.align(_as_float64(body, "body"), _volumes(body_volumes, "body_volumes"),
@@ -270,8 +287,10 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     iteration on the user's mesh, whose result it returns); any other return value continues;
     an exception raised by the callback ends the run and propagates. initial: the starting
     control (one value per control, e.g. an earlier result's ``control``; levels 1 only); None:
-    the scene's control.initial. pose_move: a scene target in the camera's frame only, the
-    pose's move limit as a fraction of the control's, in (0, 1] (default 1).
+    the scene's control.initial; values outside the control bounds, and an empty array, raise
+    InvalidArgument. pose_move: a scene target in the camera's frame only (InvalidArgument for a
+    target in the body's frame), the pose's move limit as a fraction of the control's, in
+    (0, 1] (default 1).
     """
     points = vols = file = None
     if isinstance(target, (str, bytes, _os.PathLike)):

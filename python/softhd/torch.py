@@ -85,10 +85,11 @@ class HausdorffLoss(torch.nn.Module):
 
     forward(X, Y, VX=None, VY=None, visible=None): X (N, d) and Y (M, d) CPU tensors (d = 2 or
     3), float32 or float64; VX (N,) and VY (M,) optional positive volumes (weights; only their
-    ratios matter); visible (N,) booleans (tensor or array), with distance="visible" only, held
-    fixed (no gradient). Returns a 0-dimensional tensor of X's dtype; gradients flow to every
-    input that requires one (points, target points, and either set of weights; VY only for the
-    symmetric form, the others raise NotImplementedError for it).
+    ratios matter); visible (N,) booleans or 0/1 (tensor or array; other values raise
+    softhd.InvalidArgument), with distance="visible" only, held fixed (no gradient). Returns a
+    0-dimensional tensor of X's dtype; gradients flow to every input that requires one (points,
+    target points, and either set of weights; VY only for the symmetric form, the others raise
+    NotImplementedError for it).
     """
 
     def __init__(self, alpha=4.0, beta=4.0, gamma=2.0, eps=1e-3, method="exact", tol=1e-6,
@@ -109,7 +110,7 @@ class HausdorffLoss(torch.nn.Module):
         if visible is not None:
             if isinstance(visible, torch.Tensor):
                 visible = visible.detach().cpu().numpy()
-            options["visible"] = np.ascontiguousarray(visible, dtype=bool)
+            options["visible"] = visible  # booleans or 0/1 (softhd.distance refuses others)
         return HausdorffFunction.apply(X, Y, VX, VY, options)
 
     def extra_repr(self):

@@ -48,9 +48,14 @@ std::vector<Eigen::VectorXd> probe_points(const PyScene& s, const Eigen::MatrixX
 
 PyForward forward(const PyScene& s, const py::object& control, const Eigen::MatrixXd& probes,
                   int coarse_levels, int threads) {
-  // control: None (the scene's initial value), a number (uniform) or one value per control.
+  // control: None (the scene's initial value), a number (uniform: a Python int or float, a
+  // NumPy scalar or a 0-d array) or one value per control.
+  const bool number = py::isinstance<py::float_>(control) || py::isinstance<py::int_>(control) ||
+                      py::isinstance(control, py::module_::import("numpy").attr("number")) ||
+                      (py::isinstance<py::array>(control) &&
+                       py::reinterpret_borrow<py::array>(control).ndim() == 0);
   Eigen::VectorXd m;
-  if (control.is_none() || py::isinstance<py::float_>(control) || py::isinstance<py::int_>(control))
+  if (control.is_none() || number)
     m = s.control.constant(control.is_none() ? s.scene.control_initial : control.cast<double>());
   else
     m = control.cast<Eigen::VectorXd>();

@@ -57,3 +57,13 @@ def test_bad_input_refused(rng):
         softhd.align(body, body, initial=bad)
     with pytest.raises(softhd.InvalidArgument, match="distance"):
         softhd.align(body, body, distance="both")
+    # clouds that fix no pose: a single point, points on a line; a body of coincident points
+    # (its default eps, L/1000, is 0) is named as such
+    with pytest.raises(softhd.InvalidArgument, match="the scan: it has a single point"):
+        softhd.align(body, body[:1])
+    with pytest.raises(softhd.InvalidArgument, match="the scan: its 5 points are collinear"):
+        softhd.align(body, np.outer(np.arange(5.0), [1.0, 2.0, 3.0]))
+    with pytest.raises(softhd.InvalidArgument, match="the body: its 4 points coincide"):
+        softhd.align(np.ones((4, 3)), body)
+    with pytest.raises(softhd.InvalidArgument, match="initial pose has scale 2"):
+        softhd.align(body, body, initial=np.diag([2.0, 2.0, 2.0, 1.0]))

@@ -206,6 +206,14 @@ def test_forms_refused_naming_the_option(rng):
         softhd.distance(X, Y, distance="visible")
     with pytest.raises(softhd.InvalidArgument, match="visible: the mask has 3 entries"):
         softhd.distance(X, Y, distance="visible", visible=[True, False, True])
+    # below the accepted ranges of docs/formulation.md §8.3: rho was 0 or the constant cap
+    with pytest.raises(softhd.InvalidArgument, match=r"cap.q must be finite and >= 0.001"):
+        softhd.distance(X, Y, cap=1.0, cap_q=1e-300)
+    with pytest.raises(softhd.InvalidArgument, match=r"cap \(cap.c\) 1e-300 is below"):
+        softhd.distance(X, Y, cap=1e-300)
+    # visible holds booleans or 0/1; 0.5 or 2 is not read as True
+    with pytest.raises(softhd.InvalidArgument, match="visible must hold booleans"):
+        softhd.distance(X, Y, distance="visible", visible=np.r_[0.5, np.ones(9)])
 
 
 def test_forms_equal_the_command_line(rng, tmp_path, cli):

@@ -61,6 +61,14 @@ def test_equals_the_command_line_tool(scene_file, cli, tmp_path, scene_dict, pro
     assert f.newton_iterations == j["newton_iterations"]
 
 
+def test_forward_takes_numpy_scalars(scene_file):
+    """A uniform control given as a NumPy scalar or a 0-d array is the same number."""
+    scene = softhd.Scene.load(scene_file(SMALL_2D))
+    ref = scene.forward(-2e4).displacements
+    for m in (np.float32(-2e4), np.float64(-2e4), np.int64(-20000), np.array(-2e4)):
+        np.testing.assert_array_equal(scene.forward(m).displacements, ref)
+
+
 def test_control_at_nodes_reproduces_linear_fields(scene_file):
     scene = softhd.Scene.load(scene_file(SMALL_2D))
     X = scene.control_positions

@@ -241,5 +241,18 @@ def test_initial_control_starts_there(scene_file):
     assert r2.rho_start < softhd.optimise(scene, max_iter=1).rho_start
     with pytest.raises(softhd.InvalidArgument, match="initial_control has 3 values, expected"):
         softhd.optimise(scene, max_iter=1, initial=[0.0, 0.0, 0.0])
+    # An empty control is not None; values outside the bounds [-1e5, 0] are refused, not clipped.
+    with pytest.raises(softhd.InvalidArgument, match="initial_control is empty"):
+        softhd.optimise(scene, max_iter=1, initial=np.empty(0))
+    for k, value, text in ((0, 5.0, "5"), (3, -1e9, "-1000000000")):
+        m = np.array(r1.control)
+        m[k] = value
+        with pytest.raises(softhd.InvalidArgument,
+                           match=rf"initial_control\[{k}\] = {text} is outside its bounds "
+                                 r"\[-100000, 0\]"):
+            softhd.optimise(scene, max_iter=1, initial=m)
+    # pose_move moves a camera-frame target's pose: refused for this body-frame target.
+    with pytest.raises(softhd.InvalidArgument, match="pose_move moves the pose of a target"):
+        softhd.optimise(scene, max_iter=1, pose_move=0.5)
     with pytest.raises(softhd.InvalidArgument, match=r"pose_move must be in \(0, 1\]"):
         softhd.optimise(scene, max_iter=1, pose_move=0.0)

@@ -7,6 +7,7 @@ torch = pytest.importorskip(
     "torch", reason="PyTorch is not installed (Debian: apt-get install python3-torch); "
     "the HausdorffLoss tests are skipped")
 
+import softhd
 import softhd.torch as st  # noqa: E402
 from spec_reference import rho_torch  # noqa: E402
 
@@ -131,6 +132,14 @@ def test_gradcheck_distance_forms(form):
 
 def test_forms_misuse():
     X, Y, _, VY = clouds()
+    loss = st.HausdorffLoss(distance="visible")
+    one_zero = torch.tensor([1, 0, 1, 1, 0, 1, 1, 0, 1], dtype=torch.float64)
+    assert loss(X, Y, visible=one_zero) == loss(X, Y, visible=one_zero.bool())
+    for value in (0.5, 2.0):  # not a boolean: refused, not read as True
+        bad = one_zero.clone()
+        bad[1] = value
+        with pytest.raises(softhd.InvalidArgument, match="visible must hold booleans"):
+            loss(X, Y, visible=bad)
     with pytest.raises(ValueError, match="distance must be"):
         st.HausdorffLoss(distance="both")
     VY.requires_grad_()

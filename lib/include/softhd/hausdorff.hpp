@@ -116,8 +116,13 @@ Sides sides_from_string(const std::string& name);
 /// §8): ψ_c(d) = (d^(−q) + c^(−q))^(−1/q), ψ_c'(d) = (ψ_c(d)/d)^(q+1); ψ_c(d) → d for d ≪ c
 /// and → c for d ≫ c, so one outlier moves A^β by at most about c^β/M.
 struct SoftCap {
-  double c = 0.0;  ///< the cap (a length); 0: no cap (ψ = identity). Else finite and > 0.
-  double q = 4.0;  ///< sharpness q > 0 (finite)
+  /// The cap (a length); 0: no cap (ψ = identity). Else finite and at least L 2^(−1022/(q+1)),
+  /// L the diagonal of the two clouds' common bounding box (checked per evaluation).
+  double c = 0.0;
+  double q = 4.0;  ///< sharpness q ≥ kMinQ (finite)
+  /// The smallest q: ψ_c/min(d, c) = (1 + s^q)^(−1/q) ≥ 2^(−1/q) stays a normal double and
+  /// its scaled evaluation accurate to about ε_mach/q (docs/formulation.md §8.3).
+  static constexpr double kMinQ = 1e-3;
 };
 
 /// The form of the functional one evaluation computes: the sides, the cap and, for
@@ -134,6 +139,12 @@ struct DistanceForm {
   /// marked, or a mask given for other sides). Every evaluation calls it.
   void validate(Eigen::Index moving_points) const;
 };
+
+/// Throws InvalidArgument unless the cap c is 0 or at least L 2^(−1022/(q+1)), L the diagonal
+/// of the two clouds' common bounding box (every field value d̃ ≤ L): below it the slope
+/// ψ_c'(d) ≈ (c/d)^(q+1) of the largest fields underflows and ρ̃ is the constant c
+/// (docs/formulation.md §8.3). HausdorffTarget::evaluate calls it.
+void check_cap_length(const SoftCap& cap, const PointCloud& X, const PointCloud& Y);
 
 /// The cap of the rule "c = factor × the quantile-`quantile` value of `field`" (docs/formulation.md
 /// §8.3), with `field` typically HausdorffResult::field_target (d̃_X(y_j), the scan's field) at

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <nlopt.hpp>
 #include <sstream>
@@ -25,7 +26,7 @@ Algorithm algorithm_from_string(const std::string& name) {
 }
 
 namespace {
-constexpr EnumNames<OptimizerStatus, 10> kStatusNames{{
+constexpr EnumNames<OptimizerStatus, 11> kStatusNames{{
     {OptimizerStatus::iteration_limit, "iteration_limit"},
     {OptimizerStatus::evaluation_limit, "evaluation_limit"},
     {OptimizerStatus::time_limit, "time_limit"},
@@ -33,10 +34,27 @@ constexpr EnumNames<OptimizerStatus, 10> kStatusNames{{
     {OptimizerStatus::target_value, "target_value"},
     {OptimizerStatus::nlopt_converged, "nlopt_converged"},
     {OptimizerStatus::no_progress, "no_progress"},
+    {OptimizerStatus::move_limit, "move_limit"},
     {OptimizerStatus::stopped, "stopped"},
     {OptimizerStatus::start_failed, "start_failed"},
     {OptimizerStatus::nlopt_failure, "nlopt_failure"},
 }};
+}  // namespace
+
+namespace {
+// A tolerance stop (relative_change, no_progress) under a move limit below
+// kCertifyingMoveLimit is status move_limit: its steps were too short to tell a minimum.
+void uncertified_by_move_limit(const BoundedOptimizerOptions& options, BoundedOptimizerSummary* s) {
+  const bool tolerance =
+      s->status == OptimizerStatus::relative_change || s->status == OptimizerStatus::no_progress;
+  if (!(tolerance && options.move_limit > 0.0 && options.move_limit < kCertifyingMoveLimit)) return;
+  char text[160];
+  std::snprintf(text, sizeof text,
+                " (move limit %g, below %g: steps too short to tell a minimum; raise it)",
+                options.move_limit, kCertifyingMoveLimit);
+  s->status = OptimizerStatus::move_limit;
+  s->termination += text;
+}
 }  // namespace
 
 std::string to_string(OptimizerStatus status) { return enum_name(kStatusNames, status); }
@@ -446,6 +464,7 @@ BoundedOptimizerSummary minimise(
       d.summary.status = nlopt_status;
       d.summary.termination = nlopt_reason;
   }
+  uncertified_by_move_limit(options, &d.summary);
   d.summary.seconds = d.seconds();
   return d.summary;
 }

@@ -4,12 +4,14 @@
 #include "softhd/control/scene_target.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "../io/keys.hpp"
 #include "softhd/control/shape_objective.hpp"
+#include "softhd/control/shape_tracking.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/boundary.hpp"
@@ -225,6 +227,10 @@ TargetDistance target_distance(const fe::Scene& scene, const nlohmann::json& t, 
     }
   }
   if (t.contains("cap_q")) d.cap_q = target_number(scene, t["cap_q"], "cap_q", true);
+  if (!(d.cap_q >= SoftCap::kMinQ))
+    throw InvalidArgument(scene.source + ": target.cap_q must be >= 0.001 (the soft cap's " +
+                          "sharpness; below it the cap cannot be evaluated accurately), got " +
+                          t["cap_q"].dump());
   return d;
 }
 
@@ -256,6 +262,29 @@ struct FrameKeys {
   std::optional<scan::Pose> pose;
   std::string description;
 };
+
+// A number as a decimal (10 significant digits) for a message.
+std::string decimal(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.10g", v);
+  return text;
+}
+
+// A rigid start pose has scale 1; a similarity's lies within the pose bounds (PoseBounds).
+void check_start_scale(const fe::Scene& scene, const scan::Pose& pose, scan::PoseKind kind,
+                       const std::string& file) {
+  const PoseBounds bounds;
+  const bool rigid = kind == scan::PoseKind::rigid;
+  if (rigid ? pose.rigid() : pose.s >= bounds.scale_min && pose.s <= bounds.scale_max) return;
+  const std::string head =
+      scene.source + ": target.pose: the pose in '" + file + "' has scale " + decimal(pose.s);
+  if (rigid)
+    throw InvalidArgument(head + ", but a rigid pose (target.align \"rigid\") has scale 1 (to " +
+                          decimal(scan::Pose::kScaleTolerance) +
+                          "); give \"align\": \"similarity\" or a rigid pose");
+  throw InvalidArgument(head + ", outside the similarity's scale bounds [" +
+                        decimal(bounds.scale_min) + ", " + decimal(bounds.scale_max) + "]");
+}
 
 FrameKeys read_frame_keys(const fe::Scene& scene, const nlohmann::json& t) {
   FrameKeys keys;
@@ -302,6 +331,7 @@ FrameKeys read_frame_keys(const fe::Scene& scene, const nlohmann::json& t) {
       throw FileError(scene.source + ": target.pose: cannot open the pose file '" + f.string() +
                       "'");
     target->pose = read_pose(f.string());
+    check_start_scale(scene, *target->pose, target->align, f.string());
     target->description += "; camera frame, start pose " + f.string();
   } else {
     target->description += "; camera frame, start pose by align";

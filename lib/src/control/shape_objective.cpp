@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <optional>
 
@@ -308,6 +309,14 @@ void ShapeObjectiveOptions::validate() const {
     if ((p.R.transpose() * p.R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-9 ||
         p.R.determinant() < 0.0)
       throw InvalidArgument("pose: R is not a rotation (to 1e-9)");
+    if (pose_kind == scan::PoseKind::rigid && !p.rigid()) {
+      char text[160];
+      std::snprintf(text, sizeof text,
+                    "pose: a rigid pose has scale 1 (to %g), got scale %.10g (pose_kind rigid; "
+                    "use similarity for a scaled pose)",
+                    scan::Pose::kScaleTolerance, p.s);
+      throw InvalidArgument(text);
+    }
   }
   const bool has_camera = camera || pose;  // a pose gives the camera (Sides::visible)
   if (has_camera && (camera || form.sides == Sides::visible)) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <memory>
@@ -288,9 +289,14 @@ void pose_bounds(const ShapeObjective& objective, const PoseBounds& b, Eigen::Ve
     const double s0 = objective.options().pose->s;
     (*lower)[6] = std::log(s0 / b.scale_max);
     (*upper)[6] = std::log(s0 / b.scale_min);
-    if (!((*lower)[6] <= 0.0 && 0.0 <= (*upper)[6]))
-      throw InvalidArgument("pose_bounds: the start pose's scale " + exact_text(s0) +
-                            " is outside [scale_min, scale_max]");
+    if (!((*lower)[6] <= 0.0 && 0.0 <= (*upper)[6])) {
+      char text[160];
+      std::snprintf(text, sizeof text,
+                    "pose_bounds: the start pose's scale %.10g is outside [scale_min, scale_max] "
+                    "= [%.10g, %.10g]",
+                    s0, b.scale_min, b.scale_max);
+      throw InvalidArgument(text);
+    }
   }
 }
 

@@ -37,6 +37,40 @@ std::string file_hash(const std::string& path) {
   return content_hash(bytes.data(), bytes.size());
 }
 
+// A number as a decimal (10 significant digits) for a message.
+std::string decimal(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.10g", v);
+  return text;
+}
+
+// The options checked against the scene and the target: initial_control's length and bounds
+// (those of track_shape: control.lower/upper where a control acts, 0 elsewhere), pose_move (a
+// camera-frame target's only).
+void check_against_scene(const fe::Scene& scene, const fe::ControlSpace& control,
+                         const SceneTarget& target, const TrackingRunOptions& o) {
+  if (o.initial_control) {
+    const Eigen::VectorXd& m = *o.initial_control;
+    if (m.size() != control.size())
+      throw InvalidArgument("initial_control has " + std::to_string(m.size()) +
+                            " values, expected " + std::to_string(control.size()) +
+                            " (the scene's controls)");
+    const Eigen::VectorXd lower = control.constant(scene.control_lower);
+    const Eigen::VectorXd upper = control.constant(scene.control_upper);
+    for (Eigen::Index k = 0; k < m.size(); ++k)
+      if (!(m[k] >= lower[k] && m[k] <= upper[k]))
+        throw InvalidArgument("initial_control[" + std::to_string(k) + "] = " + decimal(m[k]) +
+                              " is outside its bounds [" + decimal(lower[k]) + ", " +
+                              decimal(upper[k]) +
+                              "] (the scene's control.lower and control.upper; 0 and 0 where the "
+                              "control acts on no region)");
+  }
+  if (o.pose_move != 1.0 && target.frame != TargetFrame::camera)
+    throw InvalidArgument(
+        "pose_move moves the pose of a target in the camera's frame; this target is in the "
+        "body's frame (it has no pose)");
+}
+
 }  // namespace
 
 std::string to_string(CoarseLevel level) { return enum_name(kCoarseLevelNames, level); }
@@ -68,11 +102,16 @@ void TrackingRunOptions::validate() const {
     throw InvalidArgument("refined_move_limit must be in [0, 1]");
   if (resume && out.empty())
     throw InvalidArgument("resume needs the run's folder (the out field is empty)");
-  if (initial_control.size() > 0 && levels > 1)
+  if (initial_control && levels > 1)
     throw InvalidArgument(
         "initial_control: a multilevel run (levels > 1) starts from its coarse "
         "levels' control; give levels 1");
-  if (!initial_control.allFinite()) throw InvalidArgument("initial_control must be finite");
+  if (initial_control && initial_control->size() == 0)
+    throw InvalidArgument(
+        "initial_control is empty: give one value per control (or none for the scene's "
+        "control.initial)");
+  if (initial_control && !initial_control->allFinite())
+    throw InvalidArgument("initial_control must be finite");
   if (!(pose_move > 0.0 && pose_move <= 1.0))
     throw InvalidArgument("pose_move must be in (0, 1] (the pose's move limit over the control's)");
   if (distance) {
@@ -83,8 +122,8 @@ void TrackingRunOptions::validate() const {
           "cannot give yet; use symmetric or scan_to_body");
     if (!(std::isfinite(d.cap) && d.cap >= 0.0))
       throw InvalidArgument("distance cap must be 0 (none) or finite and > 0");
-    if (!(std::isfinite(d.cap_q) && d.cap_q > 0.0))
-      throw InvalidArgument("distance cap_q must be finite and > 0");
+    if (!(std::isfinite(d.cap_q) && d.cap_q >= SoftCap::kMinQ))
+      throw InvalidArgument("distance cap_q must be finite and >= 0.001, got " + decimal(d.cap_q));
     if (!(d.cap_quantile >= 0.0 && d.cap_quantile <= 1.0))
       throw InvalidArgument("distance cap_quantile must be in [0, 1]");
     if (!(std::isfinite(d.cap_factor) && d.cap_factor >= 0.0))
@@ -130,7 +169,7 @@ int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options,
                     const SceneTarget& target) {
   if (options.levels > 0) return options.levels;
   // A given start or a joint pose runs on one level (validate, TrackingRun refuse more).
-  if (options.initial_control.size() > 0 || target.frame == TargetFrame::camera) return 1;
+  if (options.initial_control || target.frame == TargetFrame::camera) return 1;
   // A cloud without a known map (a scan): one level. On noisy one-sided scans the coarse
   // start ends at a lower ρ̃ but a larger shape error (docs/formulation.md §4.8).
   if (!target.map_displacement) return 1;
@@ -151,6 +190,7 @@ struct TrackingRun::Impl {
        const TrackingRunOptions& o)
       : scene(s), assembler(a), control(c), options(o), target(std::move(t)) {
     options.validate();
+    check_against_scene(scene, c, target, options);
     options.levels = tracking_levels(scene, options, target);
     if (target.cloud.dim() != scene.dim())
       throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
@@ -405,14 +445,9 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
   TrackingRunSummary s = d.setup;
   // The scene's bounds and start where a control acts (0 where it touches none of its
   // regions); a multilevel run starts from its coarse levels' control.
-  const Eigen::Index n = d.control.size();
-  if (d.options.initial_control.size() > 0 && d.options.initial_control.size() != n)
-    throw InvalidArgument("initial_control has " +
-                          std::to_string(d.options.initial_control.size()) + " values, expected " +
-                          std::to_string(n) + " (the scene's controls)");
   const Eigen::VectorXd m0 = !d.levels.empty() ? d.run_coarse_levels(to, callbacks, &s)
-                             : d.options.initial_control.size() > 0
-                                 ? d.options.initial_control
+                             : d.options.initial_control
+                                 ? *d.options.initial_control
                                  : d.control.constant(d.scene.control_initial);
   double offset = 0.0;  // the coarse levels' time
   for (const LevelReport& l : s.levels) offset += l.seconds;

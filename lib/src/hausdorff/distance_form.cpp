@@ -40,8 +40,11 @@ std::string got(const std::string& what, double value) {
 void DistanceForm::validate(Eigen::Index moving_points) const {
   if (!(cap.c == 0.0 || (std::isfinite(cap.c) && cap.c > 0.0)))
     throw InvalidArgument(got("distance cap.c must be 0 (no cap) or finite and > 0", cap.c));
-  if (!(std::isfinite(cap.q) && cap.q > 0.0))
-    throw InvalidArgument(got("distance cap.q must be finite and > 0", cap.q));
+  // ψ_c(d)/m = (1 + s^q)^(−1/q) ∈ [2^(−1/q), 1] (§8.3): for q ≥ 1e-3 it stays a normal double
+  // (≥ 2^−1000) and the scaled evaluation's relative error, about ε_mach/q, below 1e-12.
+  if (!(std::isfinite(cap.q) && cap.q >= SoftCap::kMinQ))
+    throw InvalidArgument(
+        got("distance cap.q must be finite and >= 0.001 (the soft cap's sharpness cap_q)", cap.q));
   if (sides != Sides::visible) {
     if (visible.size() != 0)
       throw InvalidArgument("distance visible: a mask is given but the distance is " +
@@ -53,6 +56,27 @@ void DistanceForm::validate(Eigen::Index moving_points) const {
                           " entries for " + std::to_string(moving_points) + " moving points");
   }
   if (!visible.any()) throw InvalidArgument("distance visible: no moving point is marked visible");
+}
+
+void check_cap_length(const SoftCap& cap, const PointCloud& X, const PointCloud& Y) {
+  if (cap.c == 0.0 || X.size() == 0 || Y.size() == 0) return;
+  const Eigen::RowVectorXd lo = X.points().colwise().minCoeff().cwiseMin(
+                               Y.points().colwise().minCoeff()),
+                           hi = X.points().colwise().maxCoeff().cwiseMax(
+                               Y.points().colwise().maxCoeff());
+  const double L = (hi - lo).norm();
+  // ψ_c'(d) ≈ (c/d)^(q+1) for d ≫ c stays ≥ 2^−1022 for every d ≤ L iff c ≥ L 2^(−1022/(q+1)).
+  const double smallest = L * std::exp2(-1022.0 / (cap.q + 1.0));
+  if (cap.c < smallest) {
+    std::ostringstream msg;
+    msg.precision(6);
+    msg << "distance cap (cap.c) " << cap.c << " is below " << smallest
+        << ", the smallest cap for clouds of extent " << L << " with cap_q " << cap.q
+        << ": the capped fields' slopes underflow and rho is the constant cap; give 0 (no cap) "
+           "or a cap >= "
+        << smallest;
+    throw InvalidArgument(msg.str());
+  }
 }
 
 double cap_from_quantile(const Eigen::VectorXd& field, double quantile, double factor) {

@@ -135,6 +135,7 @@ HausdorffResult HausdorffTarget::evaluate(const PointCloud& moving,
                           " entries for " + std::to_string(moving.size()) + " moving points");
   }
   request.form.validate(moving.size());
+  check_cap_length(request.form.cap, moving, impl_->cloud);
   HausdorffResult result;
   if (impl_->options.method == Method::nearest) {
     if (request.any_gradient()) {

@@ -2,12 +2,14 @@
 
 #include "softhd/scan/align.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <exception>
 #include <numeric>
+#include <string>
 
 #include "align_internal.hpp"
 #include "softhd/enum_names.hpp"
@@ -191,12 +193,20 @@ void AlignOptions::validate() const {
               std::to_string(scale_max));
   distance.validate();
   require(distance.method != Method::nearest, "distance.method nearest has no gradient");
-  form.validate(form.visible.size() > 0 ? form.visible.size() : 1);
   require(form.sides != Sides::visible,
-          "form visible is not supported (align has no camera model; use scan_to_body)");
-  require(
-      initial.R.allFinite() && initial.t.allFinite() && std::isfinite(initial.s) && initial.s > 0.0,
-      "initial pose is not finite");
+          "distance visible is not supported (align has no camera model; use scan_to_body for "
+          "a partial view)");
+  form.validate(form.visible.size() > 0 ? form.visible.size() : 1);
+  if (initial) {
+    require(initial->R.allFinite() && initial->t.allFinite() && std::isfinite(initial->s) &&
+                initial->s > 0.0,
+            "initial pose is not finite");
+    char scale[32];
+    std::snprintf(scale, sizeof scale, "%.10g", initial->s);
+    require(kind == PoseKind::similarity || initial->rigid(),
+            std::string("initial pose has scale ") + scale +
+                "; a rigid alignment keeps scale 1 (align a similarity, or give a rigid pose)");
+  }
   require(rotations >= 0 && rotations <= 100000, "rotations must be in [0, 100000]");
   require(coarse_points >= 10, "coarse_points must be >= 10");
   require(std::isfinite(coarse_epsilon) && coarse_epsilon > 0.0, "coarse_epsilon must be > 0");
@@ -210,6 +220,29 @@ void AlignOptions::validate() const {
   require(nearest_iterations >= 0, "nearest_iterations must be >= 0");
   require(std::isfinite(inlier_distance) && inlier_distance > 0.0, "inlier_distance must be > 0");
   check_threads(threads);
+}
+
+void check_fixes_pose(const PointCloud& cloud, const std::string& what) {
+  const Eigen::Index n = cloud.size();
+  if (n == 0) throw InvalidArgument(what + ": it has no points");
+  // The covariance C = Dᵀ D / n of the centred points D (scaled by their largest entry, so
+  // nothing overflows), eigenvalues λ₁ ≤ λ₂ ≤ λ₃: the points span a plane iff λ₂ > 1e-12 λ₃
+  // (their spread across the line is more than 1e-6 of that along it).
+  Eigen::MatrixXd D = cloud.points().rowwise() - cloud.points().colwise().mean();
+  const double scale = D.cwiseAbs().maxCoeff();
+  const std::string points = std::to_string(n) + " points";
+  if (!(scale > 0.0))
+    throw InvalidArgument(what +
+                          (n == 1 ? ": it has a single point" : ": its " + points + " coincide") +
+                          ", which fixes no pose (align needs points that span a plane)");
+  D /= scale;
+  const Eigen::Matrix3d C = D.transpose() * D / static_cast<double>(n);
+  const Eigen::Vector3d l =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C, Eigen::EigenvaluesOnly).eigenvalues();
+  if (l[1] <= 1e-12 * l[2])
+    throw InvalidArgument(what + ": its " + points +
+                          " are collinear (to 1e-6 of their spread along the line), which fixes "
+                          "no rotation about the line (align needs points that span a plane)");
 }
 
 double body_size(const PointCloud& body) {
@@ -228,16 +261,19 @@ std::string AlignSummary::BriefReport() const {
 
 AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
-  options.validate();
   require(body.dim() == 3 && scan.dim() == 3, "the body and the scan must be 3D clouds");
   check_coordinates(body, "body");
   check_coordinates(scan, "scan");
+  check_fixes_pose(body, "align: the body");  // before the options: ε defaults to L/1000
+  check_fixes_pose(scan, "align: the scan");
+  options.validate();
   const double L = body_size(body);
-  require(L > 0.0, "the body's points all coincide (its size is 0)");
 
+  // The global start's candidates and the user's start, which competes with them.
   std::vector<Pose> candidates;
   if (options.global_start) candidates = global_candidates(body, scan, L, options);
-  if (candidates.empty()) candidates.push_back(options.initial.inverse());
+  if (options.initial) candidates.push_back(options.initial->inverse());
+  if (candidates.empty()) candidates.push_back(Pose());
 
   // Refinement: continuation in ε (a hundredth of L, then the user's) on the refine level.
   std::vector<double> eps;

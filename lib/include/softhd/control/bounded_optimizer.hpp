@@ -76,10 +76,17 @@ enum class OptimizerStatus {
   target_value,      ///< J ≤ target_value (converged)
   nlopt_converged,   ///< NLopt reports convergence (converged)
   no_progress,       ///< no progress within the smallest move limit (converged)
+  move_limit,        ///< a relative_change or no_progress stop under a move limit below
+                     ///< kCertifyingMoveLimit: its steps were too short to tell a minimum
   stopped,           ///< an on_iteration observer threw StopRequest
   start_failed,      ///< the evaluation at the starting point failed
   nlopt_failure,     ///< NLopt stopped otherwise (round-off, a rejected problem; see termination)
 };
+
+/// The smallest move limit whose tolerance stops (relative_change, no_progress) count as
+/// converged: under a smaller one every step is so short that a small change of J, or none,
+/// does not tell a minimum (status move_limit; docs/formulation.md §4.5).
+constexpr double kCertifyingMoveLimit = 1e-3;
 
 /// "iteration_limit", "relative_change", ...: the enumerator's name.
 std::string to_string(OptimizerStatus status);

@@ -103,11 +103,11 @@ struct TrackingRunOptions {
   double refined_move_limit = 0.02;
   ///@}
   fe::StateBackend state_backend = fe::StateBackend::kCholmod;  ///< the state solver
-  /// The starting control (one value per control, clamped into the bounds), e.g. an earlier
-  /// run's: a staged run (docs/formulation.md §8.10). Empty (default): the scene's
-  /// control.initial everywhere. Single-level runs only (levels 1; the automatic levels are 1
-  /// then).
-  Eigen::VectorXd initial_control;
+  /// The starting control (one value per control, each within the scene's control bounds;
+  /// TrackingRun refuses any other), e.g. an earlier run's: a staged run (docs/formulation.md
+  /// §8.10). None (default): the scene's control.initial everywhere; an empty vector is refused.
+  /// Single-level runs only (levels 1; the automatic levels are 1 then).
+  std::optional<Eigen::VectorXd> initial_control;
   /// A camera-frame target (docs/formulation.md §8.10): the pose's move limit as a fraction of
   /// the control's, in (0, 1] (PoseBounds::move; default 1).
   double pose_move = 1.0;

@@ -7,6 +7,7 @@
 /// subsampled clouds with a larger ε, its poses ranked by a visible-surface score that tells a
 /// flipped one-sided view from the true one (CandidateScore).
 
+#include <optional>
 #include <string>
 
 #include "softhd/hausdorff.hpp"
@@ -40,10 +41,13 @@ struct AlignOptions {
   HausdorffOptions distance;  ///< the functional's parameters (ε: the finest level's) and method
   DistanceForm form;          ///< sides and cap (a visible mask is refused: align has no camera
                               ///< model of its own; use scan_to_body for partial views)
-  Pose initial;               ///< the starting pose (used as is when global_start is false)
-  bool global_start = true;   ///< search rotations first (else start at `initial`)
-  int rotations = 48;         ///< global start: grid rotations tried (plus 4 principal-axis ones)
-  int coarse_points = 150;    ///< global start: points of each subsampled cloud
+  /// A starting pose (scan → body): with global_start, one more candidate refined and compared
+  /// with the global start's; without, the only start (none: the identity). Rigid for a rigid
+  /// alignment (scale 1 to Pose::kScaleTolerance).
+  std::optional<Pose> initial;
+  bool global_start = true;  ///< search rotations first (else start at `initial`)
+  int rotations = 48;        ///< global start: grid rotations tried (plus 4 principal-axis ones)
+  int coarse_points = 150;   ///< global start: points of each subsampled cloud
   double coarse_epsilon = 0.05;  ///< global start: ε as a fraction of the body's size L
   int keep = 4;                  ///< global start: best distinct poses refined further
   int candidate_points = 400;    ///< points of each cloud when the kept poses are refined
@@ -82,8 +86,13 @@ struct AlignSummary {
 /// The size L of a body: the diagonal of its points' bounding box.
 double body_size(const PointCloud& body);
 
+/// Throws InvalidArgument starting with `what` unless the 3D cloud's points span a plane (the
+/// centred points' covariance has rank ≥ 2: its second eigenvalue above 1e-12 times its
+/// largest): a point, coincident or collinear points fix no pose (docs/formulation.md §8.5).
+void check_fixes_pose(const PointCloud& cloud, const std::string& what);
+
 /// The pose that takes `scan` (camera frame) onto `body` (body frame). Throws InvalidArgument
-/// for invalid options, non-3D clouds or a body whose points all coincide.
+/// for invalid options, non-3D clouds or a body or scan that fixes no pose (check_fixes_pose).
 AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOptions& options);
 
 }  // namespace softhd::scan

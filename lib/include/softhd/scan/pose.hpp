@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
 
 #include "softhd/point_cloud.hpp"
 
@@ -16,6 +17,12 @@ struct Pose {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  ///< rotation (orthonormal, det +1)
   Eigen::Vector3d t = Eigen::Vector3d::Zero();      ///< translation
   double s = 1.0;                                   ///< scale (1 for a rigid motion)
+
+  /// The relative tolerance of a rigid motion's scale, |s − 1| ≤ this (from_matrix's of the
+  /// rotation block).
+  static constexpr double kScaleTolerance = 1e-9;
+  /// A rigid motion: s = 1 to kScaleTolerance.
+  bool rigid() const { return std::abs(s - 1.0) <= kScaleTolerance; }
 
   /// The 4×4 homogeneous matrix [[s R, t], [0, 1]].
   Eigen::Matrix4d matrix() const;
