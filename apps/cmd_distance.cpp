@@ -129,15 +129,23 @@ PointCloud clean_target(const PointCloud& X, const PointCloud& Y, const std::str
 
 }  // namespace
 
-int run_distance(const std::vector<std::string>& tokens) {
-  Args args(tokens);
-  if (args.flag("--help")) {
-    std::cout << kUsage;
-    return 0;
-  }
-  HausdorffOptions opt;
-  opt.share = world_share();  // null unless started by mpirun with K > 1 ranks
-  const bool speaker = world_rank() == 0;
+namespace {
+
+/// What `softhd distance` was asked for.
+struct DistanceArgs {
+  HausdorffOptions options;
+  DistanceForm form;
+  long dim = 0;
+  std::optional<std::string> visible_path, grad_path;
+  bool json = false;
+  scan::ScanCleanup clean;
+  std::string weights;
+  std::vector<std::string> files;  // MOVING TARGET
+};
+
+DistanceArgs parse_distance(Args& args) {
+  DistanceArgs a;
+  HausdorffOptions& opt = a.options;
   opt.params.alpha = args.number("--alpha", opt.params.alpha);
   opt.params.beta = args.number("--beta", opt.params.beta);
   opt.params.gamma = args.number("--gamma", opt.params.gamma);
@@ -145,108 +153,130 @@ int run_distance(const std::vector<std::string>& tokens) {
   opt.method = method_from_string(args.value("--method").value_or("exact"));
   opt.tolerance = args.number("--tol", opt.tolerance);
   opt.threads = static_cast<int>(args.integer("--threads", 0, 0, kMaxThreads));
-  const long dim = args.integer("--dim", 0);
-  if (dim != 0 && dim != 2 && dim != 3) throw UsageError("--dim must be 2 or 3");
-  DistanceForm form;
-  form.sides = sides_from_string(args.value("--distance").value_or("symmetric"));
-  form.cap.c = args.number("--cap", form.cap.c);
-  form.cap.q = args.number("--cap-q", form.cap.q);
+  a.dim = args.integer("--dim", 0);
+  if (a.dim != 0 && a.dim != 2 && a.dim != 3) throw UsageError("--dim must be 2 or 3");
+  a.form.sides = sides_from_string(args.value("--distance").value_or("symmetric"));
+  a.form.cap.c = args.number("--cap", a.form.cap.c);
+  a.form.cap.q = args.number("--cap-q", a.form.cap.q);
   try {
-    DistanceForm{Sides::symmetric, form.cap, {}}.validate(0);
+    DistanceForm{Sides::symmetric, a.form.cap, {}}.validate(0);
   } catch (const InvalidArgument& e) {
     throw UsageError(std::string("--cap/--cap-q: ") + e.what());
   }
-  const std::optional<std::string> visible_path = args.value("--visible");
-  if (visible_path.has_value() != (form.sides == Sides::visible))
-    throw UsageError(visible_path ? "--visible needs --distance visible"
-                                  : "--distance visible needs --visible FILE");
-  const std::optional<std::string> grad_path = args.value("--grad");
-  const bool json = args.flag("--json");
-  scan::ScanCleanup clean;
-  if (const auto crop = args.value("--crop")) clean.crop = parse_number(*crop, "--crop");
-  if (const auto plane = args.value("--plane")) clean.plane = parse_number(*plane, "--plane");
-  if (const auto o = args.value("--outliers")) clean.outliers = parse_outliers(*o);
-  const std::string weights = args.value("--weights").value_or("file");
-  if (weights != "file" && weights != "knn" && weights != "delaunay")
-    throw UsageError("--weights must be file, knn or delaunay, got '" + weights + "'");
+  a.visible_path = args.value("--visible");
+  if (a.visible_path.has_value() != (a.form.sides == Sides::visible))
+    throw UsageError(a.visible_path ? "--visible needs --distance visible"
+                                    : "--distance visible needs --visible FILE");
+  a.grad_path = args.value("--grad");
+  a.json = args.flag("--json");
+  if (const auto crop = args.value("--crop")) a.clean.crop = parse_number(*crop, "--crop");
+  if (const auto plane = args.value("--plane")) a.clean.plane = parse_number(*plane, "--plane");
+  if (const auto o = args.value("--outliers")) a.clean.outliers = parse_outliers(*o);
+  a.weights = args.value("--weights").value_or("file");
+  if (a.weights != "file" && a.weights != "knn" && a.weights != "delaunay")
+    throw UsageError("--weights must be file, knn or delaunay, got '" + a.weights + "'");
   try {
-    clean.validate();
+    a.clean.validate();
   } catch (const InvalidArgument& e) {  // "clean.crop must be ..." for the flag --crop
     throw UsageError(std::string("--") + (e.what() + 6));
   }
-  const std::vector<std::string> files = args.finish();
-  if (files.size() != 2) {
+  a.files = args.finish();
+  if (a.files.size() != 2) {
     throw UsageError("expected two cloud files (MOVING TARGET), got " +
-                     std::to_string(files.size()) + " (see --help)");
+                     std::to_string(a.files.size()) + " (see --help)");
   }
-  opt.validate();
+  return a;
+}
+
+void print_json(const DistanceArgs& a, const PointCloud& X, const PointCloud& Y,
+                const HausdorffResult& r) {
+  const HausdorffOptions& opt = a.options;
+  nlohmann::json j;
+  j["rho"] = r.rho;
+  j["A"] = r.A;
+  j["B"] = r.B;
+  j["N"] = X.size();
+  j["M"] = Y.size();
+  j["dim"] = X.dim();
+  j["method"] = to_string(opt.method);
+  j["alpha"] = opt.params.alpha;
+  j["beta"] = opt.params.beta;
+  j["gamma"] = opt.params.gamma;
+  j["eps"] = opt.params.epsilon;
+  if (opt.method == Method::tree) j["tolerance"] = opt.tolerance;
+  j["distance"] = to_string(a.form.sides);
+  j["cap"] = a.form.cap.c;
+  j["cap_q"] = a.form.cap.q;
+  j["kernel_evaluations"] = r.kernel_evaluations;
+  j["ranks"] = opt.share ? opt.share->size() : 1;
+  j["seconds"] = r.seconds;
+  std::cout << j.dump(2) << '\n';
+}
+
+void print_text(const DistanceArgs& a, const PointCloud& X, const PointCloud& Y,
+                const HausdorffResult& r) {
+  const bool nn = a.options.method == Method::nearest;
+  std::printf("%s = %.10g\n", nn ? "Hausdorff distance" : "rho", r.rho);
+  std::printf("%s = %.10g\n", nn ? "max_j dist(y_j, X)" : "A  ", r.A);
+  std::printf("%s = %.10g\n", nn ? "max_i dist(x_i, Y)" : "B  ", r.B);
+  std::printf("N = %ld moving, M = %ld target points, %dD, method %s, distance %s, %.3g s\n",
+              static_cast<long>(X.size()), static_cast<long>(Y.size()), X.dim(),
+              to_string(a.options.method).c_str(), to_string(a.form.sides).c_str(), r.seconds);
+  if (a.form.cap.c > 0.0) std::printf("cap c = %.10g, q = %.10g\n", a.form.cap.c, a.form.cap.q);
+}
+
+}  // namespace
+
+int run_distance(const std::vector<std::string>& tokens) {
+  Args args(tokens);
+  if (args.flag("--help")) {
+    std::cout << kUsage;
+    return 0;
+  }
+  DistanceArgs a = parse_distance(args);
+  a.options.share = world_share();  // null unless started by mpirun with K > 1 ranks
+  const bool speaker = world_rank() == 0;
+  a.options.validate();
 
   std::vector<std::string> notes;
-  const PointCloud X = read_cloud(files[0], static_cast<int>(dim), &notes);
-  PointCloud Y = read_cloud(files[1], static_cast<int>(dim), &notes);
+  const std::vector<std::string>& files = a.files;
+  const PointCloud X = read_cloud(files[0], static_cast<int>(a.dim), &notes);
+  PointCloud Y = read_cloud(files[1], static_cast<int>(a.dim), &notes);
   check_coordinates(X, files[0]);  // the limit's message names the file
   check_coordinates(Y, files[1]);
   if (X.dim() != Y.dim()) {
     throw InvalidArgument("mixed dimensions: '" + files[0] + "' is " + std::to_string(X.dim()) +
                           "D but '" + files[1] + "' is " + std::to_string(Y.dim()) + "D");
   }
-  Y = clean_target(X, Y, files[1], clean, weights, notes);
+  Y = clean_target(X, Y, files[1], a.clean, a.weights, notes);
   try {
-    check_cap_length(form.cap, X, Y);
+    check_cap_length(a.form.cap, X, Y);
   } catch (const InvalidArgument& e) {
     throw UsageError(std::string("--cap: ") + e.what());
   }
   if (speaker)
     for (const std::string& n : notes) std::cerr << "softhd distance: " << n << '\n';
-  if (visible_path) {
-    form.visible = read_mask(*visible_path);
-    if (form.visible.size() != X.size())
-      throw FileError(*visible_path + ": " + std::to_string(form.visible.size()) +
+  if (a.visible_path) {
+    a.form.visible = read_mask(*a.visible_path);
+    if (a.form.visible.size() != X.size())
+      throw FileError(*a.visible_path + ": " + std::to_string(a.form.visible.size()) +
                       " entries for the " + std::to_string(X.size()) + " points of '" + files[0] +
                       "'");
   }
   HausdorffRequest req;
-  req.form = form;
-  req.gradient_points = req.gradient_volumes = grad_path.has_value();
-  const HausdorffTarget target(Y, opt);
+  req.form = a.form;
+  req.gradient_points = req.gradient_volumes = a.grad_path.has_value();
+  const HausdorffTarget target(Y, a.options);
   const HausdorffResult r = target.evaluate(X, req);
   // Clouds within kMaxCoordinate give finite results; anything else is a bug, not input.
   if (!std::isfinite(r.rho) || !std::isfinite(r.A) || !std::isfinite(r.B))
-    throw std::runtime_error("non-finite result (rho " + std::to_string(r.rho) + ")");
+    throw InternalError("non-finite result (rho " + std::to_string(r.rho) + ")");
   if (!speaker) return 0;
-  if (grad_path) write_gradient(*grad_path, X, r);
-
-  if (json) {
-    nlohmann::json j;
-    j["rho"] = r.rho;
-    j["A"] = r.A;
-    j["B"] = r.B;
-    j["N"] = X.size();
-    j["M"] = Y.size();
-    j["dim"] = X.dim();
-    j["method"] = to_string(opt.method);
-    j["alpha"] = opt.params.alpha;
-    j["beta"] = opt.params.beta;
-    j["gamma"] = opt.params.gamma;
-    j["eps"] = opt.params.epsilon;
-    if (opt.method == Method::tree) j["tolerance"] = opt.tolerance;
-    j["distance"] = to_string(form.sides);
-    j["cap"] = form.cap.c;
-    j["cap_q"] = form.cap.q;
-    j["kernel_evaluations"] = r.kernel_evaluations;
-    j["ranks"] = opt.share ? opt.share->size() : 1;
-    j["seconds"] = r.seconds;
-    std::cout << j.dump(2) << '\n';
-  } else {
-    const bool nn = opt.method == Method::nearest;
-    std::printf("%s = %.10g\n", nn ? "Hausdorff distance" : "rho", r.rho);
-    std::printf("%s = %.10g\n", nn ? "max_j dist(y_j, X)" : "A  ", r.A);
-    std::printf("%s = %.10g\n", nn ? "max_i dist(x_i, Y)" : "B  ", r.B);
-    std::printf("N = %ld moving, M = %ld target points, %dD, method %s, distance %s, %.3g s\n",
-                static_cast<long>(X.size()), static_cast<long>(Y.size()), X.dim(),
-                to_string(opt.method).c_str(), to_string(form.sides).c_str(), r.seconds);
-    if (form.cap.c > 0.0) std::printf("cap c = %.10g, q = %.10g\n", form.cap.c, form.cap.q);
-  }
+  if (a.grad_path) write_gradient(*a.grad_path, X, r);
+  if (a.json)
+    print_json(a, X, Y, r);
+  else
+    print_text(a, X, Y, r);
   return 0;
 }
 

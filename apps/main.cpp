@@ -59,7 +59,8 @@ commands:
 Run 'softhd COMMAND --help' for the options of a command.
 
 exit status: 0 done; 1 a numerical failure on valid input (a state solve that does not
-converge); 2 bad input or refused, with one line on stderr naming the file, key or flag.
+converge), or an internal error (a bug in softhd: please report it); 2 bad input or refused,
+with one line on stderr naming the file, key or flag.
 )";
 
 /// A stream that drops what it is given (the error lines of ranks other than 0).
@@ -103,6 +104,9 @@ int main(int argc, char** argv) {
     if (command == "optimise" || command == "optimize") return softhd::cli::run_optimise(rest);
     err << "softhd: unknown command '" << command << "' (see softhd --help)\n";
     return 2;
+  } catch (const softhd::InternalError& e) {
+    // A bug in softhd, not bad input: exit 1 (its message says "internal error").
+    std::tie(code, error) = std::pair(1, std::string(e.what()));
   } catch (const softhd::NumericalError& e) {
     // Valid input on which the numerics failed (e.g. a state solve): exit 1, not "bad input".
     std::tie(code, error) = std::pair(1, std::string("error: ") + e.what());

@@ -1,5 +1,6 @@
 // The pose of a scan (softhd/scan/pose.hpp): Rodrigues' exp and log against Eigen's
-// AngleAxis, round trips through the matrix and the twist, refusals of a wrong 4×4.
+// AngleAxis, round trips through the matrix and the twist, refusals of a wrong 4×4; the pose
+// map of a twist (softhd/scan/pose_map.hpp) against its definition and central differences.
 
 #include <gtest/gtest.h>
 
@@ -9,6 +10,7 @@
 
 #include "expect_error.hpp"
 #include "softhd/scan/pose.hpp"
+#include "softhd/scan/pose_map.hpp"
 
 namespace softhd::scan {
 namespace {
@@ -111,6 +113,76 @@ TEST(Pose, WrongMatrixRefusedNamingWhatIsWrong) {
   m = Eigen::Matrix4d::Identity();
   m.topLeftCorner<3, 3>() *= 3.0;  // a scaled rotation is fine
   EXPECT_NEAR(Pose::from_matrix(m).s, 3.0, 1e-15);
+}
+
+// Q_ξ = T_ξ ∘ Q₀ applied to a point equals c + e^σ exp([ω]×)(Q₀(x) − c) + v, its definition.
+TEST(PoseMap, AtIsTheTwistAboutTheCentreAfterTheStart) {
+  const Pose q0 =
+      Pose::from_twist((Eigen::Matrix<double, 7, 1>() << 0.3, -0.2, 0.9, 1, 2, 3, 0.1).finished());
+  const Eigen::Vector3d c(0.5, -1.0, 2.0), x(1.0, 0.25, -0.5);
+  const Eigen::VectorXd xi =
+      (Eigen::VectorXd(7) << 0.2, 0.1, -0.4, 0.3, -0.2, 0.5, -0.3).finished();
+  const PoseMap map(q0, c, PoseKind::similarity);
+  const Eigen::Vector3d q0x = q0.s * q0.R * x + q0.t;
+  const Eigen::Vector3d expected =
+      c +
+      std::exp(xi[6]) *
+          Eigen::AngleAxisd(xi.head<3>().norm(), xi.head<3>().normalized()).toRotationMatrix() *
+          (q0x - c) +
+      xi.segment<3>(3);
+  const Pose q = map.at(xi);
+  EXPECT_LT((q.s * q.R * x + q.t - expected).norm(), 1e-14);
+  EXPECT_LT((map.at(Eigen::VectorXd()).matrix() - q0.matrix()).norm(), 1e-15);  // ξ = 0: Q₀
+}
+
+// f(x') = Σ_i ½|x'_i − a_i|² at x' = Q_ξ(x): the twist gradient and the pull-back against
+// central differences (second order: the error falls 100x when h falls 10x), rigid and similarity.
+TEST(PoseMap, TwistGradientAndPullbackMatchCentralDifferences) {
+  std::mt19937_64 gen(12);
+  std::normal_distribution<double> n;
+  Eigen::MatrixXd x(20, 3), a(20, 3);
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    x.data()[i] = n(gen);
+    a.data()[i] = n(gen);
+  }
+  const auto f = [&](const PoseMap& m, const Eigen::VectorXd& xi, const Eigen::MatrixXd& pts) {
+    return 0.5 * (apply_points(m.at(xi), pts) - a).squaredNorm();
+  };
+  for (PoseKind kind : {PoseKind::rigid, PoseKind::similarity}) {
+    const Pose q0 = Pose::from_twist(
+        (Eigen::Matrix<double, 7, 1>() << -0.4, 0.2, 0.3, 0.5, -1, 0.2, 0.05).finished());
+    const PoseMap map(q0, Eigen::Vector3d(0.3, 0.1, -0.2), kind);
+    const int nv = map.variables();
+    ASSERT_EQ(nv, kind == PoseKind::rigid ? 6 : 7);
+    Eigen::VectorXd xi(nv);
+    for (int k = 0; k < nv; ++k) xi[k] = 0.3 * n(gen);
+    const Eigen::MatrixXd moved = apply_points(map.at(xi), x);
+    const Eigen::MatrixXd g = moved - a;  // ∂f/∂x'
+    const Eigen::VectorXd gxi = map.twist_gradient(moved, g, xi);
+    const Eigen::MatrixXd gx = map.pullback(g, xi);
+    for (int k = 0; k < nv; ++k) {
+      double err[2];
+      for (int s = 0; s < 2; ++s) {
+        const double h = s == 0 ? 1e-3 : 1e-4;
+        Eigen::VectorXd e = Eigen::VectorXd::Zero(nv);
+        e[k] = h;
+        err[s] = std::fabs((f(map, xi + e, x) - f(map, xi - e, x)) / (2 * h) - gxi[k]);
+      }
+      EXPECT_LT(err[1], 0.02 * err[0] + 1e-9) << "twist variable " << k;
+    }
+    const double h = 1e-5;
+    for (int c = 0; c < 3; ++c) {
+      Eigen::MatrixXd e = Eigen::MatrixXd::Zero(20, 3);
+      e(7, c) = h;
+      const double fd = (f(map, xi, x + e) - f(map, xi, x - e)) / (2 * h);
+      EXPECT_NEAR(fd, gx(7, c), 1e-7 * (1 + std::fabs(fd))) << "point 7, coordinate " << c;
+    }
+  }
+  const PoseMap rigid(Pose(), Eigen::Vector3d::Zero(), PoseKind::rigid);
+  test::expect_error<InvalidArgument>([&] { rigid.checked(Eigen::VectorXd::Zero(7)); },
+                                      "pose twist has 7 values, expected 6");
+  test::expect_error<InvalidArgument>(
+      [&] { rigid.checked(Eigen::VectorXd::Constant(6, std::nan(""))); }, "not finite");
 }
 
 }  // namespace

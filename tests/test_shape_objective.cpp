@@ -157,14 +157,14 @@ TEST(ShapeObjective, TwoLevelStartsReachTheSameStateWithFewerFineIterations) {
   o.coarse_correction_iterations = 0;       // always take the coarse-corrected start
   ShapeObjective plain(A, space, HausdorffTarget(Y), o);
   ShapeObjective two_level(A, space, HausdorffTarget(Y), o);
-  two_level.use_coarse_level(coarse);
-  EXPECT_EQ(plain.coarse_level(), nullptr);
-  EXPECT_EQ(two_level.coarse_level(), &coarse);
+  two_level.state_path().use_coarse_level(coarse);
+  EXPECT_EQ(plain.state_path().coarse_level(), nullptr);
+  EXPECT_EQ(two_level.state_path().coarse_level(), &coarse);
   const ShapeEvaluation a = plain.evaluate(m, true), b = two_level.evaluate(m, true);
   ASSERT_TRUE(a.status == EvaluationStatus::ok && b.status == EvaluationStatus::ok)
       << a.failure << b.failure;
-  const Eigen::VectorXd& ua = plain.last_state().u;
-  EXPECT_LT((two_level.last_state().u - ua).lpNorm<Eigen::Infinity>(),
+  const Eigen::VectorXd& ua = plain.state_path().last_state().u;
+  EXPECT_LT((two_level.state_path().last_state().u - ua).lpNorm<Eigen::Infinity>(),
             1e-9 * ua.lpNorm<Eigen::Infinity>());
   EXPECT_NEAR(b.J, a.J, 1e-10 * a.J);
   EXPECT_LT((b.gradient - a.gradient).norm(), 1e-6 * a.gradient.norm());
@@ -173,8 +173,8 @@ TEST(ShapeObjective, TwoLevelStartsReachTheSameStateWithFewerFineIterations) {
   const ShapeEvaluation c = plain.evaluate(1.4 * m, false), d = two_level.evaluate(1.4 * m, false);
   ASSERT_TRUE(c.status == EvaluationStatus::ok && d.status == EvaluationStatus::ok)
       << c.failure << d.failure;
-  const Eigen::VectorXd& uc = plain.last_state().u;
-  EXPECT_LT((two_level.last_state().u - uc).lpNorm<Eigen::Infinity>(),
+  const Eigen::VectorXd& uc = plain.state_path().last_state().u;
+  EXPECT_LT((two_level.state_path().last_state().u - uc).lpNorm<Eigen::Infinity>(),
             1e-9 * uc.lpNorm<Eigen::Infinity>());
   EXPECT_NEAR(d.J, c.J, 1e-10 * c.J);
 }
@@ -230,7 +230,7 @@ TEST_P(JointGradient, TaylorRemainderIsSecondOrderInControlAndPose) {
   o.pose_kind = c.kind;
   ShapeObjective J(A, space, HausdorffTarget(G.apply(bent_target(), false)), o);
   const int n = similarity ? 7 : 6;
-  ASSERT_EQ(J.pose_variables(), n);
+  ASSERT_EQ(pose_variables(J), n);
 
   const Eigen::MatrixXd P = space.positions(A.mesh());
   const Eigen::VectorXd m0 = -0.15 * (1.0 + P.col(2).array() / 0.3).matrix();
@@ -245,18 +245,18 @@ TEST_P(JointGradient, TaylorRemainderIsSecondOrderInControlAndPose) {
     dxi[6] = -0.2;
   }
 
-  const ShapeEvaluation e0 = J.evaluate(m0, xi0, true);
+  const ShapeEvaluation e0 = J.evaluate(m0, true, xi0);
   ASSERT_EQ(e0.status, EvaluationStatus::ok) << e0.failure;
   ASSERT_EQ(e0.pose_gradient.size(), n);
   ASSERT_TRUE(e0.gradient.allFinite() && e0.pose_gradient.allFinite());
   const double slope = e0.gradient.dot(dm) + e0.pose_gradient.dot(dxi);
   expect_taylor_order(
-      0.05, e0.J, slope, [&](double h) { return J.evaluate(m0 + h * dm, xi0 + h * dxi, false); },
+      0.05, e0.J, slope, [&](double h) { return J.evaluate(m0 + h * dm, false, xi0 + h * dxi); },
       1.9, 2.1, "control and pose");
   // The pose alone (dm = 0) as well: its gradient is not hidden behind the control's.
   expect_taylor_order(
       0.05, e0.J, e0.pose_gradient.dot(dxi),
-      [&](double h) { return J.evaluate(m0, xi0 + h * dxi, false); }, 1.9, 2.1, "pose only");
+      [&](double h) { return J.evaluate(m0, false, xi0 + h * dxi); }, 1.9, 2.1, "pose only");
 }
 
 INSTANTIATE_TEST_SUITE_P(Pose, JointGradient,
@@ -296,20 +296,20 @@ TEST(ShapeObjective, RigidlyMovedTargetWithTheInversePoseGivesTheSameObjective) 
     in_camera.pose = G.inverse();
     ShapeObjective a(A, space, HausdorffTarget(Y), in_body);
     ShapeObjective b(A, space, HausdorffTarget(G.apply(Y, false)), in_camera);
-    EXPECT_EQ(a.pose_variables(), 0);
-    EXPECT_EQ(b.pose_variables(), 6);
+    EXPECT_EQ(pose_variables(a), 0);
+    EXPECT_EQ(pose_variables(b), 6);
     const ShapeEvaluation ea = a.evaluate(m, true), eb = b.evaluate(m, true);
     ASSERT_TRUE(ea.status == EvaluationStatus::ok && eb.status == EvaluationStatus::ok);
     EXPECT_TRUE(ea.pose_gradient.size() == 0);
     EXPECT_NEAR(eb.J, ea.J, 1e-12 * ea.J);
     EXPECT_LT((eb.gradient - ea.gradient).norm(), 1e-9 * ea.gradient.norm());
     // P_ξ at ξ = 0 is the start; at ξ ≠ 0 it starts another objective with the same J.
-    EXPECT_LT((b.pose_at(Eigen::VectorXd()).matrix() - G.inverse().matrix()).norm(), 1e-14);
+    EXPECT_LT((pose_at(b, Eigen::VectorXd()).matrix() - G.inverse().matrix()).norm(), 1e-14);
     Eigen::VectorXd xi(6);
     xi << 0.1, -0.2, 0.05, 0.02, 0.01, -0.03;
-    const ShapeEvaluation ex = b.evaluate(m, xi, false);
+    const ShapeEvaluation ex = b.evaluate(m, false, xi);
     ShapeObjectiveOptions rebased = in_camera;
-    rebased.pose = b.pose_at(xi);
+    rebased.pose = pose_at(b, xi);
     ShapeObjective c(A, space, HausdorffTarget(G.apply(Y, false)), rebased);
     const ShapeEvaluation ec = c.evaluate(m, false);
     ASSERT_TRUE(ex.status == EvaluationStatus::ok && ec.status == EvaluationStatus::ok);

@@ -84,7 +84,7 @@ TEST(TargetForms, QuantileCapIsSetFromTheRestStateAndUsed) {
   const fe::ControlSpace control = scene.make_control_space(assembler);
   const SceneTarget t = scene_target(scene, assembler.mesh());
   ShapeObjective objective(assembler, control, HausdorffTarget(t.cloud));
-  const Eigen::VectorXd rest = Eigen::VectorXd::Zero(objective.last_state().u.size());
+  const Eigen::VectorXd rest = Eigen::VectorXd::Zero(objective.state_path().last_state().u.size());
   const Eigen::VectorXd field = objective.fields(rest).field_target;
   const DistanceForm form = target_form(t.distance, objective);
   EXPECT_EQ(form.sides, Sides::scan_to_body);
@@ -93,7 +93,7 @@ TEST(TargetForms, QuantileCapIsSetFromTheRestStateAndUsed) {
   const ShapeEvaluation ev = objective.evaluate(control.constant(0.0), false);
   HausdorffRequest req;
   req.form = form;
-  EXPECT_EQ(ev.rho, objective.target().evaluate(objective.particles(rest), req).rho);
+  EXPECT_EQ(ev.rho, objective.target().evaluate(objective.moving_cloud().at(rest), req).rho);
   EXPECT_EQ(ev.B, 0.0);
 }
 

@@ -14,7 +14,7 @@
 #include "softhd/parallel.hpp"
 #include "softhd/scan/visibility.hpp"
 
-using softhd::scan::TriangleSurface;
+using softhd::TriangleSurface;
 using softhd::scan::visible_points;
 using Mask = Eigen::Array<bool, Eigen::Dynamic, 1>;
 

@@ -98,7 +98,7 @@ TEST_P(VisibleGradient, TaylorRemainderIsSecondOrder) {
 
   const ShapeEvaluation e0 = J.evaluate(m0, true);
   ASSERT_EQ(e0.status, EvaluationStatus::ok) << e0.failure;
-  const Mask mask0 = seen(A.mesh(), J.last_state().u);
+  const Mask mask0 = seen(A.mesh(), J.state_path().last_state().u);
   ASSERT_GT(mask0.count(), 0);
   ASSERT_LT(mask0.count(), mask0.size());
   const double slope = e0.gradient.dot(dm);
@@ -106,7 +106,7 @@ TEST_P(VisibleGradient, TaylorRemainderIsSecondOrder) {
   for (double h = 0.2; h > 0.2 / 32; h /= 2) {
     const ShapeEvaluation e = J.evaluate(m0 + h * dm, false);
     ASSERT_EQ(e.status, EvaluationStatus::ok) << e.failure;
-    ASSERT_TRUE((seen(A.mesh(), J.last_state().u) == mask0).all()) << "the visible set changed";
+    ASSERT_TRUE((seen(A.mesh(), J.state_path().last_state().u) == mask0).all()) << "the visible set changed";
     remainder.push_back(std::fabs(e.J - e0.J - h * slope));
   }
   for (size_t k = 0; k + 1 < remainder.size(); ++k)

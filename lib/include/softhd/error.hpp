@@ -50,6 +50,24 @@ class StateSolveError : public NumericalError {
   using NumericalError::NumericalError;
 };
 
+/// A broken internal invariant: a bug in softhd, not a problem with the input. The message
+/// names the invariant and the place; please report it. Thrown by SOFTHD_ASSERT.
+class InternalError : public Error {
+ public:
+  using Error::Error;
+};
+
+/// Checks an internal invariant `cond`; if it fails, throws InternalError with `what`, the
+/// condition's text and the source position. Always on (the checks are cheap and outside
+/// inner loops).
+#define SOFTHD_ASSERT(cond, what)                                                          \
+  do {                                                                                     \
+    if (!(cond))                                                                           \
+      throw ::softhd::InternalError(std::string("internal error (a bug in softhd): ") +    \
+                                    (what) + " [" #cond "] at " + __FILE__ + ":" +         \
+                                    std::to_string(__LINE__));                             \
+  } while (false)
+
 /// A long call stopped because the interrupt check (softhd/interrupt.hpp) asked it to, e.g.
 /// on Ctrl-C in Python (raised there as KeyboardInterrupt).
 class Interrupted : public Error {

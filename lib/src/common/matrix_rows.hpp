@@ -1,7 +1,7 @@
 #pragma once
 // nanoflann's dataset adaptor over the rows of an N by d matrix, read in place (internal):
 // the one adaptor of the k-d trees in hausdorff/nearest_index.cpp, scan/neighbours.cpp and
-// scan/align_search.cpp. A tree keeps a reference to its adaptor: both must stay at one
+// fe/locator.cpp. A tree keeps a reference to its adaptor: both must stay at one
 // address while the tree lives.
 
 #include <Eigen/Core>

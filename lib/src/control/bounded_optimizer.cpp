@@ -293,12 +293,9 @@ double nlopt_callback(const std::vector<double>& z, std::vector<double>& grad, v
   return cb->driver->evaluate(z, grad, *cb->opt);
 }
 
-}  // namespace
-
-BoundedOptimizerSummary minimise(
-    const BoundedObjective& objective, const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
-    const Eigen::VectorXd& upper, const BoundedOptimizerOptions& options,
-    const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& on_iteration) {
+/// Throws InvalidArgument for options, bounds or a start the optimiser cannot take.
+void check_problem(const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
+                   const Eigen::VectorXd& upper, const BoundedOptimizerOptions& options) {
   options.validate();
   const Eigen::Index n = x0.size();
   if (n < 1) throw InvalidArgument("optimizer: no variables");
@@ -324,146 +321,170 @@ BoundedOptimizerSummary minimise(
       throw InvalidArgument(m.str());
     }
   }
+}
 
-  Driver d(objective, options, on_iteration);
-  d.scale = lower.cwiseAbs().cwiseMax(upper.cwiseAbs());
+/// The variables scaled to O(1) (x = scale ∘ z, scale = max(|lower|, |upper|)) and the
+/// starting point evaluated once: it fixes the objective's scale. Returns false, with the
+/// summary's status set, if the run ends there (a failed start, or the target reached).
+bool start(Driver* d, const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
+           const Eigen::VectorXd& upper) {
+  const Eigen::Index n = x0.size();
+  d->scale = lower.cwiseAbs().cwiseMax(upper.cwiseAbs());
   for (Eigen::Index k = 0; k < n; ++k)
-    if (!(d.scale[k] > 0.0)) d.scale[k] = 1.0;  // bounds [0, 0]
-  d.zlo = lower.cwiseQuotient(d.scale);
-  d.zhi = upper.cwiseQuotient(d.scale);
-  d.z0 = x0.cwiseQuotient(d.scale);
-
-  // The starting point, evaluated once: it fixes the objective's scale.
-  ++d.summary.evaluations;
+    if (!(d->scale[k] > 0.0)) d->scale[k] = 1.0;  // bounds [0, 0]
+  d->zlo = lower.cwiseQuotient(d->scale);
+  d->zhi = upper.cwiseQuotient(d->scale);
+  d->z0 = x0.cwiseQuotient(d->scale);
+  ++d->summary.evaluations;
   Eigen::VectorXd g;
   double f = 0.0;
-  if (!objective(x0, f, &g) || !std::isfinite(f) || g.size() != n || !g.allFinite()) {
-    d.summary.failed_evaluations = 1;
-    d.summary.status = OptimizerStatus::start_failed;
-    d.summary.termination = "the evaluation at the starting point failed";
-    d.summary.x = x0;
-    d.summary.initial_value = d.summary.final_value = std::nan("");
-    d.summary.seconds = d.seconds();
-    return d.summary;
+  if (!d->objective(x0, f, &g) || !std::isfinite(f) || g.size() != n || !g.allFinite()) {
+    d->summary.failed_evaluations = 1;
+    d->summary.status = OptimizerStatus::start_failed;
+    d->summary.termination = "the evaluation at the starting point failed";
+    d->summary.x = x0;
+    d->summary.initial_value = d->summary.final_value = std::nan("");
+    return false;
   }
-  d.fscale = d.report_scale = f != 0.0 ? std::fabs(f) : 1.0;
-  d.largest_abs = std::max(1.0, std::fabs(f));
-  d.f0 = f;
-  d.g0 = g;
-  d.summary.initial_value = d.summary.final_value = f;
-  d.summary.x = x0;
-  if (f <= options.target_value) {
-    d.summary.status = OptimizerStatus::target_value;
-    d.summary.termination = "the starting value already reaches the target value";
-    d.summary.seconds = d.seconds();
-    return d.summary;
+  d->fscale = d->report_scale = f != 0.0 ? std::fabs(f) : 1.0;
+  d->largest_abs = std::max(1.0, std::fabs(f));
+  d->f0 = f;
+  d->g0 = g;
+  d->summary.initial_value = d->summary.final_value = f;
+  d->summary.x = x0;
+  if (f <= d->options.target_value) {
+    d->summary.status = OptimizerStatus::target_value;
+    d->summary.termination = "the starting value already reaches the target value";
+    return false;
   }
+  return true;
+}
 
-  // NLopt on the whole box, or in rounds on a moving box of half-width
-  // move_limit · (upper − lower) around the best point (move limits).
-  std::string nlopt_reason;
-  OptimizerStatus nlopt_status = OptimizerStatus::nlopt_failure;  // goes with nlopt_reason
+/// Why NLopt returned, when the driver did not stop it.
+struct NloptEnd {
+  OptimizerStatus status = OptimizerStatus::nlopt_failure;
+  std::string reason;
+};
+
+/// One NLopt run on the box [lo, hi] from the best point, at most `evaluations` new
+/// evaluations. Rethrows an exception of the objective or the observer.
+void run_round(Driver* d, const Eigen::VectorXd& lo, const Eigen::VectorXd& hi, int evaluations,
+               NloptEnd* end) {
+  const Eigen::Index n = d->z0.size();
+  d->recentre = false;
+  d->fscale =
+      round_scale(d->scale.cwiseProduct(d->g0), d->report_scale, d->mma_gradient, d->options);
+  d->round_new_evaluations = 0;
+  nlopt::opt opt(nlopt_algorithm(d->options.algorithm), static_cast<unsigned>(n));
+  opt.set_lower_bounds(std::vector<double>(lo.data(), lo.data() + n));
+  opt.set_upper_bounds(std::vector<double>(hi.data(), hi.data() + n));
+  opt.set_maxeval(1 + evaluations);  // + 1: the first call of a round returns the cached best point
+  Callback cb{d, &opt};
+  opt.set_min_objective(nlopt_callback, &cb);
+  std::vector<double> z(d->z0.data(), d->z0.data() + n);
+  d->first_pending = d->g0.size() == n;
+  double fmin = 0.0;
+  try {
+    const nlopt::result r = opt.optimize(z, fmin);
+    switch (r) {
+      case nlopt::MAXEVAL_REACHED:
+        *end = {OptimizerStatus::evaluation_limit, "the evaluation limit was reached"};
+        break;
+      case nlopt::FTOL_REACHED:
+      case nlopt::XTOL_REACHED:
+      case nlopt::SUCCESS:
+        *end = {OptimizerStatus::nlopt_converged, "NLopt reports convergence"};
+        break;
+      default:
+        *end = {OptimizerStatus::nlopt_failure,
+                "NLopt stopped (result code " + std::to_string(static_cast<int>(r)) + ")"};
+    }
+  } catch (const nlopt::forced_stop&) {
+    // The driver's own stopping rules; see d->stop.
+  } catch (const nlopt::roundoff_limited&) {
+    *end = {OptimizerStatus::nlopt_failure, "NLopt stopped: progress limited by round-off"};
+  } catch (const std::invalid_argument& e) {
+    *end = {OptimizerStatus::nlopt_failure, std::string("NLopt rejected the problem: ") + e.what()};
+  } catch (const std::runtime_error& e) {
+    if (d->stop == Stop::none)
+      *end = {OptimizerStatus::nlopt_failure, std::string("NLopt failed: ") + e.what()};
+  }
+  if (d->error) std::rethrow_exception(d->error);
+}
+
+/// NLopt on the whole box, or in rounds on a moving box of half-width
+/// move_limit · (upper − lower) around the best point (move limits): the next round keeps the
+/// move limit after progress (or a recentring), halves it otherwise.
+NloptEnd run_rounds(Driver* d) {
+  const BoundedOptimizerOptions& options = d->options;
+  const Eigen::Index n = d->z0.size();
+  NloptEnd end;
   double delta = options.move_limit;
   while (true) {
-    Eigen::VectorXd lo = d.zlo, hi = d.zhi;
+    Eigen::VectorXd lo = d->zlo, hi = d->zhi;
     if (delta > 0.0) {
-      Eigen::VectorXd half = delta * (d.zhi - d.zlo);  // the box's half-width per variable
+      Eigen::VectorXd half = delta * (d->zhi - d->zlo);  // the box's half-width per variable
       if (options.move_scale.size() == n) half = half.cwiseProduct(options.move_scale);
-      lo = d.zlo.cwiseMax(d.z0 - half);
-      hi = d.zhi.cwiseMin(d.z0 + half);
+      lo = d->zlo.cwiseMax(d->z0 - half);
+      hi = d->zhi.cwiseMin(d->z0 + half);
     }
-    const int remaining = options.max_evaluations - d.summary.evaluations;
-    if (remaining <= 0) {
-      nlopt_reason = "the evaluation limit was reached";
-      nlopt_status = OptimizerStatus::evaluation_limit;
-      break;
-    }
+    const int remaining = options.max_evaluations - d->summary.evaluations;
+    if (remaining <= 0)
+      return {OptimizerStatus::evaluation_limit, "the evaluation limit was reached"};
     if (delta > 0.0) {
-      d.box_lo = lo;
-      d.box_hi = hi;
+      d->box_lo = lo;
+      d->box_hi = hi;
     }
-    d.recentre = false;
-    d.fscale = round_scale(d.scale.cwiseProduct(d.g0), d.report_scale, d.mma_gradient, options);
-    d.round_new_evaluations = 0;
-    nlopt::opt opt(nlopt_algorithm(options.algorithm), static_cast<unsigned>(n));
-    opt.set_lower_bounds(std::vector<double>(lo.data(), lo.data() + n));
-    opt.set_upper_bounds(std::vector<double>(hi.data(), hi.data() + n));
-    // + 1: the first call of a round returns the cached best point.
-    opt.set_maxeval(1 + (delta > 0.0 ? std::min(remaining, options.round_evaluations) : remaining));
-    Callback cb{&d, &opt};
-    opt.set_min_objective(nlopt_callback, &cb);
-    std::vector<double> z(d.z0.data(), d.z0.data() + n);
-    d.first_pending = d.g0.size() == n;
-    const double round_start = d.summary.final_value;
-    double fmin = 0.0;
-    try {
-      const nlopt::result r = opt.optimize(z, fmin);
-      switch (r) {
-        case nlopt::MAXEVAL_REACHED:
-          nlopt_reason = "the evaluation limit was reached";
-          nlopt_status = OptimizerStatus::evaluation_limit;
-          break;
-        case nlopt::FTOL_REACHED:
-        case nlopt::XTOL_REACHED:
-        case nlopt::SUCCESS:
-          nlopt_reason = "NLopt reports convergence";
-          nlopt_status = OptimizerStatus::nlopt_converged;
-          break;
-        default:
-          nlopt_reason = "NLopt stopped (result code " + std::to_string(static_cast<int>(r)) + ")";
-          nlopt_status = OptimizerStatus::nlopt_failure;
-      }
-    } catch (const nlopt::forced_stop&) {
-      // The driver's own stopping rules; see d.stop.
-    } catch (const nlopt::roundoff_limited&) {
-      nlopt_reason = "NLopt stopped: progress limited by round-off";
-      nlopt_status = OptimizerStatus::nlopt_failure;
-    } catch (const std::invalid_argument& e) {
-      nlopt_reason = std::string("NLopt rejected the problem: ") + e.what();
-      nlopt_status = OptimizerStatus::nlopt_failure;
-    } catch (const std::runtime_error& e) {
-      if (d.stop == Stop::none) {
-        nlopt_reason = std::string("NLopt failed: ") + e.what();
-        nlopt_status = OptimizerStatus::nlopt_failure;
-      }
-    }
-    if (d.error) std::rethrow_exception(d.error);
-    if (d.stop != Stop::none || delta <= 0.0) break;
-    d.adapt_mma_gradient();
-    if (d.recentre) continue;  // progress up to the box's side: same move limit, new centre
-    // Next round: keep the move limit after progress, halve it otherwise.
-    if (!(d.summary.final_value < round_start)) delta *= 0.5;
-    if (delta < options.move_limit * 1e-3) {
-      nlopt_reason = "no progress within the smallest move limit";
-      nlopt_status = OptimizerStatus::no_progress;
-      break;
-    }
+    const double round_start = d->summary.final_value;
+    run_round(d, lo, hi, delta > 0.0 ? std::min(remaining, options.round_evaluations) : remaining,
+              &end);
+    if (d->stop != Stop::none || delta <= 0.0) return end;
+    d->adapt_mma_gradient();
+    if (d->recentre) continue;  // progress up to the box's side: same move limit, new centre
+    if (!(d->summary.final_value < round_start)) delta *= 0.5;
+    if (delta < options.move_limit * 1e-3)
+      return {OptimizerStatus::no_progress, "no progress within the smallest move limit"};
   }
-  switch (d.stop) {
+}
+
+/// The summary's status and termination text from why the run stopped.
+void set_termination(Stop stop, const NloptEnd& end, BoundedOptimizerSummary* s) {
+  switch (stop) {
     case Stop::iterations:
-      d.summary.status = OptimizerStatus::iteration_limit;
-      d.summary.termination = "the iteration limit was reached";
+      s->status = OptimizerStatus::iteration_limit;
+      s->termination = "the iteration limit was reached";
       break;
     case Stop::relative_change:
-      d.summary.status = OptimizerStatus::relative_change;
-      d.summary.termination = "the relative change of J fell below the tolerance";
+      s->status = OptimizerStatus::relative_change;
+      s->termination = "the relative change of J fell below the tolerance";
       break;
     case Stop::target:
-      d.summary.status = OptimizerStatus::target_value;
-      d.summary.termination = "J reached the target value";
+      s->status = OptimizerStatus::target_value;
+      s->termination = "J reached the target value";
       break;
     case Stop::time:
-      d.summary.status = OptimizerStatus::time_limit;
-      d.summary.termination = "the wall-clock limit was reached";
+      s->status = OptimizerStatus::time_limit;
+      s->termination = "the wall-clock limit was reached";
       break;
     case Stop::requested:
-      d.summary.status = OptimizerStatus::stopped;
-      d.summary.termination = "stopped by the caller";
+      s->status = OptimizerStatus::stopped;
+      s->termination = "stopped by the caller";
       break;
     case Stop::none:
-      d.summary.status = nlopt_status;
-      d.summary.termination = nlopt_reason;
+      s->status = end.status;
+      s->termination = end.reason;
   }
+}
+
+}  // namespace
+
+BoundedOptimizerSummary minimise(
+    const BoundedObjective& objective, const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
+    const Eigen::VectorXd& upper, const BoundedOptimizerOptions& options,
+    const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& on_iteration) {
+  check_problem(x0, lower, upper, options);
+  Driver d(objective, options, on_iteration);
+  if (start(&d, x0, lower, upper)) set_termination(d.stop, run_rounds(&d), &d.summary);
   uncertified_by_move_limit(options, &d.summary);
   d.summary.seconds = d.seconds();
   return d.summary;

@@ -90,7 +90,7 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
     if (options.coarse_level == CoarseLevel::automatic &&
         fe::grid_levels(p->scene, fe::GridSequencingOptions{}) > 0) {
       p->two_level.emplace(fe::coarsened(p->scene).make_assembler());
-      p->objective->use_coarse_level(*p->two_level);
+      p->objective->state_path().use_coarse_level(*p->two_level);
     }
     levels.push_back(std::move(p));
     finer = &levels.back()->scene;

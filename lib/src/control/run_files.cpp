@@ -162,7 +162,7 @@ void RunFiles::finish(const ShapeTrackingSummary& s, const PointCloud& target) {
   write_ply_cloud((dir_ / "target.ply").string(), target);
   // A camera-frame target moved into the body's frame by the final pose.
   if (s.pose) write_ply_cloud((dir_ / "target_aligned.ply").string(), s.pose->apply(target, true));
-  write_ply_cloud((dir_ / "body_final.ply").string(), objective_.particles(s.displacement));
+  write_ply_cloud((dir_ / "body_final.ply").string(), objective_.moving_cloud().at(s.displacement));
   write_history();
   const fe::Mesh& mesh = objective_.assembler().mesh();
   fe::write_control_file((dir_ / "control.csv").string(), space_.positions(mesh), s.control);
@@ -182,7 +182,7 @@ HausdorffResult RunFiles::write_body(int iteration, const Eigen::VectorXd& m,
     point.push_back({"d_tilde", r.field_moving});
   cell.push_back({"J", a.jacobians(u).rowwise().mean()});
   if (space_.kind() == fe::ControlKind::kElement) cell.push_back({"m", m});
-  write_vtu_mesh((dir_ / body_name(iteration)).string(), a.mesh(), u, point, cell);
+  fe::write_vtu_mesh((dir_ / body_name(iteration)).string(), a.mesh(), u, point, cell);
   list_body(iteration);
   return r;
 }
@@ -198,7 +198,7 @@ void RunFiles::list_body(int iteration) {
 void RunFiles::write_history() const {
   if (!writes_) return;
   std::ostringstream h;
-  h << kHistoryHeader << (objective_.pose_variables() > 0 ? kPoseHeader : "") << '\n';
+  h << kHistoryHeader << (pose_variables(objective_) > 0 ? kPoseHeader : "") << '\n';
   for (const std::string& r : rows_) h << r << '\n';
   write_file_atomically((dir_ / "history.csv").string(), h.str());
 }

@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "../io/keys.hpp"
+#include "../common/keys.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/shape_tracking.hpp"
 #include "softhd/control/targets.hpp"
@@ -382,7 +382,7 @@ DistanceForm target_form(const TargetDistance& distance, const ShapeObjective& o
   form.cap.c = distance.cap;
   form.cap.q = distance.cap_q;
   if (distance.cap_factor > 0.0) {
-    const Eigen::VectorXd rest = Eigen::VectorXd::Zero(objective.last_state().u.size());
+    const Eigen::VectorXd rest = Eigen::VectorXd::Zero(objective.state_path().last_state().u.size());
     form.cap.c = cap_from_quantile(objective.fields(rest).field_target, distance.cap_quantile,
                                    distance.cap_factor);
   }

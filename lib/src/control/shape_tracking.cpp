@@ -86,8 +86,8 @@ class Recorder {
     }
     restore(best);
     ++next_;
-    const Eigen::Index np = objective_.pose_variables(), nm = m.size() - np;
-    LoggedEvaluation e{m, gradient, objective_.evaluate(m.head(nm), m.tail(np), gradient), 0.0};
+    const Eigen::Index np = pose_variables(objective_), nm = m.size() - np;
+    LoggedEvaluation e{m, gradient, objective_.evaluate(m.head(nm), gradient, m.tail(np)), 0.0};
     if (np > 0 && e.result.gradient.size() == nm) {
       e.result.gradient.conservativeResize(nm + np);
       e.result.gradient.tail(np) = e.result.pose_gradient;
@@ -105,7 +105,8 @@ class Recorder {
       RunSnapshot s;
       s.evaluations = static_cast<std::int64_t>(next_);
       s.iterations = iterations;
-      s.states.assign(objective_.warm_starts().begin(), objective_.warm_starts().end());
+      s.states.assign(objective_.state_path().warm_starts().begin(),
+                      objective_.state_path().warm_starts().end());
       s.best = best;
       writer_->write_states(s);
     }
@@ -113,18 +114,18 @@ class Recorder {
     // here with a new solver, so the uninterrupted run does too, and so does a run that
     // saves no checkpoint (Python's, a benchmark's): a run's path does not depend on
     // whether it is saved.
-    objective_.reset_solver();
+    objective_.state_path().reset();
   }
   /// The warm-start states and the best state the log ended with, once replay is over.
   void restore(fe::State* best) {
     if (restored_ || !log_.has_snapshot || log_.evaluations.empty()) return;
-    objective_.restore_warm_starts(log_.snapshot.states);
+    objective_.state_path().restore(log_.snapshot.states);
     const fe::State& b = log_.snapshot.best;
     if (b.u.size() != best->u.size() || b.m_qp.rows() != best->m_qp.rows() ||
         b.m_qp.cols() != best->m_qp.cols())
       throw InvalidArgument("the checkpoint's best state does not fit this problem");
     *best = b;
-    objective_.reset_solver();  // as the uninterrupted run did at its snapshot
+    objective_.state_path().reset();  // as the uninterrupted run did at its snapshot
     restored_ = true;
   }
 
@@ -175,18 +176,18 @@ void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimize
   recorder.restore(best_state);
   // The best control's state, evaluated again from its own state (Newton stops at once
   // there, so the final ρ̃ is the one the optimiser saw).
-  const Eigen::Index np = objective.pose_variables(), nm = r.x.size() - np;
+  const Eigen::Index np = pose_variables(objective), nm = r.x.size() - np;
   const Eigen::VectorXd m = r.x.head(nm), xi = r.x.tail(np);
-  objective.remember_state(m, *best_state);
-  const ShapeEvaluation final_eval = objective.evaluate(m, xi, false);
+  objective.state_path().remember(m, *best_state);
+  const ShapeEvaluation final_eval = objective.evaluate(m, false, xi);
   if (final_eval.status != EvaluationStatus::ok)
     throw StateSolveError("the state solve at the best control failed: " + final_eval.failure);
   s->control = m;
   if (np > 0) {
     s->pose_twist = xi;
-    s->pose = objective.pose_at(xi);
+    s->pose = pose_at(objective, xi);
   }
-  s->displacement = objective.last_state().u;
+  s->displacement = objective.state_path().last_state().u;
   s->rho_final = final_eval.rho;
   s->J_final = final_eval.J;
   s->iterations = r.iterations;
@@ -237,7 +238,7 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
                    " tikhonov " + exact_text(so.tikhonov_mass) + " " +
                    exact_text(so.tikhonov_gradient) + " warm starts " +
                    std::to_string(so.warm_start_states);
-  if (const fe::Assembler* coarse = objective.coarse_level()) {
+  if (const fe::Assembler* coarse = objective.state_path().coarse_level()) {
     f["objective"] += " coarse level " + hash_of(coarse->mesh().nodes) + " from " +
                       std::to_string(so.coarse_correction_iterations) + " iterations";
   }
@@ -273,11 +274,11 @@ namespace {
 /// for a similarity, σ with s₀ e^{−σ} within [scale_min, scale_max].
 void pose_bounds(const ShapeObjective& objective, const PoseBounds& b, Eigen::VectorXd* lower,
                  Eigen::VectorXd* upper) {
-  const int np = objective.pose_variables();
+  const int np = pose_variables(objective);
   lower->resize(np);
   upper->resize(np);
-  const fe::State& rest = objective.warm_starts().back().state;
-  const PointCloud X = objective.particles(Eigen::VectorXd::Zero(rest.u.size()));
+  const fe::State& rest = objective.state_path().warm_starts().back().state;
+  const PointCloud X = objective.moving_cloud().at(Eigen::VectorXd::Zero(rest.u.size()));
   const double L = (X.points().colwise().maxCoeff() - X.points().colwise().minCoeff()).norm();
   for (int k = 0; k < 3; ++k) {
     (*lower)[k] = -b.rotation;
@@ -311,6 +312,57 @@ void ShapeTrackingOptions::validate() const {
     throw InvalidArgument("resume needs a checkpoint file (the checkpoint field is empty)");
 }
 
+namespace {
+
+/// The optimiser's variables x = [m; ξ] with their bounds: the control, then the pose twist
+/// from 0 (the start pose) within the pose bounds, when the objective has a pose.
+void joint_variables(const ShapeObjective& objective, const PoseBounds& b, Eigen::VectorXd* x0,
+                     Eigen::VectorXd* lower, Eigen::VectorXd* upper) {
+  const Eigen::Index nm = x0->size(), np = pose_variables(objective);
+  if (np == 0) return;
+  Eigen::VectorXd pl, pu;
+  pose_bounds(objective, b, &pl, &pu);
+  x0->conservativeResize(nm + np);
+  x0->tail(np).setZero();
+  lower->conservativeResize(nm + np);
+  lower->tail(np) = pl;
+  upper->conservativeResize(nm + np);
+  upper->tail(np) = pu;
+}
+
+/// The requests of the floors (docs/formulation.md §2.2, §5.3), both in the objective's
+/// distance form: the matched floor's (the body deformed by the known map, with the map's
+/// visible set) and the self floor's (the target against itself, without a visible mask, which
+/// marks body points: the target against itself is symmetric there).
+struct FloorRequests {
+  HausdorffRequest matched, self;
+};
+FloorRequests floor_requests(const ShapeObjective& objective,
+                             const std::optional<Eigen::VectorXd>& map_displacement) {
+  FloorRequests r;
+  r.matched.form = objective.options().form;
+  r.self.form.sides =
+      r.matched.form.sides == Sides::visible ? Sides::symmetric : r.matched.form.sides;
+  r.self.form.cap = r.matched.form.cap;
+  if (map_displacement) r.matched.form = objective.distance_form(*map_displacement);
+  return r;
+}
+
+/// The optimiser's options for this run: the pose moving slower than the control if asked,
+/// and the time limit a total over the resumes.
+BoundedOptimizerOptions run_optimizer_options(const ShapeTrackingOptions& options, Eigen::Index nm,
+                                              Eigen::Index np, double logged_seconds) {
+  BoundedOptimizerOptions opt = options.optimizer;
+  if (np > 0 && options.pose_bounds.move != 1.0) {
+    opt.move_scale.setOnes(nm + np);
+    opt.move_scale.tail(np).setConstant(options.pose_bounds.move);
+  }
+  if (opt.max_seconds > 0.0) opt.max_seconds = std::max(1e-9, opt.max_seconds - logged_seconds);
+  return opt;
+}
+
+}  // namespace
+
 ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorXd& lower,
                                  const Eigen::VectorXd& upper, const Eigen::VectorXd& m0_in,
                                  const std::optional<Eigen::VectorXd>& map_displacement,
@@ -324,42 +376,23 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     throw InvalidArgument("track_shape: m0, lower and upper differ in size");
   const Eigen::VectorXd m0 = m0_in.cwiseMax(lower).cwiseMin(upper);
   Recorder recorder(objective, options, run_fingerprint(objective, lower, upper, m0_in, options));
-  // With a pose the variables are x = [m; ξ], ξ from 0 (the start pose).
-  const Eigen::Index nm = m0.size(), np = objective.pose_variables();
+  const Eigen::Index nm = m0.size(), np = pose_variables(objective);
   Eigen::VectorXd x0 = m0, x_lower = lower, x_upper = upper;
-  if (np > 0) {
-    Eigen::VectorXd pl, pu;
-    pose_bounds(objective, options.pose_bounds, &pl, &pu);
-    x0.conservativeResize(nm + np);
-    x0.tail(np).setZero();
-    x_lower.conservativeResize(nm + np);
-    x_lower.tail(np) = pl;
-    x_upper.conservativeResize(nm + np);
-    x_upper.tail(np) = pu;
-  }
+  joint_variables(objective, options.pose_bounds, &x0, &x_lower, &x_upper);
 
   ShapeTrackingSummary s;
   // Floors (docs/formulation.md §2.2, §5.3): the target against itself, and the body deformed
-  // exactly by the known map at this discretisation.
+  // exactly by the known map at this discretisation. With a known map the matched floor judges
+  // progress, and the self floor (M² pairs, often the most expensive evaluation of the run) is
+  // only reported: computed after the run.
   const HausdorffTarget& Y = objective.target();
   const double m_points = static_cast<double>(Y.cloud().size());
   const bool self_floor = m_points * m_points <= options.self_floor_max_pairs;
-  // With a known map the matched floor judges progress, and the self floor (M² pairs, often
-  // the most expensive evaluation of the run) is only reported: computed after the run.
-  // Both in the objective's distance form (the self floor's without a visible mask, which
-  // marks body points: the target against itself is symmetric there).
-  HausdorffRequest matched, self;
-  matched.form = objective.options().form;
-  self.form.sides = matched.form.sides == Sides::visible ? Sides::symmetric : matched.form.sides;
-  self.form.cap = matched.form.cap;
-  if (self_floor && !map_displacement) s.floor_self = Y.evaluate(Y.cloud(), self).rho;
-  if (map_displacement) {
-    matched.form = objective.distance_form(*map_displacement);  // with the map's visible set
-    // With a pose: the map's body at the start pose (the true pose is not known).
+  const FloorRequests floors = floor_requests(objective, map_displacement);
+  if (self_floor && !map_displacement) s.floor_self = Y.evaluate(Y.cloud(), floors.self).rho;
+  if (map_displacement)  // with a pose: the map's body at the start pose (the true one unknown)
     s.floor_matched =
-        Y.evaluate(objective.target_frame_particles(*map_displacement, Eigen::VectorXd()), matched)
-            .rho;
-  }
+        Y.evaluate(target_frame_cloud(objective, *map_displacement), floors.matched).rho;
   const std::optional<double> floor = s.floor();
 
   const ShapeEvaluation start = objective.evaluate(m0, false);
@@ -372,7 +405,8 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   // The objective for the optimiser, remembering the last evaluation for the records. Its
   // exceptions (and on_iteration's) end minimise(), which rethrows them.
   ShapeEvaluation last;
-  fe::State best_state = objective.last_state();  // the state of the best control so far
+  fe::State best_state =
+      objective.state_path().last_state();  // the state of the best control so far
   bool last_replayed = false;
   const BoundedObjective f = [&](const Eigen::VectorXd& m, double& value, Eigen::VectorXd* g) {
     check_interrupt("between optimiser evaluations");
@@ -394,11 +428,12 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   int iterations = 0;  // accepted so far (for the message of an interrupt)
   const auto on_iteration = [&](const IterationRecord& rec, const Eigen::VectorXd& x) {
     iterations = rec.iteration;
-    if (!last_replayed) best_state = objective.last_state();  // else restored from the log
+    if (!last_replayed)
+      best_state = objective.state_path().last_state();  // else restored from the log
     TrackingIteration it = record(rec, last, floor);
     it.seconds = recorder.seconds();
     it.replayed = last_replayed;
-    if (np > 0) it.pose = objective.pose_at(x.tail(np)).twist();
+    if (np > 0) it.pose = pose_at(objective, x.tail(np)).twist();
     s.history.push_back(it);
     bool stop = false;
     try {
@@ -410,13 +445,8 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     if (rec.iteration % options.checkpoint_every == 0) recorder.snapshot(rec.iteration, best_state);
     if (stop) throw StopRequest{};
   };
-  BoundedOptimizerOptions opt = options.optimizer;
-  if (np > 0 && options.pose_bounds.move != 1.0) {  // the pose slower than the control
-    opt.move_scale.setOnes(nm + np);
-    opt.move_scale.tail(np).setConstant(options.pose_bounds.move);
-  }
-  if (opt.max_seconds > 0.0)  // a total over the resumes
-    opt.max_seconds = std::max(1e-9, opt.max_seconds - recorder.logged_seconds());
+  const BoundedOptimizerOptions opt =
+      run_optimizer_options(options, nm, np, recorder.logged_seconds());
   BoundedOptimizerSummary r;
   try {
     r = minimise(f, x0, x_lower, x_upper, opt, on_iteration);
@@ -428,7 +458,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
                       " iterations (resume from the checkpoint '" + options.checkpoint + "')");
   }
   finish(objective, recorder, r, map_displacement, options.checkpoint_every, &best_state, &s);
-  if (self_floor && map_displacement) s.floor_self = Y.evaluate(Y.cloud(), self).rho;
+  if (self_floor && map_displacement) s.floor_self = Y.evaluate(Y.cloud(), floors.self).rho;
   return s;
 }
 

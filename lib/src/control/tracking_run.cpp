@@ -212,7 +212,7 @@ struct TrackingRun::Impl {
         fe::grid_levels(scene, fe::GridSequencingOptions{}) > 0) {
       const fe::Scene level = fe::coarsened(scene);
       coarse.emplace(level.make_assembler());
-      objective->use_coarse_level(*coarse);
+      objective->state_path().use_coarse_level(*coarse);
       setup.coarse_level = fe::describe_level(level);
     }
     if (options.levels > 1) levels = detail::coarse_problems(scene, target, options);
@@ -411,7 +411,7 @@ Eigen::VectorXd TrackingRun::Impl::run_coarse_levels(const ShapeTrackingOptions&
     fe::State warm;
     warm.u = fe::prolongate(p.assembler->mesh(), r.displacement, finer);
     warm.m_qp = finer_control.to_quadrature(m);
-    (last ? *objective : *levels[k + 1]->objective).remember_state(m, warm);
+    (last ? *objective : *levels[k + 1]->objective).state_path().remember(m, warm);
   }
   return m;
 }
@@ -463,14 +463,14 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
   ShapeTrackingCallbacks cb;
   cb.on_start = [&](const ShapeTrackingSummary& start) {
     if (d.files)
-      d.files->start(start, m0.cwiseMax(lower).cwiseMin(upper), d.objective->last_state().u);
+      d.files->start(start, m0.cwiseMax(lower).cwiseMin(upper), d.objective->state_path().last_state().u);
     if (callbacks.on_start) callbacks.on_start(start);
   };
   cb.on_failure = callbacks.on_failure;
   cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd& m) {
     TrackingIteration shown = it;
     shown.seconds += offset;
-    if (d.files) d.files->iteration(shown, m, d.objective->last_state().u);
+    if (d.files) d.files->iteration(shown, m, d.objective->state_path().last_state().u);
     if (callbacks.on_iteration) callbacks.on_iteration(shown, m);
     if (d.caller_stopped) throw StopRequest{};  // asked for on a coarse level
   };

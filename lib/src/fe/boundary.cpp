@@ -23,7 +23,8 @@ struct FaceTemplate {
 int node_at(const ReferenceElement& r, const Eigen::Vector3d& xi) {
   for (int a = 0; a < r.nodes; ++a)
     if ((r.node_coordinates.row(a).transpose() - xi).norm() < 1e-12) return a;
-  throw Error("boundary: no node of " + to_string(r.type) + " at a face point");
+  SOFTHD_ASSERT(false, "boundary: no node of " + to_string(r.type) + " at a face point");
+  return -1;
 }
 
 // The sub-triangles of a face whose corners c (local ids) run around it: the corner
@@ -133,13 +134,13 @@ BoundaryFacets boundary_facets(const Mesh& mesh) {
   return b;
 }
 
-scan::TriangleSurface boundary_surface(const Mesh& mesh, const BoundaryFacets& facets,
-                                       const Eigen::VectorXd& u) {
+TriangleSurface boundary_surface(const Mesh& mesh, const BoundaryFacets& facets,
+                                 const Eigen::VectorXd& u) {
   if (mesh.dim != 3) throw InvalidArgument("boundary_surface: the body is 2D (3D meshes only)");
   if (u.size() != mesh.num_nodes() * 3)
     throw InvalidArgument("boundary_surface: u has " + std::to_string(u.size()) +
                           " entries, expected 3 per node");
-  scan::TriangleSurface s;
+  TriangleSurface s;
   s.points.resize(static_cast<Eigen::Index>(facets.nodes.size()), 3);
   for (size_t k = 0; k < facets.nodes.size(); ++k) {
     const int n = facets.nodes[k];
@@ -150,11 +151,11 @@ scan::TriangleSurface boundary_surface(const Mesh& mesh, const BoundaryFacets& f
   return s;
 }
 
-scan::TriangleSurface boundary_surface(const Mesh& mesh, const Eigen::VectorXd& u) {
+TriangleSurface boundary_surface(const Mesh& mesh, const Eigen::VectorXd& u) {
   return boundary_surface(mesh, boundary_facets(mesh), u);
 }
 
-Eigen::VectorXd lumped_areas(const scan::TriangleSurface& s) {
+Eigen::VectorXd lumped_areas(const TriangleSurface& s) {
   Eigen::VectorXd V = Eigen::VectorXd::Zero(s.points.rows());
   for (Eigen::Index t = 0; t < s.triangles.rows(); ++t) {
     const Eigen::Vector3d a = s.points.row(s.triangles(t, 0)), b = s.points.row(s.triangles(t, 1)),
@@ -165,7 +166,7 @@ Eigen::VectorXd lumped_areas(const scan::TriangleSurface& s) {
   return V;
 }
 
-Eigen::MatrixXd lumped_areas_pullback(const scan::TriangleSurface& s, const Eigen::VectorXd& w) {
+Eigen::MatrixXd lumped_areas_pullback(const TriangleSurface& s, const Eigen::VectorXd& w) {
   if (w.size() != s.points.rows())
     throw InvalidArgument("lumped_areas_pullback: w has the wrong size");
   Eigen::MatrixXd g = Eigen::MatrixXd::Zero(s.points.rows(), 3);

@@ -116,7 +116,7 @@ Eigen::VectorXd cloud_pullback(const Assembler& A, const Eigen::VectorXd& u, Clo
 
 PointCloud boundary_cloud(const Mesh& mesh, const BoundaryFacets& facets, const Eigen::VectorXd& u,
                           CloudVolumes volumes) {
-  const scan::TriangleSurface s = boundary_surface(mesh, facets, u);
+  const TriangleSurface s = boundary_surface(mesh, facets, u);
   const Eigen::VectorXd V =
       lumped_areas(volumes == CloudVolumes::kDeformed
                        ? s

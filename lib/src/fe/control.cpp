@@ -1,10 +1,12 @@
 #include "softhd/fe/control.hpp"
 
 #include <Eigen/LU>
+#include <sstream>
 
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
-#include "softhd/fe/grid_sequencing.hpp"
+#include "softhd/fe/interpolation.hpp"
+#include "softhd/fe/locator.hpp"
 
 namespace softhd::fe {
 
@@ -204,6 +206,36 @@ Eigen::VectorXd control_at_nodes(const Mesh& mesh, const ControlSpace& space,
       for (int b = 0; b < nv; ++b) v += N[b] * m[mesh.element_vertices(e, b)];
       values[mesh.elements(e, a)] = v;
     }
+  }
+  return values;
+}
+
+Eigen::VectorXd control_at(const Mesh& mesh, ControlKind kind, const Eigen::VectorXd& m,
+                           const Eigen::MatrixXd& X, const std::vector<int>& regions) {
+  const PointLocator locator(mesh);
+  std::vector<int> outside;
+  Eigen::VectorXd values(X.rows());
+  if (kind == ControlKind::kElement) {
+    const Eigen::VectorXi e = locate_points(locator, X);
+    for (Eigen::Index p = 0; p < X.rows(); ++p) {
+      if (e[p] < 0) {
+        outside.push_back(static_cast<int>(p));
+        break;
+      }
+      values[p] = m[e[p]];
+    }
+  } else {  // m(X) = Σ_a M_a(ξ) m_a over the element's vertices (P1/Q1 shape functions)
+    values = interpolate_vertex(mesh, locator, m, X, &outside);
+  }
+  if (!outside.empty()) {
+    std::ostringstream os;
+    os << "control_at: the point (" << X.row(outside[0]) << ") is outside the body";
+    throw InvalidArgument(os.str());
+  }
+  if (!regions.empty()) {  // m = 0 outside the control's regions
+    const Eigen::VectorXi e = locate_points(locator, X);
+    for (Eigen::Index p = 0; p < X.rows(); ++p)
+      if (!in_regions(mesh, regions, e[p])) values[p] = 0.0;
   }
   return values;
 }

@@ -131,36 +131,6 @@ int grid_levels(const Scene& scene, const GridSequencingOptions& options) {
   return coarser_levels(scene, Halving::nested, options.min_elements);
 }
 
-Eigen::VectorXd control_at(const Mesh& mesh, ControlKind kind, const Eigen::VectorXd& m,
-                           const Eigen::MatrixXd& X, const std::vector<int>& regions) {
-  const PointLocator locator(mesh);
-  std::vector<int> outside;
-  Eigen::VectorXd values(X.rows());
-  if (kind == ControlKind::kElement) {
-    const Eigen::VectorXi e = locate_points(locator, X);
-    for (Eigen::Index p = 0; p < X.rows(); ++p) {
-      if (e[p] < 0) {
-        outside.push_back(static_cast<int>(p));
-        break;
-      }
-      values[p] = m[e[p]];
-    }
-  } else {  // m(X) = Σ_a M_a(ξ) m_a over the element's vertices (P1/Q1 shape functions)
-    values = interpolate_vertex(mesh, locator, m, X, &outside);
-  }
-  if (!outside.empty()) {
-    std::ostringstream os;
-    os << "control_at: the point (" << X.row(outside[0]) << ") is outside the body";
-    throw InvalidArgument(os.str());
-  }
-  if (!regions.empty()) {  // m = 0 outside the control's regions
-    const Eigen::VectorXi e = locate_points(locator, X);
-    for (Eigen::Index p = 0; p < X.rows(); ++p)
-      if (!in_regions(mesh, regions, e[p])) values[p] = 0.0;
-  }
-  return values;
-}
-
 Eigen::MatrixXd quadrature_positions(const Mesh& mesh, const ReferenceGeometry& geometry) {
   const int nq = geometry.points_per_element(), nen = geometry.nodes_per_element();
   const Eigen::MatrixXd& N = geometry.shape_values();  // nq by nen

@@ -6,25 +6,15 @@
 #include <nanoflann.hpp>
 #include <vector>
 
+#include "../common/matrix_rows.hpp"
+
 namespace softhd::fe {
 
 namespace {
 
 // nanoflann's dataset adaptor over the element centres (E by dim, read in place).
-struct Centres {
-  const Eigen::MatrixXd* c;
-  size_t kdtree_get_point_count() const { return static_cast<size_t>(c->rows()); }
-  double kdtree_get_pt(size_t i, size_t d) const {
-    return (*c)(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(d));
-  }
-  template <class BBox>
-  bool kdtree_get_bbox(BBox&) const {
-    return false;
-  }
-};
-using CentreTree =
-    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Centres>, Centres, -1,
-                                        size_t>;
+using Centres = softhd::detail::MatrixRows;
+using CentreTree = softhd::detail::MatrixRowsTree<>;
 
 // Collects every centre within squared distance r2 (the result-set interface nanoflann's
 // radiusSearchCustomCallback takes, the same in its 1.4 and 1.5 releases).

@@ -9,6 +9,7 @@
 
 #include "softhd/error.hpp"
 #include "softhd/fe/interpolation.hpp"
+#include "softhd/fe/reference_element.hpp"
 #include "softhd/io/atomic_file.hpp"
 #include "softhd/io/vtu.hpp"
 
@@ -34,6 +35,33 @@ Eigen::VectorXd probe_displacement(const Mesh& mesh, const Eigen::VectorXd& u,
     throw InvalidArgument(os.str());
   }
   return v.row(0).transpose();
+}
+
+void write_vtu_mesh(const std::string& path, const Mesh& mesh, const Eigen::VectorXd& u,
+                    const std::vector<VtuField>& point_fields,
+                    const std::vector<VtuField>& cell_fields) {
+  const int d = mesh.dim;
+  if (u.size() != mesh.num_nodes() * d)
+    throw InvalidArgument("VTU: displacement has " + std::to_string(u.size()) +
+                          " entries, expected " + std::to_string(mesh.num_nodes() * d));
+  // One VTK cell per element, of the cell type's VTK type, nodes in VTK's order
+  // (reference_element(cell).vtk_order: VTK 29 and 24 for hex27 and tet10, 28 and 22 in 2D).
+  const ReferenceElement& ref = reference_element(mesh.cell);
+  VtuGrid grid;
+  grid.points =
+      mesh.nodes + Eigen::Map<const Eigen::MatrixXd>(u.data(), d, mesh.num_nodes()).transpose();
+  grid.vtk_type = ref.vtk_type;
+  grid.cells.resize(static_cast<std::size_t>(mesh.num_elements()));
+  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
+    for (int a : ref.vtk_order)
+      grid.cells[static_cast<std::size_t>(e)].push_back(mesh.elements(e, a));
+  std::vector<VtuField> pf = point_fields, cf = cell_fields;
+  Eigen::MatrixXd u3 = Eigen::MatrixXd::Zero(mesh.num_nodes(), 3);
+  u3.leftCols(d) = grid.points - mesh.nodes;
+  pf.insert(pf.begin(), VtuField{"displacement", u3});
+  if (mesh.region_names.size() > 1)  // region ids (mesh.region_names order)
+    cf.push_back({"region", mesh.element_region.cast<double>()});
+  write_vtu_grid(path, grid, pf, cf);
 }
 
 void write_vtu(const std::string& path, const Mesh& mesh, const Eigen::VectorXd& u,

@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "../io/keys.hpp"
+#include "../common/keys.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/gmsh_mesh.hpp"
 #include "softhd/fe/newton.hpp"

@@ -80,6 +80,8 @@ Method method_from_string(const std::string& name) {
   return enum_from_name(kMethodNames, name, "method");
 }
 
+struct SumsEvaluation;  // one evaluation by pair sums, step by step (below)
+
 struct HausdorffTarget::Impl {
   Impl(PointCloud c, HausdorffOptions o) : cloud(std::move(c)), options(o) {
     weights = cloud.volumes() / cloud.total_volume();  // W_j/|Y|
@@ -108,6 +110,15 @@ struct HausdorffTarget::Impl {
 
   HausdorffResult evaluate_nearest(const PointCloud& X, const HausdorffRequest& req) const;
   HausdorffResult evaluate_sums(const PointCloud& X, const HausdorffRequest& req) const;
+  // The steps of evaluate_sums.
+  void nearest_scales(SumsEvaluation* e) const;
+  void pass_a(SumsEvaluation* e, HausdorffResult* r) const;
+  void pass_b(SumsEvaluation* e, HausdorffResult* r) const;
+  void point_gradient(const SumsEvaluation& e, double rho_A, double rho_B,
+                      HausdorffResult* r) const;
+  void volume_gradient(const SumsEvaluation& e, double rho_A, double rho_B,
+                       HausdorffResult* r) const;
+  void target_gradient(SumsEvaluation* e, double rho_A, double rho_B, HausdorffResult* r) const;
 };
 
 HausdorffTarget::HausdorffTarget(PointCloud target, HausdorffOptions options) {
@@ -209,156 +220,181 @@ Eigen::VectorXd fields_of(const Eigen::VectorXd& scale, const Eigen::VectorXd& S
 
 }  // namespace
 
+/// One evaluation by pair sums, step by step: its inputs, the scales c = r_min + ε of every
+/// point, the two (or three) passes' sums, the fields, the β-means and their slopes.
+struct SumsEvaluation {
+  SumsEvaluation(const PointCloud& moving, const PointCloud& target, const HausdorffRequest& r,
+                 const HausdorffParams& params)
+      : X(moving), Y(target), req(r), prm(params), one_sided(r.form.sides == Sides::scan_to_body) {}
+  const PointCloud& X;
+  const PointCloud& Y;
+  const HausdorffRequest& req;
+  const HausdorffParams& prm;
+  bool one_sided, need_inner = false, pass2 = false, clip = false;
+  detail::PassSettings set;
+  Eigen::VectorXd v;  // V_i/|X|
+  std::unique_ptr<detail::KdTree> x_kd;
+  Eigen::VectorXd scale_y, scale_x;
+  detail::PassSums p1, p2;
+  Eigen::VectorXd dt_y, dt_x;  // d̃_X(y_j), d̃_Y(x_i)
+  detail::SideMean mean_a, mean_b;
+  double volume_b = 0.0;
+  Eigen::VectorXd g_y, f_x;  // pass-2 and pass-3 coefficients
+};
+
 HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
                                                      const HausdorffRequest& req) const {
-  using detail::kInner;
-  using detail::kOuterGrad;
-  using detail::kOuterSum;
-  const PointCloud& Y = cloud;
-  const HausdorffParams& prm = options.params;
-  const DistanceForm& form = req.form;
-  const bool one_sided = form.sides == Sides::scan_to_body;
-  const double alpha = prm.alpha, beta = prm.beta, eps = prm.epsilon;
-  const int d = X.dim();
-  const Eigen::Index N = X.size(), M = Y.size();
-  const detail::KernelPower power(alpha);
-  detail::PassSettings set;
-  set.power = &power;
-  set.eps = eps;
-  set.tau = options.tolerance;
-  set.threads = resolve_threads(options.threads);
-  set.share = options.share.get();
-  const Eigen::VectorXd v = X.volumes() / X.total_volume();  // V_i/|X|
-  const Eigen::VectorXd& w = weights;                        // W_j/|Y|
-
-  // Scales c = r_min + ε of every point, from the k-d trees, leaf by leaf (each leaf's
-  // candidates found once).
-  const auto x_kd = std::make_unique<detail::KdTree>(X.points(), detail::kLeafSize);
-  const Eigen::VectorXd scale_y =
-      detail::nearest_distances(*x_kd, *kd, set.threads, set.share).array() + eps;
-  // x_i's scales serve pass 2 (and 3), which scan_to_body skips for its value alone.
-  const bool need_inner = req.gradient_points || req.gradient_volumes;
-  const bool pass2 = !one_sided || req.fields || need_inner;
-  Eigen::VectorXd scale_x;
-  if (pass2) scale_x = detail::nearest_distances(*kd, *x_kd, set.threads, set.share).array() + eps;
+  SumsEvaluation e(X, cloud, req, options.params);
+  const detail::KernelPower power(e.prm.alpha);
+  e.set.power = &power;
+  e.set.eps = e.prm.epsilon;
+  e.set.tau = options.tolerance;
+  e.set.threads = resolve_threads(options.threads);
+  e.set.share = options.share.get();
+  e.v = X.volumes() / X.total_volume();
   // Every exact S is ≤ 1 (each term ≤ its weight, the weights sum to 1), so clipping an
   // approximate sum at 1 only moves it towards the exact value and keeps d̃ ≥ r_min ≥ 0.
-  const bool clip = options.method != Method::exact;
+  e.clip = options.method != Method::exact;
+  nearest_scales(&e);
   HausdorffResult r;
-
-  // Pass 1, targets over sources: S_j = Σ_i (V_i/|X|) ((r_min(y_j)+ε)/(r_ij+ε))^α, and for
-  // target gradients G_j = Σ_i (V_i/|X|) p_ij t_ij (y_j − x_i)/r_ij.
-  detail::PassSources src_x{&X.points(), x_kd.get(), v.data(), nullptr, nullptr};
-  detail::PassOuter out_y{&Y.points(), kd.get(), scale_y.data(), kOuterSum, nullptr};
-  if (req.gradient_target) out_y.flags |= kOuterGrad;
-  detail::PassSums p1 = detail::run_pass(*backend, src_x, out_y, set);
-  account(r, p1);
-  if (clip) p1.S = p1.S.cwiseMin(1.0);
-  const Eigen::VectorXd dt_y = fields_of(scale_y, p1.S, alpha, eps);  // d̃_X(y_j)
-  // A = (Σ_j (W_j/|Y|) ψ(d̃_j)^β)^(1/β); a_j = ∂A/∂d̃_j = (W_j/|Y|)(ψ_j/A)^(β−1) ψ'_j.
-  const detail::SideMean mean_a = detail::side_mean(dt_y, w, form.cap, beta, req.any_gradient());
-  const double A = mean_a.value;
-  const Eigen::VectorXd& a_y = mean_a.slope;
-
-  // Coefficients carried into pass 2: g_j = a_j (d̃_j + ε)/S_j.
-  Eigen::VectorXd g_y;
-  if (req.any_gradient()) g_y = a_y.array() * (dt_y.array() + eps) / p1.S.array();
-
-  // Pass 2, sources over targets: S_i = Σ_j (W_j/|Y|) ((r_min(x_i)+ε)/(r_ij+ε))^α, with
-  // G_i = Σ_j (W_j/|Y|) p_ij t_ij (x_i − y_j)/r_ij, and the pass-1 terms scaled by y_j's
-  // own scale: H_i = Σ_j g_j p'_ij, G2_i = Σ_j g_j p'_ij t_ij (x_i − y_j)/r_ij.
-  // scan_to_body needs neither S_i (but for the fields) nor G_i: only H_i, G2_i for A.
-  detail::PassSources src_y{&Y.points(), kd.get(), w.data(), nullptr, nullptr};
-  detail::PassOuter out_x{&X.points(), x_kd.get(), scale_x.data(), 0u, nullptr};
-  if (!one_sided || req.fields) out_x.flags |= kOuterSum;
-  if (req.gradient_points && !one_sided) out_x.flags |= kOuterGrad;
-  if (need_inner) {
-    out_x.flags |= kInner;
-    src_y.coef = g_y.data();
-    src_y.scale = scale_y.data();
-  }
-  // The mask leaves masked points with S alone: only where S is summed anyway.
-  if (req.differentiate.size() != 0 && (out_x.flags & kOuterSum)) out_x.mask = &req.differentiate;
-  detail::PassSums p2;
-  if (pass2) {
-    p2 = detail::run_pass(*backend, src_y, out_x, set);
-    account(r, p2);
-  }
-  Eigen::VectorXd dt_x;  // d̃_Y(x_i)
-  if (out_x.flags & kOuterSum) {
-    if (clip) p2.S = p2.S.cwiseMin(1.0);
-    dt_x = fields_of(scale_x, p2.S, alpha, eps);
-  }
-  // B = (Σ_i u_i ψ(d̃_i)^β)^(1/β), u_i = V_i/|X| (symmetric) or V_i/|V| on the visible
-  // points (B_V, |V| = Σ_{k visible} V_k); b_i = ∂B/∂d̃_i = u_i (ψ_i/B)^(β−1) ψ'_i.
-  double volume_b = 0.0;
-  detail::SideMean mean_b;
-  if (!one_sided)
-    mean_b = detail::side_mean(dt_x, detail::b_weights(X, form, volume_b), form.cap, beta,
-                               req.any_gradient(),
-                               form.sides == Sides::visible ? &form.visible : nullptr);
-  const double B = mean_b.value;
-  const double rho = one_sided ? A : detail::combine_means(A, B, prm.gamma);
-
-  r.A = A;
-  r.B = B;
-  r.rho = rho;
+  pass_a(&e, &r);
+  pass_b(&e, &r);
+  r.A = e.mean_a.value;
+  r.B = e.mean_b.value;
+  r.rho = e.one_sided ? r.A : detail::combine_means(r.A, r.B, e.prm.gamma);
   if (req.fields) {
-    r.field_target = dt_y;
-    r.field_moving = dt_x;
+    r.field_target = e.dt_y;
+    r.field_moving = e.dt_x;
   }
   if (!req.any_gradient()) return r;
-
-  const auto [rho_A, rho_B] = detail::rho_slopes(A, B, rho, prm.gamma, form.sides);
+  const auto [rho_A, rho_B] = detail::rho_slopes(r.A, r.B, r.rho, e.prm.gamma, req.form.sides);
   // f_i = b_i (d̃_i + ε)/S_i (zero for scan_to_body).
-  Eigen::VectorXd f_x = Eigen::VectorXd::Zero(N);
-  if (!one_sided) f_x = mean_b.slope.array() * (dt_x.array() + eps) / p2.S.array();
-  auto differentiated = [&](Eigen::Index i) {
-    return req.differentiate.size() == 0 || req.differentiate[i];
-  };
-
-  if (req.gradient_points) {
-    // ∂ρ̃/∂x_i = ρ̃_A (V_i/|X|) G2_i + ρ̃_B f_i G_i
-    r.gradient_points.setZero(N, d);
-    for (Eigen::Index i = 0; i < N; ++i) {
-      if (!differentiated(i)) continue;
-      r.gradient_points.row(i) = rho_A * v[i] * p2.G2.row(i);
-      if (!one_sided) r.gradient_points.row(i) += rho_B * f_x[i] * p2.G.row(i);
-    }
-  }
-  if (req.gradient_volumes) {
-    // ∂ρ̃/∂V_i = −ρ̃_A/(α|X|) (H_i − Σ_j a_j (d̃_j + ε)) + ρ̃_B ∂B/∂V_i, with
-    // ∂B/∂V_i = B/(β|U|) ((ψ_i/B)^β − 1) for the points in B's mean (|U| = |X| or |V|),
-    // 0 for the others.
-    const double sum_a = (a_y.array() * (dt_y.array() + eps)).sum();
-    const double volX = X.total_volume();
-    r.gradient_volumes.setZero(N);
-    for (Eigen::Index i = 0; i < N; ++i) {
-      if (!differentiated(i)) continue;
-      const double dA = -(p2.H[i] - sum_a) / (alpha * volX);
-      const bool in_b = !one_sided && (form.sides != Sides::visible || form.visible[i]);
-      const double dB = in_b && B > 0.0
-                            ? B / (beta * volume_b) * (std::pow(mean_b.capped[i] / B, beta) - 1.0)
-                            : 0.0;
-      r.gradient_volumes[i] = rho_A * dA + rho_B * dB;
-    }
-  }
-  if (req.gradient_target) {
-    // ∂ρ̃/∂y_j = ρ̃_A g_j G_j + ρ̃_B (W_j/|Y|) G3_j, with pass 3 (B's part; not for
-    // scan_to_body), targets over sources with x_i's own scales:
-    // G3_j = Σ_i f_i p'_ij t_ij (y_j − x_i)/r_ij.
-    r.gradient_target.resize(M, d);
-    for (Eigen::Index j = 0; j < M; ++j) r.gradient_target.row(j) = rho_A * g_y[j] * p1.G.row(j);
-    if (!one_sided) {
-      src_x.coef = f_x.data();
-      src_x.scale = scale_x.data();
-      out_y.flags = kInner;
-      const detail::PassSums p3 = detail::run_pass(*backend, src_x, out_y, set);
-      account(r, p3);
-      for (Eigen::Index j = 0; j < M; ++j) r.gradient_target.row(j) += rho_B * w[j] * p3.G2.row(j);
-    }
-  }
+  e.f_x = Eigen::VectorXd::Zero(X.size());
+  if (!e.one_sided)
+    e.f_x = e.mean_b.slope.array() * (e.dt_x.array() + e.prm.epsilon) / e.p2.S.array();
+  if (req.gradient_points) point_gradient(e, rho_A, rho_B, &r);
+  if (req.gradient_volumes) volume_gradient(e, rho_A, rho_B, &r);
+  if (req.gradient_target) target_gradient(&e, rho_A, rho_B, &r);
   return r;
+}
+
+/// The scales c = r_min + ε of every point, from the k-d trees, leaf by leaf (each leaf's
+/// candidates found once). x_i's scales serve pass 2 (and 3), which scan_to_body skips for
+/// its value alone.
+void HausdorffTarget::Impl::nearest_scales(SumsEvaluation* e) const {
+  const double eps = e->prm.epsilon;
+  e->x_kd = std::make_unique<detail::KdTree>(e->X.points(), detail::kLeafSize);
+  e->scale_y = detail::nearest_distances(*e->x_kd, *kd, e->set.threads, e->set.share).array() + eps;
+  e->need_inner = e->req.gradient_points || e->req.gradient_volumes;
+  e->pass2 = !e->one_sided || e->req.fields || e->need_inner;
+  if (e->pass2)
+    e->scale_x =
+        detail::nearest_distances(*kd, *e->x_kd, e->set.threads, e->set.share).array() + eps;
+}
+
+/// Pass 1, targets over sources: S_j = Σ_i (V_i/|X|) ((r_min(y_j)+ε)/(r_ij+ε))^α, and for
+/// target gradients G_j = Σ_i (V_i/|X|) p_ij t_ij (y_j − x_i)/r_ij; then the fields d̃_X(y_j)
+/// and A = (Σ_j (W_j/|Y|) ψ(d̃_j)^β)^(1/β) with a_j = ∂A/∂d̃_j = (W_j/|Y|)(ψ_j/A)^(β−1) ψ'_j,
+/// and the coefficients carried into pass 2: g_j = a_j (d̃_j + ε)/S_j.
+void HausdorffTarget::Impl::pass_a(SumsEvaluation* e, HausdorffResult* r) const {
+  const double eps = e->prm.epsilon;
+  detail::PassSources src_x{&e->X.points(), e->x_kd.get(), e->v.data(), nullptr, nullptr};
+  detail::PassOuter out_y{&e->Y.points(), kd.get(), e->scale_y.data(), detail::kOuterSum, nullptr};
+  if (e->req.gradient_target) out_y.flags |= detail::kOuterGrad;
+  e->p1 = detail::run_pass(*backend, src_x, out_y, e->set);
+  account(*r, e->p1);
+  if (e->clip) e->p1.S = e->p1.S.cwiseMin(1.0);
+  e->dt_y = fields_of(e->scale_y, e->p1.S, e->prm.alpha, eps);
+  e->mean_a =
+      detail::side_mean(e->dt_y, weights, e->req.form.cap, e->prm.beta, e->req.any_gradient());
+  if (e->req.any_gradient())
+    e->g_y = e->mean_a.slope.array() * (e->dt_y.array() + eps) / e->p1.S.array();
+}
+
+/// Pass 2, sources over targets: S_i = Σ_j (W_j/|Y|) ((r_min(x_i)+ε)/(r_ij+ε))^α, with
+/// G_i = Σ_j (W_j/|Y|) p_ij t_ij (x_i − y_j)/r_ij, and the pass-1 terms scaled by y_j's
+/// own scale: H_i = Σ_j g_j p'_ij, G2_i = Σ_j g_j p'_ij t_ij (x_i − y_j)/r_ij.
+/// scan_to_body needs neither S_i (but for the fields) nor G_i: only H_i, G2_i for A.
+/// Then d̃_Y(x_i) and B = (Σ_i u_i ψ(d̃_i)^β)^(1/β), u_i = V_i/|X| (symmetric) or V_i/|V| on the
+/// visible points (B_V, |V| = Σ_{k visible} V_k); b_i = ∂B/∂d̃_i = u_i (ψ_i/B)^(β−1) ψ'_i.
+void HausdorffTarget::Impl::pass_b(SumsEvaluation* e, HausdorffResult* r) const {
+  const HausdorffRequest& req = e->req;
+  detail::PassSources src_y{&e->Y.points(), kd.get(), weights.data(), nullptr, nullptr};
+  detail::PassOuter out_x{&e->X.points(), e->x_kd.get(), e->scale_x.data(), 0u, nullptr};
+  if (!e->one_sided || req.fields) out_x.flags |= detail::kOuterSum;
+  if (req.gradient_points && !e->one_sided) out_x.flags |= detail::kOuterGrad;
+  if (e->need_inner) {
+    out_x.flags |= detail::kInner;
+    src_y.coef = e->g_y.data();
+    src_y.scale = e->scale_y.data();
+  }
+  // The mask leaves masked points with S alone: only where S is summed anyway.
+  if (req.differentiate.size() != 0 && (out_x.flags & detail::kOuterSum))
+    out_x.mask = &req.differentiate;
+  if (e->pass2) {
+    e->p2 = detail::run_pass(*backend, src_y, out_x, e->set);
+    account(*r, e->p2);
+  }
+  if (out_x.flags & detail::kOuterSum) {
+    if (e->clip) e->p2.S = e->p2.S.cwiseMin(1.0);
+    e->dt_x = fields_of(e->scale_x, e->p2.S, e->prm.alpha, e->prm.epsilon);
+  }
+  if (!e->one_sided)
+    e->mean_b = detail::side_mean(e->dt_x, detail::b_weights(e->X, req.form, e->volume_b),
+                                  req.form.cap, e->prm.beta, req.any_gradient(),
+                                  req.form.sides == Sides::visible ? &req.form.visible : nullptr);
+}
+
+/// ∂ρ̃/∂x_i = ρ̃_A (V_i/|X|) G2_i + ρ̃_B f_i G_i.
+void HausdorffTarget::Impl::point_gradient(const SumsEvaluation& e, double rho_A, double rho_B,
+                                           HausdorffResult* r) const {
+  const HausdorffRequest& req = e.req;
+  r->gradient_points.setZero(e.X.size(), e.X.dim());
+  for (Eigen::Index i = 0; i < e.X.size(); ++i) {
+    if (req.differentiate.size() != 0 && !req.differentiate[i]) continue;
+    r->gradient_points.row(i) = rho_A * e.v[i] * e.p2.G2.row(i);
+    if (!e.one_sided) r->gradient_points.row(i) += rho_B * e.f_x[i] * e.p2.G.row(i);
+  }
+}
+
+/// ∂ρ̃/∂V_i = −ρ̃_A/(α|X|) (H_i − Σ_j a_j (d̃_j + ε)) + ρ̃_B ∂B/∂V_i, with
+/// ∂B/∂V_i = B/(β|U|) ((ψ_i/B)^β − 1) for the points in B's mean (|U| = |X| or |V|),
+/// 0 for the others.
+void HausdorffTarget::Impl::volume_gradient(const SumsEvaluation& e, double rho_A, double rho_B,
+                                            HausdorffResult* r) const {
+  const HausdorffRequest& req = e.req;
+  const double alpha = e.prm.alpha, beta = e.prm.beta, B = e.mean_b.value;
+  const double sum_a = (e.mean_a.slope.array() * (e.dt_y.array() + e.prm.epsilon)).sum();
+  const double volX = e.X.total_volume();
+  r->gradient_volumes.setZero(e.X.size());
+  for (Eigen::Index i = 0; i < e.X.size(); ++i) {
+    if (req.differentiate.size() != 0 && !req.differentiate[i]) continue;
+    const double dA = -(e.p2.H[i] - sum_a) / (alpha * volX);
+    const bool in_b = !e.one_sided && (req.form.sides != Sides::visible || req.form.visible[i]);
+    const double dB = in_b && B > 0.0
+                          ? B / (beta * e.volume_b) * (std::pow(e.mean_b.capped[i] / B, beta) - 1.0)
+                          : 0.0;
+    r->gradient_volumes[i] = rho_A * dA + rho_B * dB;
+  }
+}
+
+/// ∂ρ̃/∂y_j = ρ̃_A g_j G_j + ρ̃_B (W_j/|Y|) G3_j, with pass 3 (B's part; not for
+/// scan_to_body), targets over sources with x_i's own scales:
+/// G3_j = Σ_i f_i p'_ij t_ij (y_j − x_i)/r_ij.
+void HausdorffTarget::Impl::target_gradient(SumsEvaluation* e, double rho_A, double rho_B,
+                                            HausdorffResult* r) const {
+  const Eigen::Index M = e->Y.size();
+  r->gradient_target.resize(M, e->Y.dim());
+  for (Eigen::Index j = 0; j < M; ++j)
+    r->gradient_target.row(j) = rho_A * e->g_y[j] * e->p1.G.row(j);
+  if (e->one_sided) return;
+  detail::PassSources src_x{&e->X.points(), e->x_kd.get(), e->v.data(), e->f_x.data(),
+                            e->scale_x.data()};
+  detail::PassOuter out_y{&e->Y.points(), kd.get(), e->scale_y.data(), detail::kInner, nullptr};
+  const detail::PassSums p3 = detail::run_pass(*backend, src_x, out_y, e->set);
+  account(*r, p3);
+  for (Eigen::Index j = 0; j < M; ++j)
+    r->gradient_target.row(j) += rho_B * weights[j] * p3.G2.row(j);
 }
 
 HausdorffResult hausdorff(const PointCloud& moving, const PointCloud& target,

@@ -62,6 +62,24 @@ Eigen::VectorXd NearestIndex::distances(const Eigen::MatrixXd& queries, int thre
   return out;
 }
 
+void NearestIndex::nearest(const Eigen::MatrixXd& queries, std::vector<Eigen::Index>* index,
+                           Eigen::VectorXd* distance, int threads) const {
+  const Eigen::Index n = queries.rows();
+  const int d = static_cast<int>(queries.cols());
+  index->assign(static_cast<size_t>(n), 0);
+  distance->resize(n);
+#pragma omp parallel for schedule(static) num_threads(resolve_threads(threads)) if (n > 512)
+  for (Eigen::Index q = 0; q < n; ++q) {
+    double point[3];
+    for (int k = 0; k < d; ++k) point[k] = queries(q, k);
+    size_t i = 0;
+    double d2 = 0.0;
+    tree_->index.knnSearch(point, 1, &i, &d2);
+    (*index)[static_cast<size_t>(q)] = static_cast<Eigen::Index>(i);
+    (*distance)[q] = std::sqrt(d2);
+  }
+}
+
 namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();

@@ -1,8 +1,9 @@
 #pragma once
-// Nearest-neighbour distances with nanoflann (internal).
+// Nearest neighbours with nanoflann (internal): the one nearest-point wrapper of the library.
 
 #include <Eigen/Core>
 #include <memory>
+#include <vector>
 
 #include "softhd/work_share.hpp"
 
@@ -23,6 +24,10 @@ class NearestIndex {
   /// (collective; exact, the other processes contribute zeros).
   Eigen::VectorXd distances(const Eigen::MatrixXd& queries, int threads,
                             const WorkShare* share = nullptr) const;
+  /// For each row q of `queries`: the index of its nearest row (ties: nanoflann's choice) and
+  /// the distance. OpenMP over the queries above 512 of them.
+  void nearest(const Eigen::MatrixXd& queries, std::vector<Eigen::Index>* index,
+               Eigen::VectorXd* distance, int threads) const;
 
  private:
   struct Tree;

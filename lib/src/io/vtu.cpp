@@ -63,59 +63,32 @@ const char* kFooter = "    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
 
 }  // namespace
 
-void write_vtu_mesh(const std::string& path, const fe::Mesh& mesh, const Eigen::VectorXd& u,
+void write_vtu_grid(const std::string& path, const VtuGrid& grid,
                     const std::vector<VtuField>& point_fields,
                     const std::vector<VtuField>& cell_fields) {
-  const int d = mesh.dim;
-  if (u.size() != mesh.num_nodes() * d)
-    throw InvalidArgument("VTU: displacement has " + std::to_string(u.size()) +
-                          " entries, expected " + std::to_string(mesh.num_nodes() * d));
-  check_rows(point_fields, mesh.num_nodes(), "nodes");
-  check_rows(cell_fields, mesh.num_elements(), "elements");
-  const Eigen::MatrixXd x =
-      mesh.nodes + Eigen::Map<const Eigen::MatrixXd>(u.data(), d, mesh.num_nodes()).transpose();
-  // One VTK cell per element, of the cell type's VTK type, nodes in VTK's order
-  // (reference_element(cell).vtk_order: VTK 29 and 24 for hex27 and tet10, 28 and 22 in 2D).
-  const fe::ReferenceElement& ref = fe::reference_element(mesh.cell);
-  std::vector<std::vector<int>> cells(static_cast<std::size_t>(mesh.num_elements()));
-  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
-    for (int a : ref.vtk_order) cells[static_cast<std::size_t>(e)].push_back(mesh.elements(e, a));
-  std::vector<VtuField> cf = cell_fields;
-  if (mesh.region_names.size() > 1)  // region ids (mesh.region_names order)
-    cf.push_back({"region", mesh.element_region.cast<double>()});
+  check_rows(point_fields, grid.points.rows(), "points");
+  check_rows(cell_fields, static_cast<Eigen::Index>(grid.cells.size()), "cells");
   std::ostringstream s;
   s.precision(12);
-  s << kHeader << "    <Piece NumberOfPoints=\"" << x.rows() << "\" NumberOfCells=\""
-    << cells.size() << "\">\n";
-  write_points(s, x);
-  write_cells(s, cells, ref.vtk_type);
-  std::vector<VtuField> pf = point_fields;
-  Eigen::MatrixXd u3 = Eigen::MatrixXd::Zero(mesh.num_nodes(), 3);
-  u3.leftCols(d) = x - mesh.nodes;
-  pf.insert(pf.begin(), VtuField{"displacement", u3});
-  write_fields(s, "PointData", pf);
-  write_fields(s, "CellData", cf);
+  s << kHeader << "    <Piece NumberOfPoints=\"" << grid.points.rows() << "\" NumberOfCells=\""
+    << grid.cells.size() << "\">\n";
+  write_points(s, grid.points);
+  write_cells(s, grid.cells, grid.vtk_type);
+  write_fields(s, "PointData", point_fields);
+  write_fields(s, "CellData", cell_fields);
   s << kFooter;
   write_file_atomically(path, s.str());
 }
 
 void write_vtu_cloud(const std::string& path, const PointCloud& cloud,
                      const std::vector<VtuField>& point_fields) {
-  check_rows(point_fields, cloud.size(), "points");
-  std::vector<std::vector<int>> cells(static_cast<size_t>(cloud.size()));
+  VtuGrid grid{cloud.points(), std::vector<std::vector<int>>(static_cast<size_t>(cloud.size())),
+               1};  // VTK_VERTEX
   for (Eigen::Index i = 0; i < cloud.size(); ++i)
-    cells[static_cast<size_t>(i)] = {static_cast<int>(i)};
-  std::ostringstream s;
-  s.precision(12);
-  s << kHeader << "    <Piece NumberOfPoints=\"" << cloud.size() << "\" NumberOfCells=\""
-    << cloud.size() << "\">\n";
-  write_points(s, cloud.points());
-  write_cells(s, cells, 1);  // VTK_VERTEX
+    grid.cells[static_cast<size_t>(i)] = {static_cast<int>(i)};
   std::vector<VtuField> pf = point_fields;
   pf.insert(pf.begin(), VtuField{"volume", cloud.volumes()});
-  write_fields(s, "PointData", pf);
-  s << kFooter;
-  write_file_atomically(path, s.str());
+  write_vtu_grid(path, grid, pf);
 }
 
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& files) {

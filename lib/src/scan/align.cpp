@@ -20,8 +20,6 @@ namespace softhd::scan {
 
 namespace {
 
-constexpr EnumNames<PoseKind, 2> kPoseKindNames{
-    {{PoseKind::rigid, "rigid"}, {PoseKind::similarity, "similarity"}}};
 constexpr EnumNames<AlignStatus, 3> kAlignStatusNames{
     {{AlignStatus::converged, "converged"},
      {AlignStatus::iteration_limit, "iteration_limit"},
@@ -158,7 +156,7 @@ std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& sc
 void report_nearest(const detail::NearestPoints& nearest, const PointCloud& scan,
                     const AlignOptions& options, double L, AlignSummary* out) {
   std::vector<Eigen::Index> index;
-  nearest.query(apply_points(out->pose, scan.points()), &index, &out->residuals, options.threads);
+  nearest.nearest(apply_points(out->pose, scan.points()), &index, &out->residuals, options.threads);
   out->inlier_distance = options.inlier_distance * L;
   double sum2 = 0.0;
   Eigen::Index inliers = 0;
@@ -174,10 +172,6 @@ void report_nearest(const detail::NearestPoints& nearest, const PointCloud& scan
 
 }  // namespace
 
-std::string to_string(PoseKind kind) { return enum_name(kPoseKindNames, kind); }
-PoseKind pose_kind_from_string(const std::string& name) {
-  return enum_from_name(kPoseKindNames, name, "align");
-}
 std::string to_string(AlignStatus status) { return enum_name(kAlignStatusNames, status); }
 std::string to_string(CandidateScore score) { return enum_name(kCandidateScoreNames, score); }
 CandidateScore candidate_score_from_string(const std::string& name) {

@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "../hausdorff/nearest_index.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/scan/align.hpp"
 #include "softhd/scan/pose.hpp"
@@ -69,20 +70,9 @@ Eigen::Matrix3d principal_axes(const Eigen::MatrixXd& points);
 /// `count` rows of `points` (all if fewer), chosen by a seeded shuffle: deterministic.
 std::vector<Eigen::Index> subsample(Eigen::Index rows, Eigen::Index count, unsigned seed);
 
-/// Nearest neighbours among the rows of a fixed N by 3 matrix (a k-d tree built once).
-class NearestPoints {
- public:
-  explicit NearestPoints(const Eigen::MatrixXd& points);
-  ~NearestPoints();
-  /// For each row q of `queries`: the index of its nearest point and the distance.
-  void query(const Eigen::MatrixXd& queries, std::vector<Eigen::Index>* index,
-             Eigen::VectorXd* distance, int threads) const;
-
- private:
-  struct Tree;
-  Eigen::MatrixXd points_;
-  std::unique_ptr<Tree> tree_;
-};
+/// Nearest neighbours among the rows of a fixed N by 3 matrix (a k-d tree built once; the
+/// matrix must outlive it).
+using NearestPoints = softhd::detail::NearestIndex;
 
 /// The score align() chooses its candidate by (docs/formulation.md §8.5): with the camera at
 /// the scan frame's origin, the body points a pose Q puts nearest the camera in their pixel

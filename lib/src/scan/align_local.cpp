@@ -23,36 +23,16 @@ double PoseObjective::value(const Pose& Q, Eigen::VectorXd* gradient,
   request.gradient_points = gradient != nullptr;
   const HausdorffResult r = target_.evaluate(moved, request);
   if (gradient == nullptr) return r.rho;
-  // Twist about the centroid c of the moved points x_i, g_i = ∂ρ̃/∂x_i:
-  //   ∂ρ̃/∂v = Σ g_i,  ∂ρ̃/∂ω = Σ (x_i − c) × g_i,  ∂ρ̃/∂σ = Σ (x_i − c)·g_i.
+  // The twist about the centroid c of the moved points, at δ = 0 (PoseMap::twist_gradient).
   const Eigen::Vector3d c = moved.points().colwise().mean().transpose();
-  Eigen::Vector3d gv = Eigen::Vector3d::Zero(), gw = Eigen::Vector3d::Zero();
-  double gs = 0.0;
-  for (Eigen::Index i = 0; i < moved.size(); ++i) {
-    const Eigen::Vector3d d = moved.points().row(i).transpose() - c;
-    const Eigen::Vector3d g = r.gradient_points.row(i).transpose();
-    gv += g;
-    gw += d.cross(g);
-    gs += d.dot(g);
-  }
-  gradient->resize(gradient->size() == 7 ? 7 : 6);
-  gradient->head<3>() = gw;
-  gradient->segment<3>(3) = gv;
-  if (gradient->size() == 7) (*gradient)[6] = gs;
+  const PoseMap step(Q, c, gradient->size() == 7 ? PoseKind::similarity : PoseKind::rigid);
+  *gradient = step.twist_gradient(moved.points(), r.gradient_points, Eigen::VectorXd());
   *centre = c;
   return r.rho;
 }
 
 Pose twist_step(const Pose& Q, const Eigen::VectorXd& delta, const Eigen::Vector3d& centre) {
-  // T(z) = c + e^σ E (z − c) + v, E = exp([ω]×); T ∘ Q: R' = E R, s' = e^σ s,
-  // t' = c + e^σ E (t − c) + v.
-  const Eigen::Matrix3d E = rotation_exp(delta.head<3>());
-  const double es = delta.size() == 7 ? std::exp(delta[6]) : 1.0;
-  Pose out;
-  out.R = E * Q.R;
-  out.s = es * Q.s;
-  out.t = centre + es * (E * (Q.t - centre)) + delta.segment<3>(3);
-  return out;
+  return PoseMap(Q, centre, delta.size() == 7 ? PoseKind::similarity : PoseKind::rigid).at(delta);
 }
 
 namespace {

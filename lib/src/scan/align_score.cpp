@@ -18,8 +18,8 @@ VisibleScore::VisibleScore(const Eigen::MatrixXd& body, const Eigen::MatrixXd& s
       size_(size),
       truncation_(truncation),
       threads_(threads),
-      body_tree_(body),
-      scan_tree_(scan) {
+      body_tree_(body_),
+      scan_tree_(scan_) {
   // The image: the camera at the origin looking at the scan's centroid (e3), pinhole
   // coordinates (p·e1, p·e2)/(p·e3); pixels of width L/n at the centroid's depth,
   // n = clamp(√N_body / 1.5, 8, 200) (a few body points per pixel on a surface).
@@ -96,11 +96,11 @@ double VisibleScore::value(const Pose& Q) const {
   Eigen::VectorXd d;
   double body_side = c;  // no visible body point in the footprint: the worst
   if (V.rows() > 0) {
-    scan_tree_.query(V, &index, &d, threads_);
+    scan_tree_.nearest(V, &index, &d, threads_);
     body_side = d.cwiseMin(c).mean();
   }
   // d(y_j, Q(B)) = d(P y_j, B)·s_Q with P = Q⁻¹ (the body's tree is in its own frame).
-  body_tree_.query(apply_points(Q.inverse(), scan_), &index, &d, threads_);
+  body_tree_.nearest(apply_points(Q.inverse(), scan_), &index, &d, threads_);
   const double scan_side = (d * Q.s).cwiseMin(c).mean();
   return 0.5 * (scan_side + body_side) / Lq;
 }

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <random>
 
-#include "../common/matrix_rows.hpp"
 #include "align_internal.hpp"
 #include "softhd/parallel.hpp"
 
@@ -54,38 +53,6 @@ std::vector<Eigen::Index> subsample(Eigen::Index rows, Eigen::Index count, unsig
   return index;
 }
 
-namespace {
-using Rows = softhd::detail::MatrixRows;
-using Flann = softhd::detail::MatrixRowsTree<3>;
-}  // namespace
-
-struct NearestPoints::Tree {  // the adaptor must stay at one address while the tree lives
-  explicit Tree(const Eigen::MatrixXd& p)
-      : rows{&p}, index(3, rows, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {}
-  Rows rows;
-  Flann index;
-};
-
-NearestPoints::NearestPoints(const Eigen::MatrixXd& points)
-    : points_(points), tree_(std::make_unique<Tree>(points_)) {}
-NearestPoints::~NearestPoints() = default;
-
-void NearestPoints::query(const Eigen::MatrixXd& queries, std::vector<Eigen::Index>* index,
-                          Eigen::VectorXd* distance, int threads) const {
-  const Eigen::Index n = queries.rows();
-  index->assign(static_cast<size_t>(n), 0);
-  distance->resize(n);
-#pragma omp parallel for schedule(static) num_threads(resolve_threads(threads)) if (n > 512)
-  for (Eigen::Index q = 0; q < n; ++q) {
-    const double point[3] = {queries(q, 0), queries(q, 1), queries(q, 2)};
-    size_t i = 0;
-    double d2 = 0.0;
-    tree_->index.knnSearch(point, 1, &i, &d2);
-    (*index)[static_cast<size_t>(q)] = static_cast<Eigen::Index>(i);
-    (*distance)[q] = std::sqrt(d2);
-  }
-}
-
 Pose fit_pose(const Eigen::MatrixXd& from, const Eigen::MatrixXd& to, bool similarity, double s_min,
               double s_max) {
   // Umeyama: with means a, b and Σ = (1/n) Σ (b_k − b)(a_k − a)ᵀ = U D Vᵀ,
@@ -114,7 +81,7 @@ Pose nearest_refinement(const NearestPoints& body, const Eigen::MatrixXd& body_p
   std::vector<Eigen::Index> index;
   Eigen::VectorXd dist;
   for (*iterations = 0; *iterations < options.nearest_iterations; ++*iterations) {
-    body.query(apply_points(P, scan), &index, &dist, options.threads);
+    body.nearest(apply_points(P, scan), &index, &dist, options.threads);
     Eigen::VectorXd sorted = dist;
     std::nth_element(sorted.data(), sorted.data() + sorted.size() / 2,
                      sorted.data() + sorted.size());

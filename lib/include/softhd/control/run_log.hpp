@@ -50,7 +50,7 @@ struct LoggedEvaluation {
 struct RunSnapshot {
   std::int64_t evaluations = 0;   ///< evaluations logged before it
   std::int64_t iterations = 0;    ///< accepted iterations by then
-  std::vector<WarmStart> states;  ///< ShapeObjective::warm_starts(), most recent first
+  std::vector<WarmStart> states;  ///< StatePath::warm_starts(), most recent first
   fe::State best;  ///< the state of the best control so far (the final solve starts there)
 };
 

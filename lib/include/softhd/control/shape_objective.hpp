@@ -4,8 +4,8 @@
 ///
 ///     J(m) = ρ̃_H(Φ_m(Ω₀), Ω_d) + (M/2)∫m² + (ε_m/2)∫|∇m|²
 ///
-/// Φ_m(Ω₀) is the deformed body as a point cloud — its nodes or its quadrature points —
-/// with the reference volumes (the paper's simplification) or the deformed ones
+/// Φ_m(Ω₀) is the deformed body as a point cloud — its nodes, its quadrature points or its
+/// boundary nodes — with the reference volumes (the paper's simplification) or the deformed ones
 /// V_i = ∫ N_i J dX; the gradient is exact for the choice made:
 ///
 ///     g = ∂ρ̃/∂u (through the particle positions, and volumes if they move),
@@ -14,7 +14,7 @@
 ///
 /// With a pose (ShapeObjectiveOptions::pose, docs/formulation.md §8.10) the target stays in the
 /// camera's frame and the moving cloud is mapped into it, x'_i = Q_ξ(x_i), by the twist ξ about
-/// a fixed centre composed with the start; evaluate(m, ξ) returns dJ/dξ beside dJ/dm.
+/// a fixed centre composed with the start; evaluate(m, gradient, ξ) returns dJ/dξ beside dJ/dm.
 
 #include <Eigen/Core>
 #include <deque>
@@ -22,34 +22,18 @@
 #include <optional>
 #include <string>
 
+#include "softhd/control/moving_cloud.hpp"
+#include "softhd/control/state_path.hpp"
 #include "softhd/fe/assembly.hpp"
 #include "softhd/fe/control.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/state_equation.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/point_cloud.hpp"
-#include "softhd/scan/align.hpp"
 #include "softhd/scan/pose.hpp"
+#include "softhd/scan/pose_map.hpp"
 
 namespace softhd {
-
-/// Which points of the deformed body form the moving cloud.
-enum class Particles {
-  nodes,       ///< the mesh nodes
-  quadrature,  ///< the quadrature points
-  /// the boundary nodes (3D): a surface target's moving cloud, the volumes the lumped facet
-  /// areas (reference, or deformed: current), docs/formulation.md §8.6
-  boundary,
-};
-/// Volumes of the moving cloud: fixed reference volumes or the deformed ones.
-enum class ParticleVolumes { reference, deformed };
-
-/// "nodes", "quadrature" or "boundary".
-std::string to_string(Particles p);
-/// "reference" or "deformed".
-std::string to_string(ParticleVolumes v);
-Particles particles_from_string(const std::string& name);  ///< "nodes"/"quadrature"/"boundary"
-ParticleVolumes particle_volumes_from_string(const std::string& name);  ///< "reference"/"deformed"
 
 /// Settings of the objective J(m) (docs/formulation.md §4.2, §4.3); defaults per field.
 struct ShapeObjectiveOptions {
@@ -120,14 +104,10 @@ struct ShapeEvaluation {
   std::string failure;  ///< for people: Newton's one-line report of a failed state solve
 };
 
-/// A converged state kept for warm starts, with its control (empty for the rest state).
-struct WarmStart {
-  Eigen::VectorXd m;  ///< the control (empty for the rest state)
-  fe::State state;    ///< its converged state
-};
-
-/// J(m) and dJ/dm for one body, control space and target. Keeps the last converged
-/// states for warm starts and the target's trees across evaluations. Not thread-safe.
+/// J(m) and dJ/dm for one body, control space and target, as a composition: the state path
+/// m ↦ u(m) (StatePath), the moving cloud u ↦ X(u) (MovingCloud), optionally the pose map
+/// X ↦ Q_ξ(X) (scan::PoseMap), the distance form against the target (its trees built once),
+/// plus the Tikhonov terms of the control space. Not thread-safe.
 class ShapeObjective {
  public:
   /// The assembler and control space must outlive the objective; the state equation is
@@ -145,72 +125,58 @@ class ShapeObjective {
                  const fe::StateSolverFactory& make_solver);
   ~ShapeObjective();
 
-  /// J(m); with `gradient`, also dJ/dm. Never throws for a failed state solve. With a pose:
-  /// J at the start pose (ξ = 0), and dJ/dξ too.
-  ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient);
-  /// J(m, ξ) with the pose twist ξ (pose_variables() entries; empty means 0); with `gradient`,
-  /// dJ/dm and dJ/dξ (exact, docs/formulation.md §8.10). Throws InvalidArgument for a ξ of the
-  /// wrong size or not finite.
-  ShapeEvaluation evaluate(const Eigen::VectorXd& m, const Eigen::VectorXd& xi, bool gradient);
-  /// The number of pose variables: 0 without a pose, 6 (rigid) or 7 (similarity).
-  int pose_variables() const;
-  /// The pose P_ξ (scan → body) of the twist ξ (empty: the start pose; without a pose: identity).
-  scan::Pose pose_at(const Eigen::VectorXd& xi) const;
-  /// The twist's fixed centre c (the camera's frame; zero without a pose).
-  Eigen::Vector3d pose_centre() const;
-  /// The moving cloud of u in the target's frame at the twist ξ (x'_i = Q_ξ(x_i); without a
-  /// pose, particles(u)).
-  PointCloud target_frame_particles(const Eigen::VectorXd& u, const Eigen::VectorXd& xi) const;
+  /// J(m) and, with `gradient`, dJ/dm; with a pose, at the twist ξ (pose()->variables()
+  /// entries; empty: 0), and dJ/dξ too (exact, docs/formulation.md §8.10). Never throws for
+  /// a failed state solve (the evaluation's status says so). Throws InvalidArgument for an m
+  /// or ξ of the wrong size or not finite.
+  ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient,
+                           const Eigen::VectorXd& xi = Eigen::VectorXd());
 
-  /// The moving cloud of a displacement u (num_dofs entries).
-  PointCloud particles(const Eigen::VectorXd& u) const;
-  /// The last converged state (the rest state before any evaluation).
-  const fe::State& last_state() const;
-  /// Puts a converged state for the control m first among the warm starts (e.g. the best
-  /// one, so that evaluating m again starts, and stays, exactly there).
-  void remember_state(const Eigen::VectorXd& m, const fe::State& state);
+  /// The states solved so far: warm starts, two-level starts, solver resets.
+  StatePath& state_path();
+  /// As state_path(), read-only.
+  const StatePath& state_path() const;
+  /// The first map of the chain: the moving cloud X(u) in the body's frame.
+  const MovingCloud& moving_cloud() const;
+  /// The second map: the pose map Q_ξ into the target's (camera) frame, or null when the target
+  /// is in the body's frame (ShapeObjectiveOptions::pose). pose()->at(ξ).inverse() is the pose
+  /// P_ξ (scan → body).
+  const scan::PoseMap* pose() const;
+
+  /// Per-point fields d̃ of the moving cloud of u (at the twist ξ) against the target, with the
+  /// objective's form (raw fields; ρ̃, A, B of the form).
+  HausdorffResult fields(const Eigen::VectorXd& u,
+                         const Eigen::VectorXd& xi = Eigen::VectorXd()) const;
+  /// The form an evaluation at displacement u (and twist ξ) uses: the options' form, with the
+  /// visible mask of u's deformed boundary when a camera is set (the pose's camera with a pose).
+  DistanceForm distance_form(const Eigen::VectorXd& u,
+                             const Eigen::VectorXd& xi = Eigen::VectorXd()) const;
+  /// Replaces the distance form of later evaluations (e.g. a cap set from the starting
+  /// state's fields, cap_from_quantile). Throws InvalidArgument as DistanceForm::validate for
+  /// the moving cloud's size.
+  void set_form(DistanceForm form);
+
   /// The target with its trees.
   const HausdorffTarget& target() const;
   /// The options (with the Newton absolute tolerance filled in if it was 0).
   const ShapeObjectiveOptions& options() const;
   /// The body's assembler.
   const fe::Assembler& assembler() const;
-  /// The warm-start states, most recent first (what the next evaluation starts from).
-  const std::deque<WarmStart>& warm_starts() const;
-  /// Replaces the warm-start states (e.g. from a checkpoint), so that the next evaluation
-  /// is bitwise the one an uninterrupted run would make. Throws InvalidArgument if the
-  /// list is empty, longer than warm_start_states, or a size does not fit the problem.
-  void restore_warm_starts(const std::vector<WarmStart>& states);
-  /// Two-level starts (docs/formulation.md §4.7): before each state solve, the coarse body
-  /// `coarse` (the same body on a coarser mesh, e.g. fe::coarsened(scene)) is solved at the
-  /// warm start's control and at m, and a large step starts the fine solve from the warm
-  /// state plus the prolongated coarse change. `coarse` must outlive the objective.
-  void use_coarse_level(const fe::Assembler& coarse);
-  /// The coarse body of use_coarse_level, or null.
-  const fe::Assembler* coarse_level() const;
-  /// Resets the state solver (fe::StateEquation::reset), forgetting what it keeps between
-  /// solves (its factorisations and path tangent): later evaluations then depend on earlier ones
-  /// only through the warm starts, which a checkpoint can save. Costs a factorisation at the next
-  /// solve.
-  void reset_solver();
-  /// Per-point fields d̃ of the last converged state (moving cloud, target cloud), with the
-  /// objective's form (raw fields; ρ̃, A, B of the form).
-  HausdorffResult fields(const Eigen::VectorXd& u) const;
-  /// As fields(u), at the pose twist ξ (empty: 0).
-  HausdorffResult fields(const Eigen::VectorXd& u, const Eigen::VectorXd& xi) const;
-  /// Replaces the distance form of later evaluations (e.g. a cap set from the starting
-  /// state's fields, cap_from_quantile). Throws InvalidArgument as DistanceForm::validate for
-  /// the moving cloud's size.
-  void set_form(DistanceForm form);
-  /// The form an evaluation at displacement u uses: the options' form, with the visible mask
-  /// of u's deformed boundary when a camera is set.
-  DistanceForm distance_form(const Eigen::VectorXd& u) const;
-  /// As distance_form(u), with the camera of the pose twist ξ (empty: 0).
-  DistanceForm distance_form(const Eigen::VectorXd& u, const Eigen::VectorXd& xi) const;
 
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// The number of pose variables: 0 without a pose, else pose()->variables() (6 or 7).
+inline int pose_variables(const ShapeObjective& objective) {
+  return objective.pose() ? objective.pose()->variables() : 0;
+}
+/// The pose P_ξ (scan → body) at the twist ξ (empty: 0): pose()->at(ξ).inverse(), the identity
+/// without a pose.
+scan::Pose pose_at(const ShapeObjective& objective, const Eigen::VectorXd& xi);
+/// The moving cloud of u in the target's frame at the twist ξ: Q_ξ(X(u)), or X(u) without a pose.
+PointCloud target_frame_cloud(const ShapeObjective& objective, const Eigen::VectorXd& u,
+                              const Eigen::VectorXd& xi = Eigen::VectorXd());
 
 }  // namespace softhd

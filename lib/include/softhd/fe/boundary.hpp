@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "softhd/fe/mesh.hpp"
-#include "softhd/scan/visibility.hpp"
+#include "softhd/triangle_surface.hpp"
 
 namespace softhd::fe {
 
@@ -28,19 +28,18 @@ struct BoundaryFacets {
 BoundaryFacets boundary_facets(const Mesh& mesh);
 
 /// The boundary in the configuration x = X + u (u: mesh.num_nodes() * 3 entries, node-major).
-scan::TriangleSurface boundary_surface(const Mesh& mesh, const BoundaryFacets& facets,
-                                       const Eigen::VectorXd& u);
+TriangleSurface boundary_surface(const Mesh& mesh, const BoundaryFacets& facets,
+                                 const Eigen::VectorXd& u);
 /// As above, building the facets first.
-scan::TriangleSurface boundary_surface(const Mesh& mesh, const Eigen::VectorXd& u);
+TriangleSurface boundary_surface(const Mesh& mesh, const Eigen::VectorXd& u);
 
 /// The lumped areas of the surface's points: V_k = Σ_{t ∋ k} |T_t| / 3, |T| = ½|(b−a)×(c−a)|
 /// (exactly ∫ N_k dA for flat P1 facets; for the other facets the sub-triangle lumping, whose
 /// weights are positive where ∫ N_k dA of a P2 corner is zero).
-Eigen::VectorXd lumped_areas(const scan::TriangleSurface& surface);
+Eigen::VectorXd lumped_areas(const TriangleSurface& surface);
 
 /// Σ_k w_k ∂V_k/∂x_j for every surface point j (N by 3), V_k = lumped_areas:
 /// ∂|T|/∂a = ½ (b − c) × n̂ for T = (a, b, c) with unit normal n̂, cyclically.
-Eigen::MatrixXd lumped_areas_pullback(const scan::TriangleSurface& surface,
-                                      const Eigen::VectorXd& w);
+Eigen::MatrixXd lumped_areas_pullback(const TriangleSurface& surface, const Eigen::VectorXd& w);
 
 }  // namespace softhd::fe

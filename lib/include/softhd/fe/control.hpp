@@ -85,4 +85,11 @@ class ControlSpace {
 Eigen::VectorXd control_at_nodes(const Mesh& mesh, const ControlSpace& space,
                                  const Eigen::VectorXd& m);
 
+/// Values at the reference points X (rows) of the control field m of `kind` on `mesh`:
+/// Q1 interpolation of the vertex values, or the value of the containing element; 0 in the
+/// elements outside `regions` (empty: the whole body). Throws InvalidArgument naming the
+/// first point outside the body.
+Eigen::VectorXd control_at(const Mesh& mesh, ControlKind kind, const Eigen::VectorXd& m,
+                           const Eigen::MatrixXd& X, const std::vector<int>& regions = {});
+
 }  // namespace softhd::fe

@@ -77,13 +77,6 @@ std::string describe_level(const Scene& scene);
 /// InvalidArgument if an explicit count cannot be coarsened that often.
 int grid_levels(const Scene& scene, const GridSequencingOptions& options);
 
-/// Values at the reference points X (rows) of the control field m of `kind` on `mesh`:
-/// Q1 interpolation of the vertex values, or the value of the containing element; 0 in the
-/// elements outside `regions` (empty: the whole body). Throws InvalidArgument naming the
-/// first point outside the body.
-Eigen::VectorXd control_at(const Mesh& mesh, ControlKind kind, const Eigen::VectorXd& m,
-                           const Eigen::MatrixXd& X, const std::vector<int>& regions = {});
-
 /// Reference positions of the quadrature points of `mesh`: row e·nq + q is point q of e.
 Eigen::MatrixXd quadrature_positions(const Mesh& mesh, const ReferenceGeometry& geometry);
 

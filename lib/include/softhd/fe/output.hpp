@@ -5,8 +5,10 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <vector>
 
 #include "softhd/fe/assembly.hpp"
+#include "softhd/io/vtu.hpp"
 
 namespace softhd::fe {
 
@@ -18,9 +20,18 @@ Eigen::VectorXd probe_displacement(const Assembler& assembler, const Eigen::Vect
 Eigen::VectorXd probe_displacement(const Mesh& mesh, const Eigen::VectorXd& u,
                                    const Eigen::VectorXd& X);
 
+/// The mesh moved by the displacement u (num_nodes · dim entries, node-major) as an ASCII VTU:
+/// one VTK cell per element (quadratic cells as VTK's quadratic types), point data
+/// "displacement" then `point_fields` (num_nodes rows), cell data `cell_fields` (num_elements
+/// rows) then "region" when the mesh has several. Throws FileError if the file cannot be
+/// written, InvalidArgument for mis-sized u or fields.
+void write_vtu_mesh(const std::string& path, const Mesh& mesh, const Eigen::VectorXd& u,
+                    const std::vector<VtuField>& point_fields,
+                    const std::vector<VtuField>& cell_fields = {});
+
 /// Writes an ASCII VTU (VTK unstructured grid) of the deformed mesh: points at X + u,
 /// point data "displacement", cell data "m" and "J" (element means, E by nq inputs). Q2
-/// elements are written as 2^dim linear sub-cells. Throws FileError if it cannot write.
+/// elements as VTK's quadratic cells. Throws FileError if it cannot write.
 void write_vtu(const std::string& path, const Mesh& mesh, const Eigen::VectorXd& u,
                const Eigen::MatrixXd& m_qp, const Eigen::MatrixXd& J_qp);
 

@@ -1,16 +1,14 @@
 #pragma once
 /// \file vtu.hpp
 /// ParaView output (docs/formulation.md §6.2): VTK XML unstructured grids (.vtu, ascii) of a
-/// deformed mesh or a point cloud, and .pvd collections that make a series of them a time line. Q2
-/// elements are written as 2^dim linear sub-cells through their nodes, so nodal data are shown
-/// exactly.
+/// grid of cells (fe::write_vtu_mesh makes one of a deformed mesh) or a point cloud, and .pvd
+/// collections that make a series of them a time line. Knows no FE types.
 
 #include <Eigen/Core>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "softhd/fe/mesh.hpp"
 #include "softhd/io/atomic_file.hpp"
 #include "softhd/point_cloud.hpp"
 
@@ -22,10 +20,17 @@ struct VtuField {
   Eigen::MatrixXd values;  ///< rows: points or cells; columns: components
 };
 
-/// The mesh moved by the displacement u (num_nodes · dim entries, node-major), with
-/// point fields (num_nodes rows) and cell fields (num_elements rows). Throws
-/// FileError if the file cannot be written, InvalidArgument for mis-sized fields.
-void write_vtu_mesh(const std::string& path, const fe::Mesh& mesh, const Eigen::VectorXd& u,
+/// An unstructured grid of one VTK cell type: points (N by 2 or 3; z = 0 in 2D) and cells as
+/// lists of point indices in VTK's node order.
+struct VtuGrid {
+  Eigen::MatrixXd points;               ///< N by 2 or 3
+  std::vector<std::vector<int>> cells;  ///< point indices per cell, VTK's order
+  int vtk_type = 1;                     ///< the VTK cell type of every cell (1: vertex)
+};
+
+/// The grid with point fields (N rows) and cell fields (one row per cell). Throws FileError
+/// if the file cannot be written, InvalidArgument for mis-sized fields.
+void write_vtu_grid(const std::string& path, const VtuGrid& grid,
                     const std::vector<VtuField>& point_fields,
                     const std::vector<VtuField>& cell_fields = {});
 

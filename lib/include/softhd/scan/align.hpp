@@ -12,15 +12,9 @@
 
 #include "softhd/hausdorff.hpp"
 #include "softhd/scan/pose.hpp"
+#include "softhd/scan/pose_map.hpp"  // PoseKind: what align() may change
 
 namespace softhd::scan {
-
-/// What align() may change.
-enum class PoseKind { rigid, similarity };
-/// "rigid" / "similarity"; pose_kind_from_string throws InvalidArgument naming `align`.
-std::string to_string(PoseKind kind);
-/// The PoseKind named "rigid" or "similarity".
-PoseKind pose_kind_from_string(const std::string& name);
 
 /// How align() compares the refined candidates of its global start (docs/formulation.md §8.5).
 ///   visible: the visible-surface score S: the camera at the scan frame's origin, the body

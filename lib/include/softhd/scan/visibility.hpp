@@ -6,13 +6,9 @@
 
 #include <Eigen/Core>
 
-namespace softhd::scan {
+#include "softhd/triangle_surface.hpp"
 
-/// A closed triangulated surface: points (N by 3) and triangles over them, outward oriented.
-struct TriangleSurface {
-  Eigen::MatrixXd points;                           ///< N by 3
-  Eigen::Matrix<int, Eigen::Dynamic, 3> triangles;  ///< T by 3 point indices, outward normals
-};
+namespace softhd::scan {
 
 /// For every surface point: true if it faces the camera (some incident triangle's outward
 /// normal has n·(camera − x) > 0) and the segment from the camera to it meets no triangle

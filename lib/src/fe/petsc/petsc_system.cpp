@@ -51,8 +51,8 @@ DistributedSystem::DistributedSystem(const Scene& scene, StateBackend backend,
       backend_(backend),
       max_krylov_iterations_(max_krylov_iterations),
       local_rows_(part_.numbering.local_to_global.begin(), part_.numbering.local_to_global.end()) {
-  if (assembler_->dofs().num_free != static_cast<Eigen::Index>(local_rows_.size()))
-    throw Error("PETSc state: the assembler's free dofs differ from the partition's (a bug)");
+  SOFTHD_ASSERT(assembler_->dofs().num_free == static_cast<Eigen::Index>(local_rows_.size()),
+                "PETSc state: the assembler's free dofs differ from the partition's");
   int whole = numbering().whole_nodes ? 1 : 0, all_whole = 0;
   MPI_Allreduce(&whole, &all_whole, 1, MPI_INT, MPI_MIN, comm());
   block_size_ = all_whole ? scene.dim() : 1;
