@@ -13,7 +13,7 @@
 #include "softhd/fe/scene.hpp"
 #include "softhd/io/atomic_file.hpp"
 #include "softhd/io/cloud_io.hpp"
-#include "softhd/io/pose_io.hpp"
+#include "softhd/control/pose_file.hpp"
 #include "softhd/parallel.hpp"
 #include "softhd/scan/align.hpp"
 

@@ -15,7 +15,7 @@
 #include "hausdorff_reference.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/cloud_io.hpp"
-#include "softhd/io/pose_io.hpp"
+#include "softhd/control/pose_file.hpp"
 
 namespace softhd::test {
 namespace {

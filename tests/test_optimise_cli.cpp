@@ -16,7 +16,7 @@
 
 #include "softhd/fe/state_backend.hpp"
 #include "softhd/io/cloud_io.hpp"
-#include "softhd/io/pose_io.hpp"
+#include "softhd/control/pose_file.hpp"
 #include "softhd/scan/pose.hpp"
 
 namespace {

@@ -18,7 +18,7 @@
 #include "softhd/fe/cloud.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/cloud_io.hpp"
-#include "softhd/io/pose_io.hpp"
+#include "softhd/control/pose_file.hpp"
 #include "softhd/samplers.hpp"
 #include "softhd/scan/cleanup.hpp"
 #include "softhd/scan/surface_weights.hpp"

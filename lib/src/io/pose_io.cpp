@@ -39,7 +39,7 @@ double number(const std::string& text, const std::string& where) {
 
 }  // namespace
 
-scan::Pose parse_pose(const std::string& text, const std::string& name) {
+Eigen::Matrix4d parse_pose_matrix(const std::string& text, const std::string& name) {
   Eigen::Matrix4d m;
   int rows = 0, line_no = 0;
   std::istringstream in(text);
@@ -57,25 +57,20 @@ scan::Pose parse_pose(const std::string& text, const std::string& name) {
   }
   if (rows != 4)
     throw FileError(name + ": expected 4 rows of a 4x4 pose matrix, got " + std::to_string(rows));
-  try {
-    return scan::Pose::from_matrix(m);
-  } catch (const InvalidArgument& e) {
-    throw FileError(name + ": " + e.what());
-  }
+  return m;
 }
 
-scan::Pose read_pose(const std::string& path) {
+std::string read_text_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw FileError("cannot open '" + path + "': " + std::strerror(errno));
   std::ostringstream all;
   all << in.rdbuf();
-  return parse_pose(all.str(), path);
+  return all.str();
 }
 
-void write_pose(const std::string& path, const scan::Pose& pose) {
+void write_pose_matrix(const std::string& path, const Eigen::Matrix4d& m) {
   std::ostringstream out;
   out.precision(17);
-  const Eigen::Matrix4d m = pose.matrix();
   for (int r = 0; r < 4; ++r)
     out << m(r, 0) << ' ' << m(r, 1) << ' ' << m(r, 2) << ' ' << m(r, 3) << '\n';
   write_file_atomically(path, out.str());
