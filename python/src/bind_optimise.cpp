@@ -133,10 +133,8 @@ void bind_records(py::module_& m) {
       });
 }
 
-}  // namespace
-
-void bind_optimise(py::module_& m) {
-  bind_records(m);
+/// softhd.OptimiseResult: the summary of a run as read-only properties.
+void bind_optimise_result(py::module_& m) {
   py::class_<PyOptimise>(m, "OptimiseResult", "The result of optimise.")
       .def_property_readonly("rho_start", [](const PyOptimise& r) { return r.summary.rho_start; })
       .def_property_readonly("rho_final", [](const PyOptimise& r) { return r.summary.rho_final; })
@@ -185,7 +183,13 @@ void bind_optimise(py::module_& m) {
       .def_property_readonly("target", [](const PyOptimise& r) { return r.summary.target; })
       .def("__repr__",
            [](const PyOptimise& r) { return "OptimiseResult(" + r.summary.BriefReport() + ")"; });
+}
 
+}  // namespace
+
+void bind_optimise(py::module_& m) {
+  bind_records(m);
+  bind_optimise_result(m);
   // Every option None keeps TrackingRunOptions' default (softhd optimise's).
   m.def(
       "optimise",
