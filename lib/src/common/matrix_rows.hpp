@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <nanoflann.hpp>
+#include <vector>
 
 namespace softhd::detail {
 
@@ -28,5 +29,22 @@ template <int Dim = -1>
 using MatrixRowsTree =
     nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, MatrixRows>,
                                         MatrixRows, Dim, size_t>;
+
+/// Collects every point within squared distance r2 into *found, as `Index` (the result-set
+/// interface nanoflann's radiusSearchCustomCallback takes, the same in its 1.4 and 1.5 releases).
+template <class Index>
+struct WithinRadius {
+  double r2;
+  std::vector<Index>* found;
+  void init() {}
+  void clear() { found->clear(); }
+  size_t size() const { return found->size(); }
+  bool full() const { return true; }
+  bool addPoint(double d2, size_t i) {
+    if (d2 <= r2) found->push_back(static_cast<Index>(i));
+    return true;
+  }
+  double worstDist() const { return r2; }
+};
 
 }  // namespace softhd::detail

@@ -278,20 +278,7 @@ std::map<std::string, std::vector<int>> boundary_sets(const io::MshFile& f, int 
   return out;
 }
 
-// Collects the points within squared distance r2 (nanoflann's result-set interface).
-struct WithinRadius {
-  double r2;
-  std::vector<size_t>* found;
-  void init() {}
-  void clear() { found->clear(); }
-  size_t size() const { return found->size(); }
-  bool full() const { return true; }
-  bool addPoint(double d2, size_t i) {
-    if (d2 <= r2) found->push_back(i);
-    return true;
-  }
-  double worstDist() const { return r2; }
-};
+using WithinRadius = softhd::detail::WithinRadius<size_t>;
 
 std::string point(const Eigen::VectorXd& x) {  // "(x, y, z)", 6 significant digits
   std::ostringstream s;

@@ -16,21 +16,7 @@ namespace {
 using Centres = softhd::detail::MatrixRows;
 using CentreTree = softhd::detail::MatrixRowsTree<>;
 
-// Collects every centre within squared distance r2 (the result-set interface nanoflann's
-// radiusSearchCustomCallback takes, the same in its 1.4 and 1.5 releases).
-struct WithinRadius {
-  double r2;
-  std::vector<int>* found;
-  void init() {}
-  void clear() { found->clear(); }
-  size_t size() const { return found->size(); }
-  bool full() const { return true; }
-  bool addPoint(double d2, size_t i) {
-    if (d2 <= r2) found->push_back(static_cast<int>(i));
-    return true;
-  }
-  double worstDist() const { return r2; }
-};
+using WithinRadius = softhd::detail::WithinRadius<int>;
 
 constexpr double kTol = 1e-10;  // relative to the mesh's size (X) or the cell (ξ)
 
