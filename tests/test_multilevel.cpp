@@ -246,8 +246,9 @@ TEST_F(MultilevelRun, AutomaticLevelsAreEveryCoarserLevelOfAtLeast32Elements) {
 }
 
 TEST_F(MultilevelRun, MoreLevelsThanHalvingsAreRefusedNamingLevels) {
-  options_.levels = 3;  // (6, 1, 2) -> (3, 1, 1) -> no even count
-  expect_error<InvalidArgument>([&] { run_tracking(scene_, options_); }, "levels");
+  options_.levels = 3;  // (6, 1, 2) -> (3, 1, 1) -> no even count: one coarser level
+  expect_error<InvalidArgument>([&] { run_tracking(scene_, options_); },
+                                "levels: 3 asks for 2 coarser levels of the body, but it has 1");
   options_.levels = -1;
   expect_error<InvalidArgument>([&] { options_.validate(); }, "levels");
   options_.levels = 2;

@@ -394,3 +394,79 @@ TEST(Quadrature, TheDefaultRuleHasNoSpuriousModes) {
   EXPECT_GT(zero_modes(CellType::kTri6, 1), 3);
   EXPECT_GT(zero_modes(CellType::kHex27, 1), 6);
 }
+
+// spurious_zero_modes (the rank of the stacked symmetric gradients, which the scene's
+// mesh.quadrature_degree is checked with) counts what the assembled stiffness of a free
+// element shows at every degree the scene accepts, and smallest_stable_degree is never
+// above the default.
+TEST(Quadrature, SpuriousModesAreThoseOfTheAssembledStiffness) {
+  const CellType all[] = {CellType::kQuad4, CellType::kQuad9, CellType::kTri3, CellType::kTri6,
+                          CellType::kHex8,  CellType::kHex27, CellType::kTet4, CellType::kTet10};
+  for (CellType cell : all) {
+    const int rigid = reference_element(cell).dim == 3 ? 6 : 3;
+    for (int degree = 1; degree <= 8; ++degree)
+      EXPECT_EQ(spurious_zero_modes(cell, degree), zero_modes(cell, degree) - rigid)
+          << to_string(cell) << " degree " << degree;
+    EXPECT_LE(smallest_stable_degree(cell), reference_element(cell).default_quadrature_degree);
+    EXPECT_EQ(spurious_zero_modes(cell, smallest_stable_degree(cell)), 0);
+  }
+  EXPECT_GT(spurious_zero_modes(CellType::kHex27, 3), 0);  // 2 by 2 by 2 Gauss points
+  EXPECT_GT(spurious_zero_modes(CellType::kQuad4, 1), 0);  // one point: hourglass modes
+  try {
+    check_quadrature_degree(CellType::kTet10, 1);
+    ADD_FAILURE();
+  } catch (const softhd::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("on tet10"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("use degree " +
+                                         std::to_string(smallest_stable_degree(CellType::kTet10))),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+namespace {
+
+// A node fibre field on `mesh` varying smoothly, and the same with the signs of some nodes'
+// vectors flipped (the same axes).
+void fibre_fields(const Mesh& mesh, FiberField* aligned, FiberField* flipped) {
+  aligned->kind = flipped->kind = FiberField::Kind::kNode;
+  aligned->values.resize(3, mesh.num_nodes());
+  for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n)
+    aligned->values.col(n) = Eigen::Vector3d(1.0, 0.3 * mesh.nodes(n, 1), 0.2 * mesh.nodes(n, 0));
+  flipped->values = aligned->values;
+  for (Eigen::Index n = 0; n < mesh.num_nodes(); ++n)
+    if ((n * 7) % 3 == 1) flipped->values.col(n) *= -1.0;
+}
+
+}  // namespace
+
+// A fibre is an axis: flipping the sign of some nodes' vectors changes nothing (energy,
+// residual, hence the state) on P2 and Q2 meshes, where interpolating the vectors would
+// average opposite ones; a pure ±x field is the uniform x field.
+TEST(Assembly, NodeFibresAreAxesNotVectors) {
+  const Mesh meshes[] = {fe_test::tet_box(2, {2, 1, 1}, {2.0, 1.0, 1.0}),
+                         fe_test::box(3, 2, {2.0, 1.0, 1.0}, {2, 1, 1})};
+  for (const Mesh& mesh : meshes) {
+    FiberField aligned, flipped, pm, uniform;
+    fibre_fields(mesh, &aligned, &flipped);
+    pm.kind = FiberField::Kind::kNode;
+    pm.values = flipped.values.cwiseSign().row(0).replicate(3, 1);
+    pm.values.bottomRows(2).setZero();  // ±x
+    const auto mr = std::vector<std::shared_ptr<const Material>>{fe_test::mooney_rivlin()};
+    const Assembler a(mesh, mr, aligned, {}), b(mesh, mr, flipped, {});
+    const Assembler c(mesh, mr, pm, {}), d(mesh, mr, uniform, {});
+    const Eigen::VectorXd u = admissible_u(a, 5);
+    const Eigen::MatrixXd m =
+        Eigen::MatrixXd::Constant(mesh.num_elements(), a.geometry().points_per_element(), -0.7);
+    double Pa = 0.0, Pb = 0.0, Pc = 0.0, Pd = 0.0;
+    Eigen::VectorXd Ra, Rb, Rc, Rd;
+    ASSERT_TRUE(a.evaluate(u, m, &Pa, &Ra, nullptr));
+    ASSERT_TRUE(b.evaluate(u, m, &Pb, &Rb, nullptr));
+    ASSERT_TRUE(c.evaluate(u, m, &Pc, &Rc, nullptr));
+    ASSERT_TRUE(d.evaluate(u, m, &Pd, &Rd, nullptr));
+    EXPECT_NEAR(Pa, Pb, 1e-13 * std::abs(Pa)) << to_string(mesh.cell);
+    EXPECT_LT((Ra - Rb).norm(), 1e-13 * Ra.norm()) << to_string(mesh.cell);
+    EXPECT_NEAR(Pc, Pd, 1e-13 * std::abs(Pd)) << to_string(mesh.cell);
+    EXPECT_LT((Rc - Rd).norm(), 1e-13 * Rd.norm()) << to_string(mesh.cell);
+  }
+}

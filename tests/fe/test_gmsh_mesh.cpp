@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <algorithm>
 #include <array>
 #include <fstream>
@@ -179,6 +180,161 @@ TEST(GmshMesh, BadMeshesAreRefusedWithOneLine) {
   }
 }
 
+// One element of `cell` (an affine image of the reference cell in the plane z = 0, or with
+// `flat_x` in the plane x = 0) written with the Gmsh local order `row`, element tag 42.
+io::MshFile one_element_file(CellType cell, const std::vector<int>& row, bool flat_x = false) {
+  const ReferenceElement& r = reference_element(cell);
+  io::MshFile f;
+  f.version = 4.1;
+  f.nodes.resize(r.nodes, 3);
+  Eigen::Matrix2d A;
+  A << 1.0, 0.3, -0.2, 0.9;
+  for (int a = 0; a < r.nodes; ++a) {  // internal node a is Gmsh node gmsh_order[a]
+    const Eigen::Vector2d x = A * r.node_coordinates.row(a).transpose() + Eigen::Vector2d(0.5, 1.5);
+    f.nodes.row(r.gmsh_order[a]) =
+        flat_x ? Eigen::RowVector3d(0.0, x[0], x[1]) : Eigen::RowVector3d(x[0], x[1], 0.0);
+    f.node_tags.push_back(a + 1);
+  }
+  io::MshElementBlock b;
+  b.gmsh_type = r.gmsh_type;
+  b.dim = 2;
+  b.entity = 1;
+  b.nodes.resize(1, r.nodes);
+  for (int g = 0; g < r.nodes; ++g) b.nodes(0, g) = row[g];
+  b.element_tags = {42};
+  f.blocks.push_back(b);
+  return f;
+}
+
+// A 2D element whose outline runs clockwise (a Gmsh surface with a clockwise curve loop) is
+// the same element: the clockwise copy of each cell type (its Gmsh node lists reversed by
+// hand: corners backwards, edges backwards, centre) gives the same residual as the
+// counter-clockwise one at a displacement and a tension.
+TEST(GmshMesh, ClockwiseSurfaceElementsAreTheSameElements) {
+  const std::map<CellType, std::pair<std::vector<int>, std::vector<int>>> rows = {
+      {CellType::kTri3, {{0, 1, 2}, {0, 2, 1}}},
+      {CellType::kTri6, {{0, 1, 2, 3, 4, 5}, {0, 2, 1, 5, 4, 3}}},
+      {CellType::kQuad4, {{0, 1, 2, 3}, {0, 3, 2, 1}}},
+      {CellType::kQuad9, {{0, 1, 2, 3, 4, 5, 6, 7, 8}, {0, 3, 2, 1, 7, 6, 5, 4, 8}}}};
+  for (const auto& [cell, pair] : rows) {
+    const Mesh ccw = mesh_from_gmsh(one_element_file(cell, pair.first));
+    const Mesh cw = mesh_from_gmsh(one_element_file(cell, pair.second));
+    ASSERT_EQ(ccw.nodes, cw.nodes);
+    const auto mr =
+        std::vector<std::shared_ptr<const Material>>{std::make_shared<MooneyRivlin>(1.0, 0.2, 3.0)};
+    FiberField a0;
+    a0.values = Eigen::Vector3d(0.8, 0.6, 0.0);
+    const Assembler a(ccw, mr, a0, {}), b(cw, mr, a0, {});  // b threw "inverted" before
+    const Eigen::VectorXd u = 0.05 * Eigen::VectorXd::Random(ccw.num_nodes() * 2);
+    const Eigen::MatrixXd m = Eigen::MatrixXd::Constant(1, a.geometry().points_per_element(), -0.4);
+    double Pa = 0.0, Pb = 0.0;
+    Eigen::VectorXd Ra, Rb;
+    ASSERT_TRUE(a.evaluate(u, m, &Pa, &Ra, nullptr));
+    ASSERT_TRUE(b.evaluate(u, m, &Pb, &Rb, nullptr));
+    EXPECT_NEAR(Pa, Pb, 1e-13 * std::abs(Pa)) << to_string(cell);
+    EXPECT_LT((Ra - Rb).norm(), 1e-13 * Ra.norm()) << to_string(cell);
+    EXPECT_NEAR(a.geometry().weights().sum(), b.geometry().weights().sum(), 1e-14);
+  }
+  // A flat mesh outside the plane z = const: the message says which plane it lies in.
+  try {
+    mesh_from_gmsh(one_element_file(CellType::kTri3, {0, 1, 2}, true));
+    ADD_FAILURE();
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("in a plane with normal (1, 0, 0) rather than z = const"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// Messages about an element name its Gmsh tag: an inverted tetrahedron, a P2 element folded
+// at a vertex (det dX/dξ < 0 there although positive at every quadrature point).
+TEST(GmshMesh, BadElementsAreNamedByTheirGmshTag) {
+  io::MshFile f = io::read_msh(mesh_path("cube_tet4_v41.msh"));
+  io::MshElementBlock* body = nullptr;
+  for (io::MshElementBlock& b : f.blocks)
+    if (b.dim == 3 && !body) body = &b;
+  ASSERT_NE(body, nullptr);
+  ASSERT_GT(body->nodes.rows(), 3);
+  std::swap(body->nodes(3, 1), body->nodes(3, 2));
+  const std::string tag = std::to_string(body->element_tags[3]);
+  ASSERT_NE(tag, "3");
+  try {
+    ReferenceGeometry g(mesh_from_gmsh(f));
+    ADD_FAILURE();
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("element " + tag + " is inverted"), std::string::npos)
+        << e.what();
+  }
+  // The reference tetrahedron with its edge node between vertices 0 and 1 at x = 0.22: along
+  // that edge dX/dt = (2.4 t − 0.2, 0, 0) runs backwards for t < 1/12, where no quadrature
+  // point lies (det dX/dξ > 0 at all of them, computed below).
+  Mesh m;
+  m.cell = CellType::kTet10;
+  m.order = 2;
+  m.nodes = reference_element(CellType::kTet10).node_coordinates;
+  m.nodes(4, 0) = 0.22;
+  m.elements = Connectivity(1, 10);
+  for (int a = 0; a < 10; ++a) m.elements(0, a) = a;
+  m.element_region = Eigen::VectorXi::Zero(1);
+  m.element_tags = {77};
+  Eigen::MatrixXd xi;
+  Eigen::VectorXd w;
+  cell_quadrature(CellType::kTet10, reference_element(CellType::kTet10).default_quadrature_degree,
+                  &xi, &w);
+  for (Eigen::Index q = 0; q < xi.rows(); ++q) {
+    double N[10], dN[30];
+    const Eigen::Vector3d p = xi.row(q).transpose();
+    shape_functions(CellType::kTet10, p.data(), N, dN);
+    Eigen::Matrix3d J = Eigen::Matrix3d::Zero();  // J_iK = Σ_a X_a,i dN_a/dξ_K
+    for (int a = 0; a < 10; ++a)
+      for (int i = 0; i < 3; ++i)
+        for (int K = 0; K < 3; ++K) J(i, K) += m.nodes(a, i) * dN[a * 3 + K];
+    EXPECT_GT(J.determinant(), 0.0) << q;
+  }
+  try {
+    ReferenceGeometry g(m);
+    ADD_FAILURE();
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("element 77 is folded at its local node 0"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// A $NodeData fibre field is a field of axes: with the signs of some nodes flipped, the
+// nodes order 2 adds get the same axes; a zero vector is refused naming the node's tag.
+TEST(GmshMesh, NodeDataFibresAreAxes) {
+  io::MshFile f = io::read_msh(mesh_path("fields.msh"));
+  io::MshDataBlock& d = f.data[0];
+  ASSERT_EQ(d.name, "fibres");
+  for (Eigen::Index k = 0; k < d.values.rows(); ++k) {
+    const Eigen::RowVector3d X = f.nodes.row(static_cast<Eigen::Index>(d.tags[k]));
+    d.values.row(k) << 1.0, 0.3 * X[1], 0.2 * X[2];
+  }
+  GmshMeshOptions two;
+  two.order = 2;
+  const FiberField aligned = gmsh_fiber_field(f, "fibres", two);
+  d.values.row(1) *= -1.0;
+  d.values.row(3) *= -1.0;
+  const FiberField flipped = gmsh_fiber_field(f, "fibres", two);
+  ASSERT_EQ(aligned.values.cols(), flipped.values.cols());
+  ASSERT_GT(aligned.values.cols(), 5);
+  for (Eigen::Index n = 0; n < aligned.values.cols(); ++n)
+    EXPECT_NEAR(std::abs(aligned.values.col(n).dot(flipped.values.col(n))),
+                aligned.values.col(n).squaredNorm(), 1e-14)
+        << n;
+  d.values.row(3).setZero();
+  try {
+    gmsh_fiber_field(f, "fibres", two);
+    ADD_FAILURE();
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("node " + std::to_string(f.node_tags[d.tags[3]]) +
+                                         " a zero or non-finite fibre"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // A scene on the two-part cube: materials per region, a clamp on a physical surface, solved;
 // unknown names refused listing the file's.
 TEST(GmshMesh, ASceneOnAFileMesh) {
@@ -213,6 +369,51 @@ TEST(GmshMesh, ASceneOnAFileMesh) {
   refused("\"clamp\": [\"base\"]", "\"clamp\": [\"bottom\"]", "base, tip");
   refused("\"layer\": {", "\"lyer\": {", "unknown region 'lyer'");
   refused("cube_tet10_v41.msh", "missing.msh", "missing.msh");
+}
+
+// {"file", "per": "node"} on a first-order file that "order": 2 elevates: one row per file
+// node (vertex) is taken, the added nodes getting their edge's axis; a uniform ±x field so
+// written (random signs) is the uniform field [1, 0, 0]. A zero row is refused naming the
+// file and the row; a wrong count says how many rows either way.
+TEST(GmshMesh, NodeFibreFilesOnAnElevatedMesh) {
+  const std::string dir = ::testing::TempDir();
+  const Eigen::Index vertices = read("cube_tet4_v41.msh").num_nodes();
+  auto write = [&](Eigen::Index rows, Eigen::Index zero_row) {
+    std::ofstream out(dir + "/fib.txt");
+    for (Eigen::Index k = 0; k < rows; ++k)
+      out << (k == zero_row ? 0 : (k * 5) % 3 == 1 ? -1 : 1) << " 0 0\n";
+  };
+  const std::string head =
+      R"({"mesh": {"type": "gmsh", "order": 2, "file": ")" + mesh_path("cube_tet4_v41.msh") + R"("},
+    "material": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3}, "clamp": ["base"],
+    "control": {"space": "vertex", "lower": -1, "upper": 0}, "fibers": )";
+  write(vertices, -1);
+  const Scene file = parse_scene(head + R"({"file": "fib.txt", "per": "node"}})", dir + "/c.json");
+  const Scene uniform = parse_scene(head + "[1, 0, 0]}", dir + "/c.json");
+  const Assembler a = file.make_assembler(), b = uniform.make_assembler();
+  ASSERT_GT(a.mesh().num_nodes(), vertices);
+  const Eigen::VectorXd u = a.dofs().expand(0.002 * Eigen::VectorXd::Random(a.dofs().num_free));
+  const Eigen::MatrixXd m =
+      Eigen::MatrixXd::Constant(a.mesh().num_elements(), a.geometry().points_per_element(), -0.5);
+  double Pa = 0.0, Pb = 0.0;
+  Eigen::VectorXd Ra, Rb;
+  ASSERT_TRUE(a.evaluate(u, m, &Pa, &Ra, nullptr));
+  ASSERT_TRUE(b.evaluate(u, m, &Pb, &Rb, nullptr));
+  EXPECT_NEAR(Pa, Pb, 1e-13 * std::abs(Pb));
+  EXPECT_LT((Ra - Rb).norm(), 1e-13 * Rb.norm());
+  auto refused = [&](const std::vector<std::string>& needles) {
+    try {
+      parse_scene(head + R"({"file": "fib.txt", "per": "node"}})", dir + "/c.json");
+      ADD_FAILURE();
+    } catch (const FileError& e) {
+      for (const std::string& n : needles)
+        EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << e.what();
+    }
+  };
+  write(vertices, 2);
+  refused({"fib.txt: row 3 is a zero or non-finite fibre vector"});
+  write(vertices + 1, -1);
+  refused({"fib.txt", "or one per vertex, " + std::to_string(vertices)});
 }
 
 // control.region: the control acts on the named volume only. On the two-part cube the

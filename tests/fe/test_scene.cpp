@@ -61,6 +61,21 @@ TEST(Scene, ReferenceScenesMatchSpec) {
   EXPECT_TRUE(t.fibers.isApprox(Eigen::Vector3d::UnitX()));
 }
 
+// mesh.quadrature_degree: a rule that leaves spurious zero-energy modes (2 by 2 by 2 Gauss
+// points on Q2, one point on Q1) is refused naming the key, the cell type and the smallest
+// degree without them; that degree is accepted.
+TEST(Scene, AQuadratureWithSpuriousModesIsRefused) {
+  const std::string good = read(kBending);  // a Q2 box
+  expect_error(replace(good, "\"order\": 2", "\"order\": 2, \"quadrature_degree\": 3"),
+               {"mesh.quadrature_degree", "hex27", "spurious zero-energy modes", "use degree 4"});
+  expect_error(replace(good, "\"order\": 2", "\"order\": 1, \"quadrature_degree\": 1"),
+               {"mesh.quadrature_degree", "hex8", "use degree 2"});
+  EXPECT_EQ(
+      parse_scene(replace(good, "\"order\": 2", "\"order\": 2, \"quadrature_degree\": 4"), "q.json")
+          .quadrature_degree,
+      4);
+}
+
 TEST(Scene, InvalidFilesNameTheKey) {
   const std::string good = read(kBending);
   expect_error("{", {"not valid JSON"});

@@ -76,7 +76,8 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
     } catch (const InvalidArgument& e) {
       throw InvalidArgument("levels: " + std::to_string(options.levels) + " asks for " +
                             std::to_string(options.levels - 1) +
-                            " coarser levels of the body, but " + e.what());
+                            " coarser levels of the body, but it has " + std::to_string(level - 1) +
+                            ": " + e.what());
     }
     p->assembler = std::make_unique<fe::Assembler>(p->scene.make_assembler());
     p->control = std::make_unique<fe::ControlSpace>(p->scene.make_control_space(*p->assembler));

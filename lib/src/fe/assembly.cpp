@@ -1,5 +1,6 @@
 #include "softhd/fe/assembly.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
@@ -115,6 +116,19 @@ Assembler::Assembler(Mesh mesh, std::vector<std::shared_ptr<const Material>> mat
   }
 }
 
+Eigen::Matrix3Xd aligned_fibers(const Eigen::Matrix3Xd& a) {
+  Eigen::Matrix3d T = Eigen::Matrix3d::Zero();  // Σ_b a_b a_bᵀ / |a_b|²
+  for (Eigen::Index b = 0; b < a.cols(); ++b)
+    if (a.col(b).squaredNorm() > 0.0) T += a.col(b) * a.col(b).transpose() / a.col(b).squaredNorm();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(T);
+  const Eigen::Vector3d r = es.eigenvectors().col(2);  // eigenvalues ascending
+  Eigen::Matrix3Xd out = a;
+  for (Eigen::Index b = 0; b < a.cols(); ++b)
+    if (a.col(b).dot(r) < 0.0) out.col(b) = -a.col(b);
+  return out;
+}
+
 void Assembler::set_fibers(const FiberField& field) {
   const Eigen::Index E = mesh_.num_elements(), N = mesh_.num_nodes();
   const int nq = geometry_.points_per_element(), nen = mesh_.nodes_per_element();
@@ -128,24 +142,29 @@ void Assembler::set_fibers(const FiberField& field) {
     fibers_ = field.values;
   } else {
     fibers_.resize(3, E * nq);
-    for (Eigen::Index e = 0; e < E; ++e)
+    Eigen::Matrix3Xd ae(3, nen);
+    for (Eigen::Index e = 0; e < E; ++e) {
+      if (field.kind == FiberField::Kind::kNode) {  // the element's node axes, one sign
+        for (int b = 0; b < nen; ++b) ae.col(b) = field.values.col(mesh_.elements(e, b));
+        ae = aligned_fibers(ae);
+      }
       for (int q = 0; q < nq; ++q) {
-        // a₀(X_q) = Σ_a N_a(ξ_q) a_a (per node) or the element's, then normalised
+        // a₀(X_q) = Σ_b N_b(ξ_q) s_b a_b (per node) or the element's, then normalised
         Eigen::Vector3d a = Eigen::Vector3d::Zero();
         if (field.kind == FiberField::Kind::kElement)
           a = field.values.col(e);
         else
-          for (int b = 0; b < nen; ++b)
-            a += geometry_.shape_values()(q, b) * field.values.col(mesh_.elements(e, b));
+          for (int b = 0; b < nen; ++b) a += geometry_.shape_values()(q, b) * ae.col(b);
         fibers_.col(e * nq + q) = a;
       }
+    }
   }
   for (Eigen::Index k = 0; k < fibers_.cols(); ++k) {
     const double n = fibers_.col(k).norm();
     if (!(n > 0.0) || !std::isfinite(n))
       throw InvalidArgument(
-          "assembler: fiber direction must be non-zero" +
-          (fibers_.cols() > 1 ? " (element " + std::to_string(k / nq) + ")" : std::string()));
+          "assembler: fiber direction must be non-zero and finite" +
+          (fibers_.cols() > 1 ? " (" + mesh_.element_name(k / nq) + ")" : std::string()));
     fibers_.col(k) /= n;
     if (mesh_.dim == 2 && fibers_(2, k) != 0.0)
       throw InvalidArgument(

@@ -6,6 +6,36 @@
 
 namespace softhd::fe {
 
+namespace {
+
+// Curved (order-2) elements of a file mesh: det dX/dξ > 0 at the element's vertices too,
+// where a fold (a vertex angle of 180° or more) lies outside every quadrature point. dN at
+// each vertex: nen by dim. (A box is affine: nothing to check.)
+void check_vertices(const Mesh& mesh) {
+  const ReferenceElement& ref = reference_element(mesh.cell);
+  if (ref.order == 1 || mesh.structured()) return;
+  const int nen = ref.nodes, dim = ref.dim, nv = static_cast<int>(ref.vertex_nodes.size());
+  std::vector<Eigen::MatrixXd> dN(nv, Eigen::MatrixXd(nen, dim));
+  Eigen::VectorXd N(nen);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> g(nen, dim);
+  for (int v = 0; v < nv; ++v) {
+    const Eigen::VectorXd xi = ref.node_coordinates.row(ref.vertex_nodes[v]).transpose();
+    shape_functions(mesh.cell, xi.data(), N.data(), g.data());
+    dN[v] = g;
+  }
+  Eigen::MatrixXd Xe(nen, dim);
+  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e) {
+    for (int a = 0; a < nen; ++a) Xe.row(a) = mesh.nodes.row(mesh.elements(e, a));
+    for (int v = 0; v < nv; ++v)
+      if (!((Xe.transpose() * dN[v]).determinant() > 0.0))  // J = Σ_a X_a ⊗ dN_a/dξ
+        throw InvalidArgument("mesh: " + mesh.element_name(e) + " is folded at its local node " +
+                              std::to_string(ref.vertex_nodes[v]) +
+                              " (det dX/dxi <= 0 there): its curved edges cross");
+  }
+}
+
+}  // namespace
+
 ReferenceGeometry::ReferenceGeometry(const Mesh& mesh, GradientStorage storage,
                                      int quadrature_degree)
     : dim_(mesh.dim) {
@@ -46,7 +76,7 @@ ReferenceGeometry::ReferenceGeometry(const Mesh& mesh, GradientStorage storage,
       const Eigen::MatrixXd J0 = Xe.transpose() * dN_ref_[q];
       const double det = J0.determinant();
       if (!(det > 0.0)) {
-        throw InvalidArgument("mesh: element " + std::to_string(e) +
+        throw InvalidArgument("mesh: " + mesh.element_name(e) +
                               " is inverted or degenerate (det dX/dxi <= 0)");
       }
       if (store)
@@ -54,6 +84,7 @@ ReferenceGeometry::ReferenceGeometry(const Mesh& mesh, GradientStorage storage,
       weights_(e, q) = wq[q] * det;
     }
   }
+  check_vertices(mesh);
 }
 
 void ReferenceGeometry::point_gradients(const Mesh& mesh, Eigen::Index e, int q, double* G) const {

@@ -1,5 +1,6 @@
 #include "softhd/fe/gmsh_mesh.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -52,14 +53,38 @@ bool planar(const Eigen::MatrixXd& nodes) {
   return true;
 }
 
+// The unit normal of the plane all nodes lie in (the covariance's null direction), or zero if
+// they do not lie in one plane.
+Eigen::Vector3d plane_normal(const Eigen::MatrixXd& nodes) {
+  const Eigen::RowVector3d c = nodes.colwise().mean();
+  const Eigen::MatrixXd d = nodes.rowwise() - c;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(d.transpose() * d);
+  const double spread = es.eigenvalues()[2];  // ascending: the smallest is off the plane
+  if (!(es.eigenvalues()[0] <= 1e-24 * spread)) return Eigen::Vector3d::Zero();
+  return es.eigenvectors().col(0);
+}
+
+// Why a file of surface elements only cannot be a 2D body (whose nodes must lie in z = const).
+[[noreturn]] void fail_not_in_xy(const Eigen::MatrixXd& nodes) {
+  const Eigen::Vector3d n = plane_normal(nodes);
+  if (n.isZero())
+    fail(
+        "the file has surface elements only, and they are not planar: Gmsh writes only the "
+        "elements of physical groups, so add a Physical Volume for the body");
+  std::ostringstream os;
+  os.precision(3);
+  os << "the file has surface elements only, in a plane with normal (" << n[0] << ", " << n[1]
+     << ", " << n[2]
+     << ") rather than z = const: a 2D body must lie in the xy-plane (rotate it there), and a 3D "
+        "body needs a Physical Volume";
+  fail(os.str());
+}
+
 // The body's cell type (from the file's top-dimension blocks, which must agree) and dim.
 CellType body_cell(const io::MshFile& f, int* dim) {
   *dim = f.max_element_dim();
   if (*dim < 2) fail("the file has no volume or surface elements");
-  if (*dim == 2 && !planar(f.nodes))
-    fail(
-        "the file has surface elements only, and they are not planar: Gmsh writes only the "
-        "elements of physical groups, so add a Physical Volume for the body");
+  if (*dim == 2 && !planar(f.nodes)) fail_not_in_xy(f.nodes);
   int gmsh_type = -1;
   for (const io::MshElementBlock& b : f.blocks) {
     if (b.dim != *dim) continue;
@@ -162,6 +187,34 @@ void check_repeated(const Connectivity& elements, const std::vector<std::int64_t
     if (a > b) std::swap(a, b);
     fail("elements " + std::to_string(a) + " and " + std::to_string(b) +
          " have the same nodes (an element listed twice): remove one");
+  }
+}
+
+// 2D elements whose outline runs clockwise (det dX/dξ < 0 at the centroid of the corners),
+// e.g. from a Gmsh surface whose curve loop is clockwise, are reoriented: node a takes the
+// node at the mirror image (ξ₁, ξ₂) -> (ξ₂, ξ₁) of its reference position, a symmetry of the
+// reference triangle and square that reverses the orientation, X'(ξ) = X(ξ₂, ξ₁).
+void orient_counter_clockwise(const Eigen::MatrixXd& X, CellType cell, Connectivity* elements) {
+  const ReferenceElement& ref = reference_element(cell);
+  const ReferenceElement& lin = reference_element(ref.linear);
+  std::vector<int> mirror(ref.nodes);  // the node at the mirror image of node a
+  for (int a = 0; a < ref.nodes; ++a)
+    for (int b = 0; b < ref.nodes; ++b)
+      if ((ref.node_coordinates.row(b) - ref.node_coordinates.row(a).reverse()).norm() < 1e-12)
+        mirror[a] = b;
+  const Eigen::VectorXd centre = lin.node_coordinates.colwise().mean().transpose();
+  std::vector<double> N(lin.nodes), dN(lin.nodes * 2);
+  shape_functions(ref.linear, centre.data(), N.data(), dN.data());
+  std::vector<int> row(ref.nodes);
+  for (Eigen::Index e = 0; e < elements->rows(); ++e) {
+    Eigen::Matrix2d J = Eigen::Matrix2d::Zero();  // J_iK = Σ_v X_v,i dN_v/dξ_K
+    for (int v = 0; v < lin.nodes; ++v)
+      for (int i = 0; i < 2; ++i)
+        for (int K = 0; K < 2; ++K)
+          J(i, K) += X((*elements)(e, ref.vertex_nodes[v]), i) * dN[v * 2 + K];
+    if (!(J.determinant() < 0.0)) continue;
+    for (int a = 0; a < ref.nodes; ++a) row[a] = (*elements)(e, mirror[a]);
+    for (int a = 0; a < ref.nodes; ++a) (*elements)(e, a) = row[a];
   }
 }
 
@@ -369,6 +422,7 @@ Mesh build_mesh(const io::MshFile& f, const GmshMeshOptions& o, NodeTable* table
   Connectivity el;
   body_elements(f, dim, file_cell, &el, &m.element_region, &m.region_names, element_tags);
   check_repeated(el, *element_tags);
+  if (dim == 2) orient_counter_clockwise(f.nodes, file_cell, &el);
   const int order = o.order == 0 ? fref.order : o.order;
   m.cell = order == fref.order ? file_cell : order == 1 ? fref.linear : fref.quadratic;
   m.dim = dim;
@@ -393,12 +447,21 @@ Mesh build_mesh(const io::MshFile& f, const GmshMeshOptions& o, NodeTable* table
   for (std::size_t k = 0; k < t.new_position.size(); ++k)
     m.nodes.row(new_base + static_cast<Eigen::Index>(k)) = t.new_position[k].transpose();
   m.elements = std::move(el);
+  m.element_tags = *element_tags;
   m.boundary_nodes = boundary_sets(f, dim, t, new_base);
   number_vertices(&m);
   for (std::size_t r = 0; r < m.region_names.size(); ++r)
     if ((m.element_region.array() == static_cast<int>(r)).count() == 0)
       fail("region '" + m.region_names[r] + "' has no elements");
   return m;
+}
+
+// A fibre value must be a finite non-zero vector (its sign is free: an axis).
+void check_fiber(const Eigen::Vector3d& a, const std::string& block, const char* what,
+                 std::int64_t tag) {
+  if (!(a.norm() > 0.0) || !a.allFinite())
+    fail("data block '" + block + "' gives " + what + " " + std::to_string(tag) +
+         " a zero or non-finite fibre vector");
 }
 
 }  // namespace
@@ -436,6 +499,7 @@ FiberField gmsh_fiber_field(const io::MshFile& f, const std::string& name,
         fail("data block '" + name + "' has no value for element " +
              std::to_string(tags[static_cast<std::size_t>(e)]));
       field.values.col(e) = block->values.row(it->second).transpose();
+      check_fiber(field.values.col(e), name, "element", tags[static_cast<std::size_t>(e)]);
     }
     return field;
   }
@@ -451,11 +515,14 @@ FiberField gmsh_fiber_field(const io::MshFile& f, const std::string& name,
       fail("data block '" + name + "' has no value for node " +
            std::to_string(f.node_tags[static_cast<std::size_t>(t.file_of[n])]));
     field.values.col(n) = block->values.row(r).transpose();
+    check_fiber(field.values.col(n), name, "node",
+                f.node_tags[static_cast<std::size_t>(t.file_of[n])]);
   }
-  for (std::size_t k = 0; k < t.support_of.size(); ++k) {  // midside nodes: the mean
-    Eigen::Vector3d a = Eigen::Vector3d::Zero();
-    for (int v : t.support_of[k]) a += field.values.col(v);
-    field.values.col(base + static_cast<Eigen::Index>(k)) = a / double(t.support_of[k].size());
+  for (std::size_t k = 0; k < t.support_of.size(); ++k) {  // new nodes: the mean axis
+    Eigen::Matrix3Xd a(3, static_cast<Eigen::Index>(t.support_of[k].size()));
+    for (Eigen::Index j = 0; j < a.cols(); ++j)
+      a.col(j) = field.values.col(t.support_of[k][static_cast<std::size_t>(j)]);
+    field.values.col(base + static_cast<Eigen::Index>(k)) = aligned_fibers(a).rowwise().mean();
   }
   return field;
 }

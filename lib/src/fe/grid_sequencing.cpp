@@ -45,9 +45,10 @@ Scene halved(const Scene& scene, Halving halving) {
 // quadrature; materials by region and constraints by name carry over.
 Scene order_dropped(const Scene& scene) {
   if (scene.order != 2)
-    throw InvalidArgument("grid sequencing: the body's mesh comes from a file (" + scene.mesh_file +
-                          ") and is of order 1: it has no coarser level (no grid to halve, no "
-                          "order to drop)");
+    throw InvalidArgument("grid sequencing: the mesh from " + scene.mesh_file +
+                          " is of order 1 at this level (a first-order file, or an order-2 "
+                          "file's vertices): a file mesh has no grid to halve, so its one "
+                          "coarser level is an order-2 mesh's vertices (P1/Q1 on its cells)");
   const Mesh& fine = *scene.file_mesh;
   Scene coarse = scene;
   coarse.file_mesh = std::make_shared<const Mesh>(linear_mesh(fine));
@@ -122,7 +123,15 @@ int grid_levels(const Scene& scene, const GridSequencingOptions& options) {
   options.validate();
   if (options.levels >= 0) {
     Scene s = scene;
-    for (int l = 0; l < options.levels; ++l) s = coarsened(s);  // throws if it cannot
+    for (int l = 0; l < options.levels; ++l) {
+      try {
+        s = coarsened(s);
+      } catch (const InvalidArgument& e) {  // say how many levels there are, and why
+        throw InvalidArgument("grid sequencing: " + std::to_string(options.levels) +
+                              " coarser levels asked for, but the body has " + std::to_string(l) +
+                              " (" + e.what() + ")");
+      }
+    }
     return options.levels;
   }
   // A file mesh of order 2: its P1/Q1 level (as many elements as the mesh), measured faster

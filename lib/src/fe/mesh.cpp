@@ -9,6 +9,12 @@
 
 namespace softhd::fe {
 
+std::string Mesh::element_name(Eigen::Index e) const {
+  return "element " + std::to_string(element_tags.empty()
+                                         ? static_cast<std::int64_t>(e)
+                                         : element_tags[static_cast<std::size_t>(e)]);
+}
+
 const std::vector<int>& Mesh::face(const std::string& name) const {
   auto it = boundary_nodes.find(name);
   if (it == boundary_nodes.end()) {
@@ -188,6 +194,7 @@ Mesh linear_mesh(const Mesh& mesh) {
   }
   m.element_region = mesh.element_region;
   m.region_names = mesh.region_names;
+  m.element_tags = mesh.element_tags;
   m.box_lo = mesh.box_lo;
   m.box_hi = mesh.box_hi;
   m.cells = mesh.cells;

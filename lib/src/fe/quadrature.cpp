@@ -5,7 +5,10 @@
 // inside and all weights positive.
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "softhd/error.hpp"
 #include "softhd/fe/reference_element.hpp"
@@ -201,6 +204,63 @@ void gauss_legendre(int n, Eigen::VectorXd* points, Eigen::VectorXd* weights) {
   }
 }
 
+namespace {
+
+// The zero eigenvalues of M = Σ_q B_qᵀ B_q on the cell mapped by X = A ξ, B_q the symmetric
+// gradient ε(u)(ξ_q) of the element's displacements: the kernel of the linearised stiffness
+// Σ_q w_q B_qᵀ C B_q for any positive weights and positive definite C.
+int kernel_dimension(CellType type, const Eigen::MatrixXd& points, const Eigen::MatrixXd& A) {
+  const ReferenceElement& r = reference_element(type);
+  const int dim = r.dim, nd = r.nodes * dim;
+  const Eigen::MatrixXd Ainv = A.inverse();
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(nd, nd), B(dim * (dim + 1) / 2, nd);
+  std::vector<double> N(static_cast<std::size_t>(r.nodes)), dN(N.size() * dim);
+  for (Eigen::Index q = 0; q < points.rows(); ++q) {
+    const Eigen::VectorXd xi = points.row(q).transpose();
+    shape_functions(type, xi.data(), N.data(), dN.data());
+    const Eigen::MatrixXd G =  // dN_a/dX = dN_a/dξ A⁻¹: nodes by dim
+        Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+            dN.data(), r.nodes, dim) *
+        Ainv;
+    B.setZero();
+    int row = 0;  // ε_ij = (∂u_i/∂X_j + ∂u_j/∂X_i) / 2, i <= j
+    for (int i = 0; i < dim; ++i)
+      for (int j = i; j < dim; ++j, ++row)
+        for (int a = 0; a < r.nodes; ++a) {
+          B(row, a * dim + i) += 0.5 * G(a, j);
+          B(row, a * dim + j) += 0.5 * G(a, i);
+        }
+    M += B.transpose() * B;
+  }
+  const Eigen::VectorXd lambda = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(M).eigenvalues();
+  int zeros = 0;
+  for (Eigen::Index k = 0; k < lambda.size(); ++k)
+    zeros += std::abs(lambda[k]) <= 1e-10 * lambda.maxCoeff();
+  return zeros;
+}
+
+}  // namespace
+
+int spurious_zero_modes(CellType type, int degree) {
+  const ReferenceElement& r = reference_element(type);
+  Eigen::MatrixXd points;
+  Eigen::VectorXd weights;
+  cell_quadrature(type, degree, &points, &weights);
+  // The reference cell itself, a stretched one (axis-aligned boxes) and a sheared one (the
+  // generic case): the most zero modes of the three, less the rigid motions.
+  const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(r.dim, r.dim);
+  Eigen::MatrixXd stretch = identity, shear(r.dim, r.dim);
+  stretch(0, 0) = 4.0;
+  if (r.dim == 3)
+    shear << 1.0, 0.2, 0.1, -0.1, 0.8, 0.3, 0.05, -0.2, 1.3;
+  else
+    shear << 1.0, 0.3, -0.2, 0.9;
+  int zeros = 0;
+  for (const Eigen::MatrixXd* A : {&identity, &std::as_const(stretch), &std::as_const(shear)})
+    zeros = std::max(zeros, kernel_dimension(type, points, *A));
+  return zeros - (r.dim == 3 ? 6 : 3);
+}
+
 void cell_quadrature(CellType type, int degree, Eigen::MatrixXd* points, Eigen::VectorXd* weights) {
   if (degree < 1 || degree > kMaxDegree)
     throw InvalidArgument("quadrature degree " + std::to_string(degree) + " is outside 1.." +
@@ -211,6 +271,21 @@ void cell_quadrature(CellType type, int degree, Eigen::MatrixXd* points, Eigen::
     tensor_rule(r.dim, n, points, weights);
   else if (!symmetric_rule(r.dim, degree, points, weights))
     collapsed_rule(r.dim, n, points, weights);
+}
+
+int smallest_stable_degree(CellType type) {
+  for (int degree = 1;; ++degree)
+    if (spurious_zero_modes(type, degree) == 0) return degree;
+}
+
+void check_quadrature_degree(CellType type, int degree) {
+  const int spurious = spurious_zero_modes(type, degree);  // also checks the range
+  if (spurious > 0)
+    throw InvalidArgument("quadrature degree " + std::to_string(degree) + " on " + to_string(type) +
+                          " leaves " + std::to_string(spurious) +
+                          " spurious zero-energy modes (a free element's stiffness must vanish "
+                          "on its rigid motions only): use degree " +
+                          std::to_string(smallest_stable_degree(type)) + " or higher");
 }
 
 }  // namespace softhd::fe

@@ -232,17 +232,54 @@ void parse_materials(const Reader& r, const json& doc, const Mesh& mesh, Scene* 
       r.fail("materials", "has no material for region '" + mesh.region_names[k] + "'");
 }
 
+// Per-node fibres given at the vertices of an order-2 mesh (one row per node of a first-order
+// file that "order": 2 elevated): every other node takes the mean axis of its support's
+// vertices (its edge's, face's or cell's), as the elevated nodes of a $NodeData block do.
+Eigen::Matrix3Xd fibers_from_vertices(const Eigen::Matrix3Xd& at_vertex, const Mesh& mesh) {
+  const ReferenceElement& ref = reference_element(mesh.cell);
+  Eigen::Matrix3Xd a = Eigen::Matrix3Xd::Zero(3, mesh.num_nodes());
+  std::vector<char> done(static_cast<std::size_t>(mesh.num_nodes()), 0);
+  for (Eigen::Index k = 0; k < mesh.num_vertices(); ++k) {
+    a.col(mesh.vertex_nodes[k]) = at_vertex.col(k);
+    done[static_cast<std::size_t>(mesh.vertex_nodes[k])] = 1;
+  }
+  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
+    for (int l = 0; l < ref.nodes; ++l) {
+      const int n = mesh.elements(e, l);
+      if (done[static_cast<std::size_t>(n)]) continue;
+      const std::vector<int>& support = ref.node_support[static_cast<std::size_t>(l)];
+      Eigen::Matrix3Xd v(3, static_cast<Eigen::Index>(support.size()));
+      for (std::size_t j = 0; j < support.size(); ++j)
+        v.col(static_cast<Eigen::Index>(j)) =
+            a.col(mesh.elements(e, ref.vertex_nodes[static_cast<std::size_t>(support[j])]));
+      a.col(n) = aligned_fibers(v).rowwise().mean();
+      done[static_cast<std::size_t>(n)] = 1;
+    }
+  return a;
+}
+
 // A fibre field from a text file: rows of 3 numbers (io's cloud reader), one per element or
-// per node of the mesh.
+// per node of the mesh (or, on an order-2 mesh, per vertex: fibers_from_vertices).
 FiberField read_fiber_file(const std::string& path, bool per_element, const Mesh& mesh) {
   FiberField f;
   f.kind = per_element ? FiberField::Kind::kElement : FiberField::Kind::kNode;
   const Eigen::MatrixXd rows = read_cloud(path, 3).points();
   const Eigen::Index expected = per_element ? mesh.num_elements() : mesh.num_nodes();
-  if (rows.rows() != expected)
+  const bool vertices = !per_element && mesh.order == 2 && rows.rows() == mesh.num_vertices();
+  if (rows.rows() != expected && !vertices)
     throw FileError(path + ": " + std::to_string(rows.rows()) + " fibre rows for the mesh's " +
-                    std::to_string(expected) + (per_element ? " elements" : " nodes"));
+                    std::to_string(expected) +
+                    (per_element ? " elements"
+                     : mesh.order == 2
+                         ? " nodes (or one per vertex, " + std::to_string(mesh.num_vertices()) +
+                               ", in node order: the others take their edge's mean axis)"
+                         : " nodes"));
+  for (Eigen::Index k = 0; k < rows.rows(); ++k)
+    if (!(rows.row(k).norm() > 0.0) || !rows.row(k).allFinite())
+      throw FileError(path + ": row " + std::to_string(k + 1) +
+                      " is a zero or non-finite fibre vector");
   f.values = rows.transpose();
+  if (vertices && rows.rows() != expected) f.values = fibers_from_vertices(f.values, mesh);
   return f;
 }
 
@@ -265,7 +302,7 @@ void parse_fibers(const Reader& r, const json& doc, const Mesh& mesh, Scene* s) 
     try {
       s->fiber_field = gmsh_fiber_field(io::read_msh(s->mesh_file), name, s->gmsh_options);
     } catch (const InvalidArgument& e) {
-      r.fail("fibers.data", e.what());
+      r.fail("fibers.data", "is refused: " + s->mesh_file + ": " + e.what());
     }
     (void)mesh;
     return;
@@ -405,6 +442,12 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
     if (!(q >= 1 && q <= 8 && q == std::floor(q)))
       r.fail("mesh.quadrature_degree", "must be an integer from 1 to 8");
     s.quadrature_degree = static_cast<int>(q);
+    try {  // a rule that leaves spurious zero-energy modes solves to a wrong state
+      check_quadrature_degree(s.file_mesh ? s.file_mesh->cell : cell_type(s.dim(), s.order, false),
+                              s.quadrature_degree);
+    } catch (const InvalidArgument& e) {
+      r.fail("mesh.quadrature_degree", std::string("is refused: ") + e.what());
+    }
   }
   const Mesh body = s.make_mesh();
   parse_materials(r, doc, body, &s);

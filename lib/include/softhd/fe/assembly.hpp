@@ -49,7 +49,7 @@ class ElementMatrixSink {
 };
 
 /// Fibre directions a₀ of a body: one for all, or a field per element or per node
-/// (interpolated to the quadrature points and normalised there).
+/// (interpolated to the quadrature points as axes, see aligned_fibers, and normalised there).
 struct FiberField {
   /// Where the directions live.
   enum class Kind {
@@ -61,6 +61,12 @@ struct FiberField {
   /// 3 by 1 (uniform), 3 by E (per element) or 3 by N (per node); non-zero columns.
   Eigen::Matrix3Xd values = Eigen::Vector3d::UnitX();
 };
+
+/// The fibre directions a_b (columns) turned to one axis: a_b s_b with s_b = ±1 the sign of
+/// a_b · r, r the dominant eigenvector of Σ_b a_b a_bᵀ / |a_b|² (+1 on a tie; zero columns
+/// are left). The fibre term depends on a₀ ⊗ a₀ only, so a_b and −a_b are the same fibre;
+/// fields are interpolated or averaged after this, so opposite vectors never cancel.
+Eigen::Matrix3Xd aligned_fibers(const Eigen::Matrix3Xd& a);
 
 /// Everything that defines the discrete state problem except the control.
 class Assembler {

@@ -41,6 +41,9 @@ struct Mesh {
   Eigen::VectorXi element_region;
   /// Region names: {"body"} for a box, a Gmsh file's physical volumes (surfaces in 2D).
   std::vector<std::string> region_names{"body"};
+  /// The Gmsh element tag of each element (E entries) for a mesh from a file; empty
+  /// otherwise. Messages name elements by it (element_name).
+  std::vector<std::int64_t> element_tags;
   ///@{
   /// Structured-box data, used to locate points by arithmetic: lower corner, upper
   /// corner, cells. Empty for unstructured meshes (structured() is false).
@@ -60,6 +63,8 @@ struct Mesh {
   /// Nodes per element, (p+1)^dim.
   int nodes_per_element() const { return static_cast<int>(elements.cols()); }
 
+  /// "element T" with T the Gmsh tag of element e if the mesh has tags, else its index.
+  std::string element_name(Eigen::Index e) const;
   /// Node ids of a named boundary set; throws InvalidArgument naming it and listing the
   /// names the mesh has if unknown.
   const std::vector<int>& face(const std::string& name) const;

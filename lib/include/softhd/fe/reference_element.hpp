@@ -86,6 +86,20 @@ void shape_functions(CellType type, const double* xi, double* N, double* dN);
 /// is outside 1..the highest degree the table has (documented in the implementation).
 void cell_quadrature(CellType type, int degree, Eigen::MatrixXd* points, Eigen::VectorXd* weights);
 
+/// The spurious zero-energy modes of cell_quadrature(type, degree): the dimension of the
+/// kernel of Σ_q B_qᵀ B_q (B_q the symmetric gradient of the element's displacements at
+/// point q) less the rigid motions (6 in 3D, 3 in 2D), the most over the reference cell, a
+/// stretched and a sheared affine image of it. 0 means the linearised stiffness of a free
+/// element vanishes only on the rigid motions (docs/formulation.md §7.2).
+int spurious_zero_modes(CellType type, int degree);
+
+/// The smallest degree whose rule has no spurious zero-energy modes.
+int smallest_stable_degree(CellType type);
+
+/// Throws InvalidArgument naming the degree, the cell type and smallest_stable_degree(type)
+/// if cell_quadrature(type, degree) has spurious zero-energy modes (or is out of range).
+void check_quadrature_degree(CellType type, int degree);
+
 /// Whether the reference point xi lies in the reference cell, within `tol`.
 bool inside_reference_cell(CellType type, const double* xi, double tol);
 

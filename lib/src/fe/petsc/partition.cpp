@@ -135,6 +135,7 @@ Mesh submesh(const Mesh& g, const std::vector<int>& elements, std::vector<int>* 
     for (int a = 0; a < nen; ++a) m.elements(k, a) = ln[g.elements(e, a)];
     for (int a = 0; a < nv; ++a) m.element_vertices(k, a) = lv[g.element_vertices(e, a)];
     if (regions) m.element_region[k] = g.element_region[e];
+    if (!g.element_tags.empty()) m.element_tags.push_back(g.element_tags[e]);
   }
   m.vertex_nodes.resize(static_cast<Eigen::Index>(vertex_ids->size()));
   for (size_t v = 0; v < vertex_ids->size(); ++v)
