@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "expect_error.hpp"
 #include "hausdorff_reference.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/error.hpp"
@@ -90,7 +91,7 @@ TEST_P(ShapeGradient, TaylorRemainderIsSecondOrder) {
   o.newton.relative_tolerance = 1e-13;
   o.newton.absolute_tolerance = 1e-14;
   o.hausdorff.params.epsilon = 1e-2;
-  ShapeObjective J(A, space, HausdorffTarget(PointCloud(py, Y.volumes())), o);
+  ShapeObjective J(A, space, HausdorffTarget(PointCloud(py, Y.volumes()), o.hausdorff), o);
 
   // A control that bends the strip: m = −0.3 (1 + X_last / t) sampled at the controls.
   const Eigen::MatrixXd P = space.positions(A.mesh());
@@ -228,7 +229,7 @@ TEST_P(JointGradient, TaylorRemainderIsSecondOrderInControlAndPose) {
   off << 0.05, 0.08, -0.03, 0.05, -0.02, 0.03, similarity ? 0.03 : 0.0;
   o.pose = scan::compose(G.inverse(), scan::Pose::from_twist(off));
   o.pose_kind = c.kind;
-  ShapeObjective J(A, space, HausdorffTarget(G.apply(bent_target(), false)), o);
+  ShapeObjective J(A, space, HausdorffTarget(G.apply(bent_target(), false), o.hausdorff), o);
   const int n = similarity ? 7 : 6;
   ASSERT_EQ(pose_variables(J), n);
 
@@ -294,8 +295,8 @@ TEST(ShapeObjective, RigidlyMovedTargetWithTheInversePoseGivesTheSameObjective) 
       in_body.camera = P.camera_position();
     }
     in_camera.pose = G.inverse();
-    ShapeObjective a(A, space, HausdorffTarget(Y), in_body);
-    ShapeObjective b(A, space, HausdorffTarget(G.apply(Y, false)), in_camera);
+    ShapeObjective a(A, space, HausdorffTarget(Y, o.hausdorff), in_body);
+    ShapeObjective b(A, space, HausdorffTarget(G.apply(Y, false), o.hausdorff), in_camera);
     EXPECT_EQ(pose_variables(a), 0);
     EXPECT_EQ(pose_variables(b), 6);
     const ShapeEvaluation ea = a.evaluate(m, true), eb = b.evaluate(m, true);
@@ -310,7 +311,7 @@ TEST(ShapeObjective, RigidlyMovedTargetWithTheInversePoseGivesTheSameObjective) 
     const ShapeEvaluation ex = b.evaluate(m, false, xi);
     ShapeObjectiveOptions rebased = in_camera;
     rebased.pose = pose_at(b, xi);
-    ShapeObjective c(A, space, HausdorffTarget(G.apply(Y, false)), rebased);
+    ShapeObjective c(A, space, HausdorffTarget(G.apply(Y, false), o.hausdorff), rebased);
     const ShapeEvaluation ec = c.evaluate(m, false);
     ASSERT_TRUE(ex.status == EvaluationStatus::ok && ec.status == EvaluationStatus::ok);
     EXPECT_NEAR(ec.J, ex.J, 1e-12 * ex.J);
@@ -327,9 +328,9 @@ TEST(ShapeObjective, VisibleFormSetLaterWithAPoseIsTheSame) {
   ShapeObjectiveOptions o;
   o.hausdorff.params.epsilon = 1e-2;
   o.pose = G.inverse();
-  ShapeObjective later(A, space, HausdorffTarget(G.apply(bent_target(), false)), o);
+  ShapeObjective later(A, space, HausdorffTarget(G.apply(bent_target(), false), o.hausdorff), o);
   o.form.sides = Sides::visible;
-  ShapeObjective made(A, space, HausdorffTarget(G.apply(bent_target(), false)), o);
+  ShapeObjective made(A, space, HausdorffTarget(G.apply(bent_target(), false), o.hausdorff), o);
   const Eigen::VectorXd m = Eigen::VectorXd::Constant(space.size(), -0.2);
   const ShapeEvaluation symmetric = later.evaluate(m, false);
   later.set_form(o.form);
@@ -338,6 +339,19 @@ TEST(ShapeObjective, VisibleFormSetLaterWithAPoseIsTheSame) {
   EXPECT_EQ(a.J, b.J);
   EXPECT_EQ(a.gradient, b.gradient);
   EXPECT_NE(a.B, symmetric.B);  // the mask changed B
+}
+
+// The target's options decide the distance: an objective whose options say otherwise is
+// refused (setting epsilon on the objective alone used to do nothing).
+TEST(ShapeObjective, DistanceOptionsMustBeTheTargets) {
+  const fe::Assembler A = strip(3);
+  const fe::ControlSpace space(A.mesh(), A.geometry(), fe::ControlKind::kElement);
+  ShapeObjectiveOptions o;
+  o.hausdorff.params.epsilon = 1e-2;
+  expect_error<InvalidArgument>(
+      [&] { ShapeObjective(A, space, HausdorffTarget(bent_target()), o); },
+      "hausdorff.params.epsilon differs from the target's");
+  EXPECT_NO_THROW(ShapeObjective(A, space, HausdorffTarget(bent_target(), o.hausdorff), o));
 }
 
 TEST(ShapeObjective, PoseOptionsAreChecked) {

@@ -34,6 +34,24 @@ MovingCloud make_moving_cloud(const fe::Assembler& a, const ShapeObjectiveOption
   return MovingCloud(a, o.particles, o.volumes, boundary);
 }
 
+/// The target's options decide the distance: options.hausdorff must say the same (else setting
+/// α, β, γ, ε or the method on the objective alone would silently do nothing).
+void check_same_distance(const HausdorffOptions& mine, const HausdorffOptions& target) {
+  const HausdorffParams &a = mine.params, &b = target.params;
+  const char* field = a.alpha != b.alpha                           ? "params.alpha"
+                      : a.beta != b.beta                           ? "params.beta"
+                      : a.gamma != b.gamma                         ? "params.gamma"
+                      : a.epsilon != b.epsilon                     ? "params.epsilon"
+                      : mine.method != target.method               ? "method"
+                      : mine.tolerance != target.tolerance         ? "tolerance"
+                      : mine.tree_fallback != target.tree_fallback ? "tree_fallback"
+                                                                   : nullptr;
+  if (field)
+    throw InvalidArgument(std::string("ShapeObjectiveOptions::hausdorff.") + field +
+                          " differs from the target's (build the HausdorffTarget with the "
+                          "objective's options)");
+}
+
 }  // namespace
 
 std::string to_string(EvaluationStatus s) { return enum_name(kEvaluationStatus, s); }
@@ -161,6 +179,7 @@ ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::Control
                           "D but the body is " + std::to_string(assembler.mesh().dim) + "D");
   }
   options.validate();
+  check_same_distance(options.hausdorff, target.options());
   if (options.newton.absolute_tolerance == 0.0) {
     // A floor under the relative residual test: the optimiser's small control changes
     // make |R(0; m)| tiny, and 1e-9 of a tiny reference lies below the residual's round-off.
