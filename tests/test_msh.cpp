@@ -404,8 +404,11 @@ TEST(Msh, ScannedCountsAreTheParsedOnes) {
     softhd::io::MshCounts c;
     ASSERT_TRUE(softhd::io::scan_msh_counts(slurp(name), &c)) << name;
     EXPECT_EQ(c.nodes, static_cast<std::size_t>(m.nodes.rows())) << name;
-    for (auto& [type, n] : c.elements)  // the kept types (skipped ones are counted too)
-      if (softhd::io::gmsh_nodes_per_element(type) > 0) EXPECT_EQ(n, per_type[type]) << name;
+    for (auto& [type, n] : c.elements) {  // the kept types (skipped ones are counted too)
+      if (softhd::io::gmsh_nodes_per_element(type) > 0) {
+        EXPECT_EQ(n, per_type[type]) << name;
+      }
+    }
     for (auto& [type, n] : per_type) EXPECT_EQ(c.elements[type], n) << name << type;
   }
   softhd::io::MshCounts c;
