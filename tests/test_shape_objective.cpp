@@ -377,7 +377,7 @@ TEST(ShapeObjective, PoseOptionsAreChecked) {
   EXPECT_NO_THROW(ShapeObjective(A, space, HausdorffTarget(bent_target()), o));
   o.pose->s = 1.0;
   ShapeObjective J(A, space, HausdorffTarget(bent_target()), o);
-  EXPECT_THROW(J.evaluate(Eigen::VectorXd::Zero(space.size()), Eigen::VectorXd::Zero(7), false),
+  EXPECT_THROW(J.evaluate(Eigen::VectorXd::Zero(space.size()), false, Eigen::VectorXd::Zero(7)),
                InvalidArgument);
   const fe::Assembler A2 = strip(2);
   const fe::ControlSpace space2(A2.mesh(), A2.geometry(), fe::ControlKind::kElement);
