@@ -17,7 +17,7 @@
 #include "softhd/fe/gmsh_mesh.hpp"
 
 using namespace softhd::fe;
-using softhd::scan::TriangleSurface;
+using softhd::TriangleSurface;
 
 namespace {
 
