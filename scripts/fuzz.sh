@@ -1,18 +1,20 @@
 #!/usr/bin/env bash
 # Runs every libFuzzer target of a fuzz build (SOFTHD_FUZZ=ON, clang, ASan+UBSan) for a
 # set time on its seed corpus (fuzz/corpus/<target>), and fails on the first finding.
-# usage: scripts/fuzz.sh BUILD_DIR SECONDS_PER_TARGET [JOBS]
-# JOBS targets run at once (default 1; the sanitizer suite uses 2: each target is one
-# process on one core, so 2 halve the wall time on 2 cores). Every target still gets
-# SECONDS of its own; the lines are printed in the targets' order.
+# usage: scripts/fuzz.sh BUILD_DIR SECONDS_PER_TARGET [JOBS [TARGET...]]
+# JOBS targets run at once (default 1; each target is one process on one core, so 2 halve
+# the wall time on 2 cores). Every target still gets SECONDS of its own; the lines are
+# printed in the targets' order. TARGETs (e.g. msh) run only those (the sanitizer suite runs
+# one per CTest test); default all.
 # New corpus entries go to BUILD_DIR/fuzz-corpus/<target>; a crashing input is kept as
 # BUILD_DIR/fuzz-findings/<target>/crash-* and printed as a path.
 set -euo pipefail
-build=${1:?usage: fuzz.sh BUILD_DIR SECONDS [JOBS]}
-seconds=${2:?usage: fuzz.sh BUILD_DIR SECONDS [JOBS]}
+build=${1:?usage: fuzz.sh BUILD_DIR SECONDS [JOBS [TARGET...]]}
+seconds=${2:?usage: fuzz.sh BUILD_DIR SECONDS [JOBS [TARGET...]]}
 jobs=${3:-1}
 source_dir=$(cd "$(dirname "$0")/.." && pwd)
 targets=(text_cloud ply_cloud pcd_cloud scene checkpoint msh)
+if [ $# -gt 3 ]; then targets=("${@:4}"); fi
 for t in "${targets[@]}"; do
   [ -x "$build/fuzz/fuzz_$t" ] || { echo "fuzz.sh: $build/fuzz/fuzz_$t is missing (build with -DSOFTHD_FUZZ=ON)"; exit 1; }
 done

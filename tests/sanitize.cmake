@@ -1,36 +1,23 @@
-# The whole suite under AddressSanitizer + UBSan, and the libFuzzer targets' smoke run:
-# one clang build (Debian clang; libFuzzer ships with it) in its own tree, every CTest test
-# of it run there (the CLI and its tests included), then each fuzz target for FUZZ_SECONDS.
-# Variables: SOURCE_DIR, WORK_DIR, FUZZ_SECONDS.
-find_program(CLANGXX clang++)
-if(NOT CLANGXX)
-  message(FATAL_ERROR "the sanitizer suite needs clang++ (apt-get install clang libclang-rt-14-dev, "
-                      "or run scripts/install-deps.sh)")
-endif()
-# -O1 -g1 (line tables for the reports): the build is most of this test's time. To make it
-# cheaper, with every file still compiled and run under ASan+UBSan: one precompiled header
-# for the library and one for the test executables (Eigen, GoogleTest, the standard
-# headers: about 1-4 s of a file's 3-24 s of CPU), and the test executables' own files
-# without libFuzzer's coverage instrumentation (the library and the fuzz targets keep it;
-# the tests never run under libFuzzer; it also costs them run time: test_hausdorff_dual took
-# 101 s of CPU with it, 77 s without). CPU (user+sys) of the build, `/usr/bin/time -v
-# cmake --build <tree> -j 2` on a fresh tree configured as here (Dec 2, shared machine):
-# 1032 s before, 765 s with these three; the test run below (ctest -j 2, user+sys) 434 s
-# before, 409 s after (all 553 passing both times).
-execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}
-  -DCMAKE_CXX_COMPILER=${CLANGXX} -DCMAKE_BUILD_TYPE=None
-  "-DCMAKE_CXX_FLAGS=-O1 -g1 -Wno-pass-failed" -DSOFTHD_SANITIZE=ON -DSOFTHD_FUZZ=ON
-  -DSOFTHD_BUILD_BENCH=OFF -DSOFTHD_SANITIZER_SUITE=OFF
-  -DSOFTHD_LIB_PCH=ON -DSOFTHD_TEST_PCH=ON
-  -DSOFTHD_TEST_COMPILE_OPTIONS=-fno-sanitize=fuzzer-no-link
-  RESULT_VARIABLE rc OUTPUT_QUIET)
-if(rc)
-  message(FATAL_ERROR "configuring the sanitizer build failed")
-endif()
-execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK_DIR} -j 2 RESULT_VARIABLE rc OUTPUT_QUIET)
-if(rc)
-  message(FATAL_ERROR "the sanitizer build failed")
-endif()
+# The suite under AddressSanitizer + UBSan, and the libFuzzer targets' smoke run: one clang
+# build (Debian clang; libFuzzer ships with it) in its own tree, WORK_DIR. CTest runs this
+# script as several tests (tests/CMakeLists.txt), one STEP each:
+#   configure        configure the tree and build what the other steps share (the library,
+#                    the CLI, the test executables' precompiled header); the fixture's setup
+#   test EXE=name    build the test executable `name` and run its GoogleTest tests there
+#   scripts          the tree's tests that are not GoogleTest executables (the CLI's scripts,
+#                    the documentation checks); after every `test` step
+#   fuzz TARGET=t    build the libFuzzer target fuzz_t and run it for FUZZ_SECONDS
+# Variables: STEP, SOURCE_DIR, WORK_DIR, EXE, TARGET, FUZZ_SECONDS.
+#
+# Two builds in one tree at once are safe when they share no out-of-date target: the
+# configure step builds everything shared, twice (the second, a no-op, also writes the
+# library's consolidated dependency files, which the other steps' builds then only read).
+# Each test step reads only its own executable's test list, written by its own build.
+# The tests run are those the single-test suite ran before: the tree's 584 less the 15 below
+# (569: 562 in the 48 executables' steps, 7 in scripts). `ctest -j 2 -R '^sanitizer\.'`
+# (56 tests, Dec 6, on 2 cores loaded by other builds, load average 6-12): 2225 s wall,
+# 1370 s of CPU (user+sys), with part of the library built before it started.
+
 # Left out here (each runs in the main suite): the install test, a packaging check rather
 # than a sanitizer one, and tests that repeat code smaller tests run under ASan too, on
 # larger problems, where ASan makes the FE code about 20x slower. Their times under ASan on
@@ -40,7 +27,6 @@ endif()
 # OptimiseCli.IterationLimitIsATotalOverResumes); Newton.OptionsChangeThePath... 40 s (16
 # Newton solves); ShapeObjective.TwoLevelStarts... 39 s (grid sequencing, as in
 # GridSequencing.*); Newton.ZeroControlConvergesAtRest 25 s (the torsion scene's set-up).
-# With the last four, this run's tests took 375 s at -j 2 (Dec 1).
 set(heavy "install_and_consume|Plate\\.HardCaseIsReachedFromFlat"
   "Plate\\.TipDisplacementConvergesUnderQ2Refinement"
   "OptimiseCli\\.KilledAndResumedRunsAreTheUninterruptedRun"
@@ -66,18 +52,88 @@ set(heavy "install_and_consume|Plate\\.HardCaseIsReachedFromFlat"
   # ResumeIsTheSameRun.WithAJointPose.
   "OptimiseCli\\.CameraFrameTargetRefinesThePoseWithTheControl")
 list(JOIN heavy "|" heavy)
-execute_process(COMMAND ${CMAKE_CTEST_COMMAND} --test-dir ${WORK_DIR} -j 2 --output-on-failure
-  -E "^(${heavy})$"
-  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-if(rc)
-  message(FATAL_ERROR "tests failed under ASan+UBSan:\n${out}\n${err}")
-endif()
-string(REGEX MATCH "[0-9]+% tests passed[^\n]*" passed "${out}")
-message(STATUS "ASan+UBSan: ${passed}")
-# Two fuzz targets at a time (one core each), each for FUZZ_SECONDS.
-execute_process(COMMAND ${SOURCE_DIR}/scripts/fuzz.sh ${WORK_DIR} ${FUZZ_SECONDS} 2
-  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
-message(STATUS "${out}")
-if(rc)
-  message(FATAL_ERROR "a fuzz target found a problem:\n${out}\n${err}")
+
+# cmake --build WORK_DIR -j JOBS --target TARGETS...; a failure prints the build's output.
+function(sanitizer_build jobs)
+  execute_process(COMMAND ${CMAKE_COMMAND} --build ${WORK_DIR} -j ${jobs} --target ${ARGN}
+    RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+  if(rc)
+    message(FATAL_ERROR "the sanitizer build of ${ARGN} failed:\n${out}")
+  endif()
+endfunction()
+
+# ctest in DIR, the heavy tests left out (an executable may have none left: it is still
+# built under the sanitizers).
+function(sanitizer_ctest dir)
+  execute_process(COMMAND ${CMAKE_CTEST_COMMAND} --test-dir ${dir} --output-on-failure
+    --no-tests=ignore -E "^(${heavy})$" ${ARGN}
+    RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(rc)
+    message(FATAL_ERROR "tests failed under ASan+UBSan:\n${out}\n${err}")
+  endif()
+  string(REGEX MATCH "[0-9]+% tests passed[^\n]*" passed "${out}")
+  if(NOT passed)
+    set(passed "no test left to run (all in the heavy list)")
+  endif()
+  message(STATUS "ASan+UBSan: ${passed}")
+endfunction()
+
+if(STEP STREQUAL "configure")
+  find_program(CLANGXX clang++)
+  if(NOT CLANGXX)
+    message(FATAL_ERROR "the sanitizer suite needs clang++ (apt-get install clang "
+                        "libclang-rt-14-dev, or run scripts/install-deps.sh)")
+  endif()
+  # ccache, when installed, makes a rebuilt tree (CI's reruns, a fresh tree) cheap.
+  find_program(CCACHE ccache)
+  set(launcher)
+  if(CCACHE)
+    set(launcher -DCMAKE_CXX_COMPILER_LAUNCHER=${CCACHE})
+  endif()
+  # -O1 -g1 (line tables for the reports): the build is most of the suite's time. To make
+  # it cheaper, with every file still compiled and run under ASan+UBSan: one precompiled
+  # header for the library and one for the test executables (Eigen, GoogleTest, the
+  # standard headers: about 1-4 s of a file's 3-24 s of CPU), and the test executables'
+  # own files without libFuzzer's coverage instrumentation (the library and the fuzz
+  # targets keep it; the tests never run under libFuzzer; it also costs them run time:
+  # test_hausdorff_dual took 101 s of CPU with it, 77 s without). CPU (user+sys) of the
+  # whole build, `/usr/bin/time -v cmake --build <tree> -j 2` on a fresh tree configured as
+  # here (Dec 2, shared machine): 1032 s before, 765 s with these three.
+  execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}
+    -DCMAKE_CXX_COMPILER=${CLANGXX} -DCMAKE_BUILD_TYPE=None ${launcher}
+    "-DCMAKE_CXX_FLAGS=-O1 -g1 -Wno-pass-failed" -DSOFTHD_SANITIZE=ON -DSOFTHD_FUZZ=ON
+    -DSOFTHD_BUILD_BENCH=OFF -DSOFTHD_SANITIZER_SUITE=OFF
+    -DSOFTHD_LIB_PCH=ON -DSOFTHD_TEST_PCH=ON
+    -DSOFTHD_TEST_COMPILE_OPTIONS=-fno-sanitize=fuzzer-no-link
+    RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+  if(rc)
+    message(FATAL_ERROR "configuring the sanitizer build failed:\n${out}")
+  endif()
+  # The CLI pulls in the library; test_point_cloud owns the tests' precompiled header.
+  sanitizer_build(2 softhd_cli test_point_cloud)
+  sanitizer_build(1 softhd_cli test_point_cloud)
+elseif(STEP STREQUAL "test")
+  sanitizer_build(1 ${EXE})
+  # A directory whose test list is this executable's alone (CTest reads no other
+  # executable's list, which another step's build may be writing).
+  set(dir ${WORK_DIR}/sanitizer-ctest/${EXE})
+  set(include "${WORK_DIR}/tests/${EXE}[1]_include.cmake")  # gtest_discover_tests' name
+  if(NOT EXISTS "${include}")
+    message(FATAL_ERROR "no test list of ${EXE}: ${include}")
+  endif()
+  file(WRITE ${dir}/CTestTestfile.cmake "include(\"${include}\")\n")
+  sanitizer_ctest(${dir})
+elseif(STEP STREQUAL "scripts")
+  # The tests without a label: every GoogleTest test has its executable's name as label.
+  sanitizer_ctest(${WORK_DIR} -LE .)
+elseif(STEP STREQUAL "fuzz")
+  sanitizer_build(1 fuzz_${TARGET})
+  execute_process(COMMAND ${SOURCE_DIR}/scripts/fuzz.sh ${WORK_DIR} ${FUZZ_SECONDS} 1 ${TARGET}
+    RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  message(STATUS "${out}")
+  if(rc)
+    message(FATAL_ERROR "a fuzz target found a problem:\n${out}\n${err}")
+  endif()
+else()
+  message(FATAL_ERROR "sanitize.cmake: unknown STEP '${STEP}'")
 endif()
