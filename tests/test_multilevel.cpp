@@ -93,7 +93,10 @@ TEST(Multilevel, ALinearLevelPassesItsControlsUnchanged) {
 class MultilevelRun : public ::testing::Test {
  protected:
   void SetUp() override {
-    file_ = fs::path(::testing::TempDir()) / "softhd_multilevel_scene.json";
+    // One file per test: CTest runs the tests of this fixture at the same time.
+    file_ = fs::path(::testing::TempDir()) /
+            (std::string("softhd_multilevel_scene_") +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".json");
     std::ofstream(file_) << R"({
       "name": "small_bend",
       "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [2, 0.4, 0.2], "cells": [6, 1, 2],
