@@ -24,10 +24,13 @@ struct GmshMeshOptions {
   /// [kMinScale, kMaxScale].
   double scale = 1.0;
 
+  ///@{
   /// The range of `scale`: a file's lengths in any unit from nanometres to kilometres made
   /// metres or millimetres, with the scaled lengths and volumes far from overflow and
   /// underflow.
-  static constexpr double kMinScale = 1e-12, kMaxScale = 1e12;
+  static constexpr double kMinScale = 1e-12;
+  static constexpr double kMaxScale = 1e12;
+  ///@}
 
   /// Throws InvalidArgument naming the field.
   void validate() const;
