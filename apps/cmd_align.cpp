@@ -9,11 +9,11 @@
 
 #include "cli.hpp"
 #include "commands.hpp"
+#include "softhd/control/pose_file.hpp"
 #include "softhd/fe/cloud.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/io/atomic_file.hpp"
 #include "softhd/io/cloud_io.hpp"
-#include "softhd/control/pose_file.hpp"
 #include "softhd/parallel.hpp"
 #include "softhd/scan/align.hpp"
 

@@ -13,9 +13,9 @@
 #include <sstream>
 
 #include "hausdorff_reference.hpp"
+#include "softhd/control/pose_file.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/cloud_io.hpp"
-#include "softhd/control/pose_file.hpp"
 
 namespace softhd::test {
 namespace {

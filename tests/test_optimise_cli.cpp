@@ -14,9 +14,9 @@
 #include <sstream>
 #include <tuple>
 
+#include "softhd/control/pose_file.hpp"
 #include "softhd/fe/state_backend.hpp"
 #include "softhd/io/cloud_io.hpp"
-#include "softhd/control/pose_file.hpp"
 #include "softhd/scan/pose.hpp"
 
 namespace {

@@ -11,10 +11,10 @@
 #include <string>
 
 #include "expect_error.hpp"
+#include "softhd/control/pose_file.hpp"
 #include "softhd/control/scene_target.hpp"
 #include "softhd/fe/scene.hpp"
 #include "softhd/io/cloud_io.hpp"
-#include "softhd/control/pose_file.hpp"
 #include "softhd/scan/cleanup.hpp"
 #include "softhd/scan/surface_weights.hpp"
 

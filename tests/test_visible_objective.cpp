@@ -106,7 +106,8 @@ TEST_P(VisibleGradient, TaylorRemainderIsSecondOrder) {
   for (double h = 0.2; h > 0.2 / 32; h /= 2) {
     const ShapeEvaluation e = J.evaluate(m0 + h * dm, false);
     ASSERT_EQ(e.status, EvaluationStatus::ok) << e.failure;
-    ASSERT_TRUE((seen(A.mesh(), J.state_path().last_state().u) == mask0).all()) << "the visible set changed";
+    ASSERT_TRUE((seen(A.mesh(), J.state_path().last_state().u) == mask0).all())
+        << "the visible set changed";
     remainder.push_back(std::fabs(e.J - e0.J - h * slope));
   }
   for (size_t k = 0; k + 1 < remainder.size(); ++k)

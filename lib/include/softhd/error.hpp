@@ -60,12 +60,12 @@ class InternalError : public Error {
 /// Checks an internal invariant `cond`; if it fails, throws InternalError with `what`, the
 /// condition's text and the source position. Always on (the checks are cheap and outside
 /// inner loops).
-#define SOFTHD_ASSERT(cond, what)                                                          \
-  do {                                                                                     \
-    if (!(cond))                                                                           \
-      throw ::softhd::InternalError(std::string("internal error (a bug in softhd): ") +    \
-                                    (what) + " [" #cond "] at " + __FILE__ + ":" +         \
-                                    std::to_string(__LINE__));                             \
+#define SOFTHD_ASSERT(cond, what)                                                                \
+  do {                                                                                           \
+    if (!(cond))                                                                                 \
+      throw ::softhd::InternalError(std::string("internal error (a bug in softhd): ") + (what) + \
+                                    " [" #cond "] at " + __FILE__ + ":" +                        \
+                                    std::to_string(__LINE__));                                   \
   } while (false)
 
 /// A long call stopped because the interrupt check (softhd/interrupt.hpp) asked it to, e.g.

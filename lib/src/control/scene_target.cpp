@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "../common/keys.hpp"
+#include "softhd/control/pose_file.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/shape_tracking.hpp"
 #include "softhd/control/targets.hpp"
@@ -18,7 +19,6 @@
 #include "softhd/fe/cloud.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/cloud_io.hpp"
-#include "softhd/control/pose_file.hpp"
 #include "softhd/samplers.hpp"
 #include "softhd/scan/cleanup.hpp"
 #include "softhd/scan/surface_weights.hpp"
@@ -382,7 +382,8 @@ DistanceForm target_form(const TargetDistance& distance, const ShapeObjective& o
   form.cap.c = distance.cap;
   form.cap.q = distance.cap_q;
   if (distance.cap_factor > 0.0) {
-    const Eigen::VectorXd rest = Eigen::VectorXd::Zero(objective.state_path().last_state().u.size());
+    const Eigen::VectorXd rest =
+        Eigen::VectorXd::Zero(objective.state_path().last_state().u.size());
     form.cap.c = cap_from_quantile(objective.fields(rest).field_target, distance.cap_quantile,
                                    distance.cap_factor);
   }

@@ -463,7 +463,8 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
   ShapeTrackingCallbacks cb;
   cb.on_start = [&](const ShapeTrackingSummary& start) {
     if (d.files)
-      d.files->start(start, m0.cwiseMax(lower).cwiseMin(upper), d.objective->state_path().last_state().u);
+      d.files->start(start, m0.cwiseMax(lower).cwiseMin(upper),
+                     d.objective->state_path().last_state().u);
     if (callbacks.on_start) callbacks.on_start(start);
   };
   cb.on_failure = callbacks.on_failure;
