@@ -462,6 +462,23 @@ void sample_basis(const Pass& p, const std::vector<std::vector<Interaction>>& li
                         grid_work(p, *p.st, p.sbox, smark, p.source_fields(), translations));
 }
 
+/// Plans the outer tree's root `root` within `limit` of the shared `spent` (PlanState): its
+/// work in *work, its interactions in *list, the planning work added to *visits and *axes.
+/// False if the plan ran over the limit.
+bool plan_root(Pass& p, int root, std::atomic<double>* spent, double limit, double* work,
+               std::vector<Interaction>* list, std::int64_t* visits, std::int64_t* axes) {
+  PlanState st;
+  st.spent = spent;
+  st.limit = limit;
+  Ledger ledger;
+  const bool within = plan(p, root, 0, st, ledger);
+  *visits += st.counts.visits;
+  *axes += st.counts.axes;
+  *work = st.total;
+  *list = std::move(st.out);
+  return within;
+}
+
 /// Whether the sample predicts a plan over `limit`. Its units are the tasks of `mine`, cut
 /// into subtrees of at most N/16 points (at least kMinSamplePoints) where tasks are larger,
 /// i.e. only below N ≈ 16 000, where 4–8 tasks would make the sample half or a quarter of the
@@ -506,14 +523,9 @@ bool sample_exceeds(Pass& p, const std::vector<int>& roots, UnitRange mine, doub
 #pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits, axes)
   for (size_t i = 0; i < sample_roots.size(); ++i) {
     if (stopped.load()) continue;
-    PlanState st;
-    st.spent = &spent;
-    st.limit = limit * covered / n_all;
-    Ledger ledger;
-    if (!plan(p, sample_roots[i], 0, st, ledger)) stopped = true;
-    visits += st.counts.visits, axes += st.counts.axes;
-    sampled[i] = st.total;
-    sample_lists[i] = std::move(st.out);
+    if (!plan_root(p, sample_roots[i], &spent, limit * covered / n_all, &sampled[i],
+                   &sample_lists[i], &visits, &axes))
+      stopped = true;
   }
   counts += {visits, axes};
   // stopped, the sample's planned work (with its outer grids' basis work), its points,
@@ -557,14 +569,9 @@ bool plan_tasks(Pass& p, const std::vector<int>& roots, UnitRange mine, double a
 #pragma omp parallel for schedule(dynamic, 1) num_threads(set.threads) reduction(+ : visits, axes)
   for (size_t r = mine.first; r < mine.last; ++r) {
     if (done[r] || stopped.load()) continue;
-    PlanState st;
-    st.spent = &spent;
-    st.limit = kFallBackPlanned * all_pairs;
-    Ledger ledger;
-    if (!plan(p, roots[r], 0, st, ledger)) stopped = true;
-    visits += st.counts.visits, axes += st.counts.axes;
-    work[r] = st.total;
-    lists[r] = std::move(st.out);
+    if (!plan_root(p, roots[r], &spent, kFallBackPlanned * all_pairs, &work[r], &lists[r], &visits,
+                   &axes))
+      stopped = true;
   }
   counts += {visits, axes};
   double verdict = stopped ? 1.0 : 0.0;
