@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -16,6 +17,8 @@
 #include "softhd/control/pose_file.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/io/cloud_io.hpp"
+#include "softhd/io/msh.hpp"
+#include "softhd/scan/surface_weights.hpp"
 
 namespace softhd::test {
 namespace {
@@ -239,6 +242,36 @@ TEST_F(Cli, AlignRecoversAMovedCopyAndRefusesBadInput) {
   expect_bad_input("align " + good + " " + good, "--out DIR is required");
 }
 
+// align --inlier F: the overlap's threshold is F times the body size L (pose.json's
+// inlier_distance / body_size), and a wider threshold counts at least as many scan points in.
+TEST_F(Cli, AlignInlierIsAFractionOfTheBodySize) {
+  std::string body_text, scan_text;
+  for (int i = 0; i < 60; ++i) {  // an asymmetric spiral and a shifted, perturbed copy
+    const double a = 0.15 * i;
+    const Eigen::Vector3d x(std::cos(a) * (1 + 0.01 * i), std::sin(a), 0.02 * i * (i % 3));
+    const Eigen::Vector3d y = x + Eigen::Vector3d(0.3, -0.1, 0.05 * std::sin(7.0 * i));
+    body_text +=
+        std::to_string(x.x()) + " " + std::to_string(x.y()) + " " + std::to_string(x.z()) + "\n";
+    scan_text +=
+        std::to_string(y.x()) + " " + std::to_string(y.y()) + " " + std::to_string(y.z()) + "\n";
+  }
+  const std::string clouds =
+      write("body.txt", body_text) + " " + write("scan.txt", scan_text) + " --threads 1 --json";
+  const auto pose = [&](const std::string& flags) {
+    const Outcome r = run("align " + clouds + " --out " + path("al") + flags);
+    EXPECT_EQ(r.status, 0) << flags << ": " << r.err;
+    return r.status == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
+  };
+  const nlohmann::json def = pose(""), wide = pose(" --inlier 0.2");
+  const double L = def.value("body_size", 0.0);
+  ASSERT_GT(L, 0.0);
+  EXPECT_NEAR(def.value("inlier_distance", 0.0), 0.01 * L, 1e-15 * L);  // the default 0.01
+  EXPECT_NEAR(wide.value("inlier_distance", 0.0), 0.2 * L, 1e-15 * L);
+  EXPECT_GE(wide.value("overlap", 0.0), def.value("overlap", 1.0));
+  expect_bad_input("align " + clouds + " --out " + path("bad") + " --inlier 0",
+                   "inlier_distance must be > 0");
+}
+
 // A body or scan that fixes no pose (a single point, coincident or collinear points) is refused
 // naming its file, as are --distance visible (align has no camera) and a scaled --initial for a
 // rigid alignment: exit 2 and one line.
@@ -314,6 +347,197 @@ TEST_F(Cli, DistanceFormsMatchTheLibraryAndRefuseMisuse) {
   for (int i = 0; i < 12; ++i) zeros += "0\n";
   expect_bad_input("distance " + xy + " --distance visible --visible " + write("z.txt", zeros),
                    "no moving point is marked visible");
+}
+
+// distance's cleanup flags act on TARGET as documented: --crop keeps exactly the points in
+// MOVING's (inflated) box, --plane removes the dominant plane, --outliers the far point,
+// --weights knn gives the library's distance to the knn-weighted cloud; bad values are
+// exit 2 and one line naming the flag.
+TEST_F(Cli, DistanceCleanupFlagsChangeTheTargetAsDocumented) {
+  const std::string x = write("x.txt", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 1 1\n");  // box [0,1]^3
+  // 3 points in the box, one at 1.5 (kept by a margin of diag = sqrt 3), one at 10 (never).
+  const std::string y = write("y.txt", "0.5 0.5 0.5\n0.2 0.1 0.9\n1 1 1\n1.5 0.5 0.5\n10 0 0\n");
+  const auto kept = [&](const std::string& flags) {
+    const Outcome r = run("distance " + x + " " + y + " --json " + flags);
+    EXPECT_EQ(r.status, 0) << flags << ": " << r.err;
+    return r.status == 0 ? nlohmann::json::parse(r.out)["M"].get<int>() : -1;
+  };
+  EXPECT_EQ(kept(""), 5);
+  EXPECT_EQ(kept("--crop 0"), 3);
+  EXPECT_EQ(kept("--crop 1"), 4);
+  // 36 points on the plane z = 0 and 4 off it: the plane goes, the 4 stay.
+  std::string plane_text;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j)
+      plane_text += std::to_string(0.2 * i) + " " + std::to_string(0.2 * j) + " 0\n";
+  plane_text += "0.1 0.3 0.5\n0.7 0.2 0.8\n0.4 0.9 0.3\n0.6 0.6 1.0\n";
+  const Outcome p =
+      run("distance " + x + " " + write("p.txt", plane_text) + " --json --plane 0.01");
+  ASSERT_EQ(p.status, 0) << p.err;
+  EXPECT_EQ(nlohmann::json::parse(p.out)["M"].get<int>(), 4);
+  // A 3x3x3 grid of spacing 0.1 and one point at (5,5,5): mean distance to the 4 nearest
+  // is <= 0.12 on the grid, ~8.5 for the far point (mean + 1 std over the cloud ~ 1.9).
+  std::string grid = "5 5 5\n";
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k)
+        grid += std::to_string(0.1 * i) + " " + std::to_string(0.1 * j) + " " +
+                std::to_string(0.1 * k) + "\n";
+  const Outcome o = run("distance " + x + " " + write("g.txt", grid) + " --json --outliers 4,1");
+  ASSERT_EQ(o.status, 0) << o.err;
+  EXPECT_EQ(nlohmann::json::parse(o.out)["M"].get<int>(), 27);
+  // --weights knn: the library's distance to the cloud with knn area weights.
+  const PointCloud X = random_cloud(10, 3, 41), Y = random_cloud(40, 3, 42);
+  write_text_cloud(path("rx.txt"), X);
+  write_text_cloud(path("ry.txt"), Y);
+  const Outcome w =
+      run("distance " + path("rx.txt") + " " + path("ry.txt") + " --json --weights knn");
+  ASSERT_EQ(w.status, 0) << w.err;
+  const double rho_knn =
+      hausdorff(X, scan::with_area_weights(Y, scan::AreaEstimate::knn), {}, {}).rho;
+  EXPECT_EQ(nlohmann::json::parse(w.out)["rho"].get<double>(), rho_knn);
+  EXPECT_NE(rho_knn, hausdorff(X, Y, {}, {}).rho);  // the weights do change the distance
+  const std::string xy = x + " " + y;
+  expect_bad_input("distance " + xy + " --crop -1", "--crop");
+  expect_bad_input("distance " + xy + " --plane 0", "--plane");
+  expect_bad_input("distance " + xy + " --outliers 5", "--outliers");
+  expect_bad_input("distance " + xy + " --outliers 0,2", "--outliers");
+  expect_bad_input("distance " + xy + " --weights area", "--weights");
+}
+
+// forward's Newton flags have their documented effect on a 12-element plate (counts read from
+// --json): --factorize-every-step factorises more and runs no PCG, --load-increment 0.25 takes
+// more load steps, --intermediate-tol 0.5 then accepts the early steps in fewer iterations,
+// --step-tol 0 (residual test only) stops sooner than the default 1e-10, --linear-solver
+// eigen-llt gives cholmod's displacement, --verbose prints one line per Newton iteration.
+TEST_F(Cli, ForwardSolverFlagsChangeTheNewtonRunAsDocumented) {
+  const std::string scene = write("s.json", R"({
+  "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [2, 0.4, 0.2], "cells": [6, 1, 2], "order": 1 },
+  "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
+  "fibers": [1, 0, 0],
+  "clamp": ["x0"],
+  "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 }
+})");
+  const std::string base = "forward " + scene + " --control-uniform -8e4 --coarse-levels 0 --out " +
+                           path("o") + " --probe 2,0.2,0.1 ";
+  const auto solve = [&](const std::string& flags) {
+    const Outcome r = run(base + "--json " + flags);
+    EXPECT_EQ(r.status, 0) << flags << ": " << r.err;
+    return r.status == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
+  };
+  const auto n = [](const nlohmann::json& j, const char* key) { return j.value(key, -1); };
+  const nlohmann::json def = solve("");
+  ASSERT_EQ(n(def, "load_steps"), 1);
+  ASSERT_EQ(n(def, "factorizations"), 1);
+  ASSERT_GT(n(def, "krylov_iterations"), 0);
+  const nlohmann::json every = solve("--factorize-every-step");
+  EXPECT_GT(n(every, "factorizations"), 1);
+  EXPECT_EQ(n(every, "krylov_iterations"), 0);
+  const nlohmann::json quarter = solve("--load-increment 0.25");
+  EXPECT_GE(n(quarter, "load_steps"), 3);  // 0.25, then at most doubled: 0.5 and 0.25 more
+  EXPECT_GT(n(quarter, "newton_iterations"), n(def, "newton_iterations"));
+  const nlohmann::json loose = solve("--load-increment 0.25 --intermediate-tol 0.5");
+  EXPECT_EQ(n(loose, "load_steps"), n(quarter, "load_steps"));
+  EXPECT_LT(n(loose, "newton_iterations"), n(quarter, "newton_iterations"));
+  EXPECT_LT(n(solve("--step-tol 0"), "newton_iterations"), n(def, "newton_iterations"));
+  const nlohmann::json llt = solve("--linear-solver eigen-llt");
+  const double u_ref = def["probes"][0]["u"][0].get<double>();
+  ASSERT_LT(u_ref, -0.1);  // the plate does shorten
+  EXPECT_NEAR(llt["probes"][0]["u"][0].get<double>(), u_ref, 1e-10 * std::abs(u_ref));
+  // --verbose: "newton: ..." per iteration on stderr (nothing there without it).
+  const Outcome quiet = run(base), verbose = run(base + "--verbose");
+  ASSERT_EQ(verbose.status, 0) << verbose.err;
+  EXPECT_EQ(quiet.err, "");
+  EXPECT_EQ(std::count(verbose.err.begin(), verbose.err.end(), '\n'), n(def, "newton_iterations"));
+  EXPECT_EQ(verbose.err.rfind("newton: ", 0), 0u) << verbose.err;
+  expect_bad_input(base + "--step-tol 1", "--step-tol");
+  expect_bad_input(base + "--load-increment 0", "--load-increment");
+  expect_bad_input(base + "--intermediate-tol 1", "--intermediate-tol");
+  expect_bad_input(base + "--linear-solver lu", "unknown linear solver 'lu'");
+}
+
+// Scene keys of a file mesh, through forward --json on the unit cube (base x = 0, tip x = 1):
+// "mesh.scale": 2 gives 8 times the volume at rest and, the load being a stress, twice the
+// displacement at the scaled point; constraints [{"group": "tip", "components": [1]}] makes
+// u_y zero on the tip face only (not inside, and not without it); an unknown group is exit 2.
+TEST_F(Cli, MeshScaleAndConstraintGroupActOnAFileMesh) {
+  const std::string mesh = std::string(SOFTHD_SOURCE_DIR) + "/tests/data/meshes/cube_tet4_v41.msh";
+  const auto scene = [&](const std::string& name, const std::string& mesh_extra,
+                         const std::string& extra) {
+    return write(name, R"({"mesh": {"type": "gmsh", "file": ")" + mesh + "\"" + mesh_extra +
+                           R"(}, "material": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3},
+      "fibers": [1, 0, 0], "clamp": ["base"])" +
+                           extra + R"(, "control": {"space": "vertex", "lower": -1, "upper": 0}})");
+  };
+  const std::string one = scene("one.json", "", ""), two = scene("two.json", R"(, "scale": 2)", "");
+  const std::string tip =
+      scene("tip.json", "", R"(, "constraints": [{"group": "tip", "components": [1]}])");
+  const auto solve = [&](const std::string& file, const std::string& flags) {
+    const Outcome r =
+        run("forward " + file + " --coarse-levels 0 --json --out " + path("o") + " " + flags);
+    EXPECT_EQ(r.status, 0) << file << flags << ": " << r.err;
+    return r.status == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
+  };
+  EXPECT_NEAR(solve(one, "--control-uniform 0").value("volume", 0.0), 1.0, 1e-12);
+  EXPECT_NEAR(solve(two, "--control-uniform 0").value("volume", 0.0), 8.0, 8e-12);
+  const nlohmann::json u1 = solve(one, "--control-uniform -0.3 --probe 0.9,0.3,0.7");
+  const nlohmann::json u2 = solve(two, "--control-uniform -0.3 --probe 1.8,0.6,1.4");
+  for (int i = 0; i < 3; ++i) {
+    const double a = u1["probes"][0]["u"][i].get<double>(),
+                 b = u2["probes"][0]["u"][i].get<double>();
+    EXPECT_GT(std::abs(a), 1e-3) << i;
+    EXPECT_NEAR(b, 2.0 * a, 1e-9 * std::abs(a)) << i;
+  }
+  const std::string probes = " --control-uniform -0.3 --probe 1,0.1,0.9 --probe 0.9,0.1,0.9";
+  const nlohmann::json free = solve(one, probes), held = solve(tip, probes);
+  EXPECT_GT(std::abs(free["probes"][0]["u"][1].get<double>()), 1e-3);  // tip, not held
+  EXPECT_NEAR(held["probes"][0]["u"][1].get<double>(), 0.0, 1e-14);    // tip, held in y
+  EXPECT_GT(std::abs(held["probes"][0]["u"][0].get<double>()), 1e-3);  // x stays free
+  EXPECT_GT(std::abs(held["probes"][1]["u"][1].get<double>()), 1e-4);  // inside: free
+  const std::string tap =
+      scene("tap.json", "", R"(, "constraints": [{"group": "tap", "components": [1]}])");
+  expect_bad_input("forward " + tap + " --out " + path("o"), "unknown boundary face 'tap'");
+}
+
+// "fibers": {"file": F, "per": "element"} with one row per tetrahedron of the file (counted
+// from the file's element blocks), ±x with varying signs, gives the state of the constant
+// "fibers": [1, 0, 0] (a fibre is an axis); a file one row short is exit 2 naming it.
+TEST_F(Cli, ElementFibreFileIsTheConstantFibreField) {
+  const std::string mesh = std::string(SOFTHD_SOURCE_DIR) + "/tests/data/meshes/cube_tet4_v41.msh";
+  Eigen::Index elements = 0;
+  for (const io::MshElementBlock& b : io::read_msh(mesh).blocks)
+    if (b.dim == 3) elements += b.nodes.rows();
+  ASSERT_GT(elements, 10);
+  const auto fibre_rows = [&](const std::string& name, Eigen::Index rows) {
+    std::string t;
+    for (Eigen::Index k = 0; k < rows; ++k) t += (k % 3 == 1 ? "-1 0 0\n" : "1 0 0\n");
+    return write(name, t);
+  };
+  fibre_rows("fib.txt", elements);
+  fibre_rows("short.txt", elements - 1);
+  const auto scene = [&](const std::string& name, const std::string& fibers) {
+    return write(
+        name,
+        R"({"mesh": {"type": "gmsh", "file": ")" + mesh + R"("},
+      "material": {"model": "mooney_rivlin", "a": 1, "b": 0.2, "c": 3}, "fibers": )" +
+            fibers +
+            R"(, "clamp": ["base"], "control": {"space": "vertex", "lower": -1, "upper": 0}})");
+  };
+  const std::string args =
+      " --coarse-levels 0 --control-uniform -0.3 --json --probe 1,0.1,0.9 --out ";
+  const Outcome c = run("forward " + scene("c.json", "[1, 0, 0]") + args + path("o"));
+  const Outcome f = run("forward " + scene("f.json", R"({"file": "fib.txt", "per": "element"})") +
+                        args + path("o"));
+  ASSERT_EQ(c.status, 0) << c.err;
+  ASSERT_EQ(f.status, 0) << f.err;
+  const nlohmann::json jc = nlohmann::json::parse(c.out), jf = nlohmann::json::parse(f.out);
+  EXPECT_EQ(jf["energy"].get<double>(), jc["energy"].get<double>());
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(jf["probes"][0]["u"][i].get<double>(), jc["probes"][0]["u"][i].get<double>()) << i;
+  expect_bad_input("forward " + scene("s.json", R"({"file": "short.txt", "per": "element"})") +
+                       " --out " + path("o"),
+                   "short.txt: " + std::to_string(elements - 1) + " fibre rows for the mesh's " +
+                       std::to_string(elements) + " elements");
 }
 
 // Issue 29: OMP_NUM_THREADS=100000 segfaulted inside GOMP_parallel; the default is clamped to

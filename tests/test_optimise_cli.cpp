@@ -13,6 +13,8 @@
 #include <random>
 #include <sstream>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include "softhd/control/pose_file.hpp"
 #include "softhd/fe/state_backend.hpp"
@@ -276,6 +278,87 @@ TEST_F(OptimiseCli, TooManyLevelsIsBadInput) {
   std::string err;
   EXPECT_EQ(run(scene() + " --out " + out() + " --levels 3 --quiet", &err), 2);
   EXPECT_NE(err.find("levels"), std::string::npos) << err;
+}
+
+// --target FILE is the run of a scene whose target is {"kind": "cloud", "file": FILE}
+// (history.csv equal but for timings), not the scene's own arc's; a missing file is exit 2.
+TEST_F(OptimiseCli, TargetFlagIsTheScenesCloudTargetOfThatFile) {
+  const std::string forward = std::string(SOFTHD_CLI) + " forward " + scene() +
+                              " --control-uniform -3e4 --write-cloud " + (dir_ / "t.ply").string() +
+                              " --out " + (dir_ / "fwd").string() + " >/dev/null 2>&1";
+  ASSERT_EQ(std::system(forward.c_str()), 0);
+  nlohmann::json cloud = nlohmann::json::parse(kScene);
+  cloud["target"] = {{"kind", "cloud"}, {"file", "t.ply"}};
+  const std::string cloud_scene = (dir_ / "cloud.json").string();
+  std::ofstream(cloud_scene) << cloud.dump();
+  const std::string common = " --max-iter 2 --threads 1 --quiet";
+  std::string err;
+  ASSERT_EQ(run(cloud_scene + " --out " + (dir_ / "a").string() + common, &err), 0) << err;
+  ASSERT_EQ(run(scene() + " --out " + (dir_ / "b").string() + common + " --target " +
+                    (dir_ / "t.ply").string(),
+                &err),
+            0)
+      << err;
+  ASSERT_EQ(run(scene() + " --out " + (dir_ / "c").string() + common, &err), 0) << err;
+  EXPECT_EQ(history_without_timings(dir_ / "b"), history_without_timings(dir_ / "a"));
+  EXPECT_NE(history_without_timings(dir_ / "b"), history_without_timings(dir_ / "c"));
+  EXPECT_EQ(run(scene() + " --target " + (dir_ / "missing.ply").string(), &err), 2);
+  EXPECT_NE(err.find("missing.ply"), std::string::npos) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+}
+
+// history.csv's rho per level (column 4, level the last column), in row order.
+std::vector<std::pair<int, double>> rho_by_level(const fs::path& dir) {
+  std::istringstream in(read_text(dir / "history.csv"));
+  std::string line;
+  std::getline(in, line);  // header
+  std::vector<std::pair<int, double>> rows;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::string field;
+    for (int i = 0; i < 4; ++i) std::getline(fields, field, ',');
+    rows.emplace_back(std::stoi(line.substr(line.rfind(',') + 1)), std::stod(field));
+  }
+  return rows;
+}
+
+// --levels 2: --coarse-iterations 2 caps the coarse level (level 1) at 2 rows of history.csv
+// (8 without it, --max-iter); --refined-move-limit 1e-3 leaves the coarse rows as they were
+// and makes the fine level's steps small: its rho decreases by under a tenth of the default's.
+TEST_F(OptimiseCli, CoarseIterationsAndRefinedMoveLimitActOnTheirLevels) {
+  const std::string common = " --levels 2 --max-iter 8 --rel-tol 0 --threads 1 --quiet";
+  std::string err;
+  ASSERT_EQ(run(scene() + " --out " + (dir_ / "d").string() + common, &err), 0) << err;
+  ASSERT_EQ(
+      run(scene() + " --out " + (dir_ / "k").string() + common + " --coarse-iterations 2", &err), 0)
+      << err;
+  ASSERT_EQ(run(scene() + " --out " + (dir_ / "m").string() + common + " --refined-move-limit 1e-3",
+                &err),
+            0)
+      << err;
+  const auto count = [](const std::vector<std::pair<int, double>>& rows, int level) {
+    return std::count_if(rows.begin(), rows.end(), [&](const auto& r) { return r.first == level; });
+  };
+  const auto def = rho_by_level(dir_ / "d"), capped = rho_by_level(dir_ / "k"),
+             slow = rho_by_level(dir_ / "m");
+  ASSERT_EQ(count(def, 1), 8);
+  EXPECT_EQ(count(capped, 1), 2);
+  EXPECT_EQ(count(capped, 0), 8);
+  ASSERT_EQ(slow.size(), def.size());
+  for (std::size_t i = 0; i < 8; ++i) EXPECT_EQ(slow[i], def[i]) << "coarse row " << i;
+  ASSERT_EQ(count(def, 0), 8);
+  const double fine_drop = def[8].second - def.back().second;
+  const double slow_drop = slow[8].second - slow.back().second;
+  ASSERT_GT(fine_drop, 0.0);
+  EXPECT_LT(slow_drop, 0.1 * fine_drop);
+  for (const auto& [args, needle] : std::vector<std::pair<std::string, std::string>>{
+           {" --coarse-iterations 0", "--coarse-iterations"},
+           {" --refined-move-limit -1", "refined_move_limit must be in [0, 1]"},
+           {" --refined-move-limit 2", "refined_move_limit must be in [0, 1]"}}) {
+    EXPECT_EQ(run(scene() + args, &err), 2) << args;
+    EXPECT_NE(err.find(needle), std::string::npos) << args << "\n" << err;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  }
 }
 
 // A manufactured target (forward --write-cloud) solved on the body's own mesh: the known map
