@@ -50,7 +50,14 @@ set(heavy "install_and_consume|Plate\\.HardCaseIsReachedFromFlat"
   # about 2.5 s of CPU in the main suite (five CLI runs, one of 12 joint pose-and-control
   # iterations); the joint objective and run run under ASan in Pose/JointGradient.* and
   # ResumeIsTheSameRun.WithAJointPose.
-  "OptimiseCli\\.CameraFrameTargetRefinesThePoseWithTheControl")
+  "OptimiseCli\\.CameraFrameTargetRefinesThePoseWithTheControl"
+  # flag tests of the main suite, 6-14 s each there (seven forward solves; three optimise
+  # runs of 8 iterations, two of them on two levels): they show each flag's effect; the
+  # Newton, the levels and the cloud target they drive run under ASan in Newton.*,
+  # Multilevel.* and OptimiseCli's shorter runs.
+  "Cli\\.ForwardSolverFlagsChangeTheNewtonRunAsDocumented"
+  "OptimiseCli\\.TargetFlagIsTheScenesCloudTargetOfThatFile"
+  "OptimiseCli\\.CoarseIterationsAndRefinedMoveLimitActOnTheirLevels")
 list(JOIN heavy "|" heavy)
 
 # cmake --build WORK_DIR -j JOBS --target TARGETS...; a failure prints the build's output.
