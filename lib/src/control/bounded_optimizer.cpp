@@ -448,33 +448,28 @@ NloptEnd run_rounds(Driver* d) {
 }
 
 /// The summary's status and termination text from why the run stopped: the driver's own
-/// stop, or (none) why NLopt returned. (A switch: a function-local constexpr table of these
-/// was left unmatched by clang 14 under ASan at -O1, every stop reported as NLopt's end.)
+/// stop, or (none) why NLopt returned.
 void set_termination(Stop stop, const NloptEnd& end, BoundedOptimizerSummary* s) {
-  switch (stop) {
-    case Stop::iterations:
-      s->status = OptimizerStatus::iteration_limit;
-      s->termination = "the iteration limit was reached";
-      break;
-    case Stop::relative_change:
-      s->status = OptimizerStatus::relative_change;
-      s->termination = "the relative change of J fell below the tolerance";
-      break;
-    case Stop::target:
-      s->status = OptimizerStatus::target_value;
-      s->termination = "J reached the target value";
-      break;
-    case Stop::time:
-      s->status = OptimizerStatus::time_limit;
-      s->termination = "the wall-clock limit was reached";
-      break;
-    case Stop::requested:
-      s->status = OptimizerStatus::stopped;
-      s->termination = "stopped by the caller";
-      break;
-    case Stop::none:
-      s->status = end.status;
-      s->termination = end.reason;
+  struct Reason {
+    Stop stop;
+    OptimizerStatus status;
+    const char* text;
+  };
+  static constexpr Reason kReasons[] = {
+      {Stop::iterations, OptimizerStatus::iteration_limit, "the iteration limit was reached"},
+      {Stop::relative_change, OptimizerStatus::relative_change,
+       "the relative change of J fell below the tolerance"},
+      {Stop::target, OptimizerStatus::target_value, "J reached the target value"},
+      {Stop::time, OptimizerStatus::time_limit, "the wall-clock limit was reached"},
+      {Stop::requested, OptimizerStatus::stopped, "stopped by the caller"},
+  };
+  s->status = end.status;
+  s->termination = end.reason;
+  for (const Reason& r : kReasons) {
+    if (r.stop == stop) {
+      s->status = r.status;
+      s->termination = r.text;
+    }
   }
 }
 
