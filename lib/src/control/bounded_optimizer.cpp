@@ -481,7 +481,12 @@ BoundedOptimizerSummary minimise(
     const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& on_iteration) {
   check_problem(x0, lower, upper, options);
   Driver d(objective, options, on_iteration);
-  if (start(&d, x0, lower, upper)) set_termination(d.stop, run_rounds(&d), &d.summary);
+  if (start(&d, x0, lower, upper)) {
+    // Run first, then read d.stop: in one call's arguments their order is unspecified (GCC
+    // ran run_rounds first, clang read d.stop first and reported every stop as none).
+    const NloptEnd end = run_rounds(&d);
+    set_termination(d.stop, end, &d.summary);
+  }
   uncertified_by_move_limit(options, &d.summary);
   d.summary.seconds = d.seconds();
   return d.summary;
