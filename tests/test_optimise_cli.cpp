@@ -1,7 +1,9 @@
 // softhd optimise end to end on a small plate: it lowers ρ̃, writes every promised
 // file, resumed after kills it is the uninterrupted run, and bad input gets exit code 2.
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <spawn.h>
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -20,6 +22,8 @@
 #include "softhd/fe/state_backend.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/scan/pose.hpp"
+
+extern char** environ;
 
 namespace {
 
@@ -61,6 +65,26 @@ class OptimiseCli : public ::testing::Test {
   }
   nlohmann::json summary() const {
     return nlohmann::json::parse(std::ifstream(fs::path(out()) / "summary.json"));
+  }
+  /// `softhd forward SCENE --control-uniform -3e4 --write-cloud CLOUD` (a manufactured target
+  /// on the scene's own mesh), run with an argument vector, no shell; its exit status.
+  int write_forward_cloud(const fs::path& cloud) const {
+    const std::string fwd = (dir_ / "fwd").string(), c = cloud.string(), sc = scene();
+    std::vector<std::string> args = {
+        SOFTHD_CLI, "forward", sc, "--control-uniform", "-3e4", "--write-cloud", c, "--out", fwd};
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t quiet;
+    posix_spawn_file_actions_init(&quiet);
+    posix_spawn_file_actions_addopen(&quiet, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&quiet, 2, "/dev/null", O_WRONLY, 0);
+    pid_t pid = 0;
+    const int spawned = posix_spawn(&pid, argv[0], &quiet, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&quiet);
+    int raw = 0;
+    if (spawned != 0 || waitpid(pid, &raw, 0) != pid) return -1;
+    return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
   }
   fs::path dir_;
 };
@@ -283,10 +307,7 @@ TEST_F(OptimiseCli, TooManyLevelsIsBadInput) {
 // --target FILE is the run of a scene whose target is {"kind": "cloud", "file": FILE}
 // (history.csv equal but for timings), not the scene's own arc's; a missing file is exit 2.
 TEST_F(OptimiseCli, TargetFlagIsTheScenesCloudTargetOfThatFile) {
-  const std::string forward = std::string(SOFTHD_CLI) + " forward " + scene() +
-                              " --control-uniform -3e4 --write-cloud " + (dir_ / "t.ply").string() +
-                              " --out " + (dir_ / "fwd").string() + " >/dev/null 2>&1";
-  ASSERT_EQ(std::system(forward.c_str()), 0);
+  ASSERT_EQ(write_forward_cloud(dir_ / "t.ply"), 0);
   nlohmann::json cloud = nlohmann::json::parse(kScene);
   cloud["target"] = {{"kind", "cloud"}, {"file", "t.ply"}};
   const std::string cloud_scene = (dir_ / "cloud.json").string();
@@ -366,10 +387,7 @@ TEST_F(OptimiseCli, CoarseIterationsAndRefinedMoveLimitActOnTheirLevels) {
 // volumes the matched floor is the self floor.
 TEST_F(OptimiseCli, ManufacturedTargetOnTheSameMeshHasTheSelfFloorAsMatchedFloor) {
   const std::string target = (dir_ / "target.ply").string();
-  const std::string forward = std::string(SOFTHD_CLI) + " forward " + scene() +
-                              " --control-uniform -3e4 --write-cloud " + target + " --out " +
-                              (dir_ / "fwd").string() + " >/dev/null 2>&1";
-  ASSERT_EQ(std::system(forward.c_str()), 0);
+  ASSERT_EQ(write_forward_cloud(target), 0);
   nlohmann::json scene2 = nlohmann::json::parse(kScene);
   scene2["target"] = {{"kind", "cloud"}, {"file", "target.ply"}, {"solved_on", "scene.json"}};
   const std::string path2 = (dir_ / "manufactured.json").string();
