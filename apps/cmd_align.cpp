@@ -10,8 +10,8 @@
 #include "cli.hpp"
 #include "commands.hpp"
 #include "softhd/control/pose_file.hpp"
+#include "softhd/control/scene.hpp"
 #include "softhd/fe/cloud.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/io/atomic_file.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/parallel.hpp"
@@ -81,8 +81,8 @@ bool is_scene(const std::string& path) {
 /// The body: a scene's mesh nodes with their reference volumes, or a cloud file.
 PointCloud read_body(const std::string& path) {
   if (!is_scene(path)) return read_cloud(path);
-  const fe::Scene scene = fe::load_scene(path);
-  const fe::Assembler assembler = scene.make_assembler();
+  const softhd::Scene scene = softhd::load_scene(path);
+  const fe::Assembler assembler = scene.body.make_assembler();
   return fe::deformed_cloud(assembler, Eigen::VectorXd::Zero(assembler.dofs().num_dofs),
                             fe::CloudPoints::kNodes, fe::CloudVolumes::kReference);
 }

@@ -11,6 +11,7 @@
 
 #include "commands.hpp"
 #include "failure.hpp"
+#include "softhd/control/scene.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/cloud.hpp"
@@ -19,7 +20,6 @@
 #include "softhd/fe/locator.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/output.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/fe/state_backend.hpp"
 #include "softhd/fe/state_equation.hpp"
 #include "softhd/io/cloud_io.hpp"
@@ -29,6 +29,8 @@
 namespace {
 
 using namespace softhd::fe;
+using softhd::load_scene;
+using softhd::Scene;
 
 constexpr const char* kUsage =
     "usage: softhd forward SCENE [--control FILE | --control-uniform V] [--probe X1,X2[,X3]]...\n"
@@ -145,6 +147,11 @@ bool parse(int argc, char** argv, Args* a) {
                                       " needs softhd built with -DSOFTHD_WITH_MPI=ON");
     } else if (s == "--linear-solver") {
       a->linear_solver = value();
+      try {
+        parse_linear_solver(a->linear_solver);
+      } catch (const softhd::InvalidArgument& e) {
+        throw softhd::InvalidArgument("--linear-solver: " + std::string(e.what()));
+      }
     } else if (s == "--step-tol") {
       a->step_tol = parse_number(value(), s);
       if (!(a->step_tol >= 0.0 && a->step_tol < 1.0))
@@ -200,8 +207,8 @@ bool parse(int argc, char** argv, Args* a) {
 Eigen::VectorXd control_values(const Scene& scene, const Mesh& mesh,
                                const Eigen::MatrixXd& positions, const Args& args) {
   if (!args.control_file.empty()) return read_control_file(args.control_file, positions);
-  return softhd::fe::constant_control(mesh, scene.control_kind, scene.control_regions,
-                                      args.has_uniform ? args.uniform : scene.control_initial);
+  return softhd::fe::constant_control(mesh, scene.body.control_kind, scene.body.control_regions,
+                                      args.has_uniform ? args.uniform : scene.body.control_initial);
 }
 
 // The JSON record of each coarse level of a grid-sequenced start.
@@ -251,11 +258,11 @@ struct Solved {
 };
 
 Solved solve(const Scene& scene, const Eigen::VectorXd& m, const Args& args) {
-  const std::unique_ptr<StateEquation> solver = make_state_solver(scene, solver_options(args));
+  const std::unique_ptr<StateEquation> solver = make_state_solver(scene.body, solver_options(args));
   GridSequencingOptions grid_options;
   grid_options.levels = args.coarse_levels;
   Solved r;
-  r.grid = solver->grid_sequenced_start(scene, m, grid_options);
+  r.grid = solver->grid_sequenced_start(scene.body, m, grid_options);
   if (softhd::world_rank() == 0) std::cerr << r.grid.BriefReport();
   r.summary = solver->solve(m);
   r.seconds_solve = r.summary.seconds_total;
@@ -310,20 +317,21 @@ int forward(const Args& args) {
   // The memory limit is per rank: a PETSc backend holds 1/K of the state on each.
   const double ranks = args.backend == StateBackend::kCholmod ? 1 : softhd::world_size();
   const Scene scene = load_scene(args.scene, args.memory_limit * ranks);
-  const Mesh mesh = scene.make_mesh();
-  const Eigen::MatrixXd positions = control_positions(mesh, scene.control_kind);
+  const Mesh mesh = scene.body.make_mesh();
+  const Eigen::MatrixXd positions = control_positions(mesh, scene.body.control_kind);
   const Eigen::VectorXd m = control_values(scene, mesh, positions, args);
   if (!args.write_nodes.empty()) {
     if (writer) write_control_file(args.write_nodes, positions, m);
     return 0;
   }
-  softhd::fe::check_control_bounds(scene, mesh, m);
+  softhd::fe::check_control_bounds(scene.body, mesh, m);
   const softhd::fe::PointLocator locator(mesh);
   for (const Eigen::VectorXd& X : args.probes) {
     Eigen::VectorXd xi;
-    if (X.size() != scene.dim() || locator.locate(X, &xi) < 0) {
+    if (X.size() != scene.body.dim() || locator.locate(X, &xi) < 0) {
       std::ostringstream os;
-      os << "probe (" << X.transpose() << ") is not a point of the " << scene.dim() << "D body";
+      os << "probe (" << X.transpose() << ") is not a point of the " << scene.body.dim()
+         << "D body";
       throw softhd::InvalidArgument(os.str());
     }
   }
@@ -337,7 +345,7 @@ int forward(const Args& args) {
   const bool cloud = !args.write_cloud.empty() && summary.converged();
   if (cloud) {  // the deformed volumes need the whole mesh's quadrature: one assembler here
     softhd::write_cloud(args.write_cloud,
-                        deformed_cloud(scene.make_assembler(), r.state.u, CloudPoints::kNodes,
+                        deformed_cloud(scene.body.make_assembler(), r.state.u, CloudPoints::kNodes,
                                        CloudVolumes::kDeformed));
   }
   const double seconds =

@@ -19,8 +19,8 @@
 
 #include "cli.hpp"
 #include "commands.hpp"
+#include "softhd/control/scene.hpp"
 #include "softhd/control/tracking_run.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/parallel.hpp"
 #include "softhd/work_share.hpp"
 
@@ -321,7 +321,7 @@ void print_end(const ShapeTrackingSummary& s, const fs::path& out) {
 }
 
 // The progress lines (none with --quiet).
-TrackingRunCallbacks progress(const fe::Scene& scene, bool quiet) {
+TrackingRunCallbacks progress(const softhd::Scene& scene, bool quiet) {
   TrackingRunCallbacks cb;
   if (quiet) return cb;
   cb.on_begin = [&scene](const TrackingRunSummary& s) {
@@ -365,7 +365,7 @@ int run_quietly(const std::vector<std::string>& argv) {
 }
 
 // --out (or results/<scene name>), created here so that its error names the flag.
-fs::path output_directory(const OptimiseArgs& a, const fe::Scene& scene) {
+fs::path output_directory(const OptimiseArgs& a, const softhd::Scene& scene) {
   const fs::path out = a.out ? fs::path(*a.out) : fs::path("results") / scene.name;
   std::error_code ec;
   fs::create_directories(out, ec);
@@ -396,7 +396,7 @@ int run_optimise(const std::vector<std::string>& tokens) {
   a.run.share = world_share();  // null unless started by mpiexec with K > 1 ranks
   if (!writer) a.quiet = true;
 
-  const fe::Scene scene = fe::load_scene(a.scene_file, a.run.memory_limit);
+  const softhd::Scene scene = softhd::load_scene(a.scene_file, a.run.memory_limit);
   a.run.out = (a.out ? fs::path(*a.out) : fs::path("results") / scene.name).string();
   a.run.resume = a.resume;
   TrackingRun run(scene, a.run);  // the body, the target and the objective

@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
   };
 
   if (scenes.find("bending") != std::string::npos) {
-    const fe::Scene scene = scene_file("bending");
+    const softhd::Scene scene = scene_file("bending");
     const ArcMap T = arc_of(scene);
     const PointCloud target =
         arc_grid(scene, T, quick ? Eigen::Vector3i(40, 8, 4) : Eigen::Vector3i(200, 20, 8));
@@ -97,10 +97,10 @@ int main(int argc, char** argv) {
   }
 
   if (scenes.find("torsion") != std::string::npos) {
-    const fe::Scene scene = scene_file("torsion");
+    const softhd::Scene scene = scene_file("torsion");
     const std::string dir = std::string(SOFTHD_SOURCE_DIR) + "/data/targets/";
     const PointCloud target = read_cloud(dir + "torsion_target.ply", 3);
-    const NodalMap T(fe::load_scene(dir + "torsion_fine.json").make_mesh(), target);
+    const NodalMap T(softhd::load_scene(dir + "torsion_fine.json").body.make_mesh(), target);
     const std::vector<Eigen::Vector3i> meshes = {{13, 1, 1}, {25, 2, 1}, {50, 4, 2}};
     RunSettings settings;
     settings.run.max_iterations = std::stoi(max_iter.empty() ? "120" : max_iter);

@@ -54,13 +54,13 @@ int main(int argc, char** argv) {
   settings.run.max_iterations = std::stoi(option(argc, argv, "--max-iter", quick ? "4" : "40"));
   settings.run.max_seconds = std::stod(option(argc, argv, "--max-seconds", "0"));
 
-  const fe::Scene scene = scene_file("bending");
+  const softhd::Scene scene = scene_file("bending");
   // The Q2 25×3×1 mesh (1 071 nodes): 40 iterations of the 50×5×2 mesh cost 5× more, and the
   // studies are stated relative to h, so the coarser body keeps them within make bench's hour.
   const Eigen::Vector3i cells = quick ? Eigen::Vector3i(10, 2, 1) : Eigen::Vector3i(25, 3, 1);
   const int scan_n = quick ? 600 : 16000;
   const ArcMap T = arc_of(scene);
-  const double thickness = scene.upper[2] - scene.lower[2];
+  const double thickness = scene.body.upper[2] - scene.body.lower[2];
   std::vector<Run> runs;
   auto record = [&](Run r) {
     runs.push_back(std::move(r));
@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
                         body, arc_grid(scene, T, c), map, settings));
   }
   const Eigen::Vector3i half = grid_counts(cells, 0.5);
-  const double h1 = (scene.upper[0] - scene.lower[0]) / (2 * cells[0]);
+  const double h1 = (scene.body.upper[0] - scene.body.lower[0]) / (2 * cells[0]);
   const std::vector<std::pair<std::string, PointCloud>> scans = {
       {"random", arc_random(scene, T, scan_n, 11)},
       {"nonuniform 5:1", arc_nonuniform(scene, T, scan_n, 12)},

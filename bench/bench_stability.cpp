@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
   base.run.max_iterations = std::stoi(option(argc, argv, "--max-iter", quick ? "3" : "40"));
   base.run.max_seconds = std::stod(option(argc, argv, "--max-seconds", "0"));
 
-  const fe::Scene scene = scene_file("bending");
+  const softhd::Scene scene = scene_file("bending");
   const Eigen::Vector3i cells = quick ? Eigen::Vector3i(10, 2, 1) : Eigen::Vector3i(25, 3, 1);
   const ArcMap T = arc_of(scene);
   const PointCloud target = arc_grid(scene, T, 4 * cells);  // 2 target cells per node interval
@@ -70,9 +70,9 @@ int main(int argc, char** argv) {
 
   for (const auto& [lo, hi, label] :
        {std::tuple{-1.9e5, 0.0, "[-1.9a, 0]"}, std::tuple{-1.9e5, 1.9e5, "[-1.9a, 1.9a]"}}) {
-    fe::Scene wide = scene;
-    wide.control_lower = lo;
-    wide.control_upper = hi;
+    softhd::Scene wide = scene;
+    wide.body.control_lower = lo;
+    wide.body.control_upper = hi;
     Body b = make_body(wide, cells);
     record(run_tracking(params("bounds", base, label, ""), b, target, map, base));
   }

@@ -13,22 +13,22 @@
 
 namespace softhd::bench {
 
-fe::Scene scene_file(const std::string& name) {
-  return fe::load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/" + name + ".json");
+softhd::Scene scene_file(const std::string& name) {
+  return softhd::load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/" + name + ".json");
 }
 
-Body make_body(fe::Scene scene, const Eigen::Vector3i& cells, const Eigen::Vector3d& shift) {
-  if (cells.minCoeff() > 0) scene.cells = cells.head(scene.dim());
-  scene.lower += shift.head(scene.dim());
-  scene.upper += shift.head(scene.dim());
+Body make_body(softhd::Scene scene, const Eigen::Vector3i& cells, const Eigen::Vector3d& shift) {
+  if (cells.minCoeff() > 0) scene.body.cells = cells.head(scene.body.dim());
+  scene.body.lower += shift.head(scene.body.dim());
+  scene.body.upper += shift.head(scene.body.dim());
   Body b;
   b.scene = std::move(scene);
-  b.assembler = std::make_unique<fe::Assembler>(b.scene.make_assembler());
-  b.space = std::make_unique<fe::ControlSpace>(b.scene.make_control_space(*b.assembler));
+  b.assembler = std::make_unique<fe::Assembler>(b.scene.body.make_assembler());
+  b.space = std::make_unique<fe::ControlSpace>(b.scene.body.make_control_space(*b.assembler));
   return b;
 }
 
-ArcMap arc_of(const fe::Scene& scene, double angle) { return arc_map(scene, angle); }
+ArcMap arc_of(const softhd::Scene& scene, double angle) { return arc_map(scene, angle); }
 
 Eigen::VectorXd arc_displacement(const ArcMap& T, const fe::Mesh& mesh,
                                  const Eigen::Vector3d& shift) {
@@ -48,8 +48,10 @@ PointCloud shifted(const PointCloud& cloud, const Eigen::Vector3d& shift) {
 
 namespace {
 
-Eigen::VectorXd box_lower(const fe::Scene& s) { return s.lower - s.lower; }  // plate at origin
-Eigen::VectorXd box_upper(const fe::Scene& s) { return s.upper - s.lower; }
+Eigen::VectorXd box_lower(const softhd::Scene& s) {
+  return s.body.lower - s.body.lower;
+}  // plate at origin
+Eigen::VectorXd box_upper(const softhd::Scene& s) { return s.body.upper - s.body.lower; }
 
 // t ∈ [0, 1) with density (1 + c t)/(1 + c/2), c = 4: the inverse of its CDF at u.
 double nonuniform_t(double u) {
@@ -62,15 +64,15 @@ double uniform01(std::mt19937_64& g) { return static_cast<double>(g() >> 11) * 0
 
 }  // namespace
 
-PointCloud arc_grid(const fe::Scene& box, const ArcMap& T, const Eigen::Vector3i& counts) {
+PointCloud arc_grid(const softhd::Scene& box, const ArcMap& T, const Eigen::Vector3i& counts) {
   return T.apply(sample_box_grid(box_lower(box), box_upper(box), counts));
 }
 
-PointCloud arc_random(const fe::Scene& box, const ArcMap& T, int n, std::uint64_t seed) {
+PointCloud arc_random(const softhd::Scene& box, const ArcMap& T, int n, std::uint64_t seed) {
   return T.apply(sample_uniform_random(box_lower(box), box_upper(box), n, seed));
 }
 
-PointCloud arc_nonuniform(const fe::Scene& box, const ArcMap& T, int n, std::uint64_t seed) {
+PointCloud arc_nonuniform(const softhd::Scene& box, const ArcMap& T, int n, std::uint64_t seed) {
   const Eigen::Vector3d hi = box_upper(box);
   std::mt19937_64 g(seed);
   Eigen::MatrixXd p(n, 3);
@@ -93,7 +95,7 @@ PointCloud jittered(const PointCloud& cloud, double sigma, std::uint64_t seed) {
   return PointCloud(p, cloud.volumes());
 }
 
-PointCloud arc_surface(const fe::Scene& box, const ArcMap& T, double spacing, int random_n,
+PointCloud arc_surface(const softhd::Scene& box, const ArcMap& T, double spacing, int random_n,
                        std::uint64_t seed) {
   const Eigen::Vector3d hi = box_upper(box);
   std::vector<Eigen::Vector3d> pts;

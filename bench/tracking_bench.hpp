@@ -11,30 +11,30 @@
 #include <utility>
 #include <vector>
 
+#include "softhd/control/scene.hpp"
 #include "softhd/control/shape_tracking.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/control/tracking_run.hpp"
-#include "softhd/fe/scene.hpp"
 
 namespace softhd::bench {
 
 /// A body ready to optimise: the scene and, at stable addresses, its assembler and
 /// control space.
 struct Body {
-  fe::Scene scene;
+  softhd::Scene scene;
   std::unique_ptr<fe::Assembler> assembler;
   std::unique_ptr<fe::ControlSpace> space;
   const fe::Mesh& mesh() const { return assembler->mesh(); }
 };
 
 /// data/scenes/NAME.json of the source tree.
-fe::Scene scene_file(const std::string& name);
+softhd::Scene scene_file(const std::string& name);
 /// The scene with `cells` elements per direction (empty: unchanged), shifted by `shift`.
-Body make_body(fe::Scene scene, const Eigen::Vector3i& cells = Eigen::Vector3i::Zero(),
+Body make_body(softhd::Scene scene, const Eigen::Vector3i& cells = Eigen::Vector3i::Zero(),
                const Eigen::Vector3d& shift = Eigen::Vector3d::Zero());
 
 /// The bending scene's arc map (its plate's length and thickness, `angle` radians).
-ArcMap arc_of(const fe::Scene& scene, double angle = M_PI);
+ArcMap arc_of(const softhd::Scene& scene, double angle = M_PI);
 /// u_T = T(X − shift) + shift − X at the body's nodes (the map of a translated scene).
 Eigen::VectorXd arc_displacement(const ArcMap& T, const fe::Mesh& mesh,
                                  const Eigen::Vector3d& shift = Eigen::Vector3d::Zero());
@@ -44,19 +44,19 @@ PointCloud shifted(const PointCloud& cloud, const Eigen::Vector3d& shift);
 /// Arc targets of the plate [0, L] × [0, W] × [0, t] (`box` = the scene), each mapped by T
 /// with volumes × det ∇T (docs/formulation.md §5.2):
 /// a cell-centred grid with `counts` cells;
-PointCloud arc_grid(const fe::Scene& box, const ArcMap& T, const Eigen::Vector3i& counts);
+PointCloud arc_grid(const softhd::Scene& box, const ArcMap& T, const Eigen::Vector3i& counts);
 /// n uniform random points of the plate;
-PointCloud arc_random(const fe::Scene& box, const ArcMap& T, int n, std::uint64_t seed);
+PointCloud arc_random(const softhd::Scene& box, const ArcMap& T, int n, std::uint64_t seed);
 /// n random points with density ∝ 1 + 4 X1/L (5× denser at the free end than at the clamp),
 /// volumes |Ω| / (n p(X)) so they still sum to |Ω| in expectation;
-PointCloud arc_nonuniform(const fe::Scene& box, const ArcMap& T, int n, std::uint64_t seed);
+PointCloud arc_nonuniform(const softhd::Scene& box, const ArcMap& T, int n, std::uint64_t seed);
 /// a mapped cloud with isotropic Gaussian noise of standard deviation `sigma` added to the
 /// deformed positions (a scanner's error);
 PointCloud jittered(const PointCloud& cloud, double sigma, std::uint64_t seed);
 /// the plate's surface only: cell centres of a grid of spacing ≈ `spacing` on its six faces,
 /// weights = face areas (× det ∇T, to first order); with `random_n` > 0 instead n random
 /// surface points with density ∝ 1 + 4 X1/L (a scan).
-PointCloud arc_surface(const fe::Scene& box, const ArcMap& T, double spacing, int random_n = 0,
+PointCloud arc_surface(const softhd::Scene& box, const ArcMap& T, double spacing, int random_n = 0,
                        std::uint64_t seed = 1);
 
 /// What one benchmark run is asked to do.

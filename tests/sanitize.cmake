@@ -13,10 +13,9 @@
 # configure step builds everything shared, twice (the second, a no-op, also writes the
 # library's consolidated dependency files, which the other steps' builds then only read).
 # Each test step reads only its own executable's test list, written by its own build.
-# The tests run are those the single-test suite ran before: the tree's 584 less the 15 below
-# (569: 562 in the 48 executables' steps, 7 in scripts). `ctest -j 2 -R '^sanitizer\.'`
-# (56 tests, Dec 6, on 2 cores loaded by other builds, load average 6-12): 2225 s wall,
-# 1370 s of CPU (user+sys), with part of the library built before it started.
+# The tests run are the tree's tests less those listed below. `ctest -j 2 -R '^sanitizer\.'`
+# (Dec 6, on 2 cores loaded by other builds, load average 6-12): 2225 s wall, 1370 s of CPU
+# (user+sys), with part of the library built before it started.
 
 # Left out here (each runs in the main suite): the install test, a packaging check rather
 # than a sanitizer one, and tests that repeat code smaller tests run under ASan too, on

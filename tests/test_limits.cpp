@@ -13,10 +13,10 @@
 
 #include "expect_error.hpp"
 #include "hausdorff_reference.hpp"
+#include "softhd/control/scene.hpp"
 #include "softhd/fe/assembly.hpp"
 #include "softhd/fe/materials.hpp"
 #include "softhd/fe/mesh.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/parallel.hpp"
 
@@ -60,20 +60,20 @@ TEST(MeshSize, MeshesBeyondIntAreRefusedNotCrashed) {
 TEST(MeshSize, ScenesAboveTheMemoryLimitAreRefusedNamingSizeAndLimit) {
   // [1000, 1000, 1000] Q1: 1e9 elements, ~1e9 nodes; refused before allocating.
   expect_error<ResourceError>(
-      [] { fe::parse_scene(scene_with_cells("[1000, 1000, 1000]", 1), "s"); },
+      [] { softhd::parse_scene(scene_with_cells("[1000, 1000, 1000]", 1), "s"); },
       "GiB, above the memory limit of 8 GiB");
   // [100, 100, 100] Q2 needs more than 8 GiB by the estimate; a raised limit admits it ...
   const fe::MeshSize s = fe::box_mesh_size(Eigen::Vector3d(100, 100, 100), 2);
   EXPECT_GT(s.bytes, fe::kDefaultMemoryLimit);
-  expect_error<ResourceError>([] { fe::parse_scene(scene_with_cells("[100, 100, 100]", 2), "s"); },
-                              "memory limit");
+  expect_error<ResourceError>(
+      [] { softhd::parse_scene(scene_with_cells("[100, 100, 100]", 2), "s"); }, "memory limit");
   // ... (checked on the estimate only: building it here would take minutes).
   EXPECT_NO_THROW(fe::check_mesh_size(s, 2 * s.bytes, "mesh"));
   // A small mesh passes the default limit.
-  EXPECT_NO_THROW(fe::parse_scene(scene_with_cells("[4, 2, 2]", 2), "s"));
+  EXPECT_NO_THROW(softhd::parse_scene(scene_with_cells("[4, 2, 2]", 2), "s"));
   // The int range is a hard limit, whatever the memory limit.
   expect_error<ResourceError>(
-      [] { fe::parse_scene(scene_with_cells("[1290, 1290, 1290]", 1), "s", 1e15); },
+      [] { softhd::parse_scene(scene_with_cells("[1290, 1290, 1290]", 1), "s", 1e15); },
       "more than the 2147483647");
 }
 
@@ -85,14 +85,14 @@ TEST(SceneInput, ConstraintComponentsAndHugeNumbersAreRefused) {
   for (const char* c : {"[2.5]", "[1e20]", "[-1]", "[3]"})
     expect_error<FileError>(
         [&] {
-          fe::parse_scene(
+          softhd::parse_scene(
               with(std::string(R"("constraints": [{"face": "z0", "components": )") + c + "}]"),
               "s.json");
         },
         "constraints[].components");
   EXPECT_NO_THROW(
-      fe::parse_scene(with(R"("constraints": [{"face": "z0", "components": [2]}])"), "s.json"));
-  expect_error<FileError>([&] { fe::parse_scene(with(R"("extra": 1e400)"), "s.json"); },
+      softhd::parse_scene(with(R"("constraints": [{"face": "z0", "components": [2]}])"), "s.json"));
+  expect_error<FileError>([&] { softhd::parse_scene(with(R"("extra": 1e400)"), "s.json"); },
                           "scene s.json: not valid JSON");
 }
 

@@ -16,6 +16,7 @@
 #include "softhd/fe/gmsh_mesh.hpp"
 #include "softhd/fe/materials.hpp"
 #include "softhd/fe/mesh.hpp"
+#include "softhd/fe/mesh_hierarchy.hpp"
 
 namespace softhd::test {
 namespace {
@@ -56,7 +57,7 @@ TEST(Multilevel, ProlongationReproducesAffineVertexFieldsAndCoarseElementValues)
       return (1.0 + 2.0 * X.col(0).array() - 3.0 * X.col(1).array() + 5.0 * X.col(2).array())
           .matrix();
     };
-    const Eigen::VectorXd m = detail::prolongate(
+    const Eigen::VectorXd m = fe::prolongate_control(
         coarse.mesh(), cs, affine(cs.positions(coarse.mesh())), fine.mesh(), fs_, {});
     const Eigen::VectorXd expected = affine(fs_.positions(fine.mesh()));
     ASSERT_EQ(m.size(), expected.size());
@@ -66,7 +67,7 @@ TEST(Multilevel, ProlongationReproducesAffineVertexFieldsAndCoarseElementValues)
     const fe::ControlSpace cs(coarse.mesh(), coarse.geometry(), fe::ControlKind::kElement);
     const fe::ControlSpace fs_(fine.mesh(), fine.geometry(), fe::ControlKind::kElement);
     const Eigen::VectorXd m =
-        detail::prolongate(coarse.mesh(), cs, Eigen::Vector2d(1.0, 2.0), fine.mesh(), fs_, {});
+        fe::prolongate_control(coarse.mesh(), cs, Eigen::Vector2d(1.0, 2.0), fine.mesh(), fs_, {});
     const Eigen::MatrixXd centres = fs_.positions(fine.mesh());
     ASSERT_EQ(m.size(), 16);
     for (Eigen::Index e = 0; e < m.size(); ++e)  // coarse element 0 holds X1 < 1.5
@@ -86,7 +87,7 @@ TEST(Multilevel, ALinearLevelPassesItsControlsUnchanged) {
     ASSERT_EQ(c1.size(), c2.size());
     Eigen::VectorXd m(c1.size());
     for (Eigen::Index k = 0; k < m.size(); ++k) m[k] = -0.1 - 0.37 * std::sin(0.3 * k);
-    EXPECT_EQ(detail::prolongate(p1, c1, m, p2, c2, {}), m);
+    EXPECT_EQ(fe::prolongate_control(p1, c1, m, p2, c2, {}), m);
   }
 }
 
@@ -107,13 +108,13 @@ class MultilevelRun : public ::testing::Test {
       "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
       "target": { "kind": "arc", "angle": 0.6 }
     })";
-    scene_ = fe::load_scene(file_.string());
+    scene_ = softhd::load_scene(file_.string());
     options_.max_iterations = 5;
     options_.relative_change = 0.0;
     options_.threads = 1;
   }
   fs::path file_;
-  fe::Scene scene_;
+  softhd::Scene scene_;
   TrackingRunOptions options_;
 };
 
@@ -173,7 +174,7 @@ TEST_F(MultilevelRun, LevelsAfterTheCoarsestStepWithinTheRefinedMoveLimit) {
   options_.levels = 2;
   options_.coarse_iterations = 3;
   options_.max_iterations = 1;
-  const double range = scene_.control_upper - scene_.control_lower;
+  const double range = scene_.body.control_upper - scene_.body.control_lower;
   auto first_step = [&](double refined) {
     options_.refined_move_limit = refined;
     Eigen::VectorXd start, first;
@@ -231,8 +232,8 @@ TEST_F(MultilevelRun, AutomaticLevelsAreEveryCoarserLevelOfAtLeast32Elements) {
   ASSERT_NE(at, std::string::npos);
   for (const auto& [cells, levels] : cases) {
     std::ofstream(file_) << std::string(text).replace(at, 9, cells);
-    const fe::Scene scene = fe::load_scene(file_.string());
-    const SceneTarget known = tracking_target(scene, scene.make_mesh(), TrackingRunOptions{});
+    const softhd::Scene scene = softhd::load_scene(file_.string());
+    const SceneTarget known = tracking_target(scene, scene.body.make_mesh(), TrackingRunOptions{});
     ASSERT_TRUE(known.map_displacement) << "the scene's arc has a known map";
     SceneTarget scan = known, camera = known;
     scan.map_displacement.reset();
@@ -251,7 +252,7 @@ TEST_F(MultilevelRun, AutomaticLevelsAreEveryCoarserLevelOfAtLeast32Elements) {
 TEST_F(MultilevelRun, MoreLevelsThanHalvingsAreRefusedNamingLevels) {
   options_.levels = 3;  // (6, 1, 2) -> (3, 1, 1) -> no even count: one coarser level
   expect_error<InvalidArgument>([&] { run_tracking(scene_, options_); },
-                                "levels: 3 asks for 2 coarser levels of the body, but it has 1");
+                                "levels: 3: 2 coarser levels asked for, but the body has 1");
   options_.levels = -1;
   expect_error<InvalidArgument>([&] { options_.validate(); }, "levels");
   options_.levels = 2;

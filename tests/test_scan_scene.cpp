@@ -12,8 +12,8 @@
 
 #include "expect_error.hpp"
 #include "softhd/control/pose_file.hpp"
+#include "softhd/control/scene.hpp"
 #include "softhd/control/scene_target.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/scan/cleanup.hpp"
 #include "softhd/scan/surface_weights.hpp"
@@ -40,25 +40,26 @@ std::string write_scan() {
   return path;
 }
 
-fe::Scene scene_with(const std::string& target) {
-  return fe::parse_scene(R"({
+softhd::Scene scene_with(const std::string& target) {
+  return softhd::parse_scene(R"({
     "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [2, 1, 0.2], "cells": [2, 1, 1], "order": 1 },
     "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
     "fibers": [1, 0, 0], "clamp": ["x0"],
     "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
     "target": )" + target + "}",
-                         testing::TempDir() + "/scan_scene.json");
+                             testing::TempDir() + "/scan_scene.json");
 }
 
 TEST(ScanScene, CleansAndWeighsInTheDocumentedOrder) {
   const std::string file = write_scan();
-  const fe::Scene s = scene_with(
+  const softhd::Scene s = scene_with(
       R"({"kind": "cloud", "file": "scan_scene.ply", "weights": "knn",
           "clean": {"crop": 0.5, "plane": 0.01, "outliers": {"k": 10, "ratio": 2}}})");
-  const SceneTarget t = scene_target(s, s.make_mesh());
+  const SceneTarget t = scene_target(s, s.body.make_mesh());
   // The same steps by the library's calls.
   const PointCloud read = read_cloud(file);
-  const PointCloud cropped = scan::select(read, scan::crop_to_box(read, s.lower, s.upper, 0.5));
+  const PointCloud cropped =
+      scan::select(read, scan::crop_to_box(read, s.body.lower, s.body.upper, 0.5));
   scan::PlaneRemoval plane;
   plane.distance = 0.01;
   const PointCloud flat = scan::select(cropped, scan::remove_dominant_plane(cropped, plane));
@@ -82,8 +83,8 @@ TEST(ScanScene, RefusesBadKeysAndAnEmptiedScan) {
   write_scan();
   const std::string head = R"({"kind": "cloud", "file": "scan_scene.ply", )";
   auto refuses = [&](const std::string& rest, const std::string& message) {
-    const fe::Scene s = scene_with(head + rest + "}");
-    expect_error<Error>([&] { scene_target(s, s.make_mesh()); }, message);
+    const softhd::Scene s = scene_with(head + rest + "}");
+    expect_error<Error>([&] { scene_target(s, s.body.make_mesh()); }, message);
   };
   refuses(R"("weights": "area")", "target.weights must be \"file\", \"knn\" or \"delaunay\"");
   refuses(R"("clean": {"crop": -1})", "target.clean.crop must be a finite margin >= 0");
@@ -95,8 +96,8 @@ TEST(ScanScene, RefusesBadKeysAndAnEmptiedScan) {
   refuses(R"("clean": {"crop": 0, "plane": 5})",
           "no points left after the clean-up (plane removed the last");
   // "file" weights are the file's (here 1s).
-  const fe::Scene s = scene_with(head + R"("weights": "file"})");
-  EXPECT_EQ(scene_target(s, s.make_mesh()).cloud.volumes(), Eigen::VectorXd::Ones(3860));
+  const softhd::Scene s = scene_with(head + R"("weights": "file"})");
+  EXPECT_EQ(scene_target(s, s.body.make_mesh()).cloud.volumes(), Eigen::VectorXd::Ones(3860));
 }
 
 // A scan in the camera's frame (docs/formulation.md §8.10): "frame", "align", "pose" read; the
@@ -108,10 +109,10 @@ TEST(ScanScene, CameraFrameKeys) {
   const scan::Pose P = scan::Pose::from_twist(tw);
   write_pose(testing::TempDir() + "/scan_scene_pose.txt", P);
   const std::string head = R"({"kind": "cloud", "file": "scan_scene.ply", )";
-  const fe::Scene s =
+  const softhd::Scene s =
       scene_with(head + R"("frame": "camera", "align": "similarity", "pose": "scan_scene_pose.txt",
                  "distance": "visible"})");
-  const SceneTarget t = scene_target(s, s.make_mesh());
+  const SceneTarget t = scene_target(s, s.body.make_mesh());
   EXPECT_EQ(t.frame, TargetFrame::camera);
   EXPECT_EQ(t.align, scan::PoseKind::similarity);
   ASSERT_TRUE(t.pose);
@@ -121,12 +122,12 @@ TEST(ScanScene, CameraFrameKeys) {
   ShapeObjectiveOptions o;
   apply_target_settings(t, &o);
   EXPECT_EQ(o.pose_kind, scan::PoseKind::similarity);
-  const fe::Scene body = scene_with(head + R"("frame": "body"})");
-  EXPECT_EQ(scene_target(body, body.make_mesh()).frame, TargetFrame::body);
+  const softhd::Scene body = scene_with(head + R"("frame": "body"})");
+  EXPECT_EQ(scene_target(body, body.body.make_mesh()).frame, TargetFrame::body);
 
   auto refuses = [&](const std::string& rest, const std::string& message) {
-    const fe::Scene bad = scene_with(head + rest + "}");
-    expect_error<Error>([&] { scene_target(bad, bad.make_mesh()); }, message);
+    const softhd::Scene bad = scene_with(head + rest + "}");
+    expect_error<Error>([&] { scene_target(bad, bad.body.make_mesh()); }, message);
   };
   refuses(R"("frame": "world")", "target.frame must be \"body\" or \"camera\", got \"world\"");
   refuses(R"("frame": "camera", "align": "affine")",
@@ -149,30 +150,30 @@ TEST(ScanScene, CameraFrameKeys) {
   refuses(R"("frame": "camera", "align": "similarity", "pose": "scan_scene_tiny_pose.txt")",
           "scan_scene_tiny_pose.txt' has scale 1e-100, outside the similarity's scale bounds "
           "[0.5, 2]");
-  const fe::Scene arc = fe::parse_scene(R"({
+  const softhd::Scene arc = softhd::parse_scene(R"({
     "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [2, 1, 0.2], "cells": [2, 1, 1], "order": 1 },
     "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
     "fibers": [1, 0, 0], "clamp": ["x0"],
     "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
     "target": {"kind": "arc", "frame": "camera"}})",
-                                        testing::TempDir() + "/scan_scene_arc.json");
-  expect_error<Error>([&] { scene_target(arc, arc.make_mesh()); }, "unknown key 'frame'");
+                                                testing::TempDir() + "/scan_scene_arc.json");
+  expect_error<Error>([&] { scene_target(arc, arc.body.make_mesh()); }, "unknown key 'frame'");
 }
 
 // Without "pose" the start is align against the body at rest: for the rest nodes seen from a
 // camera (moved by a rigid motion) it puts every scan point on a node (to 1e-6 of the body's
 // size; which of the box's symmetric poses is not asked).
 TEST(ScanScene, CameraFrameWithoutAPoseStartsFromAlign) {
-  const fe::Scene s0 = scene_with(R"({"kind": "arc"})");
-  const fe::Assembler A = s0.make_assembler();
+  const softhd::Scene s0 = scene_with(R"({"kind": "arc"})");
+  const fe::Assembler A = s0.body.make_assembler();
   const Eigen::MatrixXd& nodes = A.mesh().nodes;
   Eigen::Matrix<double, 7, 1> tw;
   tw << 0.7, -0.4, 1.1, 3.0, -1.0, 2.0, 0.0;
   const scan::Pose G = scan::Pose::from_twist(tw);
   write_ply_cloud(testing::TempDir() + "/scan_scene_rest.ply", G.apply(PointCloud(nodes), false));
-  const fe::Scene s = scene_with(R"({"kind": "cloud", "file": "scan_scene_rest.ply",
+  const softhd::Scene s = scene_with(R"({"kind": "cloud", "file": "scan_scene_rest.ply",
                                       "frame": "camera"})");
-  const SceneTarget t = scene_target(s, s.make_mesh());
+  const SceneTarget t = scene_target(s, s.body.make_mesh());
   EXPECT_FALSE(t.pose);
   EXPECT_NE(t.description.find("start pose by align"), std::string::npos) << t.description;
   ShapeObjectiveOptions o;
@@ -182,9 +183,9 @@ TEST(ScanScene, CameraFrameWithoutAPoseStartsFromAlign) {
   for (Eigen::Index i = 0; i < moved.rows(); ++i)
     worst = std::max(worst, (nodes.rowwise() - moved.row(i)).rowwise().norm().minCoeff());
   EXPECT_LT(worst, 1e-6 * std::sqrt(2.0 * 2.0 + 1.0 + 0.04));
-  const fe::Scene body = scene_with(R"({"kind": "cloud", "file": "scan_scene_rest.ply"})");
-  expect_error<InvalidArgument>([&] { start_pose(scene_target(body, body.make_mesh()), A, o); },
-                                "body's frame");
+  const softhd::Scene body = scene_with(R"({"kind": "cloud", "file": "scan_scene_rest.ply"})");
+  expect_error<InvalidArgument>(
+      [&] { start_pose(scene_target(body, body.body.make_mesh()), A, o); }, "body's frame");
 }
 
 }  // namespace

@@ -13,12 +13,12 @@
 
 #include "expect_error.hpp"
 #include "hausdorff_reference.hpp"
+#include "softhd/control/scene.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/materials.hpp"
 #include "softhd/fe/mesh.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/scan/pose.hpp"
 
 namespace softhd::test {
@@ -144,11 +144,12 @@ TEST(ShapeObjective, FailedStateSolveIsReportedNotThrown) {
 // the first state) land on the states (and J) of the plain warm start, the first with
 // fewer fine Newton iterations.
 TEST(ShapeObjective, TwoLevelStartsReachTheSameStateWithFewerFineIterations) {
-  fe::Scene scene = fe::load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/bending.json");
-  scene.cells << 6, 1, 2;  // coarse level 3 x 1 x 1
-  const fe::Assembler A = scene.make_assembler();
-  const fe::Assembler coarse = fe::coarsened(scene).make_assembler();
-  const fe::ControlSpace space(A.mesh(), A.geometry(), scene.control_kind);
+  softhd::Scene scene =
+      softhd::load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/bending.json");
+  scene.body.cells << 6, 1, 2;  // coarse level 3 x 1 x 1
+  const fe::Assembler A = scene.body.make_assembler();
+  const fe::Assembler coarse = fe::coarsened(scene.body).make_assembler();
+  const fe::ControlSpace space(A.mesh(), A.geometry(), scene.body.control_kind);
   const Eigen::MatrixXd P = space.positions(A.mesh());
   const Eigen::VectorXd m = -2.5e4 * (1.0 + P.col(2).array() / 0.1).matrix();  // ~half a turn
   PointCloud Y = random_cloud(50, 3, 4, 0.0, 1.0);

@@ -10,10 +10,10 @@
 #include <fstream>
 
 #include "expect_error.hpp"
+#include "softhd/control/scene.hpp"
 #include "softhd/control/scene_target.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/tracking_run.hpp"
-#include "softhd/fe/scene.hpp"
 
 namespace softhd::test {
 namespace {
@@ -21,7 +21,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // The bending scene of the multilevel tests, with `target_extra` appended inside its target.
-fe::Scene bend_scene(const std::string& name, const std::string& target_extra) {
+softhd::Scene bend_scene(const std::string& name, const std::string& target_extra) {
   const fs::path file = fs::path(::testing::TempDir()) / ("softhd_forms_" + name + ".json");
   std::ofstream(file) << R"({
       "name": "small_bend",
@@ -34,11 +34,11 @@ fe::Scene bend_scene(const std::string& name, const std::string& target_extra) {
       "target": { "kind": "arc", "angle": 0.6)"
                       << target_extra << R"( }
     })";
-  return fe::load_scene(file.string());
+  return softhd::load_scene(file.string());
 }
 
-SceneTarget target_of(const fe::Scene& scene) {
-  return scene_target(scene, scene.make_assembler().mesh());
+SceneTarget target_of(const softhd::Scene& scene) {
+  return scene_target(scene, scene.body.make_assembler().mesh());
 }
 
 TEST(TargetForms, KeysAreParsed) {
@@ -78,10 +78,10 @@ TEST(TargetForms, BadKeysAreRefusedInOneLineNamingTheKey) {
 // The quantile rule gives c = F × the Q-quantile of d̃_X(y_j) of the body at rest, and the
 // objective then evaluates with it: its ρ̃ is the library's for that form.
 TEST(TargetForms, QuantileCapIsSetFromTheRestStateAndUsed) {
-  const fe::Scene scene = bend_scene(
+  const softhd::Scene scene = bend_scene(
       "quantile", R"(, "distance": "scan_to_body", "cap": {"quantile": 0.5, "factor": 2})");
-  const fe::Assembler assembler = scene.make_assembler();
-  const fe::ControlSpace control = scene.make_control_space(assembler);
+  const fe::Assembler assembler = scene.body.make_assembler();
+  const fe::ControlSpace control = scene.body.make_control_space(assembler);
   const SceneTarget t = scene_target(scene, assembler.mesh());
   ShapeObjective objective(assembler, control, HausdorffTarget(t.cloud));
   const Eigen::VectorXd rest = Eigen::VectorXd::Zero(objective.state_path().last_state().u.size());
@@ -100,7 +100,7 @@ TEST(TargetForms, QuantileCapIsSetFromTheRestStateAndUsed) {
 // TrackingRunOptions::distance replaces the target block's form as a whole: the run's target
 // description says so, its B is 0 (scan_to_body), and visible is refused naming the field.
 TEST(TargetForms, RunOptionsReplaceTheTargetsForm) {
-  const fe::Scene scene = bend_scene("override", R"(, "cap": 0.2)");
+  const softhd::Scene scene = bend_scene("override", R"(, "cap": 0.2)");
   TrackingRunOptions options;
   options.max_iterations = 1;
   options.threads = 1;
@@ -151,9 +151,9 @@ SceneTarget half_target(const SceneTarget& full, bool upper, Sides sides) {
 // one-sided form is better by 0.69x, not by a clear margin either. Asserted: a one-sided run
 // against the upper half recovers the shape as well as the whole target does (within 10 %).
 TEST(TargetForms, OneSidedRunAgainstAHalfTargetRecoversTheShape) {
-  const fe::Scene scene = bend_scene("half", "");
-  const fe::Assembler assembler = scene.make_assembler();
-  const fe::ControlSpace control = scene.make_control_space(assembler);
+  const softhd::Scene scene = bend_scene("half", "");
+  const fe::Assembler assembler = scene.body.make_assembler();
+  const fe::ControlSpace control = scene.body.make_control_space(assembler);
   const SceneTarget full = scene_target(scene, assembler.mesh());
   TrackingRunOptions options;
   options.max_iterations = 40;

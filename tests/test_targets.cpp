@@ -8,9 +8,9 @@
 #include <cmath>
 
 #include "expect_error.hpp"
+#include "softhd/control/scene.hpp"
 #include "softhd/control/scene_target.hpp"
 #include "softhd/control/targets.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/samplers.hpp"
 
 namespace softhd::test {
@@ -84,20 +84,21 @@ TEST(ArcMap, CommutesWithTranslations) {
 }
 
 TEST(SceneTarget, ArcOfATranslatedSceneIsTheTranslatedArc) {
-  fe::Scene s = fe::parse_scene(R"({
+  softhd::Scene s = softhd::parse_scene(R"({
     "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [4, 1, 0.2], "cells": [4, 1, 1], "order": 2 },
     "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
     "fibers": [1, 0, 0], "clamp": ["x0"],
     "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
     "target": { "kind": "arc", "angle": 1.5 } })",
-                                "plate.json");
-  fe::Scene moved = s;
+                                        "plate.json");
+  softhd::Scene moved = s;
   const Eigen::Vector3d o(1.0, 2.0, -0.5);
   for (int k = 0; k < 3; ++k) {
-    moved.lower[k] += o[k];
-    moved.upper[k] += o[k];
+    moved.body.lower[k] += o[k];
+    moved.body.upper[k] += o[k];
   }
-  const SceneTarget a = scene_target(s, s.make_mesh()), b = scene_target(moved, moved.make_mesh());
+  const SceneTarget a = scene_target(s, s.body.make_mesh()),
+                    b = scene_target(moved, moved.body.make_mesh());
   ASSERT_EQ(a.cloud.size(), b.cloud.size());
   const Eigen::MatrixXd d = b.cloud.points().rowwise() - o.transpose();
   EXPECT_LT((d - a.cloud.points()).cwiseAbs().maxCoeff(), 1e-14);
@@ -117,8 +118,8 @@ TEST(SceneTarget, SurfaceAndCameraKeys) {
     "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
     "target": { "kind": "arc", "angle": 1.5)";
   auto target = [&](const std::string& keys) {
-    const fe::Scene s = fe::parse_scene(head + keys + "} }", "view.json");
-    return scene_target(s, s.make_mesh());
+    const softhd::Scene s = softhd::parse_scene(head + keys + "} }", "view.json");
+    return scene_target(s, s.body.make_mesh());
   };
   const SceneTarget t = target(R"(, "surface": true, "camera": [1, 2, 3])");
   EXPECT_TRUE(t.surface);

@@ -29,10 +29,10 @@
 #include <utility>
 #include <vector>
 
+#include "softhd/control/scene.hpp"
 #include "softhd/fe/adjoint.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/output.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/parallel.hpp"
 
 #ifdef _OPENMP
@@ -40,6 +40,8 @@
 #endif
 
 using namespace softhd::fe;
+using softhd::load_scene;
+using softhd::Scene;
 using Clock = std::chrono::steady_clock;
 
 namespace {
@@ -75,8 +77,8 @@ int solvers(double scale) {
   // (its threads busy-wait for the cores the other processes hold).
   softhd::limit_blas_threads();
   Scene s = scene_file("bending");
-  s.cells = (s.cells.cast<double>() * scale).cast<int>();
-  const Assembler A = s.make_assembler();
+  s.body.cells = (s.body.cells.cast<double>() * scale).cast<int>();
+  const Assembler A = s.body.make_assembler();
   const ControlSpace c(A.mesh(), A.geometry(), ControlKind::kVertex);
   State st = rest_state(A);
   SparseMatrix K = A.tangent_pattern();
@@ -103,9 +105,10 @@ int solvers(double scale) {
       const Eigen::VectorXd x = ls->solve(R);
       ts = std::min(ts, since(t0));
     }
-    std::printf("%dx%dx%d,%ld,%ld,%ld,%s,%.4f,%.4f,%.4f,%.4f\n", s.cells[0], s.cells[1], s.cells[2],
-                static_cast<long>(A.mesh().num_nodes()), static_cast<long>(A.dofs().num_free),
-                static_cast<long>(K.nonZeros()), to_string(t).c_str(), ta, tf, ts, tc);
+    std::printf("%dx%dx%d,%ld,%ld,%ld,%s,%.4f,%.4f,%.4f,%.4f\n", s.body.cells[0], s.body.cells[1],
+                s.body.cells[2], static_cast<long>(A.mesh().num_nodes()),
+                static_cast<long>(A.dofs().num_free), static_cast<long>(K.nonZeros()),
+                to_string(t).c_str(), ta, tf, ts, tc);
   }
   return 0;
 }
@@ -122,8 +125,8 @@ void print_summary(const char* label, const NewtonSummary& s) {
 
 int newton(const std::string& name, const std::string& solver) {
   const Scene s = scene_file(name);
-  const Assembler A = s.make_assembler();
-  const ControlSpace c(A.mesh(), A.geometry(), s.control_kind);
+  const Assembler A = s.body.make_assembler();
+  const ControlSpace c(A.mesh(), A.geometry(), s.body.control_kind);
   NewtonOptions o;
   if (!solver.empty()) o.tangent.linear_solver = parse_linear_solver(solver);
   NewtonSolver newton(A, o);
@@ -134,7 +137,7 @@ int newton(const std::string& name, const std::string& solver) {
     m = linear_bend(c, A.mesh());
   } else {
     const Eigen::MatrixXd P = c.positions(A.mesh());
-    m = (P.col(2).array() > 0.5 * s.upper[2]).cast<double>() * 0.02 * s.control_lower;
+    m = (P.col(2).array() > 0.5 * s.body.upper[2]).cast<double>() * 0.02 * s.body.control_lower;
   }
   std::printf("scene=%s,dofs=%ld,solver=%s\n", name.c_str(), static_cast<long>(A.dofs().num_free),
               to_string(o.tangent.linear_solver).c_str());
@@ -142,7 +145,7 @@ int newton(const std::string& name, const std::string& solver) {
   const NewtonSummary cold = newton.solve(c.to_quadrature(m), &st);
   print_summary("cold", cold);
   const Eigen::VectorXd tip =
-      probe_displacement(A, st.u, s.upper.cwiseProduct(Eigen::Vector3d(1, 0.5, 0.5)));
+      probe_displacement(A, st.u, s.body.upper.cwiseProduct(Eigen::Vector3d(1, 0.5, 0.5)));
   std::printf("tip_u,%.6f,%.6f,%.6f\n", tip[0], tip[1], tip[2]);
   // Adjoint for J = |u_tip|^2 at the tip nodes: one solve + the gradient integral.
   auto t0 = Clock::now();
@@ -162,9 +165,9 @@ int newton(const std::string& name, const std::string& solver) {
 
 double tip_z(int order, int nx, int ny, int nz, int* iterations) {
   Scene s = scene_file("bending");
-  s.order = order;
-  s.cells << nx, ny, nz;
-  const Assembler A = s.make_assembler();
+  s.body.order = order;
+  s.body.cells << nx, ny, nz;
+  const Assembler A = s.body.make_assembler();
   const ControlSpace c(A.mesh(), A.geometry(), ControlKind::kVertex);
   NewtonSolver newton(A);
   State st = rest_state(A);
@@ -188,10 +191,11 @@ class CountingSink final : public ElementMatrixSink {
 
 int assembly(const std::string& name) {
   const Scene s = scene_file(name);
-  const Assembler A = s.make_assembler();
+  const Assembler A = s.body.make_assembler();
   // The PETSc backend's lean assembler (no pattern, dN/dX recomputed per point).
-  const Assembler L(A.mesh(), s.material, s.fibers, s.constraints, AssemblerStorage::kLean);
-  const ControlSpace c(A.mesh(), A.geometry(), s.control_kind);
+  const Assembler L(A.mesh(), s.body.materials[0], s.body.fiber_field.values.col(0),
+                    s.body.constraints, AssemblerStorage::kLean);
+  const ControlSpace c(A.mesh(), A.geometry(), s.body.control_kind);
   const Eigen::MatrixXd m = c.to_quadrature(Eigen::VectorXd::Constant(c.size(), -1e3));
   const Eigen::VectorXd u = Eigen::VectorXd::Zero(A.dofs().num_dofs);
   SparseMatrix K = A.tangent_pattern();
@@ -256,9 +260,9 @@ int qp_cost(const std::vector<std::string>& names) {
   double first = 0.0, first_kernel = 0.0;
   for (const std::string& name : names) {
     const Scene s = scene_file(name);
-    const Assembler A = s.make_assembler();
-    const ControlSpace c(A.mesh(), A.geometry(), s.control_kind);
-    const double a = s.material->stiffness_scale();
+    const Assembler A = s.body.make_assembler();
+    const ControlSpace c(A.mesh(), A.geometry(), s.body.control_kind);
+    const double a = s.body.materials[0]->stiffness_scale();
     const Eigen::MatrixXd m = c.to_quadrature(Eigen::VectorXd::Constant(c.size(), -1e-3 * a));
     const Eigen::VectorXd u = Eigen::VectorXd::Zero(A.dofs().num_dofs);
     SparseMatrix K = A.tangent_pattern();
@@ -301,9 +305,9 @@ int refine() {
 
 int hard(int nx) {
   Scene s = scene_file("bending");
-  s.cells << nx, std::max(1, nx / 10), 2;
-  s.control_kind = ControlKind::kElement;
-  const Assembler A = s.make_assembler();
+  s.body.cells << nx, std::max(1, nx / 10), 2;
+  s.body.control_kind = ControlKind::kElement;
+  const Assembler A = s.body.make_assembler();
   const ControlSpace c(A.mesh(), A.geometry(), ControlKind::kElement);
   const Eigen::MatrixXd P = c.positions(A.mesh());
   const Eigen::VectorXd m = (P.col(2).array() > 0.05).cast<double>() * -5e4;
@@ -329,8 +333,8 @@ int hard(int nx) {
     }
     x_prev = x;
   }
-  std::printf("cells=%dx%dx%d,tip_u,%.5f,%.5f,%.5f,min_J=%.4f,turn_rad=%.4f\n", s.cells[0],
-              s.cells[1], s.cells[2], tip[0], tip[1], tip[2], A.min_jacobian(st.u), turn);
+  std::printf("cells=%dx%dx%d,tip_u,%.5f,%.5f,%.5f,min_J=%.4f,turn_rad=%.4f\n", s.body.cells[0],
+              s.body.cells[1], s.body.cells[2], tip[0], tip[1], tip[2], A.min_jacobian(st.u), turn);
   return sum.converged() ? 0 : 1;
 }
 

@@ -28,7 +28,7 @@ struct PyForward {
 };
 
 std::vector<Eigen::VectorXd> probe_points(const PyScene& s, const Eigen::MatrixXd& probes) {
-  const int dim = s.scene.dim();
+  const int dim = s.scene.body.dim();
   if (probes.size() > 0 && probes.cols() != dim)
     throw InvalidArgument("probes must be a (P, " + std::to_string(dim) + ") array, got " +
                           std::to_string(probes.cols()) + " columns");
@@ -56,7 +56,8 @@ PyForward forward(const PyScene& s, const py::object& control, const Eigen::Matr
                        py::reinterpret_borrow<py::array>(control).ndim() == 0);
   Eigen::VectorXd m;
   if (control.is_none() || number)
-    m = s.control.constant(control.is_none() ? s.scene.control_initial : control.cast<double>());
+    m = s.control.constant(control.is_none() ? s.scene.body.control_initial
+                                             : control.cast<double>());
   else
     m = control.cast<Eigen::VectorXd>();
   const std::vector<Eigen::VectorXd> points = probe_points(s, probes);
@@ -64,16 +65,16 @@ PyForward forward(const PyScene& s, const py::object& control, const Eigen::Matr
   options.grid.levels = coarse_levels;
   ThreadScope scope(threads);
   std::optional<fe::ForwardResult> r;
-  Eigen::MatrixXd u_probes(points.size(), s.scene.dim());
+  Eigen::MatrixXd u_probes(points.size(), s.scene.body.dim());
   {
     py::gil_scoped_release release;
-    r.emplace(fe::solve_forward(s.scene, s.assembler, s.control, m, options));
+    r.emplace(fe::solve_forward(s.scene.body, s.assembler, s.control, m, options));
     for (size_t p = 0; p < points.size(); ++p)
       u_probes.row(static_cast<Eigen::Index>(p)) =
           fe::probe_displacement(s.assembler, r->state.u, points[p]).transpose();
   }
   PyForward out;
-  out.displacements = node_rows(r->state.u, s.scene.dim());
+  out.displacements = node_rows(r->state.u, s.scene.body.dim());
   out.energy = r->energy;
   out.volume = r->volume;
   out.min_J = r->min_J;
@@ -118,13 +119,13 @@ void bind_fe(py::module_& m) {
               throw InvalidArgument("max_memory_gib must be in (0, 1e6]");
             py::gil_scoped_release release;
             return std::make_unique<PyScene>(
-                fe::load_scene(path.string(), max_memory_gib * (1u << 30)));
+                softhd::load_scene(path.string(), max_memory_gib * (1u << 30)));
           },
           py::arg("path"), py::arg("max_memory_gib") = 8.0,
           "Reads a scene file (JSON, docs/guide.md). Raises FileError for a missing or malformed "
           "file, ResourceError if the mesh's estimated memory exceeds max_memory_gib.")
       .def_property_readonly("name", [](const PyScene& s) { return s.scene.name; })
-      .def_property_readonly("dim", [](const PyScene& s) { return s.scene.dim(); })
+      .def_property_readonly("dim", [](const PyScene& s) { return s.scene.body.dim(); })
       .def_property_readonly("nodes",
                              [](const PyScene& s) { return to_numpy(s.assembler.mesh().nodes); })
       .def_property_readonly(
@@ -136,10 +137,11 @@ void bind_fe(py::module_& m) {
           [](const PyScene& s) { return to_numpy(s.control.positions(s.assembler.mesh())); })
       .def_property_readonly("control_bounds",
                              [](const PyScene& s) {
-                               return py::make_tuple(s.scene.control_lower, s.scene.control_upper);
+                               return py::make_tuple(s.scene.body.control_lower,
+                                                     s.scene.body.control_upper);
                              })
       .def_property_readonly("control_initial",
-                             [](const PyScene& s) { return s.scene.control_initial; })
+                             [](const PyScene& s) { return s.scene.body.control_initial; })
       .def_property_readonly("has_target",
                              [](const PyScene& s) { return !s.scene.target_json.empty(); })
       .def(

@@ -30,9 +30,9 @@ SceneTarget array_target(const PyScene& s, const Array& points,
                          const std::optional<Array>& volumes) {
   check_cloud(points, volumes, "target");
   PointCloud cloud = make_cloud(points, volumes);
-  if (cloud.dim() != s.scene.dim())
+  if (cloud.dim() != s.scene.body.dim())
     throw InvalidArgument("the target cloud is " + std::to_string(cloud.dim()) +
-                          "D but the scene's body is " + std::to_string(s.scene.dim()) + "D");
+                          "D but the scene's body is " + std::to_string(s.scene.body.dim()) + "D");
   return {std::move(cloud), std::nullopt, "arrays from Python", {}};
 }
 
@@ -58,7 +58,7 @@ PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
   TrackingRun run(s.scene, s.assembler, s.control, std::move(target), o);
   PyOptimise out;
   out.summary = run.run(cb);
-  out.dim = s.scene.dim();
+  out.dim = s.scene.body.dim();
   return out;
 }
 

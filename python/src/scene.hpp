@@ -2,22 +2,22 @@
 // softhd._core.Scene: a scene file with its body's assembler and control space, built once.
 
 #include "common.hpp"
+#include "softhd/control/scene.hpp"
 #include "softhd/fe/assembly.hpp"
 #include "softhd/fe/control.hpp"
-#include "softhd/fe/scene.hpp"
 
 namespace softhd::python {
 
 /// A loaded scene, its assembler and its control space (shared by forward and optimise).
 struct PyScene {
-  explicit PyScene(fe::Scene s)
+  explicit PyScene(softhd::Scene s)
       : scene(std::move(s)),
-        assembler(scene.make_assembler()),
-        control(scene.make_control_space(assembler)) {}
+        assembler(scene.body.make_assembler()),
+        control(scene.body.make_control_space(assembler)) {}
   PyScene(const PyScene&) = delete;
   PyScene& operator=(const PyScene&) = delete;
 
-  fe::Scene scene;
+  softhd::Scene scene;
   fe::Assembler assembler;
   fe::ControlSpace control;
 };

@@ -14,12 +14,12 @@
 #include <set>
 #include <sstream>
 
+#include "softhd/control/scene.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/assembly.hpp"
 #include "softhd/fe/forward.hpp"
 #include "softhd/fe/gmsh_mesh.hpp"
 #include "softhd/fe/newton.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/io/msh.hpp"
 
 namespace softhd::fe {
@@ -348,13 +348,13 @@ TEST(GmshMesh, ASceneOnAFileMesh) {
     "fibers": [1, 0, 0], "clamp": ["base"],
     "control": {"space": "vertex", "lower": -1, "upper": 0}})";
   const Scene s = parse_scene(scene, dir + "/cube.json");
-  EXPECT_FALSE(s.is_box());
-  EXPECT_NEAR(s.volume, 1.0, 1e-12);
-  ASSERT_EQ(s.materials.size(), 2u);
-  EXPECT_DOUBLE_EQ(s.materials[1]->a(), 10.0);
-  const Assembler a = s.make_assembler();
-  const ControlSpace c(a.mesh(), a.geometry(), s.control_kind);
-  const ForwardResult r = solve_forward(s, a, c, Eigen::VectorXd::Constant(c.size(), -0.3));
+  EXPECT_FALSE(s.body.is_box());
+  EXPECT_NEAR(s.body.volume, 1.0, 1e-12);
+  ASSERT_EQ(s.body.materials.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.body.materials[1]->a(), 10.0);
+  const Assembler a = s.body.make_assembler();
+  const ControlSpace c(a.mesh(), a.geometry(), s.body.control_kind);
+  const ForwardResult r = solve_forward(s.body, a, c, Eigen::VectorXd::Constant(c.size(), -0.3));
   EXPECT_TRUE(r.summary.converged());
   auto refused = [&](const std::string& from, const std::string& to, const std::string& needle) {
     std::string t = scene;
@@ -390,7 +390,7 @@ TEST(GmshMesh, NodeFibreFilesOnAnElevatedMesh) {
   write(vertices, -1);
   const Scene file = parse_scene(head + R"({"file": "fib.txt", "per": "node"}})", dir + "/c.json");
   const Scene uniform = parse_scene(head + "[1, 0, 0]}", dir + "/c.json");
-  const Assembler a = file.make_assembler(), b = uniform.make_assembler();
+  const Assembler a = file.body.make_assembler(), b = uniform.body.make_assembler();
   ASSERT_GT(a.mesh().num_nodes(), vertices);
   const Eigen::VectorXd u = a.dofs().expand(0.002 * Eigen::VectorXd::Random(a.dofs().num_free));
   const Eigen::MatrixXd m =
@@ -430,10 +430,10 @@ TEST(GmshMesh, AControlRestrictedToARegionActsThereOnly) {
     "fibers": [1, 0, 0], "clamp": ["base"],
     "control": {"space": "vertex", "region": "layer", "lower": -1, "upper": 0}})";
   const Scene s = parse_scene(scene, dir + "/cube.json");
-  ASSERT_EQ(s.control_regions, std::vector<int>{1});
-  const Assembler a = s.make_assembler();
+  ASSERT_EQ(s.body.control_regions, std::vector<int>{1});
+  const Assembler a = s.body.make_assembler();
   const Mesh& mesh = a.mesh();
-  const ControlSpace c = s.make_control_space(a);
+  const ControlSpace c = s.body.make_control_space(a);
   const Eigen::VectorXd ones = c.constant(1.0);
   int acting = 0;
   for (Eigen::Index k = 0; k < c.size(); ++k) {
@@ -457,19 +457,19 @@ TEST(GmshMesh, AControlRestrictedToARegionActsThereOnly) {
   // The regularisation integrates over the layer only: (M/2) ∫ 1² = M · 0.4 / 2.
   EXPECT_NEAR(c.regularisation(ones, 2.0, 0.0, nullptr), 0.4, 1e-12);
   // Bounds: [0, 0] outside the layer; a nonzero value there is refused, naming the region.
-  EXPECT_NO_THROW(check_control_bounds(s, c, mesh, c.constant(-0.5)));
+  EXPECT_NO_THROW(check_control_bounds(s.body, c, mesh, c.constant(-0.5)));
   try {
-    check_control_bounds(s, c, mesh, Eigen::VectorXd::Constant(c.size(), -0.5));
+    check_control_bounds(s.body, c, mesh, Eigen::VectorXd::Constant(c.size(), -0.5));
     ADD_FAILURE() << "a control outside the region was accepted";
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("outside control.region"), std::string::npos) << e.what();
   }
   // The layer alone bends less than the whole body, and the solve converges.
-  const ForwardResult layer = solve_forward(s, a, c, c.constant(-0.3));
+  const ForwardResult layer = solve_forward(s.body, a, c, c.constant(-0.3));
   Scene whole = s;
-  whole.control_regions.clear();
-  const ControlSpace cw = whole.make_control_space(a);
-  const ForwardResult all = solve_forward(whole, a, cw, cw.constant(-0.3));
+  whole.body.control_regions.clear();
+  const ControlSpace cw = whole.body.make_control_space(a);
+  const ForwardResult all = solve_forward(whole.body, a, cw, cw.constant(-0.3));
   ASSERT_TRUE(layer.summary.converged());
   ASSERT_TRUE(all.summary.converged());
   EXPECT_GT(layer.state.u.norm(), 0.0);
@@ -481,7 +481,7 @@ TEST(GmshMesh, AControlRestrictedToARegionActsThereOnly) {
     t.replace(t.find(from), from.size(), "\"region\": " + value);
     return parse_scene(t, dir + "/cube.json");
   };
-  EXPECT_EQ(region("[\"layer\", \"body\"]").control_regions, (std::vector<int>{0, 1}));
+  EXPECT_EQ(region("[\"layer\", \"body\"]").body.control_regions, (std::vector<int>{0, 1}));
   try {
     region("\"muscle\"");
     ADD_FAILURE() << "an unknown region was accepted";

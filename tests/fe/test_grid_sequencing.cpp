@@ -9,11 +9,15 @@
 #include <string>
 #include <vector>
 
+#include "softhd/control/scene.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/interpolation.hpp"
 
 using namespace softhd::fe;
+using softhd::load_scene;
+using softhd::parse_scene;
+using softhd::Scene;
 
 namespace {
 
@@ -85,53 +89,76 @@ TEST(GridSequencing, ControlFieldsAreEvaluatedByTheirOwnInterpolation) {
 
 TEST(GridSequencing, LevelsHalveTheEvenAxesWhileTheCoarseMeshIsLargeEnough) {
   Scene s = load_scene(kTorsion);  // 50 x 4 x 2
-  ASSERT_EQ(cells_of(s.cells), std::vector<int>({50, 4, 2}));
-  EXPECT_EQ(cells_of(coarsened(s).cells), std::vector<int>({25, 2, 1}));
+  ASSERT_EQ(cells_of(s.body.cells), std::vector<int>({50, 4, 2}));
+  EXPECT_EQ(cells_of(coarsened(s.body).cells), std::vector<int>({25, 2, 1}));
   GridSequencingOptions automatic;
   // 25 x 2 x 1 = 50 elements >= 32; the next, 25 x 1 x 1 = 25, is too small.
-  EXPECT_EQ(grid_levels(s, automatic), 1);
+  EXPECT_EQ(grid_levels(s.body, automatic), 1);
   automatic.min_elements = 51;
-  EXPECT_EQ(grid_levels(s, automatic), 0);
+  EXPECT_EQ(grid_levels(s.body, automatic), 0);
   GridSequencingOptions explicit_levels;
   explicit_levels.levels = 2;  // 25 x 1 x 1 is allowed when asked for
-  EXPECT_EQ(grid_levels(s, explicit_levels), 2);
+  EXPECT_EQ(grid_levels(s.body, explicit_levels), 2);
   explicit_levels.levels = 3;  // 25 x 1 x 1 has no even axis
-  EXPECT_THROW(grid_levels(s, explicit_levels), softhd::InvalidArgument);
+  EXPECT_THROW(grid_levels(s.body, explicit_levels), softhd::InvalidArgument);
   explicit_levels.levels = -2;
-  EXPECT_THROW(grid_levels(s, explicit_levels), softhd::InvalidArgument);
+  EXPECT_THROW(grid_levels(s.body, explicit_levels), softhd::InvalidArgument);
 }
 
 // Halving::rounded halves the even axes as nested does, and a box with none every axis of
 // at least 4 cells to (n + 1) / 2 (the bending plate: 50 x 5 x 2 -> 25 x 5 x 1 -> 13 x 3 x 1);
-// coarser_levels counts while the level keeps min_elements (125, 39, then 7 x 2 x 1 = 14).
+// coarser_levels counts while the level keeps min_elements (125, 39, then 7 x 3 x 1 = 21).
 TEST(GridSequencing, RoundedHalvingCoarsensABoxWithNoEvenAxis) {
   Scene s = load_scene(kTorsion);
-  s.cells = (Eigen::VectorXi(3) << 50, 5, 2).finished();
-  EXPECT_EQ(cells_of(coarsened(s, Halving::rounded).cells), std::vector<int>({25, 5, 1}));
-  s.cells = (Eigen::VectorXi(3) << 25, 5, 1).finished();
-  EXPECT_THROW(coarsened(s), softhd::InvalidArgument);  // nested: no even axis
-  EXPECT_EQ(cells_of(coarsened(s, Halving::rounded).cells), std::vector<int>({13, 3, 1}));
-  s.cells = (Eigen::VectorXi(3) << 3, 1, 1).finished();
-  EXPECT_THROW(coarsened(s, Halving::rounded), softhd::InvalidArgument);
-  s.cells = (Eigen::VectorXi(3) << 50, 5, 2).finished();
-  EXPECT_EQ(coarser_levels(s, Halving::rounded, 32), 2);
-  EXPECT_EQ(coarser_levels(s, Halving::rounded, 40), 1);
-  EXPECT_EQ(coarser_levels(s, Halving::nested, 32), 1);  // 25 x 5 x 1, then no even axis
+  s.body.cells = (Eigen::VectorXi(3) << 50, 5, 2).finished();
+  EXPECT_EQ(cells_of(coarsened(s.body, Halving::rounded).cells), std::vector<int>({25, 5, 1}));
+  s.body.cells = (Eigen::VectorXi(3) << 25, 5, 1).finished();
+  EXPECT_THROW(coarsened(s.body), softhd::InvalidArgument);  // nested: no even axis
+  EXPECT_EQ(cells_of(coarsened(s.body, Halving::rounded).cells), std::vector<int>({13, 3, 1}));
+  s.body.cells = (Eigen::VectorXi(3) << 3, 1, 1).finished();
+  EXPECT_THROW(coarsened(s.body, Halving::rounded), softhd::InvalidArgument);
+  s.body.cells = (Eigen::VectorXi(3) << 50, 5, 2).finished();
+  EXPECT_EQ(coarser_levels(s.body, Halving::rounded, 32), 2);
+  EXPECT_EQ(coarser_levels(s.body, Halving::rounded, 40), 1);
+  EXPECT_EQ(coarser_levels(s.body, Halving::nested, 32), 1);  // 25 x 5 x 1, then no even axis
+}
+
+// A MeshHierarchy is the body and its levels coarsened() in turn (level 0 the body itself);
+// asking for more levels than the body has is refused saying how many it has.
+TEST(GridSequencing, MeshHierarchyIsTheBodyCoarsenedInTurn) {
+  Scene s = load_scene(kTorsion);
+  s.body.cells = (Eigen::VectorXi(3) << 50, 5, 2).finished();
+  const MeshHierarchy rounded(s.body, Halving::rounded, 3);
+  ASSERT_EQ(rounded.size(), 4);
+  EXPECT_EQ(cells_of(rounded.level(0).cells), std::vector<int>({50, 5, 2}));
+  EXPECT_EQ(cells_of(rounded.level(1).cells), std::vector<int>({25, 5, 1}));
+  EXPECT_EQ(cells_of(rounded.level(2).cells), std::vector<int>({13, 3, 1}));
+  EXPECT_EQ(cells_of(rounded.level(3).cells), std::vector<int>({7, 3, 1}));  // 3 < 4 kept
+  EXPECT_EQ(MeshHierarchy(s.body, Halving::nested, 0).size(), 1);
+  try {
+    MeshHierarchy(s.body, Halving::nested, 2);  // 25 x 5 x 1 has no even axis
+    ADD_FAILURE() << "two nested levels of 50 x 5 x 2 accepted";
+  } catch (const softhd::InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("2 coarser levels asked for, but the body has 1"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(MeshHierarchy(s.body, Halving::nested, -1), softhd::InvalidArgument);
 }
 
 TEST(GridSequencing, SequencedStartReachesTheStateNewtonReachesFromRest) {
   Scene s = load_scene(kTorsion);
-  s.cells.resize(3);
-  s.cells << 8, 2, 2;
-  const Assembler a = s.make_assembler();
-  const ControlSpace c(a.mesh(), a.geometry(), s.control_kind);
+  s.body.cells.resize(3);
+  s.body.cells << 8, 2, 2;
+  const Assembler a = s.body.make_assembler();
+  const ControlSpace c(a.mesh(), a.geometry(), s.body.control_kind);
   const Eigen::VectorXd m = Eigen::VectorXd::Constant(c.size(), -2e5);
   NewtonOptions options;
   options.displacement_tolerance = 1e-10;
   GridSequencingOptions grid;
   grid.levels = 1;
   GridSequencingReport report;
-  State start = grid_sequenced_start(s, a, m, options, grid, &report);
+  State start = grid_sequenced_start(s.body, a, m, options, grid, &report);
   ASSERT_EQ(report.levels.size(), 1u);
   EXPECT_EQ(cells_of(report.levels[0].cells), std::vector<int>({4, 1, 1}));
   EXPECT_TRUE(report.levels[0].newton.converged());
@@ -187,7 +214,7 @@ Eigen::MatrixXd linear_field(const Eigen::MatrixXd& X) {
 
 TEST(PSequencing, TheLinearMeshIsTheVerticesOfTheSameCurvedCells) {
   const Scene s = file_scene(kCylinder, "", "vertex", kOneMaterial);
-  const Mesh& p2 = *s.file_mesh;
+  const Mesh& p2 = *s.body.file_mesh;
   ASSERT_EQ(p2.cell, CellType::kTet10);
   const Mesh p1 = linear_mesh(p2);
   EXPECT_EQ(p1.cell, CellType::kTet4);
@@ -221,7 +248,7 @@ TEST(PSequencing, TheLinearMeshIsTheVerticesOfTheSameCurvedCells) {
 
 TEST(PSequencing, VertexFieldsAreInterpolatedExactlyThroughTheReferenceCoordinates) {
   const Scene s = file_scene(kCylinder, "", "vertex", kOneMaterial);
-  const Mesh& p2 = *s.file_mesh;
+  const Mesh& p2 = *s.body.file_mesh;
   const Mesh p1 = linear_mesh(p2);
   const Eigen::MatrixXd f = linear_field(p1.nodes);
   const Eigen::MatrixXd u = transfer_nodal(p1, f, p2);
@@ -264,7 +291,7 @@ TEST(PSequencing, StraightSidedP2ReproducesALinearFieldAtEveryNode) {
   // A first-order file with "order": 2: straight-sided P2, midside nodes on the chords.
   const Scene s =
       file_scene(mesh_path("cube_tet4_v41.msh"), R"(, "order": 2)", "vertex", kTwoMaterials);
-  const Mesh& p2 = *s.file_mesh;
+  const Mesh& p2 = *s.body.file_mesh;
   ASSERT_EQ(p2.cell, CellType::kTet10);
   const Mesh p1 = linear_mesh(p2);
   const Eigen::MatrixXd u = transfer_nodal(p1, linear_field(p1.nodes), p2);
@@ -277,36 +304,38 @@ TEST(PSequencing, FileMeshesOfOrderTwoGetOneLinearLevel) {
   GridSequencingOptions automatic, one, two;
   one.levels = 1;
   two.levels = 2;
-  EXPECT_EQ(grid_levels(s, automatic), 1);
-  EXPECT_EQ(grid_levels(s, one), 1);
+  EXPECT_EQ(grid_levels(s.body, automatic), 1);
+  EXPECT_EQ(grid_levels(s.body, one), 1);
   try {  // P1 has no coarser level: the message says how many levels there are
-    grid_levels(s, two);
+    grid_levels(s.body, two);
     ADD_FAILURE();
   } catch (const softhd::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("2 coarser levels asked for, but the body has 1"),
               std::string::npos)
         << e.what();
   }
-  automatic.min_elements = static_cast<int>(s.file_mesh->num_elements()) + 1;
-  EXPECT_EQ(grid_levels(s, automatic), 0);
+  automatic.min_elements = static_cast<int>(s.body.file_mesh->num_elements()) + 1;
+  EXPECT_EQ(grid_levels(s.body, automatic), 0);
   // Fibres per node are restricted to the vertices.
-  s.fiber_field.kind = FiberField::Kind::kNode;
-  s.fiber_field.values.resize(3, s.file_mesh->num_nodes());
-  for (Eigen::Index n = 0; n < s.file_mesh->num_nodes(); ++n)
-    s.fiber_field.values.col(n) = Eigen::Vector3d(1.0, 0.2 * s.file_mesh->nodes(n, 1), 0.1);
-  const Scene c = coarsened(s);
+  s.body.fiber_field.kind = FiberField::Kind::kNode;
+  s.body.fiber_field.values.resize(3, s.body.file_mesh->num_nodes());
+  for (Eigen::Index n = 0; n < s.body.file_mesh->num_nodes(); ++n)
+    s.body.fiber_field.values.col(n) =
+        Eigen::Vector3d(1.0, 0.2 * s.body.file_mesh->nodes(n, 1), 0.1);
+  const Body c = coarsened(s.body);
   EXPECT_EQ(c.order, 1);
   EXPECT_FALSE(c.is_box());
-  ASSERT_EQ(c.fiber_field.values.cols(), s.file_mesh->num_vertices());
-  for (Eigen::Index k = 0; k < s.file_mesh->num_vertices(); ++k)
-    EXPECT_EQ(c.fiber_field.values.col(k), s.fiber_field.values.col(s.file_mesh->vertex_nodes[k]));
+  ASSERT_EQ(c.fiber_field.values.cols(), s.body.file_mesh->num_vertices());
+  for (Eigen::Index k = 0; k < s.body.file_mesh->num_vertices(); ++k)
+    EXPECT_EQ(c.fiber_field.values.col(k),
+              s.body.fiber_field.values.col(s.body.file_mesh->vertex_nodes[k]));
   EXPECT_EQ(c.make_assembler().mesh().cell, CellType::kTet4);
   // A first-order file has no coarser level.
   const Scene p1 = file_scene(mesh_path("cube_tet4_v41.msh"), "", "vertex", kTwoMaterials);
-  EXPECT_EQ(grid_levels(p1, GridSequencingOptions{}), 0);
-  EXPECT_THROW(grid_levels(p1, one), softhd::InvalidArgument);
+  EXPECT_EQ(grid_levels(p1.body, GridSequencingOptions{}), 0);
+  EXPECT_THROW(grid_levels(p1.body, one), softhd::InvalidArgument);
   try {
-    coarsened(p1);
+    coarsened(p1.body);
     ADD_FAILURE();
   } catch (const softhd::InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("of order 1"), std::string::npos) << e.what();
@@ -318,14 +347,14 @@ namespace {
 // The p-sequenced start and the start from rest reach the same state (Newton's tolerance).
 void expect_p_sequencing_reaches_the_state_from_rest(const Scene& s, const Eigen::VectorXd& m,
                                                      const GridSequencingOptions& grid = {}) {
-  const Assembler a = s.make_assembler();
-  const ControlSpace c(a.mesh(), a.geometry(), s.control_kind);
+  const Assembler a = s.body.make_assembler();
+  const ControlSpace c(a.mesh(), a.geometry(), s.body.control_kind);
   ASSERT_EQ(m.size(), c.size());
   NewtonOptions options;
   options.displacement_tolerance = 1e-10;
-  options.absolute_tolerance = s.residual_floor();
+  options.absolute_tolerance = s.body.residual_floor();
   GridSequencingReport report;
-  State start = grid_sequenced_start(s, a, m, options, grid, &report);
+  State start = grid_sequenced_start(s.body, a, m, options, grid, &report);
   ASSERT_EQ(report.levels.size(), 1u);
   const CellType linear = reference_element(a.mesh().cell).linear;
   EXPECT_EQ(report.levels[0].cell, linear);
@@ -350,30 +379,30 @@ void expect_p_sequencing_reaches_the_state_from_rest(const Scene& s, const Eigen
 
 TEST(PSequencing, CurvedP2WithVertexControlsReachesTheStateFromRest) {
   const Scene s = file_scene(kCylinder, "", "vertex", kOneMaterial);
-  Eigen::VectorXd m(s.file_mesh->num_vertices());
+  Eigen::VectorXd m(s.body.file_mesh->num_vertices());
   for (Eigen::Index k = 0; k < m.size(); ++k)  // stronger towards the top: bends and stretches
-    m[k] = -0.3 - 0.4 * (s.file_mesh->nodes(s.file_mesh->vertex_nodes[k], 2) + 0.5);
+    m[k] = -0.3 - 0.4 * (s.body.file_mesh->nodes(s.body.file_mesh->vertex_nodes[k], 2) + 0.5);
   expect_p_sequencing_reaches_the_state_from_rest(s, m);
 }
 
 TEST(PSequencing, TwoMaterialsWithElementControlsReachTheStateFromRest) {
   const Scene s =
       file_scene(mesh_path("cube_tet4_v41.msh"), R"(, "order": 2)", "element", kTwoMaterials);
-  Eigen::VectorXd m(s.file_mesh->num_elements());
+  Eigen::VectorXd m(s.body.file_mesh->num_elements());
   for (Eigen::Index e = 0; e < m.size(); ++e)
-    m[e] = -0.2 - 0.5 * s.file_mesh->nodes(s.file_mesh->elements(e, 0), 1);
+    m[e] = -0.2 - 0.5 * s.body.file_mesh->nodes(s.body.file_mesh->elements(e, 0), 1);
   expect_p_sequencing_reaches_the_state_from_rest(s, m);
 }
 
 TEST(PSequencing, Hex27FromGmshStartsFromItsQ1Level) {
   // 4 x 2 x 2 hexahedra: fewer than the automatic choice's 32 elements, so asked for.
   const Scene s = file_scene(mesh_path("box_hex27_v41.msh"), "", "vertex", kOneMaterial, "x0");
-  ASSERT_EQ(s.file_mesh->cell, CellType::kHex27);
-  EXPECT_EQ(grid_levels(s, GridSequencingOptions{}), 0);
+  ASSERT_EQ(s.body.file_mesh->cell, CellType::kHex27);
+  EXPECT_EQ(grid_levels(s.body, GridSequencingOptions{}), 0);
   GridSequencingOptions one;
   one.levels = 1;
-  Eigen::VectorXd m(s.file_mesh->num_vertices());
+  Eigen::VectorXd m(s.body.file_mesh->num_vertices());
   for (Eigen::Index k = 0; k < m.size(); ++k)
-    m[k] = -0.2 - 0.4 * s.file_mesh->nodes(s.file_mesh->vertex_nodes[k], 2);
+    m[k] = -0.2 - 0.4 * s.body.file_mesh->nodes(s.body.file_mesh->vertex_nodes[k], 2);
   expect_p_sequencing_reaches_the_state_from_rest(s, m, one);
 }

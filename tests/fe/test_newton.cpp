@@ -8,14 +8,17 @@
 #include <vector>
 
 #include "fe_test_util.hpp"
+#include "softhd/control/scene.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/control.hpp"
 #include "softhd/fe/forward.hpp"
 #include "softhd/fe/newton.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/fe/state_equation.hpp"
 
 using namespace softhd::fe;
+using softhd::load_scene;
+using softhd::parse_scene;
+using softhd::Scene;
 
 namespace {
 
@@ -282,21 +285,21 @@ TEST(Newton, OptionsValidationNamesTheField) {
 // never be met; make_state_solver's residual floor must accept the rest state at once.
 // The shipped torsion scene (control.initial = 0) failed after 325 iterations before.
 TEST(Newton, ZeroControlConvergesAtRest) {
-  const softhd::fe::Scene scene =
-      softhd::fe::load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/torsion.json");
-  const softhd::fe::Assembler a = scene.make_assembler();
-  const softhd::fe::ControlSpace c(a.mesh(), a.geometry(), scene.control_kind);
-  const auto solver = softhd::fe::make_state_solver(scene, softhd::fe::StateSolverOptions{});
+  const softhd::Scene scene =
+      softhd::load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/torsion.json");
+  const softhd::fe::Assembler a = scene.body.make_assembler();
+  const softhd::fe::ControlSpace c(a.mesh(), a.geometry(), scene.body.control_kind);
+  const auto solver = softhd::fe::make_state_solver(scene.body, softhd::fe::StateSolverOptions{});
   const softhd::fe::NewtonSummary s = solver->solve(Eigen::VectorXd::Zero(c.size()));
   EXPECT_TRUE(solver->converged()) << s.message;
   EXPECT_EQ(s.newton_iterations, 0);
   EXPECT_EQ(solver->displacement().lpNorm<Eigen::Infinity>(), 0.0);
-  const double floor = scene.residual_floor();
+  const double floor = scene.body.residual_floor();
   EXPECT_GT(s.residual, 0.0);  // round-off, not exactly zero: the case the floor is for
   EXPECT_LE(s.residual, floor);
   // The library's forward (and the Python module's) takes the same floor.
   const softhd::fe::ForwardResult f =
-      softhd::fe::solve_forward(scene, a, c, Eigen::VectorXd::Zero(c.size()));
+      softhd::fe::solve_forward(scene.body, a, c, Eigen::VectorXd::Zero(c.size()));
   EXPECT_EQ(f.summary.newton_iterations, 0);
   EXPECT_EQ(f.state.u.lpNorm<Eigen::Infinity>(), 0.0);
 }

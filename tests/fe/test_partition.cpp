@@ -15,9 +15,9 @@
 #include <vector>
 
 #include "fe/petsc/partition.hpp"
+#include "softhd/control/scene.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/assembly.hpp"
-#include "softhd/fe/scene.hpp"
 
 namespace softhd::fe::petsc_detail {
 namespace {
@@ -54,11 +54,11 @@ Scene box_scene(const std::string& cells, int order, const std::string& constrai
 // All parts of the scene's body among `size` ranks, checked against the whole mesh.
 void check_partition(const Scene& scene, int size) {
   SCOPED_TRACE(scene.name + " on " + std::to_string(size) + " ranks");
-  const Assembler whole = scene.make_assembler();  // kFull: the serial sparsity pattern
+  const Assembler whole = scene.body.make_assembler();  // kFull: the serial sparsity pattern
   const Mesh& g = whole.mesh();
   const int dim = g.dim;
   std::vector<Partition> parts;
-  for (int r = 0; r < size; ++r) parts.push_back(make_partition(scene, r, size));
+  for (int r = 0; r < size; ++r) parts.push_back(make_partition(scene.body, r, size));
 
   // Each element in exactly one part, parts balanced; nodes, regions and fibres copied.
   std::vector<int> element_rank(g.num_elements(), -1), lowest(g.num_nodes(), size);
@@ -99,7 +99,7 @@ void check_partition(const Scene& scene, int size) {
       EXPECT_TRUE(owner_of_dof.emplace(dof, p.rank).second) << "dof " << dof << " owned twice";
       EXPECT_EQ(p.rank, lowest[dof / dim]) << "node " << dof / dim;
     }
-    const DofMap local = make_dof_map(p.mesh, scene.constraints);
+    const DofMap local = make_dof_map(p.mesh, scene.body.constraints);
     for (Eigen::Index fi = 0; fi < local.num_free; ++fi) {
       const int dof = local.free_dofs[fi];
       const std::int64_t global = std::int64_t{p.global_node[dof / dim]} * dim + dof % dim;
@@ -158,8 +158,8 @@ TEST(Partition, GmshMeshes) {
 // body into parts of ⌊E/2⌋ and ⌈E/2⌉ elements.
 TEST(Partition, TwoRanksCutSlabsOfBoxes) {
   const Scene s = box_scene("3, 7, 2", 2);  // most cells along y: the cut is y = 3/7
-  const Mesh g = s.make_mesh();
-  const Partition p0 = make_partition(s, 0, 2), p1 = make_partition(s, 1, 2);
+  const Mesh g = s.body.make_mesh();
+  const Partition p0 = make_partition(s.body, 0, 2), p1 = make_partition(s.body, 1, 2);
   EXPECT_EQ(p0.axis, 1);
   EXPECT_EQ(p0.global_element.size(), 3u * 3 * 2);
   for (int e : p0.global_element)
@@ -175,14 +175,15 @@ TEST(Partition, TwoRanksCutSlabsOfBoxes) {
       EXPECT_LE(g.nodes(dofs[i - 1] / 3, 1), g.nodes(dofs[i] / 3, 1));
   }
   const Scene cube = file_scene("cube_tet4_v41.msh", "base", 1);
-  const Eigen::Index E = cube.file_mesh->num_elements();
-  EXPECT_EQ(static_cast<Eigen::Index>(make_partition(cube, 0, 2).global_element.size()), E / 2);
+  const Eigen::Index E = cube.body.file_mesh->num_elements();
+  EXPECT_EQ(static_cast<Eigen::Index>(make_partition(cube.body, 0, 2).global_element.size()),
+            E / 2);
 }
 
 TEST(Partition, RefusesMoreRanksThanElements) {
   const Scene s = box_scene("2, 1, 1", 1);
-  EXPECT_NO_THROW(make_partition(s, 1, 2));
-  EXPECT_THROW(make_partition(s, 0, 3), InvalidArgument);
+  EXPECT_NO_THROW(make_partition(s.body, 1, 2));
+  EXPECT_THROW(make_partition(s.body, 0, 3), InvalidArgument);
 }
 
 }  // namespace

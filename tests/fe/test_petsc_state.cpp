@@ -14,6 +14,7 @@
 #include <initializer_list>
 #include <string>
 
+#include "softhd/control/scene.hpp"
 #include "softhd/fe/adjoint.hpp"
 #include "softhd/fe/forward.hpp"
 #include "softhd/fe/petsc_state.hpp"
@@ -22,6 +23,9 @@
 namespace {
 
 using namespace softhd::fe;
+using softhd::load_scene;
+using softhd::parse_scene;
+using softhd::Scene;
 
 Scene scene(const std::string& name) {
   return load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/" + name + ".json");
@@ -30,8 +34,8 @@ Scene scene(const std::string& name) {
 // A control linear through the thickness, m = slope X3 at the control positions: bends the
 // plate (bending), bends and twists the beam (torsion, the target's m* = -1e6 X3 / 2).
 Eigen::VectorXd through_thickness(const Scene& s, double slope) {
-  const Assembler a = s.make_assembler();
-  const ControlSpace c(a.mesh(), a.geometry(), s.control_kind);
+  const Assembler a = s.body.make_assembler();
+  const ControlSpace c(a.mesh(), a.geometry(), s.body.control_kind);
   return slope * c.positions(a.mesh()).col(2);
 }
 
@@ -45,17 +49,17 @@ void expect_forward_equal(const std::string& name, double slope,
                           std::initializer_list<StateBackend> backends) {
   const Scene s = scene(name);
   const Eigen::VectorXd m = through_thickness(s, slope);
-  const Assembler assembler = s.make_assembler();
-  const ControlSpace control(assembler.mesh(), assembler.geometry(), s.control_kind);
-  const ForwardResult serial = solve_forward(s, assembler, control, m);
+  const Assembler assembler = s.body.make_assembler();
+  const ControlSpace control(assembler.mesh(), assembler.geometry(), s.body.control_kind);
+  const ForwardResult serial = solve_forward(s.body, assembler, control, m);
   ASSERT_TRUE(serial.summary.converged()) << serial.summary.BriefReport();
   for (StateBackend backend : backends) {
     PetscStateOptions options;
     options.newton = ForwardOptions().newton;
     options.newton.verbose = std::getenv("SOFTHD_TEST_VERBOSE") != nullptr;
     options.backend = backend;
-    PetscStateSolver petsc(s, options);
-    petsc.grid_sequenced_start(s, m, GridSequencingOptions());
+    PetscStateSolver petsc(s.body, options);
+    petsc.grid_sequenced_start(s.body, m, GridSequencingOptions());
     const NewtonSummary summary = petsc.solve(m);
     ASSERT_TRUE(summary.converged()) << summary.FullReport();
     const Eigen::VectorXd u = petsc.displacement();

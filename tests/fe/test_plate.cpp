@@ -7,20 +7,23 @@
 #include <cmath>
 #include <cstdio>
 
+#include "softhd/control/scene.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/output.hpp"
-#include "softhd/fe/scene.hpp"
 
 using namespace softhd::fe;
+using softhd::load_scene;
+using softhd::parse_scene;
+using softhd::Scene;
 
 namespace {
 
 // Tip displacement u(10, 1, 0.05) of the plate with the given order and cells.
 Eigen::VectorXd tip(int order, int nx, int ny, int nz) {
   Scene s = load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/bending.json");
-  s.order = order;
-  s.cells << nx, ny, nz;
-  const Assembler A = s.make_assembler();
+  s.body.order = order;
+  s.body.cells << nx, ny, nz;
+  const Assembler A = s.body.make_assembler();
   const ControlSpace c(A.mesh(), A.geometry(), ControlKind::kVertex);
   const Eigen::VectorXd m = -1e4 * c.positions(A.mesh()).col(2) / 0.1;
   NewtonSolver newton(A);
@@ -57,8 +60,8 @@ TEST(Plate, Q1LocksWhereQ2DoesNot) {
 // solver: unwrapped angles of the deformed mid-plane node chain along X1.
 TEST(Plate, HardCaseIsReachedFromFlat) {
   Scene s = load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/bending.json");
-  s.cells << 10, 1, 2;
-  const Assembler A = s.make_assembler();
+  s.body.cells << 10, 1, 2;
+  const Assembler A = s.body.make_assembler();
   const ControlSpace c(A.mesh(), A.geometry(), ControlKind::kElement);
   const Eigen::VectorXd m = (c.positions(A.mesh()).col(2).array() > 0.05).cast<double>() * -5e4;
   NewtonSolver newton(A);

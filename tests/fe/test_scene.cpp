@@ -4,11 +4,14 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "softhd/control/scene.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/forward.hpp"
-#include "softhd/fe/scene.hpp"
 
 using namespace softhd::fe;
+using softhd::load_scene;
+using softhd::parse_scene;
+using softhd::Scene;
 
 namespace {
 
@@ -44,21 +47,24 @@ std::string replace(std::string s, const std::string& from, const std::string& t
 TEST(Scene, ReferenceScenesMatchSpec) {
   const Scene b = load_scene(kBending);
   EXPECT_EQ(b.name, "bending");
-  EXPECT_EQ(b.dim(), 3);
-  EXPECT_EQ(b.order, 2);
-  EXPECT_EQ(b.make_mesh().num_nodes(), 5555);
-  EXPECT_EQ(b.material_model, "mooney_rivlin");
-  EXPECT_DOUBLE_EQ(b.material->a(), 1e5);
-  EXPECT_DOUBLE_EQ(b.control_lower, -1e5);
-  EXPECT_DOUBLE_EQ(b.control_upper, 0.0);
-  EXPECT_EQ(b.constraints.size(), 1u);
-  EXPECT_EQ(b.constraints[0].face, "x0");
+  EXPECT_EQ(b.body.dim(), 3);
+  EXPECT_EQ(b.body.order, 2);
+  EXPECT_EQ(b.body.make_mesh().num_nodes(), 5555);
+  ASSERT_EQ(b.body.materials.size(), 1u);  // a box: the one region "body"
+  EXPECT_NE(dynamic_cast<const MooneyRivlin*>(b.body.materials[0].get()), nullptr);
+  EXPECT_DOUBLE_EQ(b.body.materials[0]->a(), 1e5);
+  EXPECT_DOUBLE_EQ(b.body.control_lower, -1e5);
+  EXPECT_DOUBLE_EQ(b.body.control_upper, 0.0);
+  EXPECT_EQ(b.body.constraints.size(), 1u);
+  EXPECT_EQ(b.body.constraints[0].face, "x0");
   EXPECT_FALSE(b.target_json.empty());
   const Scene t = load_scene(kTorsion);
-  EXPECT_EQ(t.material_model, "transversely_isotropic");
-  EXPECT_DOUBLE_EQ(t.control_lower, -1.5e6);
-  EXPECT_DOUBLE_EQ(t.upper[0], 50.0);
-  EXPECT_TRUE(t.fibers.isApprox(Eigen::Vector3d::UnitX()));
+  ASSERT_EQ(t.body.materials.size(), 1u);
+  EXPECT_NE(dynamic_cast<const TransverselyIsotropic*>(t.body.materials[0].get()), nullptr);
+  EXPECT_DOUBLE_EQ(t.body.control_lower, -1.5e6);
+  EXPECT_DOUBLE_EQ(t.body.upper[0], 50.0);
+  EXPECT_EQ(t.body.fiber_field.kind, FiberField::Kind::kUniform);
+  EXPECT_TRUE(t.body.fiber_field.values.isApprox(Eigen::Matrix3Xd(Eigen::Vector3d::UnitX())));
 }
 
 // mesh.quadrature_degree: a rule that leaves spurious zero-energy modes (2 by 2 by 2 Gauss
@@ -70,10 +76,12 @@ TEST(Scene, AQuadratureWithSpuriousModesIsRefused) {
                {"mesh.quadrature_degree", "hex27", "spurious zero-energy modes", "use degree 4"});
   expect_error(replace(good, "\"order\": 2", "\"order\": 1, \"quadrature_degree\": 1"),
                {"mesh.quadrature_degree", "hex8", "use degree 2"});
-  EXPECT_EQ(
-      parse_scene(replace(good, "\"order\": 2", "\"order\": 2, \"quadrature_degree\": 4"), "q.json")
-          .quadrature_degree,
-      4);
+  const Scene q6 = parse_scene(
+      replace(good, "\"order\": 2", "\"order\": 2, \"quadrature_degree\": 6"), "q.json");
+  EXPECT_EQ(q6.body.quadrature_degree, 6);
+  // It reaches the assembler: more points per hex27 than the default rule's.
+  EXPECT_GT(q6.body.make_assembler().geometry().points_per_element(),
+            parse_scene(good, "g.json").body.make_assembler().geometry().points_per_element());
 }
 
 TEST(Scene, InvalidFilesNameTheKey) {
@@ -111,9 +119,10 @@ std::string scaled_strip(double L, double S) {
 
 Eigen::VectorXd strip_displacement(double L, double S) {
   const Scene scene = parse_scene(scaled_strip(L, S), "strip.json");
-  const Assembler a = scene.make_assembler();
-  const ControlSpace c(a.mesh(), a.geometry(), scene.control_kind);
-  const ForwardResult r = solve_forward(scene, a, c, Eigen::VectorXd::Constant(c.size(), -0.5 * S));
+  const Assembler a = scene.body.make_assembler();
+  const ControlSpace c(a.mesh(), a.geometry(), scene.body.control_kind);
+  const ForwardResult r =
+      solve_forward(scene.body, a, c, Eigen::VectorXd::Constant(c.size(), -0.5 * S));
   EXPECT_TRUE(r.summary.converged()) << "L = " << L << ", S = " << S;
   EXPECT_GT(r.summary.newton_iterations, 0) << "L = " << L << ", S = " << S;
   return r.state.u / L;
@@ -165,4 +174,28 @@ TEST(Scene, NameMustBeAPlainFileNameAndInitialWithinBounds) {
   EXPECT_EQ(parse_scene(replace(b, "\"name\": \"bending\",", ""), "dir/my scene.json").name,
             "my_scene");
   expect_error(replace(b, "\"initial\": 0", "\"initial\": 5"), {"control.initial", "within"});
+}
+
+// A box body made in code is the body the bending scene file describes (the file's values
+// typed in): the same mesh, free dofs, bounds and residual floor; a clamp naming no face and
+// an inverted box are refused.
+TEST(Scene, BoxBodyInCodeIsTheSceneFilesBody) {
+  const Scene file = load_scene(kBending);
+  const Body code =
+      box_body(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(10, 2, 0.1), Eigen::Vector3i(50, 5, 2), 2,
+               std::make_shared<MooneyRivlin>(1e5, 2e4, 3e5), {"x0"}, -1e5, 0.0);
+  EXPECT_TRUE(code.make_mesh().nodes == file.body.make_mesh().nodes);
+  EXPECT_EQ(code.make_assembler().dofs().num_free, file.body.make_assembler().dofs().num_free);
+  EXPECT_EQ(code.volume, 2.0 * 0.1 * 10.0);
+  EXPECT_EQ(code.residual_floor(), file.body.residual_floor());
+  EXPECT_EQ(code.control_lower, file.body.control_lower);
+  EXPECT_EQ(code.control_upper, file.body.control_upper);
+  EXPECT_THROW(
+      box_body(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1), Eigen::Vector3i(2, 2, 2), 1,
+               std::make_shared<MooneyRivlin>(1, 0, 1), {"nowhere"}),
+      softhd::InvalidArgument);
+  EXPECT_THROW(
+      box_body(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(-1, 1, 1), Eigen::Vector3i(2, 2, 2), 1,
+               std::make_shared<MooneyRivlin>(1, 0, 1), {"x0"}),
+      softhd::InvalidArgument);
 }

@@ -29,13 +29,13 @@
 #include <string>
 #include <vector>
 
+#include "softhd/control/scene.hpp"
 #include "softhd/control/scene_target.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/shape_tracking.hpp"
 #include "softhd/fe/adjoint.hpp"
 #include "softhd/fe/assembly.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/fe/state_equation.hpp"
 #include "softhd/work_share.hpp"
 
@@ -44,8 +44,8 @@ namespace {
 using namespace softhd;
 using fe::StateBackend;
 
-fe::Scene scene(const std::string& name) {
-  return fe::load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/" + name + ".json");
+softhd::Scene scene(const std::string& name) {
+  return softhd::load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/" + name + ".json");
 }
 
 int rank() { return world_rank(); }
@@ -57,21 +57,21 @@ int rank() { return world_rank(); }
 // With `softhd optimise`'s defaults (tree sums at τ = 1e-2; no two-level starts, which its
 // automatic rule skips at this size: with them, on this plate, the histories differed by
 // 1.6e-7, docs/scaling.md §5).
-fe::Scene small_bending() {
-  fe::Scene s = scene("bending");
-  s.cells << 10, 2, 2;
-  s.control_lower = -2e4;
+softhd::Scene small_bending() {
+  softhd::Scene s = scene("bending");
+  s.body.cells << 10, 2, 2;
+  s.body.control_lower = -2e4;
   s.target_json = R"({"kind": "arc", "angle": 0.6})";
   return s;
 }
 
 struct Problem {
-  explicit Problem(const fe::Scene& scene)
+  explicit Problem(const softhd::Scene& scene)
       : s(scene),
-        assembler(s.make_assembler()),
-        space(assembler.mesh(), assembler.geometry(), s.control_kind),
+        assembler(s.body.make_assembler()),
+        space(assembler.mesh(), assembler.geometry(), s.body.control_kind),
         target(scene_target(s, assembler.mesh())) {}
-  fe::Scene s;
+  softhd::Scene s;
   fe::Assembler assembler;
   fe::ControlSpace space;
   SceneTarget target;
@@ -98,7 +98,7 @@ RunRecord optimise(const Problem& p, const RunSettings& r) {
   so.hausdorff.tolerance = 1e-2;
   so.hausdorff.share = r.share;
   ShapeObjective objective(p.assembler, p.space, HausdorffTarget(p.target.cloud, so.hausdorff), so,
-                           fe::state_solver_factory(p.s, r.backend, &p.assembler, &p.space));
+                           fe::state_solver_factory(p.s.body, r.backend, &p.assembler, &p.space));
   ShapeTrackingOptions to;
   to.optimizer.max_iterations = r.iterations;
   to.optimizer.max_evaluations = 5 * r.iterations + 20;
@@ -116,9 +116,9 @@ RunRecord optimise(const Problem& p, const RunSettings& r) {
     run.m.push_back(m);
   };
   const Eigen::Index n = p.space.size();
-  run.summary = track_shape(objective, Eigen::VectorXd::Constant(n, p.s.control_lower),
-                            Eigen::VectorXd::Constant(n, p.s.control_upper),
-                            Eigen::VectorXd::Constant(n, p.s.control_initial),
+  run.summary = track_shape(objective, Eigen::VectorXd::Constant(n, p.s.body.control_lower),
+                            Eigen::VectorXd::Constant(n, p.s.body.control_upper),
+                            Eigen::VectorXd::Constant(n, p.s.body.control_initial),
                             p.target.map_displacement, to, cb);
   return run;
 }
@@ -183,14 +183,14 @@ TEST(PetscOptimise, DISABLED_BendingHistoryEqualsSerial) {
 // target solved on a finer mesh) on the scene's mesh read at order 1 (P1: 778 nodes, 2 300
 // free dofs, for the suite's time; the P2 scene's states are compared in
 // tests/fe/test_petsc_state.cpp).
-fe::Scene small_finger() {
+softhd::Scene small_finger() {
   const std::string path = std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/finger.json";
   std::ifstream in(path);
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::string p2 = R"("order": 2)";
   EXPECT_NE(text.find(p2), std::string::npos);
   text.replace(text.find(p2), p2.size(), R"("order": 1)");
-  return fe::parse_scene(text, path);
+  return softhd::parse_scene(text, path);
 }
 
 // Three MMA iterations on the finger, PETSc (MUMPS) against the serial run, iteration by
@@ -231,9 +231,9 @@ TEST(PetscOptimise, FingerHistoryEqualsSerial) {
 // Newton accepts it at once and factorises K there): two solvers' own states agree only to
 // their Newton tolerance (at rtol 1e-9 the gradients at their own states differed by 6.5e-9).
 struct OneState {
-  fe::Scene s = small_bending();
-  fe::Assembler a = s.make_assembler();
-  fe::ControlSpace space{a.mesh(), a.geometry(), s.control_kind};
+  softhd::Scene s = small_bending();
+  fe::Assembler a = s.body.make_assembler();
+  fe::ControlSpace space{a.mesh(), a.geometry(), s.body.control_kind};
   Eigen::VectorXd m = -2e4 * space.positions(a.mesh()).col(2) / 0.1;
   Eigen::VectorXd g = pattern(a.dofs().num_dofs, 0.37, 1.0);
   std::unique_ptr<fe::StateEquation> petsc, serial;  // serial: CHOLMOD, factorised there
@@ -243,12 +243,12 @@ struct OneState {
 void solve_one_state(OneState* c) {
   fe::StateSolverOptions o;
   o.backend = StateBackend::kPetscMumps;
-  c->petsc = fe::make_state_solver(c->s, o, &c->a, &c->space);
-  c->petsc->grid_sequenced_start(c->s, c->m, fe::GridSequencingOptions{});
+  c->petsc = fe::make_state_solver(c->s.body, o, &c->a, &c->space);
+  c->petsc->grid_sequenced_start(c->s.body, c->m, fe::GridSequencingOptions{});
   ASSERT_TRUE(c->petsc->solve(c->m).converged());
   c->grad_petsc = c->petsc->gradient(c->g);
   o.backend = StateBackend::kCholmod;
-  c->serial = fe::make_state_solver(c->s, o, &c->a, &c->space);
+  c->serial = fe::make_state_solver(c->s.body, o, &c->a, &c->space);
   c->serial->set_state(c->petsc->state());
   const fe::NewtonSummary at_petsc_state = c->serial->solve(c->m);
   ASSERT_TRUE(at_petsc_state.converged());

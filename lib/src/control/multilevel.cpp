@@ -29,15 +29,24 @@ namespace {
 
 // The target of a coarse level: the scene's for its body (an arc grid follows the mesh), or
 // the finer level's target subsampled where that gives no fewer points.
-SceneTarget coarse_target(const fe::Scene& coarse, const fe::Mesh& mesh, const SceneTarget& finer,
+SceneTarget coarse_target(const Scene& coarse, const fe::Mesh& mesh, const SceneTarget& finer,
                           const TrackingRunOptions& options) {
   SceneTarget t = tracking_target(coarse, mesh, options);
   if (t.cloud.size() >= finer.cloud.size()) {
-    const int stride = 1 << coarse.dim();  // 2^d: as a grid halved along every axis
+    const int stride = 1 << coarse.body.dim();  // 2^d: as a grid halved along every axis
     t.cloud = subsampled(finer.cloud, stride);
     t.description = finer.description + ", every " + std::to_string(stride) + "th point";
   }
   return t;
+}
+
+// The body and the levels − 1 coarser levels of multilevel optimisation (Halving::rounded).
+fe::MeshHierarchy level_hierarchy(const fe::Body& body, int levels) {
+  try {
+    return fe::MeshHierarchy(body, fe::Halving::rounded, levels - 1);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument("levels: " + std::to_string(levels) + ": " + e.what());
+  }
 }
 
 }  // namespace
@@ -58,7 +67,7 @@ void apply_target_form(ShapeObjective& objective, SceneTarget& target) {
   target.description += line.str();
 }
 
-std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& scene,
+std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const Scene& scene,
                                                             const SceneTarget& target,
                                                             const TrackingRunOptions& options) {
   std::vector<std::unique_ptr<CoarseProblem>> levels;  // finest first while built
@@ -66,47 +75,34 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
   if (o.method == Method::tree) o.tolerance = std::max(options.tolerance, options.coarse_tolerance);
   ShapeObjectiveOptions so = o.objective();
   apply_target_settings(target, &so);  // the user's target's view on every level
-  const fe::Scene* finer = &scene;
+  const fe::MeshHierarchy hierarchy = level_hierarchy(scene.body, options.levels);
   const SceneTarget* finer_target = &target;
   for (int level = 1; level < options.levels; ++level) {
     auto p = std::make_unique<CoarseProblem>();
     p->level = level;
-    try {
-      p->scene = fe::coarsened(*finer, fe::Halving::rounded);
-    } catch (const InvalidArgument& e) {
-      throw InvalidArgument("levels: " + std::to_string(options.levels) + " asks for " +
-                            std::to_string(options.levels - 1) +
-                            " coarser levels of the body, but it has " + std::to_string(level - 1) +
-                            ": " + e.what());
-    }
-    p->assembler = std::make_unique<fe::Assembler>(p->scene.make_assembler());
-    p->control = std::make_unique<fe::ControlSpace>(p->scene.make_control_space(*p->assembler));
+    p->scene = scene;  // the name, source and target of the scene
+    p->scene.body = hierarchy.level(level);
+    p->assembler = std::make_unique<fe::Assembler>(p->scene.body.make_assembler());
+    p->control =
+        std::make_unique<fe::ControlSpace>(p->scene.body.make_control_space(*p->assembler));
     p->target.emplace(coarse_target(p->scene, p->assembler->mesh(), *finer_target, options));
     p->objective = std::make_unique<ShapeObjective>(
         *p->assembler, *p->control, HausdorffTarget(p->target->cloud, so.hausdorff), so,
-        fe::state_solver_factory(p->scene, options.state_backend, p->assembler.get(),
+        fe::state_solver_factory(p->scene.body, options.state_backend, p->assembler.get(),
                                  p->control.get()));
     if (options.distance) p->target->distance = *options.distance;
     apply_target_form(*p->objective, *p->target);
     if (options.coarse_level == CoarseLevel::automatic &&
-        fe::grid_levels(p->scene, fe::GridSequencingOptions{}) > 0) {
-      p->two_level.emplace(fe::coarsened(p->scene).make_assembler());
+        fe::grid_levels(p->scene.body, fe::GridSequencingOptions{}) > 0) {
+      p->two_level.emplace(
+          fe::MeshHierarchy(p->scene.body, fe::Halving::nested, 1).level(1).make_assembler());
       p->objective->state_path().use_coarse_level(*p->two_level);
     }
     levels.push_back(std::move(p));
-    finer = &levels.back()->scene;
     finer_target = &*levels.back()->target;
   }
   std::reverse(levels.begin(), levels.end());
   return levels;
-}
-
-Eigen::VectorXd prolongate(const fe::Mesh& coarse, const fe::ControlSpace& coarse_control,
-                           const Eigen::VectorXd& m, const fe::Mesh& fine,
-                           const fe::ControlSpace& fine_control, const std::vector<int>& regions) {
-  // The same cells (a P1/Q1 level): the same vertices and elements carry the same controls.
-  if (fe::same_cells(coarse, fine) && coarse_control.kind() == fine_control.kind()) return m;
-  return fe::control_at(coarse, coarse_control.kind(), m, fine_control.positions(fine), regions);
 }
 
 }  // namespace softhd::detail

@@ -8,12 +8,12 @@
 #include <optional>
 #include <vector>
 
+#include "softhd/control/scene.hpp"
 #include "softhd/control/scene_target.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/tracking_run.hpp"
 #include "softhd/fe/assembly.hpp"
 #include "softhd/fe/control.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/point_cloud.hpp"
 
 namespace softhd::detail {
@@ -21,7 +21,7 @@ namespace softhd::detail {
 /// One coarse level: the scene with its box halved `level` times, its body and its target.
 struct CoarseProblem {
   int level = 0;
-  fe::Scene scene;
+  Scene scene;
   std::unique_ptr<fe::Assembler> assembler;
   std::unique_ptr<fe::ControlSpace> control;
   std::optional<fe::Assembler> two_level;  ///< this level's own two-level starts, if any
@@ -40,16 +40,8 @@ PointCloud subsampled(const PointCloud& cloud, int stride);
 /// The options.levels − 1 coarse levels of `scene`, coarsest first, against coarse versions
 /// of `target` (the target of the user's mesh). Throws InvalidArgument naming `levels` if the
 /// body has fewer coarser levels (fe::coarsened), and as scene_target.
-std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& scene,
+std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const Scene& scene,
                                                             const SceneTarget& target,
                                                             const TrackingRunOptions& options);
-
-/// The control m of `coarse` at the controls of `fine` (the same body, a finer mesh): vertex
-/// controls Q1-interpolated at the fine vertices, element controls the containing coarse
-/// element's value at each fine element's centre (fe::control_at); 0 outside `regions`. On
-/// the same cells (fe::same_cells: a P1/Q1 level and its P2/Q2 mesh) m itself.
-Eigen::VectorXd prolongate(const fe::Mesh& coarse, const fe::ControlSpace& coarse_control,
-                           const Eigen::VectorXd& m, const fe::Mesh& fine,
-                           const fe::ControlSpace& fine_control, const std::vector<int>& regions);
 
 }  // namespace softhd::detail

@@ -31,9 +31,9 @@ namespace fs = std::filesystem;
 
 // Counts of the arc target's sampling grid: integers from 1 to 1e6, and a grid whose
 // estimated memory (about 100 bytes a point with the distance's trees) fits the limit.
-Eigen::Vector3i arc_grid(const fe::Scene& scene, const nlohmann::json& t, double memory_limit) {
+Eigen::Vector3i arc_grid(const Scene& scene, const nlohmann::json& t, double memory_limit) {
   // Default resolution: a cell-centred grid twice as fine as the mesh's nodes.
-  Eigen::Vector3i counts = (2 * scene.order * scene.cells).head<3>();
+  Eigen::Vector3i counts = (2 * scene.body.order * scene.body.cells).head<3>();
   if (t.contains("cells")) {
     const nlohmann::json& c = t["cells"];
     if (!c.is_array() || c.size() != 3)
@@ -54,9 +54,9 @@ Eigen::Vector3i arc_grid(const fe::Scene& scene, const nlohmann::json& t, double
   return counts;
 }
 
-SceneTarget arc_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlohmann::json& t,
+SceneTarget arc_target(const Scene& scene, const fe::Mesh& mesh, const nlohmann::json& t,
                        double memory_limit) {
-  if (scene.dim() != 3 || !scene.is_box())
+  if (scene.body.dim() != 3 || !scene.body.is_box())
     throw InvalidArgument(scene.source + ": target.kind arc needs a 3D box body (mesh.type box)");
   double angle = ArcMap().angle;
   if (t.contains("angle")) {
@@ -66,7 +66,7 @@ SceneTarget arc_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlohm
   }
   const ArcMap T = arc_map(scene, angle);
   const Eigen::Vector3i counts = arc_grid(scene, t, memory_limit);
-  const PointCloud grid = sample_box_grid(scene.lower, scene.upper, counts);
+  const PointCloud grid = sample_box_grid(scene.body.lower, scene.body.upper, counts);
   std::ostringstream d;
   d << "arc of " << T.angle * 180.0 / M_PI << " degrees, " << counts[0] << "x" << counts[1] << "x"
     << counts[2] << " cell-centred grid";
@@ -74,7 +74,7 @@ SceneTarget arc_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlohm
 }
 
 // A number at key `key` of `o` (the block `path` of the target), or InvalidArgument.
-double number_at(const fe::Scene& scene, const nlohmann::json& o, const char* path, const char* key,
+double number_at(const Scene& scene, const nlohmann::json& o, const char* path, const char* key,
                  const char* what) {
   if (!o[key].is_number())
     throw InvalidArgument(scene.source + ": target." + path + key + " must be " + what + ", got " +
@@ -83,7 +83,7 @@ double number_at(const fe::Scene& scene, const nlohmann::json& o, const char* pa
 }
 
 // target.clean: {"crop": MARGIN, "plane": DIST, "outliers": {"k": K, "ratio": R}}, each optional.
-scan::ScanCleanup parse_clean(const fe::Scene& scene, const nlohmann::json& t) {
+scan::ScanCleanup parse_clean(const Scene& scene, const nlohmann::json& t) {
   scan::ScanCleanup c;
   if (!t.contains("clean")) return c;
   const nlohmann::json& j = t["clean"];
@@ -120,7 +120,7 @@ scan::ScanCleanup parse_clean(const fe::Scene& scene, const nlohmann::json& t) {
 }
 
 // target.weights: "file" (as read), "knn" or "delaunay" (scan::AreaEstimate).
-std::optional<scan::AreaEstimate> parse_weights(const fe::Scene& scene, const nlohmann::json& t) {
+std::optional<scan::AreaEstimate> parse_weights(const Scene& scene, const nlohmann::json& t) {
   if (!t.contains("weights")) return std::nullopt;
   const std::string name = t["weights"].is_string() ? t["weights"].get<std::string>() : "";
   if (name == "file") return std::nullopt;
@@ -133,17 +133,17 @@ std::optional<scan::AreaEstimate> parse_weights(const fe::Scene& scene, const nl
 
 // read → crop (to the body's box, inflated) → plane → outliers → weights; what each step
 // did and what the reader skipped go into `description`.
-PointCloud read_scan(const fe::Scene& scene, const nlohmann::json& t, const std::string& file,
+PointCloud read_scan(const Scene& scene, const nlohmann::json& t, const std::string& file,
                      std::string& description) {
   std::vector<std::string> notes;
-  PointCloud cloud = read_cloud(file, scene.dim(), &notes);
+  PointCloud cloud = read_cloud(file, scene.body.dim(), &notes);
   check_coordinates(cloud, file);
   const scan::ScanCleanup clean = parse_clean(scene, t);
   const std::optional<scan::AreaEstimate> weights = parse_weights(scene, t);
   std::vector<scan::CleanupStep> steps;
   const Eigen::Index read = cloud.size();
   try {
-    cloud = scan::clean_scan(cloud, scene.lower, scene.upper, clean, &steps);
+    cloud = scan::clean_scan(cloud, scene.body.lower, scene.body.upper, clean, &steps);
     if (weights) cloud = scan::with_area_weights(cloud, *weights);
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(scene.source + ": target " + file + ": " + e.what());
@@ -154,7 +154,7 @@ PointCloud read_scan(const fe::Scene& scene, const nlohmann::json& t, const std:
   return cloud;
 }
 
-SceneTarget cloud_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlohmann::json& t,
+SceneTarget cloud_target(const Scene& scene, const fe::Mesh& mesh, const nlohmann::json& t,
                          double memory_limit) {
   if (!t.contains("file") || !t["file"].is_string())
     throw InvalidArgument(scene.source + ": target.file must be a path string");
@@ -171,7 +171,7 @@ SceneTarget cloud_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlo
   if (!t["solved_on"].is_string())
     throw InvalidArgument(scene.source + ": target.solved_on must be a scene path string");
   const fs::path source = (dir / t["solved_on"].get<std::string>()).lexically_normal();
-  const NodalMap T(fe::load_scene(source.string(), memory_limit).make_mesh(), cloud);
+  const NodalMap T(load_scene(source.string(), memory_limit).body.make_mesh(), cloud);
   return {cloud,
           T.displacement(mesh),
           "cloud file " + f.string() + " (deformed nodes of " + source.string() + ")",
@@ -179,7 +179,7 @@ SceneTarget cloud_target(const fe::Scene& scene, const fe::Mesh& mesh, const nlo
 }
 
 // A number at key `key` of the target block, finite (and > 0 if `positive`).
-double target_number(const fe::Scene& scene, const nlohmann::json& v, const std::string& key,
+double target_number(const Scene& scene, const nlohmann::json& v, const std::string& key,
                      bool positive) {
   if (!v.is_number() || !std::isfinite(v.get<double>()) || (positive && !(v.get<double>() > 0.0)))
     throw InvalidArgument(scene.source + ": target." + key + " must be a number" +
@@ -189,7 +189,7 @@ double target_number(const fe::Scene& scene, const nlohmann::json& v, const std:
 
 // The keys "distance", "cap", "cap_q" of a target block (docs/guide.md); "visible" goes with
 // "camera", which implies it when "distance" is absent.
-TargetDistance target_distance(const fe::Scene& scene, const nlohmann::json& t, bool camera_frame) {
+TargetDistance target_distance(const Scene& scene, const nlohmann::json& t, bool camera_frame) {
   TargetDistance d;
   const bool camera = t.contains("camera") || camera_frame;  // a pose gives the camera
   const bool implied = t.contains("camera");
@@ -235,8 +235,8 @@ TargetDistance target_distance(const fe::Scene& scene, const nlohmann::json& t, 
 }
 
 // The keys both kinds take: "surface" (a boolean) and "camera" (3 finite numbers), 3D only.
-void read_view_keys(const fe::Scene& scene, const nlohmann::json& t, SceneTarget* target) {
-  if ((t.contains("surface") || t.contains("camera")) && scene.dim() != 3)
+void read_view_keys(const Scene& scene, const nlohmann::json& t, SceneTarget* target) {
+  if ((t.contains("surface") || t.contains("camera")) && scene.body.dim() != 3)
     throw InvalidArgument(scene.source + ": target.surface and target.camera need a 3D body");
   if (t.contains("surface")) {
     if (!t["surface"].is_boolean())
@@ -271,7 +271,7 @@ std::string decimal(double v) {
 }
 
 // A rigid start pose has scale 1; a similarity's lies within the pose bounds (PoseBounds).
-void check_start_scale(const fe::Scene& scene, const scan::Pose& pose, scan::PoseKind kind,
+void check_start_scale(const Scene& scene, const scan::Pose& pose, scan::PoseKind kind,
                        const std::string& file) {
   const PoseBounds bounds;
   const bool rigid = kind == scan::PoseKind::rigid;
@@ -286,7 +286,7 @@ void check_start_scale(const fe::Scene& scene, const scan::Pose& pose, scan::Pos
                         decimal(bounds.scale_min) + ", " + decimal(bounds.scale_max) + "]");
 }
 
-FrameKeys read_frame_keys(const fe::Scene& scene, const nlohmann::json& t) {
+FrameKeys read_frame_keys(const Scene& scene, const nlohmann::json& t) {
   FrameKeys keys;
   FrameKeys* target = &keys;
   if (t.contains("frame")) {
@@ -303,7 +303,7 @@ FrameKeys read_frame_keys(const fe::Scene& scene, const nlohmann::json& t) {
       throw InvalidArgument(scene.source + ": target." + key +
                             " is for a cloud in the camera's frame (give \"frame\": \"camera\")");
   if (!camera) return keys;
-  if (scene.dim() != 3)
+  if (scene.body.dim() != 3)
     throw InvalidArgument(scene.source + ": target.frame \"camera\" needs a 3D body");
   if (t.contains("camera"))
     throw InvalidArgument(scene.source +
@@ -390,18 +390,18 @@ DistanceForm target_form(const TargetDistance& distance, const ShapeObjective& o
   return form;
 }
 
-ArcMap arc_map(const fe::Scene& scene, double angle) {
-  if (scene.dim() != 3) throw InvalidArgument(scene.source + ": an arc map needs a 3D body");
+ArcMap arc_map(const Scene& scene, double angle) {
+  if (scene.body.dim() != 3) throw InvalidArgument(scene.source + ": an arc map needs a 3D body");
   ArcMap T;
-  T.length = scene.upper[0] - scene.lower[0];
-  T.thickness = scene.upper[2] - scene.lower[2];
+  T.length = scene.body.upper[0] - scene.body.lower[0];
+  T.thickness = scene.body.upper[2] - scene.body.lower[2];
   T.angle = angle;
-  T.origin = scene.lower.head<3>();  // the arc of the plate where the scene puts it
+  T.origin = scene.body.lower.head<3>();  // the arc of the plate where the scene puts it
   T.validate();
   return T;
 }
 
-SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh, double memory_limit) {
+SceneTarget scene_target(const Scene& scene, const fe::Mesh& mesh, double memory_limit) {
   if (scene.target_json.empty())
     throw InvalidArgument(scene.source + ": the scene has no \"target\"; give a target cloud");
   const nlohmann::json t = nlohmann::json::parse(scene.target_json);

@@ -47,7 +47,7 @@ std::string decimal(double v) {
 // The options checked against the scene and the target: initial_control's length and bounds
 // (those of track_shape: control.lower/upper where a control acts, 0 elsewhere), pose_move (a
 // camera-frame target's only).
-void check_against_scene(const fe::Scene& scene, const fe::ControlSpace& control,
+void check_against_scene(const Scene& scene, const fe::ControlSpace& control,
                          const SceneTarget& target, const TrackingRunOptions& o) {
   if (o.initial_control) {
     const Eigen::VectorXd& m = *o.initial_control;
@@ -55,8 +55,8 @@ void check_against_scene(const fe::Scene& scene, const fe::ControlSpace& control
       throw InvalidArgument("initial_control has " + std::to_string(m.size()) +
                             " values, expected " + std::to_string(control.size()) +
                             " (the scene's controls)");
-    const Eigen::VectorXd lower = control.constant(scene.control_lower);
-    const Eigen::VectorXd upper = control.constant(scene.control_upper);
+    const Eigen::VectorXd lower = control.constant(scene.body.control_lower);
+    const Eigen::VectorXd upper = control.constant(scene.body.control_upper);
     for (Eigen::Index k = 0; k < m.size(); ++k)
       if (!(m[k] >= lower[k] && m[k] <= upper[k]))
         throw InvalidArgument("initial_control[" + std::to_string(k) + "] = " + decimal(m[k]) +
@@ -165,7 +165,7 @@ ShapeTrackingOptions TrackingRunOptions::tracking() const {
   return t;
 }
 
-int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options,
+int tracking_levels(const Scene& scene, const TrackingRunOptions& options,
                     const SceneTarget& target) {
   if (options.levels > 0) return options.levels;
   // A given start or a joint pose runs on one level (validate, TrackingRun refuse more).
@@ -175,26 +175,26 @@ int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options,
   if (!target.map_displacement) return 1;
   // Else every coarser level (fe::Halving::rounded) of at least 32 elements, the two-level
   // starts' smallest (fe::GridSequencingOptions::min_elements).
-  return 1 +
-         fe::coarser_levels(scene, fe::Halving::rounded, fe::GridSequencingOptions{}.min_elements);
+  return 1 + fe::coarser_levels(scene.body, fe::Halving::rounded,
+                                fe::GridSequencingOptions{}.min_elements);
 }
 
-SceneTarget tracking_target(const fe::Scene& scene, const fe::Mesh& mesh,
+SceneTarget tracking_target(const Scene& scene, const fe::Mesh& mesh,
                             const TrackingRunOptions& options) {
-  if (!options.target_file.empty()) return file_target(options.target_file, scene.dim());
+  if (!options.target_file.empty()) return file_target(options.target_file, scene.body.dim());
   return scene_target(scene, mesh, options.memory_limit);
 }
 
 struct TrackingRun::Impl {
-  Impl(const fe::Scene& s, const fe::Assembler& a, const fe::ControlSpace& c, SceneTarget t,
+  Impl(const Scene& s, const fe::Assembler& a, const fe::ControlSpace& c, SceneTarget t,
        const TrackingRunOptions& o)
       : scene(s), assembler(a), control(c), options(o), target(std::move(t)) {
     options.validate();
     check_against_scene(scene, c, target, options);
     options.levels = tracking_levels(scene, options, target);
-    if (target.cloud.dim() != scene.dim())
+    if (target.cloud.dim() != scene.body.dim())
       throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
-                            "D but the scene's body is " + std::to_string(scene.dim()) + "D");
+                            "D but the scene's body is " + std::to_string(scene.body.dim()) + "D");
     ShapeObjectiveOptions so = options.objective();
     apply_target_settings(target, &so);
     if (target.frame == TargetFrame::camera) {  // the pose joins the control (§8.10)
@@ -205,12 +205,12 @@ struct TrackingRun::Impl {
     }
     objective = std::make_unique<ShapeObjective>(
         a, c, HausdorffTarget(target.cloud, so.hausdorff), so,
-        fe::state_solver_factory(scene, options.state_backend, &a, &c));
+        fe::state_solver_factory(scene.body, options.state_backend, &a, &c));
     if (options.distance) target.distance = *options.distance;
     detail::apply_target_form(*objective, target);
     if (options.coarse_level == CoarseLevel::automatic &&
-        fe::grid_levels(scene, fe::GridSequencingOptions{}) > 0) {
-      const fe::Scene level = fe::coarsened(scene);
+        fe::grid_levels(scene.body, fe::GridSequencingOptions{}) > 0) {
+      const fe::Body level = fe::MeshHierarchy(scene.body, fe::Halving::nested, 1).level(1);
       coarse.emplace(level.make_assembler());
       objective->state_path().use_coarse_level(*coarse);
       setup.coarse_level = fe::describe_level(level);
@@ -288,7 +288,7 @@ struct TrackingRun::Impl {
                                     const TrackingRunCallbacks& callbacks, TrackingRunSummary* s);
   bool caller_stopped = false;  // a StopRequest of the caller on a coarse level
 
-  const fe::Scene& scene;
+  const Scene& scene;
   const fe::Assembler& assembler;
   const fe::ControlSpace& control;
   std::unique_ptr<fe::Assembler> own_assembler;  // the first constructor's body
@@ -336,9 +336,9 @@ Eigen::VectorXd TrackingRun::Impl::run_coarse_levels(const ShapeTrackingOptions&
   double seconds = 0.0;  // of the levels so far
   for (std::size_t k = 0; k < levels.size(); ++k) {
     const detail::CoarseProblem& p = *levels[k];
-    const Eigen::VectorXd lower = p.control->constant(p.scene.control_lower);
-    const Eigen::VectorXd upper = p.control->constant(p.scene.control_upper);
-    if (k == 0) m = p.control->constant(p.scene.control_initial);
+    const Eigen::VectorXd lower = p.control->constant(p.scene.body.control_lower);
+    const Eigen::VectorXd upper = p.control->constant(p.scene.body.control_upper);
+    if (k == 0) m = p.control->constant(p.scene.body.control_initial);
     ShapeTrackingOptions to = fine;
     // A level's iterations: coarse_iterations, and never more than the run's own limit.
     const int iterations = std::min(options.coarse_iterations, options.max_iterations);
@@ -402,9 +402,9 @@ Eigen::VectorXd TrackingRun::Impl::run_coarse_levels(const ShapeTrackingOptions&
     const fe::Mesh& finer = last ? assembler.mesh() : levels[k + 1]->assembler->mesh();
     const fe::ControlSpace& finer_control = last ? control : *levels[k + 1]->control;
     const std::vector<int>& regions =
-        last ? scene.control_regions : levels[k + 1]->scene.control_regions;
-    m = detail::prolongate(p.assembler->mesh(), *p.control, r.control, finer, finer_control,
-                           regions);
+        last ? scene.body.control_regions : levels[k + 1]->scene.body.control_regions;
+    m = fe::prolongate_control(p.assembler->mesh(), *p.control, r.control, finer, finer_control,
+                               regions);
     // ... and its state, the next level's first warm start (as the two-level starts do). The
     // level's state is bitwise the uninterrupted run's after any resume (track_shape), so the
     // next level's start is too.
@@ -416,17 +416,17 @@ Eigen::VectorXd TrackingRun::Impl::run_coarse_levels(const ShapeTrackingOptions&
   return m;
 }
 
-TrackingRun::TrackingRun(const fe::Scene& scene, const TrackingRunOptions& options) {
+TrackingRun::TrackingRun(const Scene& scene, const TrackingRunOptions& options) {
   options.validate();
-  auto assembler = std::make_unique<fe::Assembler>(scene.make_assembler());
-  auto control = std::make_unique<fe::ControlSpace>(scene.make_control_space(*assembler));
+  auto assembler = std::make_unique<fe::Assembler>(scene.body.make_assembler());
+  auto control = std::make_unique<fe::ControlSpace>(scene.body.make_control_space(*assembler));
   SceneTarget target = tracking_target(scene, assembler->mesh(), options);
   impl_ = std::make_unique<Impl>(scene, *assembler, *control, std::move(target), options);
   impl_->own_assembler = std::move(assembler);
   impl_->own_control = std::move(control);
 }
 
-TrackingRun::TrackingRun(const fe::Scene& scene, const fe::Assembler& assembler,
+TrackingRun::TrackingRun(const Scene& scene, const fe::Assembler& assembler,
                          const fe::ControlSpace& control, SceneTarget target,
                          const TrackingRunOptions& options)
     : impl_(std::make_unique<Impl>(scene, assembler, control, std::move(target), options)) {}
@@ -448,7 +448,7 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
   const Eigen::VectorXd m0 = !d.levels.empty() ? d.run_coarse_levels(to, callbacks, &s)
                              : d.options.initial_control
                                  ? *d.options.initial_control
-                                 : d.control.constant(d.scene.control_initial);
+                                 : d.control.constant(d.scene.body.control_initial);
   double offset = 0.0;  // the coarse levels' time
   for (const LevelReport& l : s.levels) offset += l.seconds;
   if (!d.levels.empty() && d.options.max_seconds > 0.0)
@@ -458,8 +458,8 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
     // A multilevel run killed on a coarse level has no checkpoint of this level yet.
     if (to.resume) to.resume = fs::exists(to.checkpoint);
   }
-  const Eigen::VectorXd lower = d.control.constant(d.scene.control_lower);
-  const Eigen::VectorXd upper = d.control.constant(d.scene.control_upper);
+  const Eigen::VectorXd lower = d.control.constant(d.scene.body.control_lower);
+  const Eigen::VectorXd upper = d.control.constant(d.scene.body.control_upper);
   ShapeTrackingCallbacks cb;
   cb.on_start = [&](const ShapeTrackingSummary& start) {
     if (d.files)
@@ -512,7 +512,7 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
   return s;
 }
 
-TrackingRunSummary run_tracking(const fe::Scene& scene, const TrackingRunOptions& options,
+TrackingRunSummary run_tracking(const Scene& scene, const TrackingRunOptions& options,
                                 const TrackingRunCallbacks& callbacks) {
   return TrackingRun(scene, options).run(callbacks);
 }

@@ -20,8 +20,8 @@ StateSolver::StateSolver(Assembler assembler, ControlKind control, NewtonOptions
       newton_(std::in_place, *assembler_, options),
       state_(rest_state(*assembler_)) {}
 
-StateSolver::StateSolver(const Scene& scene, NewtonOptions options)
-    : StateSolver(scene.make_assembler(), scene.control_kind, options, scene.control_regions) {}
+StateSolver::StateSolver(const Body& body, NewtonOptions options)
+    : StateSolver(body.make_assembler(), body.control_kind, options, body.control_regions) {}
 
 StateSolver::StateSolver(const Assembler& assembler, const ControlSpace& control,
                          NewtonOptions options)
@@ -48,10 +48,10 @@ void StateSolver::set_state(const State& state) {
   converged_ = false;  // the kept tangent is not this state's
 }
 
-GridSequencingReport StateSolver::grid_sequenced_start(const Scene& scene, const Eigen::VectorXd& m,
+GridSequencingReport StateSolver::grid_sequenced_start(const Body& body, const Eigen::VectorXd& m,
                                                        const GridSequencingOptions& options) {
   GridSequencingReport report;
-  state_ = fe::grid_sequenced_start(scene, *assembler_, m, options_, options, &report);
+  state_ = fe::grid_sequenced_start(body, *assembler_, m, options_, options, &report);
   converged_ = false;
   return report;
 }
@@ -89,36 +89,36 @@ void StateSolverOptions::validate() const {
     throw InvalidArgument("state solver options: max_krylov_iterations must be >= 1");
 }
 
-std::unique_ptr<StateEquation> make_state_solver(const Scene& scene,
+std::unique_ptr<StateEquation> make_state_solver(const Body& body,
                                                  const StateSolverOptions& options,
                                                  const Assembler* assembler,
                                                  const ControlSpace* control) {
   options.validate();
   NewtonOptions newton = options.newton;
-  if (newton.absolute_tolerance == 0.0) newton.absolute_tolerance = scene.residual_floor();
+  if (newton.absolute_tolerance == 0.0) newton.absolute_tolerance = body.residual_floor();
   if (options.backend == StateBackend::kCholmod) {
     if (assembler && control) return std::make_unique<StateSolver>(*assembler, *control, newton);
-    return std::make_unique<StateSolver>(scene, newton);
+    return std::make_unique<StateSolver>(body, newton);
   }
 #if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
   PetscStateOptions petsc;
   petsc.newton = newton;
   petsc.backend = options.backend;
   petsc.max_krylov_iterations = options.max_krylov_iterations;
-  return std::make_unique<PetscStateSolver>(scene, petsc);
+  return std::make_unique<PetscStateSolver>(body, petsc);
 #else
   throw InvalidArgument("state backend " + to_string(options.backend) +
                         " needs softhd built with -DSOFTHD_WITH_MPI=ON");
 #endif
 }
 
-StateSolverFactory state_solver_factory(const Scene& scene, StateBackend backend,
+StateSolverFactory state_solver_factory(const Body& body, StateBackend backend,
                                         const Assembler* assembler, const ControlSpace* control) {
-  return [&scene, backend, assembler, control](const NewtonOptions& newton) {
+  return [&body, backend, assembler, control](const NewtonOptions& newton) {
     StateSolverOptions options;
     options.backend = backend;
     options.newton = newton;
-    return make_state_solver(scene, options, assembler, control);
+    return make_state_solver(body, options, assembler, control);
   };
 }
 

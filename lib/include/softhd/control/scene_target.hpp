@@ -38,10 +38,10 @@
 #include <optional>
 #include <string>
 
+#include "softhd/control/scene.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/targets.hpp"
 #include "softhd/fe/mesh.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/point_cloud.hpp"
 #include "softhd/scan/align.hpp"
@@ -99,12 +99,12 @@ DistanceForm target_form(const TargetDistance& distance, const ShapeObjective& o
 
 /// The arc map of a plate scene (3D box, clamped at X1 = lower): length and thickness from the
 /// box, total angle `angle`. Throws InvalidArgument for a 2D scene or an invalid map.
-ArcMap arc_map(const fe::Scene& scene, double angle);
+ArcMap arc_map(const Scene& scene, double angle);
 
 /// The scene's own target for the body `mesh` (the scene's mesh). Throws InvalidArgument
 /// naming the key for a missing or malformed "target", FileError for its files, and
 /// ResourceError if an arc grid's estimated memory exceeds `memory_limit` bytes.
-SceneTarget scene_target(const fe::Scene& scene, const fe::Mesh& mesh,
+SceneTarget scene_target(const Scene& scene, const fe::Mesh& mesh,
                          double memory_limit = fe::kDefaultMemoryLimit);
 
 /// A target from a cloud file (no known map). Throws FileError, or InvalidArgument if the

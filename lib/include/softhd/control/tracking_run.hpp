@@ -16,12 +16,12 @@
 #include <vector>
 
 #include "softhd/control/bounded_optimizer.hpp"
+#include "softhd/control/scene.hpp"
 #include "softhd/control/scene_target.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/shape_tracking.hpp"
 #include "softhd/fe/assembly.hpp"
 #include "softhd/fe/control.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/fe/state_backend.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/work_share.hpp"
@@ -124,7 +124,7 @@ struct TrackingRunOptions {
   /// summary.json, checkpoint.bin, body_NNNN.vtu, body.pvd, target.vtu, target.ply,
   /// body_final.ply and control.csv, each kept up to date as the run goes. Empty: no files
   /// and no checkpoint. The checkpoint's fingerprint holds a content hash of the scene file
-  /// (fe::Scene::source), so a resume needs the scene's file unchanged.
+  /// (Scene::source), so a resume needs the scene's file unchanged.
   std::string out;
   /// Continue the run recorded in out/checkpoint.bin (ShapeTrackingOptions::resume): the
   /// same run as an uninterrupted one.
@@ -183,7 +183,7 @@ struct TrackingRunCallbacks : ShapeTrackingCallbacks {
 
 /// The target of a run on the body `mesh` of `scene`: the cloud file options.target_file (no
 /// known map), else the scene's "target" (scene_target, options.memory_limit). Throws as those.
-SceneTarget tracking_target(const fe::Scene& scene, const fe::Mesh& mesh,
+SceneTarget tracking_target(const Scene& scene, const fe::Mesh& mesh,
                             const TrackingRunOptions& options);
 
 /// The levels of a run of `options` on `scene` against `target`: options.levels, or for 0
@@ -192,7 +192,7 @@ SceneTarget tracking_target(const fe::Scene& scene, const fe::Mesh& mesh,
 /// 1; always 1 for a run from
 /// options.initial_control or against a target in the camera's frame (a joint pose), which
 /// run on one level.
-int tracking_levels(const fe::Scene& scene, const TrackingRunOptions& options,
+int tracking_levels(const Scene& scene, const TrackingRunOptions& options,
                     const SceneTarget& target);
 
 /// One tracking run, set up at construction (no file touched) and made by run().
@@ -202,12 +202,11 @@ class TrackingRun {
   /// target of options.target_file, else the scene's "target". `scene` must outlive the run.
   /// Throws InvalidArgument (invalid options, a missing or malformed target, dimensions that
   /// differ), FileError or ResourceError.
-  TrackingRun(const fe::Scene& scene, const TrackingRunOptions& options);
+  TrackingRun(const Scene& scene, const TrackingRunOptions& options);
   /// The same on a body already built from `scene` (assembler and control space outlive the
   /// run) against `target` (options.target_file is ignored).
-  TrackingRun(const fe::Scene& scene, const fe::Assembler& assembler,
-              const fe::ControlSpace& control, SceneTarget target,
-              const TrackingRunOptions& options);
+  TrackingRun(const Scene& scene, const fe::Assembler& assembler, const fe::ControlSpace& control,
+              SceneTarget target, const TrackingRunOptions& options);
   ~TrackingRun();
   TrackingRun(const TrackingRun&) = delete;
   TrackingRun& operator=(const TrackingRun&) = delete;
@@ -224,7 +223,7 @@ class TrackingRun {
 };
 
 /// TrackingRun(scene, options).run(callbacks).
-TrackingRunSummary run_tracking(const fe::Scene& scene, const TrackingRunOptions& options,
+TrackingRunSummary run_tracking(const Scene& scene, const TrackingRunOptions& options,
                                 const TrackingRunCallbacks& callbacks = {});
 
 }  // namespace softhd

@@ -1,16 +1,16 @@
 #pragma once
 /// \file forward.hpp
-/// One forward (state) solve of a scene for a given control, as `softhd forward` and the Python
-/// `Scene.forward` make it: the control checked against the scene's bounds, grid sequencing
+/// One forward (state) solve of a body for a given control, as `softhd forward` and the Python
+/// `Scene.forward` make it: the control checked against the body's bounds, grid sequencing
 /// (fe/grid_sequencing.hpp), Newton, and the energy, volume and smallest J of the equilibrium.
 
 #include <Eigen/Core>
 
 #include "softhd/fe/assembly.hpp"
+#include "softhd/fe/body.hpp"
 #include "softhd/fe/control.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/newton.hpp"
-#include "softhd/fe/scene.hpp"
 
 namespace softhd::fe {
 
@@ -39,18 +39,18 @@ struct ForwardResult {
   double seconds_solve = 0.0;  ///< Newton time of the coarse levels and the fine solve
 };
 
-/// Throws InvalidArgument naming the first control value outside the scene's bounds (with
+/// Throws InvalidArgument naming the first control value outside the body's bounds (with
 /// its position), or if m does not have control.size() entries.
-void check_control_bounds(const Scene& scene, const ControlSpace& control, const Mesh& mesh,
+void check_control_bounds(const Body& body, const ControlSpace& control, const Mesh& mesh,
                           const Eigen::VectorXd& m);
-/// The same for the scene's control space (control.space, control.region) on `mesh`.
-void check_control_bounds(const Scene& scene, const Mesh& mesh, const Eigen::VectorXd& m);
+/// The same for the body's control space (control.space, control.region) on `mesh`.
+void check_control_bounds(const Body& body, const Mesh& mesh, const Eigen::VectorXd& m);
 
-/// Solves the state of `assembler` (the scene's body) for the control m on `control`
+/// Solves the state of `assembler` (`body`'s) for the control m on `control`
 /// (checked against the bounds), started by grid sequencing. Throws InvalidArgument for bad
 /// input; a fine solve that fails is reported in summary (the state is then the last
 /// converged load step).
-ForwardResult solve_forward(const Scene& scene, const Assembler& assembler,
+ForwardResult solve_forward(const Body& body, const Assembler& assembler,
                             const ControlSpace& control, const Eigen::VectorXd& m,
                             const ForwardOptions& options = {});
 

@@ -35,9 +35,9 @@
 #include <Eigen/Core>
 #include <memory>
 
+#include "softhd/fe/body.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/newton.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/fe/state_backend.hpp"
 #include "softhd/fe/state_equation.hpp"
 
@@ -67,14 +67,14 @@ struct PetscStateLayout {
   int block_size = 1;               ///< block size of the matrix
 };
 
-/// The state equation m ↦ u(m) of one scene on PETSc, warm-started from the last solve, with
+/// The state equation m ↦ u(m) of one body on PETSc, warm-started from the last solve, with
 /// the adjoint gradient (the PETSc implementation of StateEquation, usually made by
 /// make_state_solver). Collective on PETSC_COMM_WORLD.
 class PetscStateSolver final : public StateEquation {
  public:
   /// Throws InvalidArgument for invalid options, a backend other than the PETSc ones, a mesh
   /// with fewer elements than ranks, or if PETSc is not initialised.
-  explicit PetscStateSolver(const Scene& scene, PetscStateOptions options = {});
+  explicit PetscStateSolver(const Body& body, PetscStateOptions options = {});
   ~PetscStateSolver() override;
 
   /// kPetscMumps or kPetscGamg.
@@ -82,7 +82,7 @@ class PetscStateSolver final : public StateEquation {
   /// Free dofs of the whole mesh.
   Eigen::Index free_dofs() const override;
 
-  /// Equilibrium for the control m (the scene's control space, all values on every rank),
+  /// Equilibrium for the control m (the body's control space, all values on every rank),
   /// from the last converged state (rest at first). On failure the state stays at the last
   /// converged load step and the summary says why. Same summary fields as the serial
   /// Newton (factorizations: MUMPS factorisations or GAMG setups; krylov_iterations: CG).
@@ -90,11 +90,11 @@ class PetscStateSolver final : public StateEquation {
   /// True if the last solve converged.
   bool converged() const override;
   /// Grid sequencing as in solve_forward (fe/grid_sequencing.hpp): the coarser levels of
-  /// `scene` (the one given at construction) are solved by the serial Newton on every rank
+  /// `body` (the one given at construction) are solved by the serial Newton on every rank
   /// (they are small), and their equilibrium, prolongated onto this rank's nodes, becomes
   /// the start of the next solve, with the control m at full load. With no level asked for,
   /// or if a coarse solve fails (reported), the start is the rest state.
-  GridSequencingReport grid_sequenced_start(const Scene& scene, const Eigen::VectorXd& m,
+  GridSequencingReport grid_sequenced_start(const Body& body, const Eigen::VectorXd& m,
                                             const GridSequencingOptions& options) override;
   /// The current state over the whole mesh, on every rank (gathered).
   State state() const override;

@@ -17,10 +17,10 @@
 #include <memory>
 
 #include "softhd/fe/assembly.hpp"
+#include "softhd/fe/body.hpp"
 #include "softhd/fe/control.hpp"
 #include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/newton.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/fe/state_backend.hpp"
 
 namespace softhd::fe {
@@ -39,7 +39,7 @@ class StateEquation {
   /// Free dofs of the whole mesh.
   virtual Eigen::Index free_dofs() const = 0;
 
-  /// Equilibrium for the control m (one value per control of the scene), Newton started
+  /// Equilibrium for the control m (one value per control of the body), Newton started
   /// from the current state (the last solve's, or the one set_state gave). On failure the
   /// state stays at the last converged load step and the summary says why.
   virtual NewtonSummary solve(const Eigen::VectorXd& m) = 0;
@@ -52,10 +52,10 @@ class StateEquation {
   /// Makes `state` (whole mesh, the shapes state() returns) the start of the next solve.
   /// Throws InvalidArgument for the wrong shapes.
   virtual void set_state(const State& state) = 0;
-  /// Grid sequencing (fe/grid_sequencing.hpp) for the control m of `scene` (the one the
+  /// Grid sequencing (fe/grid_sequencing.hpp) for the control m of `body` (the one the
   /// solver was made for): the current state becomes the prolongated coarse equilibrium
   /// with m at full load (the rest state if no level is asked for or a coarse solve fails).
-  virtual GridSequencingReport grid_sequenced_start(const Scene& scene, const Eigen::VectorXd& m,
+  virtual GridSequencingReport grid_sequenced_start(const Body& body, const Eigen::VectorXd& m,
                                                     const GridSequencingOptions& options) = 0;
   /// Forgets what the solver keeps between solves besides the state (factorisations, the
   /// path tangent), as a newly made solver; the next solve starts from the current state.
@@ -90,14 +90,14 @@ struct StateSolverOptions {
   void validate() const;
 };
 
-/// The state solver of `options.backend` for the body of `scene` (which must outlive it).
-/// The serial one uses `assembler` and `control` (the scene's, whole mesh) if given — they
+/// The state solver of `options.backend` for `body` (which must outlive it).
+/// The serial one uses `assembler` and `control` (the body's, whole mesh) if given — they
 /// must then outlive it — and else makes its own; the PETSc ones build their part of
-/// the body from the scene and ignore them. Throws InvalidArgument for invalid options, and for a
+/// the body themselves and ignore them. Throws InvalidArgument for invalid options, and for a
 /// PETSc backend in a build without SOFTHD_WITH_MPI or before PETSc is initialised. A zero
-/// options.newton.absolute_tolerance is replaced by residual_floor() of the scene's body, so
+/// options.newton.absolute_tolerance is replaced by body.residual_floor(), so
 /// that a zero or tiny control converges at once instead of chasing round-off.
-std::unique_ptr<StateEquation> make_state_solver(const Scene& scene,
+std::unique_ptr<StateEquation> make_state_solver(const Body& body,
                                                  const StateSolverOptions& options,
                                                  const Assembler* assembler = nullptr,
                                                  const ControlSpace* control = nullptr);
@@ -105,9 +105,9 @@ std::unique_ptr<StateEquation> make_state_solver(const Scene& scene,
 /// Makes state solvers for given Newton settings (ShapeObjective fills in its tolerance).
 using StateSolverFactory = std::function<std::unique_ptr<StateEquation>(const NewtonOptions&)>;
 
-/// make_state_solver(scene, {backend, newton}, assembler, control) for each Newton setting;
-/// scene, assembler and control must outlive every solver made.
-StateSolverFactory state_solver_factory(const Scene& scene, StateBackend backend,
+/// make_state_solver(body, {backend, newton}, assembler, control) for each Newton setting;
+/// body, assembler and control must outlive every solver made.
+StateSolverFactory state_solver_factory(const Body& body, StateBackend backend,
                                         const Assembler* assembler = nullptr,
                                         const ControlSpace* control = nullptr);
 

@@ -10,8 +10,8 @@
 #include <optional>
 
 #include "softhd/fe/adjoint.hpp"
+#include "softhd/fe/body.hpp"
 #include "softhd/fe/newton.hpp"
-#include "softhd/fe/scene.hpp"
 #include "softhd/fe/state_equation.hpp"
 
 namespace softhd::fe {
@@ -24,8 +24,8 @@ class StateSolver final : public StateEquation {
   /// `control_regions` (empty: the whole body); the assembler and control space are kept.
   StateSolver(Assembler assembler, ControlKind control, NewtonOptions options = {},
               std::vector<int> control_regions = {});
-  /// The scene's body, material, clamp and control space.
-  explicit StateSolver(const Scene& scene, NewtonOptions options = {});
+  /// The body's body, material, clamp and control space.
+  explicit StateSolver(const Body& body, NewtonOptions options = {});
   /// A solver on an assembler and control space the caller keeps; both must outlive it.
   StateSolver(const Assembler& assembler, const ControlSpace& control, NewtonOptions options);
 
@@ -53,7 +53,7 @@ class StateSolver final : public StateEquation {
   /// Makes `state` the start of the next solve (shapes checked).
   void set_state(const State& state) override;
   /// grid_sequenced_start of fe/grid_sequencing.hpp on this solver's assembler.
-  GridSequencingReport grid_sequenced_start(const Scene& scene, const Eigen::VectorXd& m,
+  GridSequencingReport grid_sequenced_start(const Body& body, const Eigen::VectorXd& m,
                                             const GridSequencingOptions& options) override;
   /// A new Newton solver (no kept factorisation or path tangent); the state is kept.
   void reset() override;

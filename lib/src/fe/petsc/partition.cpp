@@ -285,9 +285,9 @@ std::vector<int> bisect_elements(const Mesh& mesh, int size, int* first_axis) {
   return owner;
 }
 
-Partition make_partition(const Scene& scene, int rank, int size) {
+Partition make_partition(const Body& body, int rank, int size) {
   if (rank < 0 || rank >= size) throw InvalidArgument("PETSc state: rank out of range");
-  const Mesh global = scene.make_mesh();
+  const Mesh global = body.make_mesh();
   Partition p;
   p.rank = rank;
   p.size = size;
@@ -295,12 +295,12 @@ Partition make_partition(const Scene& scene, int rank, int size) {
   for (Eigen::Index e = 0; e < global.num_elements(); ++e)
     if (element_owner[e] == rank) p.global_element.push_back(static_cast<int>(e));
   p.mesh = submesh(global, p.global_element, &p.global_node, &p.global_vertex);
-  p.fibers = restrict_fibers(scene.fiber_field, p);
+  p.fibers = restrict_fibers(body.fiber_field, p);
   p.num_global_nodes = global.num_nodes();
   p.num_global_elements = global.num_elements();
   p.num_global_vertices = global.num_vertices();
-  p.numbering = number_rows(global, scene.constraints, node_owners(global, element_owner), p,
-                            make_dof_map(p.mesh, scene.constraints));
+  p.numbering = number_rows(global, body.constraints, node_owners(global, element_owner), p,
+                            make_dof_map(p.mesh, body.constraints));
   return p;
 }
 

@@ -28,9 +28,9 @@
 #include <vector>
 
 #include "softhd/fe/assembly.hpp"
+#include "softhd/fe/body.hpp"
 #include "softhd/fe/dofs.hpp"
 #include "softhd/fe/mesh.hpp"
-#include "softhd/fe/scene.hpp"
 
 namespace softhd::fe::petsc_detail {
 
@@ -58,12 +58,12 @@ struct Partition {
   /// order), with the global mesh's coordinates, regions and region names; each named
   /// boundary set restricted to these nodes (possibly empty). Not structured().
   Mesh mesh;
-  FiberField fibers;                ///< the scene's fibre field on `mesh`
+  FiberField fibers;                ///< the body's fibre field on `mesh`
   std::vector<int> global_node;     ///< global node id of each local node
   std::vector<int> global_element;  ///< global element id of each local element
   std::vector<int> global_vertex;   ///< global vertex id of each local vertex
   Eigen::Index num_global_nodes = 0, num_global_elements = 0, num_global_vertices = 0;
-  /// The rows, for the DofMap of `mesh` under the scene's constraints (make_dof_map).
+  /// The rows, for the DofMap of `mesh` under the body's constraints (make_dof_map).
   FreeNumbering numbering;
 };
 
@@ -72,8 +72,8 @@ struct Partition {
 /// the mesh has fewer elements than ranks.
 std::vector<int> bisect_elements(const Mesh& mesh, int size, int* first_axis);
 
-/// The part of `rank` among `size` of the scene's body. Throws InvalidArgument if the mesh
+/// The part of `rank` among `size` of `body`. Throws InvalidArgument if the mesh
 /// has fewer elements than ranks or a node in no element.
-Partition make_partition(const Scene& scene, int rank, int size);
+Partition make_partition(const Body& body, int rank, int size);
 
 }  // namespace softhd::fe::petsc_detail

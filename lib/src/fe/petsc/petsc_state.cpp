@@ -31,12 +31,12 @@ PetscStateOptions validated(PetscStateOptions options) {
 }  // namespace
 
 struct PetscStateSolver::Impl {
-  Impl(const Scene& scene, const PetscStateOptions& options)
+  Impl(const Body& body, const PetscStateOptions& options)
       : options(validated(options)),
-        system(scene, options.backend, options.max_krylov_iterations),
-        control(system.assembler().mesh(), system.assembler().geometry(), scene.control_kind,
-                scene.control_regions),
-        global_controls(scene.control_kind == ControlKind::kVertex
+        system(body, options.backend, options.max_krylov_iterations),
+        control(system.assembler().mesh(), system.assembler().geometry(), body.control_kind,
+                body.control_regions),
+        global_controls(body.control_kind == ControlKind::kVertex
                             ? system.part().num_global_vertices
                             : system.part().num_global_elements),
         newton(system, options.newton),
@@ -69,8 +69,8 @@ struct PetscStateSolver::Impl {
   bool solved = false;   ///< the state is the last solve's (not set since)
 };
 
-PetscStateSolver::PetscStateSolver(const Scene& scene, PetscStateOptions options)
-    : impl_(std::make_unique<Impl>(scene, options)) {}
+PetscStateSolver::PetscStateSolver(const Body& body, PetscStateOptions options)
+    : impl_(std::make_unique<Impl>(body, options)) {}
 
 PetscStateSolver::~PetscStateSolver() = default;
 
@@ -86,30 +86,30 @@ NewtonSummary PetscStateSolver::solve(const Eigen::VectorXd& m) {
   return s.newton.solve(s.control.to_quadrature(local), &s.u, &s.m_qp);
 }
 
-GridSequencingReport PetscStateSolver::grid_sequenced_start(const Scene& scene,
+GridSequencingReport PetscStateSolver::grid_sequenced_start(const Body& body,
                                                             const Eigen::VectorXd& m,
                                                             const GridSequencingOptions& options) {
   Impl& s = *impl_;
   options.validate();
   GridSequencingReport report;
-  const int levels = grid_levels(scene, options);
+  const MeshHierarchy levels = grid_hierarchy(body, options);
   if (m.size() != s.global_controls)
     throw InvalidArgument("grid sequencing: m must have one value per control");
   s.u.setZero();
   s.m_qp.setZero();
   s.solved = false;
-  if (levels == 0) return report;
-  const Mesh body = scene.make_mesh();
+  if (levels.size() == 1) return report;
+  const Mesh body_mesh = body.make_mesh();
   Mesh coarse_mesh;
   State coarse;
-  if (!solve_grid_level(coarsened(scene), body, scene.control_kind, m, levels - 1, s.options.newton,
-                        &report, &coarse_mesh, &coarse)) {
+  if (!solve_coarse_levels(levels, body_mesh, body.control_kind, m, s.options.newton, &report,
+                           &coarse_mesh, &coarse)) {
     report.fell_back_to_rest = true;
     return report;
   }
   // Onto the whole body's nodes (a P1/Q1 level transfers to the mesh of its own cells, not
   // to a slab of it), then this rank's rows.
-  const Eigen::VectorXd u = prolongate(coarse_mesh, coarse.u, body);
+  const Eigen::VectorXd u = prolongate(coarse_mesh, coarse.u, body_mesh);
   const std::vector<std::int64_t>& dofs = s.system.numbering().owned_global_dof;
   for (Eigen::Index i = 0; i < s.u.size(); ++i) s.u[i] = u[dofs[i]];
   const std::vector<int>& ids = s.control_ids();

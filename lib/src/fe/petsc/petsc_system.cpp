@@ -32,22 +32,22 @@ int comm_size() {
   return s;
 }
 
-Partition checked_partition(const Scene& scene) {
+Partition checked_partition(const Body& body) {
   PetscBool initialised = PETSC_FALSE;
   PetscInitialized(&initialised);
   if (!initialised)
     throw InvalidArgument("PETSc state: PETSc is not initialised (call PetscInitialize first)");
-  return make_partition(scene, comm_rank(), comm_size());
+  return make_partition(body, comm_rank(), comm_size());
 }
 
 }  // namespace
 
-DistributedSystem::DistributedSystem(const Scene& scene, StateBackend backend,
+DistributedSystem::DistributedSystem(const Body& body, StateBackend backend,
                                      int max_krylov_iterations)
-    : part_(checked_partition(scene)),
-      assembler_(std::make_unique<Assembler>(part_.mesh, scene.materials, part_.fibers,
-                                             scene.constraints, AssemblerStorage::kLean,
-                                             scene.quadrature_degree)),
+    : part_(checked_partition(body)),
+      assembler_(std::make_unique<Assembler>(part_.mesh, body.materials, part_.fibers,
+                                             body.constraints, AssemblerStorage::kLean,
+                                             body.quadrature_degree)),
       backend_(backend),
       max_krylov_iterations_(max_krylov_iterations),
       local_rows_(part_.numbering.local_to_global.begin(), part_.numbering.local_to_global.end()) {
@@ -55,7 +55,7 @@ DistributedSystem::DistributedSystem(const Scene& scene, StateBackend backend,
                 "PETSc state: the assembler's free dofs differ from the partition's");
   int whole = numbering().whole_nodes ? 1 : 0, all_whole = 0;
   MPI_Allreduce(&whole, &all_whole, 1, MPI_INT, MPI_MIN, comm());
-  block_size_ = all_whole ? scene.dim() : 1;
+  block_size_ = all_whole ? body.dim() : 1;
   const auto n = static_cast<PetscInt>(owned());
   const auto N = static_cast<PetscInt>(numbering().num_global);
   SOFTHD_PETSC(VecCreate(comm(), &global_));

@@ -13,7 +13,7 @@
 
 #include "partition.hpp"
 #include "softhd/fe/assembly.hpp"
-#include "softhd/fe/scene.hpp"
+#include "softhd/fe/body.hpp"
 #include "softhd/fe/state_backend.hpp"
 
 namespace softhd::fe::petsc_detail {
@@ -34,7 +34,7 @@ struct LinearSolveReport {
 
 class DistributedSystem {
  public:
-  DistributedSystem(const Scene& scene, StateBackend backend, int max_krylov_iterations);
+  DistributedSystem(const Body& body, StateBackend backend, int max_krylov_iterations);
   ~DistributedSystem();
   DistributedSystem(const DistributedSystem&) = delete;
   DistributedSystem& operator=(const DistributedSystem&) = delete;

@@ -1,4 +1,4 @@
-#include "softhd/fe/scene.hpp"
+#include "softhd/control/scene.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,15 +10,18 @@
 
 #include "../common/keys.hpp"
 #include "softhd/error.hpp"
+#include "softhd/fe/dofs.hpp"
 #include "softhd/fe/gmsh_mesh.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/io/msh.hpp"
 
-namespace softhd::fe {
+namespace softhd {
 
 namespace {
 
+// The body's types and checks (fe::Body, fe::Mesh, fe::make_dof_map, ...).
+using namespace fe;
 using nlohmann::json;
 
 // Reads typed values out of a JSON object, naming the full key in every error.
@@ -74,17 +77,17 @@ class Reader {
   std::string source_;
 };
 
-std::shared_ptr<const Material> read_material(const Reader& r, const json& m, std::string* model) {
-  *model = r.string(m, "model", "material.model");
-  if (*model == "mooney_rivlin") r.keys(m, "material", {"model", "a", "b", "c"});
-  if (*model == "transversely_isotropic") r.keys(m, "material", {"model", "a", "b", "c", "d", "f"});
+std::shared_ptr<const Material> read_material(const Reader& r, const json& m) {
+  const std::string model = r.string(m, "model", "material.model");
+  if (model == "mooney_rivlin") r.keys(m, "material", {"model", "a", "b", "c"});
+  if (model == "transversely_isotropic") r.keys(m, "material", {"model", "a", "b", "c", "d", "f"});
   try {
-    if (*model == "mooney_rivlin") {
+    if (model == "mooney_rivlin") {
       return std::make_shared<MooneyRivlin>(r.number(m, "a", "material.a"),
                                             r.number(m, "b", "material.b"),
                                             r.number(m, "c", "material.c"));
     }
-    if (*model == "transversely_isotropic") {
+    if (model == "transversely_isotropic") {
       const Eigen::VectorXd f = r.numbers(m, "f", "material.f", 3, 3);
       return std::make_shared<TransverselyIsotropic>(
           r.number(m, "a", "material.a"), r.number(m, "b", "material.b"),
@@ -94,7 +97,7 @@ std::shared_ptr<const Material> read_material(const Reader& r, const json& m, st
     r.fail("material", std::string("is invalid: ") + e.what());
   }
   r.fail("material.model",
-         "must be \"mooney_rivlin\" or \"transversely_isotropic\", got \"" + *model + "\"");
+         "must be \"mooney_rivlin\" or \"transversely_isotropic\", got \"" + model + "\"");
 }
 
 // A number for messages: %g (6 significant digits, an exponent when large or small).
@@ -133,7 +136,7 @@ std::string default_name(const std::string& source) {
 constexpr double kMinLength = 1e-6, kMaxLength = 1e6;
 constexpr double kMinStress = 1e-6, kMaxStress = 1e12;
 
-void check_scales(const Reader& r, const Scene& s) {
+void check_scales(const Reader& r, const Body& s) {
   const double size = (s.upper - s.lower).maxCoeff();
   const char* where = s.is_box() ? "mesh.upper" : "mesh.scale";
   if (!(size >= kMinLength && size <= kMaxLength))
@@ -156,7 +159,7 @@ void check_scales(const Reader& r, const Scene& s) {
 
 namespace {
 
-void parse_box_mesh(const Reader& r, const json& mesh, double memory_limit, Scene* s) {
+void parse_box_mesh(const Reader& r, const json& mesh, double memory_limit, Body* s) {
   r.keys(mesh, "mesh", {"type", "lower", "upper", "cells", "order", "quadrature_degree"});
   s->lower = r.numbers(mesh, "lower", "mesh.lower", 2, 3);
   s->upper = r.numbers(mesh, "upper", "mesh.upper", 2, 3);
@@ -179,7 +182,7 @@ void parse_box_mesh(const Reader& r, const json& mesh, double memory_limit, Scen
 }
 
 // mesh.type "gmsh": the file (relative to the scene's folder) read and turned into the mesh.
-void parse_gmsh_mesh(const Reader& r, const json& mesh, double memory_limit, Scene* s) {
+void parse_gmsh_mesh(const Reader& r, const json& mesh, double memory_limit, Body* s) {
   r.keys(mesh, "mesh", {"type", "file", "order", "scale", "quadrature_degree"});
   GmshMeshOptions o;
   if (mesh.contains("order")) {
@@ -203,14 +206,14 @@ void parse_gmsh_mesh(const Reader& r, const json& mesh, double memory_limit, Sce
 }
 
 // "material" (the whole body) or "materials" (one per region of the mesh, by name).
-void parse_materials(const Reader& r, const json& doc, const Mesh& mesh, Scene* s) {
+void parse_materials(const Reader& r, const json& doc, const Mesh& mesh, Body* s) {
   if (doc.contains("material") == doc.contains("materials"))
     r.fail("material",
            "give either \"material\" (the whole body) or \"materials\" (one per "
            "region of the mesh), not both or neither");
   if (doc.contains("material")) {
-    s->material = read_material(r, r.object(doc, "material", "material"), &s->material_model);
-    s->materials.assign(mesh.region_names.size(), s->material);
+    s->materials.assign(mesh.region_names.size(),
+                        read_material(r, r.object(doc, "material", "material")));
     return;
   }
   const json& all = r.object(doc, "materials", "materials");
@@ -223,9 +226,7 @@ void parse_materials(const Reader& r, const json& doc, const Mesh& mesh, Scene* 
       r.fail("materials", e.what());
     }
     if (!item.value().is_object()) r.fail("materials." + item.key(), "must be an object");
-    std::string model;
-    s->materials[region] = read_material(r, item.value(), &model);
-    if (!s->material) s->material = s->materials[region], s->material_model = model;
+    s->materials[region] = read_material(r, item.value());
   }
   for (std::size_t k = 0; k < s->materials.size(); ++k)
     if (!s->materials[k])
@@ -285,13 +286,12 @@ FiberField read_fiber_file(const std::string& path, bool per_element, const Mesh
 
 // "fibers": a vector; {"data": NAME} (a $NodeData / $ElementData block of the mesh file);
 // {"file": PATH, "per": "element" | "node"} (rows of 3 numbers).
-void parse_fibers(const Reader& r, const json& doc, const Mesh& mesh, Scene* s) {
+void parse_fibers(const Reader& r, const json& doc, const Mesh& mesh, Body* s) {
   if (!doc.contains("fibers") || !doc["fibers"].is_object()) {
     const Eigen::VectorXd f = r.numbers(doc, "fibers", "fibers", 3, 3);
     if (!(f.norm() > 0.0)) r.fail("fibers", "must be a non-zero vector");
     if (s->dim() == 2 && f[2] != 0.0) r.fail("fibers", "must have a zero third component in 2D");
-    s->fibers = f.normalized();
-    s->fiber_field.values = s->fibers;
+    s->fiber_field.values = f.normalized();
     return;
   }
   const json& f = doc["fibers"];
@@ -320,13 +320,27 @@ namespace {
 
 // "clamp" (names of boundary sets: box faces or the mesh file's physical groups) and
 // "constraints" ([{"group" or "face": NAME, "components": [...]}]).
-void parse_constraints(const Reader& r, const json& doc, Scene* s) {
+// The boundary set `name` of `mesh`, or a failure naming `key` (its message lists the mesh's
+// boundary names).
+void check_boundary_name(const Reader& r, const Mesh& mesh, const std::string& name,
+                         const std::string& key) {
+  try {
+    mesh.face(name);
+  } catch (const InvalidArgument& e) {  // "mesh: unknown boundary face 'x' (expected ...)"
+    std::string what = e.what();
+    if (what.rfind("mesh: ", 0) == 0) what.erase(0, 6);
+    r.fail(key, "is invalid: " + what);
+  }
+}
+
+void parse_constraints(const Reader& r, const json& doc, const Mesh& mesh, Body* s) {
   if (!doc.contains("clamp") || !doc["clamp"].is_array() || doc["clamp"].empty())
     r.fail("clamp",
            "must be a non-empty array of boundary names (box faces x0, x1, y0, ..., or "
            "a mesh file's physical groups)");
   for (const json& face : doc["clamp"]) {
     if (!face.is_string()) r.fail("clamp", "must hold boundary names as strings");
+    check_boundary_name(r, mesh, face.get<std::string>(), "clamp");
     s->constraints.push_back({face.get<std::string>(), {}});
   }
   if (!doc.contains("constraints")) return;
@@ -338,6 +352,7 @@ void parse_constraints(const Reader& r, const json& doc, Scene* s) {
       r.fail("constraints[]", "needs one of \"group\" or \"face\" (the same: a boundary name)");
     const char* key = c.contains("group") ? "group" : "face";
     DirichletConstraint dc{r.string(c, key, std::string("constraints[].") + key), {}};
+    check_boundary_name(r, mesh, dc.face, std::string("constraints[].") + key);
     for (double k : comps) {
       if (!(k >= 0 && k < s->dim() && k == std::floor(k)))
         r.fail("constraints[].components", "must hold axis indices 0 to " +
@@ -378,7 +393,7 @@ std::vector<int> parse_control_regions(const Reader& r, const json& control, con
   return regions;
 }
 
-void parse_control(const Reader& r, const json& doc, const Mesh& mesh, Scene* s) {
+void parse_control(const Reader& r, const json& doc, const Mesh& mesh, Body* s) {
   const json& control = r.object(doc, "control", "control");
   r.keys(control, "control", {"space", "region", "lower", "upper", "initial"});
   try {
@@ -407,6 +422,48 @@ void parse_control(const Reader& r, const json& doc, const Mesh& mesh, Scene* s)
                                           : std::string()));
 }
 
+// The body: mesh, quadrature, materials, fibres, constraints and control, each checked against
+// the mesh, so that errors name the file.
+void parse_body(const Reader& r, const json& doc, double memory_limit, Body* s) {
+  const json& mesh = r.object(doc, "mesh", "mesh");
+  const std::string type = r.string(mesh, "type", "mesh.type");
+  if (type == "box")
+    parse_box_mesh(r, mesh, memory_limit, s);
+  else if (type == "gmsh")
+    parse_gmsh_mesh(r, mesh, memory_limit, s);
+  else
+    r.fail("mesh.type", "must be \"box\" or \"gmsh\", got \"" + type + "\"");
+  if (mesh.contains("quadrature_degree")) {
+    const double q = r.number(mesh, "quadrature_degree", "mesh.quadrature_degree");
+    if (!(q >= 1 && q <= 8 && q == std::floor(q)))
+      r.fail("mesh.quadrature_degree", "must be an integer from 1 to 8");
+    s->quadrature_degree = static_cast<int>(q);
+    try {  // a rule that leaves spurious zero-energy modes solves to a wrong state
+      check_quadrature_degree(
+          s->file_mesh ? s->file_mesh->cell : cell_type(s->dim(), s->order, false),
+          s->quadrature_degree);
+    } catch (const InvalidArgument& e) {
+      r.fail("mesh.quadrature_degree", std::string("is refused: ") + e.what());
+    }
+  }
+  const Mesh body_mesh = s->make_mesh();
+  parse_materials(r, doc, body_mesh, s);
+  check_scales(r, *s);
+  parse_fibers(r, doc, body_mesh, s);
+  parse_constraints(r, doc, body_mesh, s);
+  parse_control(r, doc, body_mesh, s);
+  try {
+    make_dof_map(body_mesh, s->constraints);
+  } catch (const InvalidArgument& e) {
+    r.fail("clamp/constraints", std::string("is invalid: ") + e.what());
+  }
+  try {  // every connected part held against rigid motions (docs/formulation.md §7)
+    check_rigid_motions(body_mesh, s->constraints);
+  } catch (const InvalidArgument& e) {
+    r.fail("clamp/constraints", std::string("does not hold the body: ") + e.what());
+  }
+}
+
 }  // namespace
 
 Scene parse_scene(const std::string& text, const std::string& source, double memory_limit) {
@@ -429,44 +486,9 @@ Scene parse_scene(const std::string& text, const std::string& source, double mem
            "must be a plain file name (letters, digits, '.', '_', '+', '-'; not starting "
            "with '.' or '-'; at most 100 characters): it names the output folder, got " +
                json(s.name).dump());
-  const json& mesh = r.object(doc, "mesh", "mesh");
-  const std::string type = r.string(mesh, "type", "mesh.type");
-  if (type == "box")
-    parse_box_mesh(r, mesh, memory_limit, &s);
-  else if (type == "gmsh")
-    parse_gmsh_mesh(r, mesh, memory_limit, &s);
-  else
-    r.fail("mesh.type", "must be \"box\" or \"gmsh\", got \"" + type + "\"");
-  if (mesh.contains("quadrature_degree")) {
-    const double q = r.number(mesh, "quadrature_degree", "mesh.quadrature_degree");
-    if (!(q >= 1 && q <= 8 && q == std::floor(q)))
-      r.fail("mesh.quadrature_degree", "must be an integer from 1 to 8");
-    s.quadrature_degree = static_cast<int>(q);
-    try {  // a rule that leaves spurious zero-energy modes solves to a wrong state
-      check_quadrature_degree(s.file_mesh ? s.file_mesh->cell : cell_type(s.dim(), s.order, false),
-                              s.quadrature_degree);
-    } catch (const InvalidArgument& e) {
-      r.fail("mesh.quadrature_degree", std::string("is refused: ") + e.what());
-    }
-  }
-  const Mesh body = s.make_mesh();
-  parse_materials(r, doc, body, &s);
-  check_scales(r, s);
-  parse_fibers(r, doc, body, &s);
-  parse_constraints(r, doc, &s);
-  parse_control(r, doc, body, &s);
+  s.body.source = source;
+  parse_body(r, doc, memory_limit, &s.body);
   if (doc.contains("target")) s.target_json = doc["target"].dump();
-  // Boundary names and components are checked against the mesh now, so errors name the file.
-  try {
-    make_dof_map(body, s.constraints);
-  } catch (const InvalidArgument& e) {
-    r.fail("clamp/constraints", std::string("is invalid: ") + e.what());
-  }
-  try {  // every connected part held against rigid motions (docs/formulation.md §7)
-    check_rigid_motions(body, s.constraints);
-  } catch (const InvalidArgument& e) {
-    r.fail("clamp/constraints", std::string("does not hold the body: ") + e.what());
-  }
   return s;
 }
 
@@ -478,19 +500,4 @@ Scene load_scene(const std::string& path, double memory_limit) {
   return parse_scene(ss.str(), path, memory_limit);
 }
 
-Mesh Scene::make_mesh() const {
-  return file_mesh ? *file_mesh : make_box_mesh(lower, upper, cells, order);
-}
-
-Assembler Scene::make_assembler() const {
-  return Assembler(make_mesh(), materials, fiber_field, constraints, AssemblerStorage::kFull,
-                   quadrature_degree);
-}
-
-double Scene::residual_floor() const {
-  double stiffness = 0.0;
-  for (const auto& m : materials) stiffness = std::max(stiffness, m->stiffness_scale());
-  return fe::residual_floor(stiffness, volume, dim());
-}
-
-}  // namespace softhd::fe
+}  // namespace softhd
