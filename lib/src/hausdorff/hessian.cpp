@@ -72,19 +72,28 @@ struct Columns {
   }
 };
 
-/// μ_j = Σ_i v_i p_ij (t_ij/r_ij) (x_i − y_j)·δ_i,  p_ij = (c_j t_ij)^α (coincident pairs: 0).
+/// μ_j = Σ_i v_i p_ij (t_ij/r_ij) (x_i − y_j)·δ_i,  p_ij = (c_j t_ij)^α. Selects, no branches
+/// (the loop vectorises): a coincident pair gets t/r = 0, so contributes 0.
 template <int D, unsigned P>
 double target_moment(const double* y, double c_j, const Columns& x, const Columns& dir,
                      const double* v, Eigen::Index n, double eps, const KernelPower& kp) {
+  const double* px = x.c[0];
+  const double* py = x.c[1];
+  const double* pz = D == 3 ? x.c[2] : x.c[1];
+  const double* ex = dir.c[0];
+  const double* ey = dir.c[1];
+  const double* ez = D == 3 ? dir.c[2] : dir.c[1];
+  const double y0 = y[0], y1 = y[1], y2 = D == 3 ? y[2] : 0.0, inv_eps = 1.0 / eps;
   double mu = 0.0;
+#pragma omp simd reduction(+ : mu)
   for (Eigen::Index i = 0; i < n; ++i) {
-    const double dx = x.c[0][i] - y[0], dy = x.c[1][i] - y[1];
-    const double dz = D == 3 ? x.c[2][i] - y[2] : 0.0;
+    const double dx = px[i] - y0, dy = py[i] - y1, dz = D == 3 ? pz[i] - y2 : 0.0;
     const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
-    if (!(r > 0.0)) continue;
-    const double t = 1.0 / (r + eps);
-    const double dd = dx * dir.c[0][i] + dy * dir.c[1][i] + (D == 3 ? dz * dir.c[2][i] : 0.0);
-    mu += v[i] * kernel_power<P>(c_j * t, kp) * (t / r) * dd;
+    const double inv = 1.0 / (r * (r + eps));  // t/r
+    const bool apart = r > 0.0;
+    const double tr = apart ? inv : 0.0, t = apart ? r * inv : inv_eps;
+    const double dd = dx * ex[i] + dy * ey[i] + (D == 3 ? dz * ez[i] : 0.0);
+    mu += v[i] * kernel_power<P>(c_j * t, kp) * tr * dd;
   }
   return mu;
 }
@@ -119,8 +128,8 @@ double cap_curvature(double d, const SoftCap& cap) {
   return -(cap.q + 1.0) * kappa / d;
 }
 
-/// The slopes of the product along ∇M (M = A or B, δM its directional derivative) and along
-/// ∇ρ̃'s γ-mean: c_M = (γ−1) ρ̃_M (δM/M − δρ̃/ρ̃) (0 for scan_to_body).
+/// The coefficient of ∇M (M = A or B, δM = ∇M·δ) in H·δ from the γ-mean's second derivatives:
+///     c_M = (γ−1) ρ̃_M (δM/M − δρ̃/ρ̃)      (0 for scan_to_body, where ρ̃ = A).
 double gamma_coefficient(double rho_M, double M, double dM, double rho, double drho,
                          const Factors& f, Sides sides) {
   if (sides == Sides::scan_to_body || !(M > 0.0) || !(rho > 0.0)) return 0.0;
@@ -151,29 +160,49 @@ template <int D, unsigned P, bool kB>
 RowSums moving_row(const double* x, const double* del, double c_i, const Columns& y,
                    const double* c_y, const double* hh, const double* kk, const double* w,
                    Eigen::Index m, double eps, double a1, const KernelPower& kp) {
-  RowSums s;
+  const double* qx = y.c[0];
+  const double* qy = y.c[1];
+  const double* qz = D == 3 ? y.c[2] : y.c[1];
+  const double x0 = x[0], x1 = x[1], x2 = x[2], e0 = del[0], e1 = del[1], e2 = del[2];
+  const double inv_eps = 1.0 / eps;
+  double ax = 0.0, ay = 0.0, az = 0.0, sa = 0.0, bx = 0.0, by = 0.0, bz = 0.0, sb = 0.0;
+  // Selects, no branches (the loop vectorises): a coincident pair gets t/r = 0 and 1/r² = 0,
+  // so contributes 0.
+#pragma omp simd reduction(+ : ax, ay, az, sa, bx, by, bz, sb)
   for (Eigen::Index j = 0; j < m; ++j) {
-    const double d[3] = {x[0] - y.c[0][j], x[1] - y.c[1][j], D == 3 ? x[2] - y.c[2][j] : 0.0};
-    const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    const double dx = x0 - qx[j], dy = x1 - qy[j], dz = D == 3 ? x2 - qz[j] : 0.0;
+    const double r2 = dx * dx + dy * dy + dz * dz;
     const double r = std::sqrt(r2);
-    if (!(r > 0.0)) continue;
-    const double t = 1.0 / (r + eps), tr = t / r;
-    const double dd = d[0] * del[0] + d[1] * del[1] + d[2] * del[2];
-    const double radial = tr * dd / r2 + a1 * tr * tr * dd;  // (t/r) dd/r² + a1 (t/r)² dd
+    const double inv = 1.0 / (r * (r + eps));  // t/r
+    const bool apart = r > 0.0;
+    const double tr = apart ? inv : 0.0, t = apart ? r * inv : inv_eps;
+    const double ir2 = apart ? 1.0 / r2 : 0.0;
+    const double dd = dx * e0 + dy * e1 + dz * e2;
+    const double radial = tr * dd * ir2 + a1 * tr * tr * dd;  // (t/r) dd/r² + a1 (t/r)² dd
     const double pa = kernel_power<P>(c_y[j] * t, kp);
     const double ga = pa * (hh[j] * tr - kk[j] * radial);
-    s.SA += pa * kk[j] * tr;
-    double gb = 0.0;
+    sa += pa * kk[j] * tr;
+    ax += ga * dx;
+    ay += ga * dy;
+    az += ga * dz;
     if constexpr (kB) {
       const double pb = w[j] * kernel_power<P>(c_i * t, kp);
-      gb = -pb * radial;
-      s.SB += pb * tr;
-    }
-    for (int k = 0; k < D; ++k) {
-      s.VA[k] += ga * d[k];
-      if constexpr (kB) s.VB[k] += gb * d[k];
+      const double gb = -pb * radial;
+      sb += pb * tr;
+      bx += gb * dx;
+      by += gb * dy;
+      bz += gb * dz;
     }
   }
+  RowSums s;
+  s.VA[0] = ax;
+  s.VA[1] = ay;
+  s.VA[2] = az;
+  s.SA = sa;
+  s.VB[0] = bx;
+  s.VB[1] = by;
+  s.VB[2] = bz;
+  s.SB = sb;
   return s;
 }
 
