@@ -29,8 +29,8 @@ void PrintTo(const Case& c, std::ostream* os) {
 }
 
 HausdorffParams odd_params() {
-  HausdorffParams p;  // non-default; α = 3 takes the generic power, 4 the unrolled one
-  p.alpha = 3.0;
+  HausdorffParams p;  // non-default; α = 2.5 takes the generic power, integers the unrolled one
+  p.alpha = 2.5;
   p.beta = 2.5;
   p.gamma = 1.5;
   p.epsilon = 0.02;

@@ -49,16 +49,29 @@ inline double kernel_power(double q, const KernelPower& kp) {
   }
 }
 
-/// Calls f(std::integral_constant<unsigned, P>) with P = α for α ∈ {2, 4, 8}, else P = 0.
+/// Calls f(std::integral_constant<unsigned, P>) with P = α for the integers α ≤ 8 and 16
+/// (unrolled, the loops vectorise), else P = 0.
 template <class F>
 auto with_power(const KernelPower& kp, F&& f) {
   switch (kp.fixed()) {
+    case 1:
+      return f(std::integral_constant<unsigned, 1>{});
     case 2:
       return f(std::integral_constant<unsigned, 2>{});
+    case 3:
+      return f(std::integral_constant<unsigned, 3>{});
     case 4:
       return f(std::integral_constant<unsigned, 4>{});
+    case 5:
+      return f(std::integral_constant<unsigned, 5>{});
+    case 6:
+      return f(std::integral_constant<unsigned, 6>{});
+    case 7:
+      return f(std::integral_constant<unsigned, 7>{});
     case 8:
       return f(std::integral_constant<unsigned, 8>{});
+    case 16:
+      return f(std::integral_constant<unsigned, 16>{});
     default:
       return f(std::integral_constant<unsigned, 0>{});
   }
