@@ -99,7 +99,8 @@ class Target:
         return self._target.dim
 
     def evaluate(self, X, VX=None, *, fields=False, gradient=False, gradient_volumes=False,
-                 gradient_target=False, distance="symmetric", cap=0.0, cap_q=4.0, visible=None):
+                 gradient_target=False, distance="symmetric", cap=0.0, cap_q=4.0, visible=None,
+                 hessian=False):
         """rho_H(X, Y) and what is asked for, as a :class:`DistanceResult`.
 
         fields: d~ at every point (``field_moving`` (N,), ``field_target`` (M,); the raw
@@ -109,6 +110,7 @@ class Target:
         "symmetric", "scan_to_body" (rho = A, Y -> X only; B reported 0) or "visible" (B over
         the moving points where ``visible`` (N,) is true, weights renormalised); cap: the soft
         cap c of psi_c(d) = (d^-q + c^-q)^(-1/q) on every field value (0: none), cap_q: q.
+        hessian: keep what :meth:`hessian_product` needs at X (the gradient's passes are made).
         X (and VX) follow the module's array rule (no copy of C-contiguous float64).
         """
         if visible is not None:
@@ -116,7 +118,15 @@ class Target:
         return self._target.evaluate(_as_float64(X, "X"), _volumes(VX, "VX"), fields=fields,
                                      gradient=gradient, gradient_volumes=gradient_volumes,
                                      gradient_target=gradient_target, distance=distance,
-                                     cap=cap, cap_q=cap_q, visible=visible)
+                                     cap=cap, cap_q=cap_q, visible=visible, hessian=hessian)
+
+    def hessian_product(self, result, V, *, part="full"):
+        """H V, the Hessian of rho w.r.t. the moving points (volumes fixed) applied to the
+        direction V (N, d), at the X of ``result`` (an :meth:`evaluate` result of this target
+        with hessian=True, whose form it keeps). part "gauss_newton": its positive
+        semi-definite part instead (docs/formulation.md §2.7). Returns a new (N, d) array.
+        """
+        return self._target.hessian_product(result, _as_float64(V, "V"), part=part)
 
 
 def distance(X, Y, VX=None, VY=None, *, alpha=4.0, beta=4.0, gamma=2.0, eps=1e-3,

@@ -54,9 +54,11 @@ HausdorffResult evaluate(const HausdorffTarget& target, const Array& X,
                          const std::optional<Array>& VX, bool fields, bool gradient,
                          bool gradient_volumes, bool gradient_target, const std::string& distance,
                          double cap, double cap_q,
-                         const std::optional<py::array_t<bool, py::array::c_style>>& visible) {
+                         const std::optional<py::array_t<bool, py::array::c_style>>& visible,
+                         bool hessian) {
   check_cloud(X, VX, "X");
   HausdorffRequest request;
+  request.hessian_points = hessian;
   request.form = make_form(distance, cap, cap_q, visible);
   request.fields = fields;
   request.gradient_points = gradient;
@@ -64,6 +66,27 @@ HausdorffResult evaluate(const HausdorffTarget& target, const Array& X,
   request.gradient_target = gradient_target;
   py::gil_scoped_release release;
   return target.evaluate(make_cloud(X, VX), request);
+}
+
+/// H·V (part "full") or H_GN·V ("gauss_newton") at the moving cloud of `at`
+/// (HausdorffTarget::hessian_product), as a new (N, d) array.
+py::array_t<double> hessian_product(const HausdorffTarget& target, const HausdorffResult& at,
+                                    const Array& V, const std::string& part) {
+  if (V.ndim() != 2)
+    throw InvalidArgument("V must be an (N, d) array, got " + std::to_string(V.ndim()) +
+                          " dimensions");
+  HessianPart which = HessianPart::full;
+  if (part == "gauss_newton")
+    which = HessianPart::gauss_newton;
+  else if (part != "full")
+    throw InvalidArgument("part must be 'full' or 'gauss_newton', got '" + part + "'");
+  const Eigen::MatrixXd v = Eigen::Map<const RowMatrix>(V.data(), V.shape(0), V.shape(1));
+  RowMatrix out;
+  {
+    py::gil_scoped_release release;
+    out = target.hessian_product(at, v, which);
+  }
+  return to_numpy(out);
 }
 
 std::string result_repr(const HausdorffResult& r) {
@@ -126,7 +149,9 @@ void bind_hausdorff(py::module_& m) {
       .def("evaluate", &evaluate, py::arg("X").noconvert(), py::arg("VX").noconvert(),
            py::kw_only(), py::arg("fields"), py::arg("gradient"), py::arg("gradient_volumes"),
            py::arg("gradient_target"), py::arg("distance") = "symmetric", py::arg("cap") = 0.0,
-           py::arg("cap_q") = 4.0, py::arg("visible") = py::none())
+           py::arg("cap_q") = 4.0, py::arg("visible") = py::none(), py::arg("hessian") = false)
+      .def("hessian_product", &hessian_product, py::arg("at"), py::arg("V").noconvert(),
+           py::kw_only(), py::arg("part") = "full")
       .def_property_readonly("size", [](const HausdorffTarget& t) { return t.cloud().size(); })
       .def_property_readonly("dim", [](const HausdorffTarget& t) { return t.cloud().dim(); })
       .def_property_readonly("total_volume",

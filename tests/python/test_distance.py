@@ -229,3 +229,26 @@ def test_forms_equal_the_command_line(rng, tmp_path, cli):
     r = softhd.distance(X, Y, VX, VY, distance="visible", visible=visible, cap=0.2, cap_q=2.0)
     assert (j["rho"], j["A"], j["B"]) == pytest.approx((r.rho, r.A, r.B), rel=1e-14)
     assert j["distance"] == "visible" and j["cap"] == 0.2
+
+
+@pytest.mark.parametrize("distance", ["symmetric", "scan_to_body"])
+def test_hessian_product_matches_differences_of_the_gradient(rng, distance):
+    X, VX = random_cloud(rng, 15, 3)
+    Y, VY = random_cloud(rng, 20, 3, shift=0.3)
+    target = softhd.Target(Y, VY, alpha=3.0, beta=2.5, gamma=1.5, eps=0.02)
+    r = target.evaluate(X, VX, hessian=True, distance=distance, cap=0.4)
+    assert r.gradient is None  # kept for the products, not returned unasked
+    V = rng.standard_normal(X.shape)
+    HV = target.hessian_product(r, V)
+    assert HV.shape == X.shape
+    h = 1e-5
+
+    def grad(Z):
+        return target.evaluate(Z, VX, gradient=True, distance=distance, cap=0.4).gradient
+
+    fd = (grad(X + h * V) - grad(X - h * V)) / (2 * h)
+    assert np.linalg.norm(HV - fd) < 1e-6 * np.linalg.norm(HV)
+    GV = target.hessian_product(r, V, part="gauss_newton")
+    assert np.sum(V * GV) >= 0.0 and np.sum(V * (GV - HV)) >= 0.0
+    with pytest.raises(softhd.InvalidArgument, match="gauss_newton"):
+        target.hessian_product(r, V, part="newton")

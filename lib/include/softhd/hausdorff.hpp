@@ -162,6 +162,10 @@ struct HausdorffRequest {
   bool gradient_points = false;   ///< ∂ρ̃/∂x_i (N by d)
   bool gradient_volumes = false;  ///< ∂ρ̃/∂V_i (N)
   bool gradient_target = false;   ///< ∂ρ̃/∂y_j (M by d)
+  /// Keep what HausdorffTarget::hessian_product needs (HausdorffResult::hessian): the
+  /// point gradient's passes are made (the gradient itself is returned only with
+  /// gradient_points) and their per-point quantities stored (docs/formulation.md §2.7).
+  bool hessian_points = false;
   /// Optional mask of N entries: moving points with `false` are not differentiated
   /// (their gradient rows are zero; e.g. clamped nodes). Empty: all points.
   Eigen::Array<bool, Eigen::Dynamic, 1> differentiate;
@@ -169,6 +173,18 @@ struct HausdorffRequest {
   /// True if any gradient is requested.
   bool any_gradient() const { return gradient_points || gradient_volumes || gradient_target; }
 };
+
+/// Which second derivative of ρ̃ w.r.t. the moving points HausdorffTarget::hessian_product
+/// applies (docs/formulation.md §2.7).
+enum class HessianPart {
+  full,          ///< the exact Hessian (volumes held fixed)
+  gauss_newton,  ///< its positive semi-definite part H_GN (H = H_GN + a negative semi-definite
+                 ///< rest)
+};
+
+/// The per-point quantities of one evaluation at X that Hessian-vector products reuse
+/// (defined in lib/src/hausdorff/hessian.hpp; opaque to callers).
+struct HausdorffHessian;
 
 /// Where the pair-sum work of one evaluation went, summed over its passes (2 or 3; 1 or 2
 /// for Sides::scan_to_body, which needs no pass for B's value).
@@ -202,6 +218,9 @@ struct HausdorffResult {
   Eigen::MatrixXd gradient_points;   ///< N by d: ∂ρ̃/∂x_i
   Eigen::VectorXd gradient_volumes;  ///< N: ∂ρ̃/∂V_i (volumes of X, Y held otherwise fixed)
   Eigen::MatrixXd gradient_target;   ///< M by d: ∂ρ̃/∂y_j
+  /// HausdorffRequest::hessian_points: the state hessian_product reuses (shared, immutable;
+  /// it holds a copy of the moving cloud, O(N + M) numbers).
+  std::shared_ptr<const HausdorffHessian> hessian;
   /// Pair kernel evaluations made: exact N·M per pass; tree counts the pairs summed
   /// directly plus the evaluations at interpolation points (N·M for a pass it sums
   /// exactly; docs/tree_tolerance.md §6).
@@ -232,6 +251,18 @@ class HausdorffTarget {
   /// dimensions differ, the mask has the wrong size, or a gradient is requested from
   /// method nearest. Thread-safe (const, no shared scratch).
   HausdorffResult evaluate(const PointCloud& moving, const HausdorffRequest& request = {}) const;
+
+  /// H·v: the Hessian of ρ̃ w.r.t. the moving points' coordinates (N·d of them, volumes held
+  /// fixed), or its Gauss–Newton part, applied to the direction `v` (N by d), at the moving
+  /// cloud of `at`, an evaluate() result of this target with HausdorffRequest::hessian_points
+  /// (same form, same differentiate mask). Reuses `at`'s fields, means and slopes; makes two
+  /// all-pairs passes (for method tree too: docs/formulation.md §2.7). Rows of points not
+  /// differentiated are zero and their rows of v ignored. `work` (optional) gets the passes'
+  /// counts. Throws InvalidArgument if `at` has no Hessian state, is of another target, or v
+  /// is not N by d. Thread-safe (const).
+  Eigen::MatrixXd hessian_product(const HausdorffResult& at, const Eigen::MatrixXd& v,
+                                  HessianPart part = HessianPart::full,
+                                  SumWork* work = nullptr) const;
 
  private:
   struct Impl;

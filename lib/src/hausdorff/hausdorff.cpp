@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "dual_tree.hpp"
+#include "hessian.hpp"
 #include "nearest_index.hpp"
 #include "pair_backend.hpp"
 #include "scaled_means.hpp"
@@ -119,6 +120,9 @@ struct HausdorffTarget::Impl {
   void volume_gradient(const SumsEvaluation& e, double rho_A, double rho_B,
                        HausdorffResult* r) const;
   void target_gradient(SumsEvaluation* e, double rho_A, double rho_B, HausdorffResult* r) const;
+  std::shared_ptr<const HausdorffHessian> hessian_state(const SumsEvaluation& e,
+                                                        const HausdorffResult& r, double rho_A,
+                                                        double rho_B) const;
 };
 
 HausdorffTarget::HausdorffTarget(PointCloud target, HausdorffOptions options) {
@@ -149,10 +153,16 @@ HausdorffResult HausdorffTarget::evaluate(const PointCloud& moving,
   check_cap_length(request.form.cap, moving, impl_->cloud);
   HausdorffResult result;
   if (impl_->options.method == Method::nearest) {
-    if (request.any_gradient()) {
+    if (request.any_gradient() || request.hessian_points) {
       throw InvalidArgument("method nearest computes no gradient (use method exact or tree)");
     }
     result = impl_->evaluate_nearest(moving, request);
+  } else if (request.hessian_points && !request.gradient_points) {
+    // The Hessian's state comes from the point gradient's passes; the gradient is not returned.
+    HausdorffRequest with_gradient = request;
+    with_gradient.gradient_points = true;
+    result = impl_->evaluate_sums(moving, with_gradient);
+    result.gradient_points.resize(0, 0);
   } else {
     result = impl_->evaluate_sums(moving, request);  // exact or tree
   }
@@ -275,6 +285,7 @@ HausdorffResult HausdorffTarget::Impl::evaluate_sums(const PointCloud& X,
   if (req.gradient_points) point_gradient(e, rho_A, rho_B, &r);
   if (req.gradient_volumes) volume_gradient(e, rho_A, rho_B, &r);
   if (req.gradient_target) target_gradient(&e, rho_A, rho_B, &r);
+  if (req.hessian_points) r.hessian = hessian_state(e, r, rho_A, rho_B);
   return r;
 }
 
@@ -395,6 +406,61 @@ void HausdorffTarget::Impl::target_gradient(SumsEvaluation* e, double rho_A, dou
   account(*r, p3);
   for (Eigen::Index j = 0; j < M; ++j)
     r->gradient_target.row(j) += rho_B * weights[j] * p3.G2.row(j);
+}
+
+/// What a Hessian-vector product reuses (hessian.hpp): the moving points, the scales, sums,
+/// fields (D = d̃ + ε), capped fields and slopes of both sides, n_i = G_i/S_i, ρ̃ and its slopes.
+std::shared_ptr<const HausdorffHessian> HausdorffTarget::Impl::hessian_state(
+    const SumsEvaluation& e, const HausdorffResult& r, double rho_A, double rho_B) const {
+  auto h = std::make_shared<HausdorffHessian>();
+  h->owner = this;
+  h->x = e.X.points();
+  h->v = e.v;
+  h->form = e.req.form;
+  h->differentiate = e.req.differentiate;
+  h->prm = e.prm;
+  h->A = r.A;
+  h->B = r.B;
+  h->rho = r.rho;
+  h->rho_A = rho_A;
+  h->rho_B = rho_B;
+  h->scale_y = e.scale_y;
+  h->S_y = e.p1.S;
+  h->D_y = e.dt_y.array() + e.prm.epsilon;
+  h->a = e.mean_a.slope;
+  h->psi_y = e.mean_a.capped;
+  if (!e.one_sided) {
+    h->scale_x = e.scale_x;
+    h->S_x = e.p2.S;
+    h->D_x = e.dt_x.array() + e.prm.epsilon;
+    h->b = e.mean_b.slope;
+    h->psi_x = e.mean_b.capped;
+    h->n_x = e.p2.G.array().colwise() / e.p2.S.array();
+  }
+  return h;
+}
+
+Eigen::MatrixXd HausdorffTarget::hessian_product(const HausdorffResult& at,
+                                                 const Eigen::MatrixXd& v, HessianPart part,
+                                                 SumWork* work) const {
+  if (at.hessian == nullptr)
+    throw InvalidArgument(
+        "hessian_product: the result has no Hessian state (evaluate with hessian_points)");
+  const HausdorffHessian& h = *at.hessian;
+  if (h.owner != impl_.get())
+    throw InvalidArgument("hessian_product: the result was evaluated against another target");
+  if (v.rows() != h.x.rows() || v.cols() != h.x.cols()) {
+    throw InvalidArgument("hessian_product: the direction is " + std::to_string(v.rows()) + " by " +
+                          std::to_string(v.cols()) + " for " + std::to_string(h.x.rows()) +
+                          " moving points in " + std::to_string(h.x.cols()) + "D");
+  }
+  SumWork local;
+  Eigen::MatrixXd out = detail::hessian_product(h, impl_->cloud.points(), impl_->weights, v, part,
+                                                resolve_threads(impl_->options.threads), &local);
+  // Method tree: the product's pairs are all summed directly (docs/formulation.md §2.7).
+  if (impl_->options.method == Method::tree) local.exact_passes = local.passes;
+  if (work != nullptr) *work = local;
+  return out;
 }
 
 HausdorffResult hausdorff(const PointCloud& moving, const PointCloud& target,
