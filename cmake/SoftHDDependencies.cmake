@@ -132,3 +132,10 @@ endfunction()
 # cmake/FindSoftHDCholmod.cmake defines softhd::cholmod (softhdConfig.cmake reuses it).
 include(FindSoftHDCholmod)
 softhd_require(CHOLMOD_FOUND libsuitesparse-dev "CHOLMOD (SuiteSparse)")
+
+# ROL (Trilinos) for the trust-region Newton–CG optimiser (Algorithm::newton). Required, like
+# NLopt: the library's optimiser layer is built with both backends. Debian's Trilinos CMake
+# configs are broken; cmake/FindSoftHDRol.cmake defines softhd::rol (softhdConfig.cmake reuses it).
+include(FindSoftHDRol)
+softhd_require(ROL_FOUND "libtrilinos-rol-dev libtrilinos-teuchos-dev libtrilinos-kokkos-dev"
+  "ROL (Trilinos' optimisation library, with Teuchos and the Kokkos headers)")

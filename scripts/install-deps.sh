@@ -11,6 +11,7 @@ packages=(
   cmake make g++ pkg-config
   libeigen3-dev libnanoflann-dev libnlopt-cxx-dev libgtest-dev nlohmann-json3-dev
   libsuitesparse-dev libopenblas0-pthread
+  libtrilinos-rol-dev libtrilinos-teuchos-dev libtrilinos-kokkos-dev
   python3 python3-matplotlib python3-numpy
   python3-dev pybind11-dev python3-pytest python3-torch
   clang libclang-rt-14-dev libomp-14-dev

@@ -293,13 +293,38 @@ TEST(BoundedOptimizer, RejectsInconsistentInput) {
   BoundedOptimizerOptions o;
   o.max_iterations = 0;
   EXPECT_THROW(minimise(f, Eigen::Vector2d(0.5, 0.5), lo, hi, o), InvalidArgument);
-  EXPECT_THROW(algorithm_from_string("newton"), InvalidArgument);
+  EXPECT_THROW(algorithm_from_string("trust-region"), InvalidArgument);
   try {
     minimise(f, Eigen::Vector2d(0.5, 2.0), lo, hi);
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("start of variable 1 (2) is outside its bounds"),
               std::string::npos)
         << e.what();
+  }
+}
+
+// gradient_tolerance stops every algorithm at the first iteration whose projected gradient
+// norm (scaled variables and value) is within it, as converged.
+TEST(BoundedOptimizer, StopsOnTheProjectedGradient) {
+  const Eigen::Vector2d c(0.3, 2.0), lo(-1, -1), hi(1, 1);  // c_1 beyond its bound
+  const BoundedObjective f = [&](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+    v = 1.0 + (x - c).squaredNorm();
+    if (g) *g = 2 * (x - c);
+    return true;
+  };
+  for (Algorithm a : kAll) {
+    BoundedOptimizerOptions o;
+    o.algorithm = a;
+    o.relative_change = 0.0;
+    o.gradient_tolerance = 1e-3;
+    const BoundedOptimizerSummary s = minimise(f, Eigen::Vector2d(-0.9, -0.9), lo, hi, o);
+    EXPECT_EQ(s.status, OptimizerStatus::gradient_tolerance)
+        << to_string(a) << ": " << s.termination;
+    EXPECT_TRUE(s.converged());
+    ASSERT_FALSE(s.history.empty());
+    EXPECT_LE(s.history.back().projected_gradient_norm, 1e-3);
+    for (std::size_t k = 0; k + 1 < s.history.size(); ++k)
+      EXPECT_GT(s.history[k].projected_gradient_norm, 1e-3);
   }
 }
 

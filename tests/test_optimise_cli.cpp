@@ -454,7 +454,7 @@ TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
     return path;
   };
   expect_refused((dir_ / "missing.json").string(), "missing.json");
-  expect_refused(scene() + " --algorithm newton", "unknown algorithm 'newton'");
+  expect_refused(scene() + " --algorithm gcmma", "unknown algorithm 'gcmma'");
   expect_refused(scene() + " --method nearest", "--method: nearest has no gradient");
   expect_refused(scene() + " --method fast", "unknown method 'fast'");
   expect_refused(scene() + " --method tree --tol 2", "tolerance");

@@ -7,16 +7,18 @@
 #include <nlopt.hpp>
 #include <sstream>
 
+#include "optimizer_backend.hpp"
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 
 namespace softhd {
 
 namespace {
-constexpr EnumNames<Algorithm, 4> kAlgorithmNames{{{Algorithm::mma, "mma"},
+constexpr EnumNames<Algorithm, 5> kAlgorithmNames{{{Algorithm::mma, "mma"},
                                                    {Algorithm::ccsaq, "ccsaq"},
                                                    {Algorithm::lbfgs, "lbfgs"},
-                                                   {Algorithm::slsqp, "slsqp"}}};
+                                                   {Algorithm::slsqp, "slsqp"},
+                                                   {Algorithm::newton, "newton"}}};
 }  // namespace
 
 std::string to_string(Algorithm a) { return enum_name(kAlgorithmNames, a); }
@@ -26,7 +28,7 @@ Algorithm algorithm_from_string(const std::string& name) {
 }
 
 namespace {
-constexpr EnumNames<OptimizerStatus, 11> kStatusNames{{
+constexpr EnumNames<OptimizerStatus, 13> kStatusNames{{
     {OptimizerStatus::iteration_limit, "iteration_limit"},
     {OptimizerStatus::evaluation_limit, "evaluation_limit"},
     {OptimizerStatus::time_limit, "time_limit"},
@@ -38,6 +40,8 @@ constexpr EnumNames<OptimizerStatus, 11> kStatusNames{{
     {OptimizerStatus::stopped, "stopped"},
     {OptimizerStatus::start_failed, "start_failed"},
     {OptimizerStatus::nlopt_failure, "nlopt_failure"},
+    {OptimizerStatus::gradient_tolerance, "gradient_tolerance"},
+    {OptimizerStatus::hessian_failed, "hessian_failed"},
 }};
 }  // namespace
 
@@ -61,7 +65,8 @@ std::string to_string(OptimizerStatus status) { return enum_name(kStatusNames, s
 
 bool is_converged(OptimizerStatus status) {
   return status == OptimizerStatus::relative_change || status == OptimizerStatus::target_value ||
-         status == OptimizerStatus::nlopt_converged || status == OptimizerStatus::no_progress;
+         status == OptimizerStatus::nlopt_converged || status == OptimizerStatus::no_progress ||
+         status == OptimizerStatus::gradient_tolerance;
 }
 
 void BoundedOptimizerOptions::validate() const {
@@ -75,6 +80,27 @@ void BoundedOptimizerOptions::validate() const {
   if (round_evaluations < 2) throw InvalidArgument("optimizer: round_evaluations must be >= 2");
   if (!(failure_penalty > 1.0) || !std::isfinite(failure_penalty))
     throw InvalidArgument("optimizer: failure_penalty must be finite and > 1");
+  if (!(gradient_tolerance >= 0.0) || !std::isfinite(gradient_tolerance))
+    throw InvalidArgument("optimizer: gradient_tolerance must be finite and >= 0");
+  trust_region.validate();
+}
+
+void TrustRegionOptions::validate() const {
+  const auto finite_at_least = [](double v, double low) { return std::isfinite(v) && v >= low; };
+  if (!finite_at_least(initial_radius, 0.0))
+    throw InvalidArgument("optimizer: trust_region.initial_radius must be finite and >= 0");
+  if (!(finite_at_least(cauchy_step, 0.0) && cauchy_step > 0.0))
+    throw InvalidArgument("optimizer: trust_region.cauchy_step must be finite and > 0");
+  if (!finite_at_least(value_scale, 0.0))
+    throw InvalidArgument("optimizer: trust_region.value_scale must be finite and >= 0");
+  if (cg_iterations < 1)
+    throw InvalidArgument("optimizer: trust_region.cg_iterations must be >= 1");
+  if (!(finite_at_least(cg_relative_tolerance, 0.0) && cg_relative_tolerance > 0.0))
+    throw InvalidArgument("optimizer: trust_region.cg_relative_tolerance must be finite and > 0");
+  if (!(finite_at_least(cg_absolute_tolerance, 0.0) && cg_absolute_tolerance > 0.0))
+    throw InvalidArgument("optimizer: trust_region.cg_absolute_tolerance must be finite and > 0");
+  if (!(finite_at_least(min_radius, 0.0) && min_radius > 0.0))
+    throw InvalidArgument("optimizer: trust_region.min_radius must be finite and > 0");
 }
 
 double projected_gradient_norm(const Eigen::VectorXd& x, const Eigen::VectorXd& g,
@@ -95,13 +121,14 @@ nlopt::algorithm nlopt_algorithm(Algorithm a) {
     case Algorithm::slsqp:
       return nlopt::LD_SLSQP;
     case Algorithm::mma:
+    case Algorithm::newton:  // not an NLopt algorithm: backend_for never passes it here
       break;
   }
   return nlopt::LD_MMA;
 }
 
 // Why the driver asked NLopt to stop (NLopt only knows "forced stop").
-enum class Stop { none, iterations, relative_change, target, time, requested };
+enum class Stop { none, iterations, relative_change, gradient, target, time, requested };
 
 // The scale of f for one NLopt run. MMA's conservative approximation adds, per variable,
 // (|g_j| σ_j + ρ/2) Δz_j² / (σ_j² − Δz_j²) to the linear term, ρ starting at 1 in every run
@@ -255,6 +282,9 @@ struct Driver {
     } else if (std::fabs(previous - f) <= options.relative_change * std::fabs(f) &&
                ++small_changes >= 3) {
       s = Stop::relative_change;
+    } else if (options.gradient_tolerance > 0.0 &&
+               rec.projected_gradient_norm <= options.gradient_tolerance) {
+      s = Stop::gradient;
     } else if (summary.iterations >= options.max_iterations) {
       s = Stop::iterations;
     }
@@ -293,9 +323,10 @@ double nlopt_callback(const std::vector<double>& z, std::vector<double>& grad, v
   return cb->driver->evaluate(z, grad, *cb->opt);
 }
 
-/// Throws InvalidArgument for options, bounds or a start the optimiser cannot take.
-void check_problem(const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
-                   const Eigen::VectorXd& upper, const BoundedOptimizerOptions& options) {
+}  // namespace
+
+void detail::check_problem(const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
+                           const Eigen::VectorXd& upper, const BoundedOptimizerOptions& options) {
   options.validate();
   const Eigen::Index n = x0.size();
   if (n < 1) throw InvalidArgument("optimizer: no variables");
@@ -323,6 +354,8 @@ void check_problem(const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
   }
 }
 
+namespace {
+
 /// The variables scaled to O(1) (x = scale ∘ z, scale = max(|lower|, |upper|)) and the
 /// starting point evaluated once: it fixes the objective's scale. Returns false, with the
 /// summary's status set, if the run ends there (a failed start, or the target reached).
@@ -346,7 +379,7 @@ bool start(Driver* d, const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
     d->summary.initial_value = d->summary.final_value = std::nan("");
     return false;
   }
-  d->fscale = d->report_scale = f != 0.0 ? std::fabs(f) : 1.0;
+  d->fscale = d->report_scale = d->summary.value_scale = f != 0.0 ? std::fabs(f) : 1.0;
   d->largest_abs = std::max(1.0, std::fabs(f));
   d->f0 = f;
   d->g0 = g;
@@ -459,6 +492,8 @@ void set_termination(Stop stop, const NloptEnd& end, BoundedOptimizerSummary* s)
       {Stop::iterations, OptimizerStatus::iteration_limit, "the iteration limit was reached"},
       {Stop::relative_change, OptimizerStatus::relative_change,
        "the relative change of J fell below the tolerance"},
+      {Stop::gradient, OptimizerStatus::gradient_tolerance,
+       "the projected gradient norm fell below the tolerance"},
       {Stop::target, OptimizerStatus::target_value, "J reached the target value"},
       {Stop::time, OptimizerStatus::time_limit, "the wall-clock limit was reached"},
       {Stop::requested, OptimizerStatus::stopped, "stopped by the caller"},
@@ -473,23 +508,49 @@ void set_termination(Stop stop, const NloptEnd& end, BoundedOptimizerSummary* s)
   }
 }
 
+class NloptBackend : public detail::OptimizerBackend {
+ public:
+  BoundedOptimizerSummary minimise(const detail::BoundedProblem& p) const override {
+    Driver d(p.objective, p.options, p.on_iteration);
+    if (start(&d, p.x0, p.lower, p.upper)) {
+      // Run first, then read d.stop: in one call's arguments their order is unspecified (GCC
+      // ran run_rounds first, clang read d.stop first and reported every stop as none).
+      const NloptEnd end = run_rounds(&d);
+      set_termination(d.stop, end, &d.summary);
+    }
+    uncertified_by_move_limit(p.options, &d.summary);
+    d.summary.seconds = d.seconds();
+    return d.summary;
+  }
+};
+
+const detail::OptimizerBackend& backend_for(Algorithm algorithm) {
+  return algorithm == Algorithm::newton ? detail::rol_backend() : detail::nlopt_backend();
+}
+
 }  // namespace
+
+const detail::OptimizerBackend& detail::nlopt_backend() {
+  static const NloptBackend backend;
+  return backend;
+}
+
+BoundedOptimizerSummary minimise(
+    const BoundedObjective& objective, const BoundedHessVec& hess_vec, const Eigen::VectorXd& x0,
+    const Eigen::VectorXd& lower, const Eigen::VectorXd& upper,
+    const BoundedOptimizerOptions& options,
+    const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& on_iteration) {
+  detail::check_problem(x0, lower, upper, options);
+  const detail::BoundedProblem problem{objective, hess_vec, x0,          lower,
+                                       upper,     options,  on_iteration};
+  return backend_for(options.algorithm).minimise(problem);
+}
 
 BoundedOptimizerSummary minimise(
     const BoundedObjective& objective, const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
     const Eigen::VectorXd& upper, const BoundedOptimizerOptions& options,
     const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& on_iteration) {
-  check_problem(x0, lower, upper, options);
-  Driver d(objective, options, on_iteration);
-  if (start(&d, x0, lower, upper)) {
-    // Run first, then read d.stop: in one call's arguments their order is unspecified (GCC
-    // ran run_rounds first, clang read d.stop first and reported every stop as none).
-    const NloptEnd end = run_rounds(&d);
-    set_termination(d.stop, end, &d.summary);
-  }
-  uncertified_by_move_limit(options, &d.summary);
-  d.summary.seconds = d.seconds();
-  return d.summary;
+  return minimise(objective, BoundedHessVec(), x0, lower, upper, options, on_iteration);
 }
 
 }  // namespace softhd
