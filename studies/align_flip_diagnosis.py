@@ -29,6 +29,8 @@ def main():
     from softhd import synthetic as synthetic_scan
     from scipy.spatial import cKDTree
     fine, _ = softhd.read_cloud(os.path.join(HERE, "..", "data", "targets", "finger_target.ply"))
+    triangles = softhd.read_mesh(os.path.join(HERE, "..", "data", "meshes", "finger_fine.msh"),
+                                 order=2).boundary_triangles
     rng = np.random.default_rng(12345)  # as bench_align.py
     body = fine[np.sort(rng.choice(len(fine), 4000, replace=False))]
     L = synthetic_scan.body_size(body)
@@ -64,8 +66,8 @@ def main():
 
     for k in a.seeds:
         for view in ("full", "half"):
-            scan, P, _ = synthetic_scan.view(fine, 1000 + k, view, noise=0.005, outliers=0.03,
-                                             points=2000)
+            scan, P, _ = synthetic_scan.view(fine, triangles, 1000 + k, view, noise=0.005,
+                                             outliers=0.03, points=2000)
             found = softhd.align(body, scan, distance="scan_to_body", threads=1, score=a.score)
             start = softhd.align(body, scan, distance="scan_to_body", threads=1,
                                  global_start=False, initial=P)

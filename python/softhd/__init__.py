@@ -42,6 +42,7 @@ from ._core import (DistanceResult, Error, FileError, ForwardResult, InvalidArgu
 
 __all__ = ["distance", "align", "hausdorff_nearest", "Target", "read_cloud", "write_cloud", "read_mesh",
            "crop_to_box", "remove_statistical_outliers", "remove_dominant_plane", "area_weights",
+           "visible_points",
            "Scene", "Mesh", "optimise", "optimise_defaults", "DistanceResult", "ForwardResult",
            "OptimiseResult",
            "Iteration", "Error", "InvalidArgument", "FileError", "ResourceError", "NumericalError"]
@@ -223,6 +224,21 @@ def area_weights(points, method="knn", neighbours=12):
     """(N,) estimated surface areas of a 3D scan (lengths of a 2D curve): "knn" (pi r_k^2 / k)
     or "delaunay" (the tangent-plane Voronoi cell); docs/formulation.md section 8.9."""
     return _core.area_weights(_as_float64(points, "points"), str(method), int(neighbours))
+
+
+def visible_points(points, triangles, camera, tolerance=1e-6):
+    """(N,) bool: the points of a closed, outward triangle surface that a camera at `camera`
+    sees (docs/formulation.md section 8.7): facing (an incident triangle's outward normal n has
+    n.(camera - x) > 0) and the segment from the camera meets no triangle before x (up to
+    `tolerance` times the bounding-box diagonal). points (N, 3); triangles (T, 3) ids into
+    them (e.g. Mesh.boundary_triangles over Mesh.nodes + displacements); a point on no
+    triangle (an interior node) is not seen."""
+    tri = _np.asarray(triangles)
+    if tri.size and tri.dtype.kind not in "iu":
+        raise TypeError(f"triangles must hold integers, got dtype {tri.dtype}")
+    return _core.visible_points(_as_float64(points, "points"),
+                                _np.ascontiguousarray(tri, dtype=_np.int64).reshape(-1, 3),
+                                _as_float64(camera, "camera"), float(tolerance))
 
 
 def write_cloud(path, points, volumes=None):
