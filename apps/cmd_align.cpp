@@ -27,7 +27,7 @@ Finds the pose P (y -> s R y + t) that takes the scan's points (camera frame) on
 body (its frame) by minimising rho over a twist (docs/formulation.md section 8): a global
 start over a grid of rotations on subsampled clouds with a large epsilon, a refinement at
 epsilon = L/100 and at --eps, then a nearest-point (ICP) finish. The best starts are
-ranked, and the refined candidates compared, by the visible-surface score (--score).
+ranked, and the refined candidates compared, by the coverage score (--score).
 SCENE_OR_CLOUD: a scene file (.json: the body is its mesh's nodes in the reference
 configuration, with their volumes) or a 3D cloud file (text or PLY, as softhd distance).
 SCAN: a 3D cloud file.
@@ -53,14 +53,14 @@ options:
   --rotations K     global start: grid rotations (default 48, plus 4 principal-axis ones)
   --refine-points N points of each cloud in the refinement, 0: all (default 1000)
   --keep K          global start: distinct candidates refined and compared (default 4)
-  --score S         visible | rho (default visible): how the global start's poses are
-                    ranked and its refined candidates compared. visible: the camera at the
+  --score S         coverage | rho (default coverage): how the global start's poses are
+                    ranked and its refined candidates compared. coverage: the camera at the
                     scan frame's origin (a depth view in its camera's frame), each candidate
                     fitted by nearest points, then the mean truncated distance of the scan
                     to the body and of the body points the pose shows the camera (over the
                     scan's image) to the scan; it tells a flipped one-sided view from the
                     true one. rho: rho itself (for a scan not in its camera's frame)
-  --score-cap F     visible score: nearest distances capped at F L (default 0.05)
+  --score-cap F     coverage score: nearest distances capped at F L (default 0.05)
   --inlier F        overlap threshold as a fraction of L (default 0.01)
   --threads T       OpenMP threads (default: all)
   --json            print pose.json's object instead of the one-line summary
@@ -152,9 +152,10 @@ int run_align(const std::vector<std::string>& tokens) {
   o.rotations = static_cast<int>(args.integer("--rotations", o.rotations, 0, 100000));
   o.refine_points = static_cast<int>(args.integer("--refine-points", o.refine_points, 0, 1L << 30));
   o.keep = static_cast<int>(args.integer("--keep", o.keep, 1, 100000));
-  const std::string score = args.value("--score").value_or("visible");
-  if (score != "visible" && score != "rho")
-    throw UsageError("--score must be visible or rho, got '" + score + "'");
+  const std::string score = args.value("--score").value_or("coverage");
+  if (score == "visible") throw UsageError("--score visible is now --score coverage");
+  if (score != "coverage" && score != "rho")
+    throw UsageError("--score must be coverage or rho, got '" + score + "'");
   o.score = scan::candidate_score_from_string(score);
   o.score_truncation = args.number("--score-cap", o.score_truncation);
   if (!(o.score_truncation > 0.0))

@@ -18,7 +18,7 @@ skipped with one line on stderr (softhd's rows are still written).
 
   bench/bench_align.py BUILD_DIR [--poses N] [--csv FILE] [--threads T] [--distance D]
                        [--cap C] [--body-points N] [--scan-points N] [--methods a,b]
-                       [--score visible|rho]
+                       [--score coverage|rho]
 """
 import argparse
 import csv
@@ -57,7 +57,7 @@ def main():
     ap.add_argument("--scan-points", type=int, default=2000)
     ap.add_argument("--methods", default="softhd,open3d")
     ap.add_argument("--refine-points", type=int, default=1000)
-    ap.add_argument("--score", default="visible", help="softhd's candidate score: visible | rho")
+    ap.add_argument("--score", default="coverage", help="softhd's candidate score: coverage | rho")
     a = ap.parse_args()
     sys.path.insert(0, os.path.join(os.path.abspath(a.build), "python"))
     sys.path.insert(0, os.path.join(HERE, "peers"))

@@ -7,7 +7,7 @@ shows the camera at the scan frame's origin, over the pixels holding scan points
 mean nearest distance to the scan (capped at 0.05 L) / L. A prototype of the C++ score of
 docs/formulation.md section 8.5 (which also adds the scan's side).
 
-  studies/align_flip_diagnosis.py BUILD_DIR [SEED ...] [--score visible|rho]
+  studies/align_flip_diagnosis.py BUILD_DIR [SEED ...] [--score coverage|rho]
 """
 import argparse
 import os
@@ -22,7 +22,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("build")
     ap.add_argument("seeds", nargs="*", type=int, default=[0, 1, 3, 5])
-    ap.add_argument("--score", default="visible")
+    ap.add_argument("--score", default="coverage")
     a = ap.parse_args()
     sys.path.insert(0, os.path.join(os.path.abspath(a.build), "python"))
     import softhd

@@ -233,6 +233,8 @@ TEST_F(Cli, AlignRecoversAMovedCopyAndRefusesBadInput) {
                    "not a scaled rotation");
   expect_bad_input("align " + good + " " + write("nan.txt", "0 0 0\nnan 1 0\n") + out, "nan.txt:2");
   expect_bad_input("align " + good + " " + good + out + " --score best", "--score must be");
+  expect_bad_input("align " + good + " " + good + out + " --score visible",
+                   "--score visible is now --score coverage");
   expect_bad_input("align " + good + " " + good + out + " --score-cap 0", "--score-cap must be");
   expect_bad_input("align " + good + " " + good + out + " --similarity --scale-min 1.5",
                    "--scale-min must be in (0, 1]");
@@ -303,14 +305,15 @@ TEST_F(Cli, DistanceFormsMatchTheLibraryAndRefuseMisuse) {
   DistanceForm form;
   form.sides = Sides::visible;
   form.cap = {0.4, 2.0};
-  form.visible.resize(12);
+  form.camera_mask.resize(12);
   for (int i = 0; i < 12; ++i) {
-    form.visible[i] = i % 3 != 1;
-    lines += form.visible[i] ? "1\n" : "0  # hidden\n";
+    form.camera_mask[i] = i % 3 != 1;
+    lines += form.camera_mask[i] ? "1\n" : "0  # hidden\n";
   }
   const std::string seen = write("seen.txt", lines);
-  const Outcome r = run("distance " + path("x.txt") + " " + path("y.txt") +
-                        " --distance visible --visible " + seen + " --cap 0.4 --cap-q 2 --json");
+  const Outcome r =
+      run("distance " + path("x.txt") + " " + path("y.txt") + " --distance visible --camera-mask " +
+          seen + " --cap 0.4 --cap-q 2 --json");
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   HausdorffRequest req;
@@ -325,8 +328,13 @@ TEST_F(Cli, DistanceFormsMatchTheLibraryAndRefuseMisuse) {
   EXPECT_EQ(nlohmann::json::parse(one.out)["B"].get<double>(), 0.0);
   const std::string xy = path("x.txt") + " " + path("y.txt");
   expect_bad_input("distance " + xy + " --distance both", "unknown distance 'both'");
-  expect_bad_input("distance " + xy + " --distance visible", "--distance visible needs --visible");
-  expect_bad_input("distance " + xy + " --visible " + seen, "--visible needs --distance visible");
+  expect_bad_input("distance " + xy + " --distance visible",
+                   "--distance visible needs --camera-mask");
+  expect_bad_input("distance " + xy + " --camera-mask " + seen,
+                   "--camera-mask needs --distance visible");
+  // the retired spelling of --camera-mask is refused naming the new one
+  expect_bad_input("distance " + xy + " --distance visible --visible " + seen,
+                   "--visible is now --camera-mask");
   expect_bad_input("distance " + xy + " --cap -1", "--cap/--cap-q: distance cap.c must be");
   expect_bad_input("distance " + xy + " --cap 1 --cap-q 0", "distance cap.q must be");
   // Below the accepted ranges (docs/formulation.md §8.3) rho was 0 or the constant cap.
@@ -335,18 +343,21 @@ TEST_F(Cli, DistanceFormsMatchTheLibraryAndRefuseMisuse) {
   expect_bad_input("distance " + xy + " --cap 1e-300",
                    "--cap: distance cap (cap.c) 1e-300 is below");
   expect_bad_input(
-      "distance " + xy + " --distance visible --visible " + write("bad.txt", "1\n0\nyes\n"),
+      "distance " + xy + " --distance visible --camera-mask " + write("bad.txt", "1\n0\nyes\n"),
       "bad.txt:3: expected 0 or 1, got 'yes'");
-  expect_bad_input("distance " + xy + " --distance visible --visible " + write("few.txt", "1\n0\n"),
-                   "few.txt: 2 entries for the 12 points of");
-  expect_bad_input("distance " + xy + " --distance visible --visible " + write("none.txt", "0\n"),
-                   "none.txt: 1 entries");
-  expect_bad_input("distance " + xy + " --distance visible --visible " + write("e.txt", "# no\n"),
-                   "e.txt: no entries");
+  expect_bad_input(
+      "distance " + xy + " --distance visible --camera-mask " + write("few.txt", "1\n0\n"),
+      "few.txt: 2 entries for the 12 points of");
+  expect_bad_input(
+      "distance " + xy + " --distance visible --camera-mask " + write("none.txt", "0\n"),
+      "none.txt: 1 entries");
+  expect_bad_input(
+      "distance " + xy + " --distance visible --camera-mask " + write("e.txt", "# no\n"),
+      "e.txt: no entries");
   std::string zeros;
   for (int i = 0; i < 12; ++i) zeros += "0\n";
-  expect_bad_input("distance " + xy + " --distance visible --visible " + write("z.txt", zeros),
-                   "no moving point is marked visible");
+  expect_bad_input("distance " + xy + " --distance visible --camera-mask " + write("z.txt", zeros),
+                   "the camera_mask marks no moving point");
 }
 
 // distance's cleanup flags act on TARGET as documented: --crop keeps exactly the points in

@@ -57,6 +57,9 @@ def test_bad_input_refused(rng):
         softhd.align(body, body, initial=bad)
     with pytest.raises(softhd.InvalidArgument, match="distance"):
         softhd.align(body, body, distance="both")
+    # the candidate score's retired spelling names the new one
+    with pytest.raises(softhd.InvalidArgument, match='"visible" is now "coverage"'):
+        softhd.align(body, body, score="visible")
     # clouds that fix no pose: a single point, points on a line; a body of coincident points
     # (its default eps, L/1000, is 0) is named as such
     with pytest.raises(softhd.InvalidArgument, match="the scan: it has a single point"):

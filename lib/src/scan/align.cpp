@@ -25,7 +25,7 @@ constexpr EnumNames<AlignStatus, 3> kAlignStatusNames{
      {AlignStatus::iteration_limit, "iteration_limit"},
      {AlignStatus::failed, "failed"}}};
 constexpr EnumNames<CandidateScore, 2> kCandidateScoreNames{
-    {{CandidateScore::visible, "visible"}, {CandidateScore::rho, "rho"}}};
+    {{CandidateScore::coverage, "coverage"}, {CandidateScore::rho, "rho"}}};
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw InvalidArgument("align: " + what);
@@ -128,11 +128,11 @@ std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& sc
                 [&](size_t i) { found[i] = detail::minimise_pose(coarse, starts[i], st); });
   std::vector<double> score(found.size());
   for (size_t k = 0; k < found.size(); ++k) score[k] = found[k].rho;
-  if (o.score == CandidateScore::visible) {  // rank by the visible-surface score instead
-    const detail::VisibleScore visible(body.points(), scan.points(), L, o.score_truncation,
-                                       o.threads);
+  if (o.score == CandidateScore::coverage) {  // rank by the coverage score instead
+    const detail::CoverageScore coverage(body.points(), scan.points(), L, o.score_truncation,
+                                         o.threads);
     for (size_t k = 0; k < found.size(); ++k)
-      if (std::isfinite(score[k])) score[k] = visible.value(found[k].pose);
+      if (std::isfinite(score[k])) score[k] = coverage.value(found[k].pose);
   }
   std::vector<size_t> order(found.size());
   std::iota(order.begin(), order.end(), size_t{0});
@@ -175,6 +175,8 @@ void report_nearest(const detail::NearestPoints& nearest, const PointCloud& scan
 std::string to_string(AlignStatus status) { return enum_name(kAlignStatusNames, status); }
 std::string to_string(CandidateScore score) { return enum_name(kCandidateScoreNames, score); }
 CandidateScore candidate_score_from_string(const std::string& name) {
+  if (name == "visible")
+    throw InvalidArgument("score \"visible\" is now \"coverage\" (the same score)");
   return enum_from_name(kCandidateScoreNames, name, "score");
 }
 
@@ -190,7 +192,7 @@ void AlignOptions::validate() const {
   require(form.sides != Sides::visible,
           "distance visible is not supported (align has no camera model; use scan_to_body for "
           "a partial view)");
-  form.validate(form.visible.size() > 0 ? form.visible.size() : 1);
+  form.validate(form.camera_mask.size() > 0 ? form.camera_mask.size() : 1);
   if (initial) {
     require(initial->R.allFinite() && initial->t.allFinite() && std::isfinite(initial->s) &&
                 initial->s > 0.0,
