@@ -34,7 +34,9 @@ SCAN: a 3D cloud file.
 
 options:
   --out DIR         write DIR/pose.txt (4x4 matrix), DIR/pose.json (matrix, twist,
-                    scale, rho, overlap, rmse, ...), DIR/aligned.ply (the moved scan) and
+                    scale, rho, overlap, rmse, the global start's starts and the
+                    candidates refined, the refinement's points of body and scan, ...),
+                    DIR/aligned.ply (the moved scan) and
                     DIR/residuals.csv (each scan point's true nearest distance to the body)
   --similarity      also find a scale s (default: a rigid motion, s = 1)
   --scale-min S     similarity: lower bound on s, 0 < S <= 1 (default 0.5)
@@ -50,7 +52,8 @@ options:
   --initial FILE    a starting pose, a 4x4 matrix file as pose.txt: with --no-global the
                     only start; else one more candidate, refined and compared with the
                     global start's (rigid, scale 1, unless --similarity)
-  --rotations K     global start: grid rotations (default 48, plus 4 principal-axis ones)
+  --rotations K     global start: grid rotations (default 48, plus 4 principal-axis ones;
+                    0: those 4 only)
   --refine-points N points of each cloud in the refinement, 0: all (default 1000)
   --keep K          global start: distinct candidates refined and compared (default 4)
   --score S         coverage | rho (default coverage): how the global start's poses are
@@ -61,7 +64,7 @@ options:
                     scan's image) to the scan; it tells a flipped one-sided view from the
                     true one. rho: rho itself (for a scan not in its camera's frame)
   --score-cap F     coverage score: nearest distances capped at F L (default 0.05)
-  --inlier F        overlap threshold as a fraction of L (default 0.01)
+  --inlier F        overlap threshold as a fraction of L, 0 < F < 1 (default 0.01)
   --threads T       OpenMP threads (default: all)
   --json            print pose.json's object instead of the one-line summary
   --help            this text
@@ -115,6 +118,9 @@ nlohmann::json summary_json(const scan::AlignSummary& s, const scan::AlignOption
   j["eps"] = o.distance.params.epsilon;
   j["body_size"] = L;
   j["scan_points"] = s.residuals.size();
+  j["starts"] = s.starts;
+  j["candidates"] = s.candidates;
+  j["refine_points"] = {s.refine_body_points, s.refine_scan_points};
   return j;
 }
 
@@ -161,6 +167,9 @@ int run_align(const std::vector<std::string>& tokens) {
   if (!(o.score_truncation > 0.0))
     throw UsageError("--score-cap must be > 0, got " + std::to_string(o.score_truncation));
   o.inlier_distance = args.number("--inlier", o.inlier_distance);
+  if (!(o.inlier_distance > 0.0 && o.inlier_distance < 1.0))
+    throw UsageError("--inlier must be in (0, 1) (a fraction of the body size L), got " +
+                     std::to_string(o.inlier_distance));
   o.threads = static_cast<int>(args.integer("--threads", 0, 0, kMaxThreads));
   const bool json = args.flag("--json");
   const std::vector<std::string> files = args.finish();

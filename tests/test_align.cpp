@@ -284,6 +284,10 @@ TEST(Align, OptionsRefusedNamingTheField) {
   o.keep = 0;
   test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "keep");
   o = AlignOptions{};
+  o.inlier_distance = 1.5;  // a fraction of L: 1 or more measures no overlap
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); },
+                                      "inlier_distance must be in (0, 1)");
+  o = AlignOptions{};
   o.form.sides = Sides::visible;
   test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "visible");
   EXPECT_EQ(candidate_score_from_string("coverage"), CandidateScore::coverage);

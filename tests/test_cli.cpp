@@ -270,8 +270,53 @@ TEST_F(Cli, AlignInlierIsAFractionOfTheBodySize) {
   EXPECT_NEAR(def.value("inlier_distance", 0.0), 0.01 * L, 1e-15 * L);  // the default 0.01
   EXPECT_NEAR(wide.value("inlier_distance", 0.0), 0.2 * L, 1e-15 * L);
   EXPECT_GE(wide.value("overlap", 0.0), def.value("overlap", 1.0));
-  expect_bad_input("align " + clouds + " --out " + path("bad") + " --inlier 0",
-                   "inlier_distance must be > 0");
+  // a threshold of L or more (the body's diagonal) measures no overlap: refused naming the flag
+  for (const char* bad : {"0", "-0.1", "1", "1.5"})
+    expect_bad_input("align " + clouds + " --out " + path("bad") + " --inlier " + bad,
+                     "--inlier must be in (0, 1)");
+}
+
+// align --rotations, --keep, --refine-points and --no-global reach the search: pose.json
+// counts the starting poses (rotations + 4 principal-axis ones), the candidates refined (at
+// most --keep, plus --initial) and the refinement's points of body and scan, so a flag
+// that is ignored fails here.
+TEST_F(Cli, AlignSearchFlagsShowInPoseJson) {
+  std::string body_text, scan_text;
+  for (int i = 0; i < 120; ++i) {  // an asymmetric spiral and a shifted copy of 100 of its points
+    const double a = 0.15 * i;
+    const Eigen::Vector3d x(std::cos(a) * (1 + 0.01 * i), std::sin(a), 0.02 * i * (i % 3));
+    body_text +=
+        std::to_string(x.x()) + " " + std::to_string(x.y()) + " " + std::to_string(x.z()) + "\n";
+    if (i >= 100) continue;
+    const Eigen::Vector3d y = x + Eigen::Vector3d(0.3, -0.1, 0.2);
+    scan_text +=
+        std::to_string(y.x()) + " " + std::to_string(y.y()) + " " + std::to_string(y.z()) + "\n";
+  }
+  const std::string clouds =
+      write("body.txt", body_text) + " " + write("scan.txt", scan_text) + " --threads 1 --json";
+  const auto pose = [&](const std::string& flags) {
+    const Outcome r = run("align " + clouds + " --out " + path("al") + flags);
+    EXPECT_EQ(r.status, 0) << flags << ": " << r.err;
+    return r.status == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
+  };
+  const auto points = [](const nlohmann::json& j) {
+    return j.value("refine_points", std::vector<long>{});
+  };
+  const nlohmann::json def = pose("");
+  EXPECT_EQ(def.value("starts", -1), 48 + 4);
+  EXPECT_EQ(def.value("candidates", -1), 4);              // the default --keep
+  EXPECT_EQ(points(def), (std::vector<long>{120, 100}));  // below the default 1000: all
+  EXPECT_EQ(pose(" --rotations 10").value("starts", -1), 10 + 4);
+  EXPECT_EQ(pose(" --rotations 0").value("starts", -1), 4);  // the principal-axis starts only
+  EXPECT_EQ(pose(" --keep 1").value("candidates", -1), 1);
+  EXPECT_EQ(pose(" --keep 2").value("candidates", -1), 2);
+  EXPECT_EQ(points(pose(" --refine-points 30")), (std::vector<long>{30, 30}));
+  EXPECT_EQ(points(pose(" --refine-points 110")), (std::vector<long>{110, 100}));
+  const nlohmann::json local = pose(" --no-global");
+  EXPECT_EQ(local.value("starts", -1), 0);
+  EXPECT_EQ(local.value("candidates", -1), 1);
+  const std::string identity = write("id.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  EXPECT_EQ(pose(" --keep 2 --initial " + identity).value("candidates", -1), 2 + 1);
 }
 
 // A body or scan that fixes no pose (a single point, coincident or collinear points) is refused

@@ -171,7 +171,7 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
     distance: "symmetric" or "scan_to_body" (rho = A, for partial views); cap: the soft cap
     (a length, 0: none). eps: the final refinement's epsilon (None: L/1000, L the diagonal of
     the body's bounding box). refine_points: points of each cloud in the refinement (0: all).
-    inlier: the overlap's threshold as a fraction of L. score: how the global start's poses
+    inlier: the overlap's threshold as a fraction of L, in (0, 1). score: how the global start's poses
     are ranked and its ``keep`` refined candidates compared: "coverage" (the coverage score
     of docs/formulation.md section 8.5: the camera at the scan frame's origin, the scan must
     cover the body's side it shows and lie on the body) or "rho" (rho itself, for a scan not
@@ -182,7 +182,10 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
     t = v, s = e^sigma), ``scale``, ``rho``, ``overlap`` (fraction of scan points within the
     inlier distance of the body), ``inlier_distance``, ``rmse`` (of those points' true
     nearest distances), ``residuals`` (M,: every moved scan point's true nearest distance to
-    the body), ``status``, ``iterations``, ``seconds``. Raises InvalidArgument for bounds
+    the body), ``status``, ``iterations``, ``seconds``, ``starts`` (the global start's
+    starting poses: rotations + 4, 0 without it), ``candidates`` (the candidates refined and
+    compared: at most ``keep``, plus ``initial``), ``refine_points`` (the refinement's points
+    of the body and of the scan). Raises InvalidArgument for bounds
     that exclude 1, a wrong ``initial``, non-3D or non-finite clouds, and a body or scan whose
     points do not span a plane (a single point, coincident or collinear points fix no pose).
     """

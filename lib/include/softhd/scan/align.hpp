@@ -41,7 +41,8 @@ struct AlignOptions {
   /// alignment (scale 1 to Pose::kScaleTolerance).
   std::optional<Pose> initial;
   bool global_start = true;  ///< search rotations first (else start at `initial`)
-  int rotations = 48;        ///< global start: grid rotations tried (plus 4 principal-axis ones)
+  int rotations = 48;        ///< global start: grid rotations tried (plus 4 principal-axis ones; 0:
+                             ///< those 4 only)
   int coarse_points = 150;   ///< global start: points of each subsampled cloud
   double coarse_epsilon = 0.05;  ///< global start: ε as a fraction of the body's size L
   int keep = 4;                  ///< global start: best distinct poses refined further
@@ -52,7 +53,7 @@ struct AlignOptions {
   int max_iterations = 200;        ///< refinement iterations (per level)
   double tolerance = 1e-10;        ///< stop when a step moves no point more than this × L
   int nearest_iterations = 50;     ///< final nearest-point refinement iterations (0: none)
-  double inlier_distance = 0.01;   ///< the overlap's threshold as a fraction of L
+  double inlier_distance = 0.01;   ///< the overlap's threshold as a fraction of L, in (0, 1)
   int threads = 0;                 ///< as HausdorffOptions::threads
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
@@ -73,7 +74,11 @@ struct AlignSummary {
   double rmse = 0.0;             ///< RMS true nearest-neighbour distance of the overlapping points
   Eigen::VectorXd residuals;     ///< true nearest-neighbour distance of each moved scan point
   int iterations = 0;            ///< refinement iterations of the best candidate, over its levels
-  double seconds = 0.0;          ///< wall time of align()
+  int starts = 0;      ///< global start: starting poses tried (rotations + 4; 0 without it)
+  int candidates = 0;  ///< candidates refined and compared (the kept starts, plus `initial`)
+  Eigen::Index refine_body_points = 0;  ///< points of the body in the refinement
+  Eigen::Index refine_scan_points = 0;  ///< points of the scan in the refinement
+  double seconds = 0.0;                 ///< wall time of align()
   /// One line: status, rotation and translation of the pose, ρ̃, overlap, rmse, time.
   std::string BriefReport() const;
 };
