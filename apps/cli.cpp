@@ -92,6 +92,12 @@ long Args::integer(const std::string& name, long fallback, long lo, long hi) {
   return n;
 }
 
+void Args::retired(const std::string& old_name, const std::string& new_name) const {
+  for (size_t i = 0; i < tokens_.size(); ++i)
+    if (!used_[i] && (tokens_[i] == old_name || tokens_[i].rfind(old_name + "=", 0) == 0))
+      throw UsageError(old_name + " is now " + new_name);
+}
+
 std::vector<std::string> Args::finish() {
   std::vector<std::string> positional;
   for (size_t i = 0; i < tokens_.size(); ++i) {

@@ -34,6 +34,9 @@ class Args {
   long integer(const std::string& name, long fallback);
   /// An integer in [lo, hi] given to `--name`, or `fallback`; the error names the range.
   long integer(const std::string& name, long fallback, long lo, long hi);
+  /// Throws UsageError "`old_name` is now `new_name`" if `old_name` (or `old_name=...`) is
+  /// present: a retired spelling of an option, refused with the one that replaced it.
+  void retired(const std::string& old_name, const std::string& new_name) const;
   /// The remaining positional arguments; throws UsageError for an unknown option.
   std::vector<std::string> finish();
 

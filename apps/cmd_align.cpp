@@ -27,14 +27,16 @@ Finds the pose P (y -> s R y + t) that takes the scan's points (camera frame) on
 body (its frame) by minimising rho over a twist (docs/formulation.md section 8): a global
 start over a grid of rotations on subsampled clouds with a large epsilon, a refinement at
 epsilon = L/100 and at --eps, then a nearest-point (ICP) finish. The best starts are
-ranked, and the refined candidates compared, by the visible-surface score (--score).
+ranked, and the refined candidates compared, by the coverage score (--score).
 SCENE_OR_CLOUD: a scene file (.json: the body is its mesh's nodes in the reference
 configuration, with their volumes) or a 3D cloud file (text or PLY, as softhd distance).
 SCAN: a 3D cloud file.
 
 options:
   --out DIR         write DIR/pose.txt (4x4 matrix), DIR/pose.json (matrix, twist,
-                    scale, rho, overlap, rmse, ...), DIR/aligned.ply (the moved scan) and
+                    scale, rho, overlap, rmse, the global start's starts and the
+                    candidates refined, the refinement's points of body and scan, ...),
+                    DIR/aligned.ply (the moved scan) and
                     DIR/residuals.csv (each scan point's true nearest distance to the body)
   --similarity      also find a scale s (default: a rigid motion, s = 1)
   --scale-min S     similarity: lower bound on s, 0 < S <= 1 (default 0.5)
@@ -50,18 +52,19 @@ options:
   --initial FILE    a starting pose, a 4x4 matrix file as pose.txt: with --no-global the
                     only start; else one more candidate, refined and compared with the
                     global start's (rigid, scale 1, unless --similarity)
-  --rotations K     global start: grid rotations (default 48, plus 4 principal-axis ones)
+  --rotations K     global start: grid rotations (default 48, plus 4 principal-axis ones;
+                    0: those 4 only)
   --refine-points N points of each cloud in the refinement, 0: all (default 1000)
   --keep K          global start: distinct candidates refined and compared (default 4)
-  --score S         visible | rho (default visible): how the global start's poses are
-                    ranked and its refined candidates compared. visible: the camera at the
+  --score S         coverage | rho (default coverage): how the global start's poses are
+                    ranked and its refined candidates compared. coverage: the camera at the
                     scan frame's origin (a depth view in its camera's frame), each candidate
                     fitted by nearest points, then the mean truncated distance of the scan
                     to the body and of the body points the pose shows the camera (over the
                     scan's image) to the scan; it tells a flipped one-sided view from the
                     true one. rho: rho itself (for a scan not in its camera's frame)
-  --score-cap F     visible score: nearest distances capped at F L (default 0.05)
-  --inlier F        overlap threshold as a fraction of L (default 0.01)
+  --score-cap F     coverage score: nearest distances capped at F L (default 0.05)
+  --inlier F        overlap threshold as a fraction of L, 0 < F < 1 (default 0.01)
   --threads T       OpenMP threads (default: all)
   --json            print pose.json's object instead of the one-line summary
   --help            this text
@@ -115,6 +118,9 @@ nlohmann::json summary_json(const scan::AlignSummary& s, const scan::AlignOption
   j["eps"] = o.distance.params.epsilon;
   j["body_size"] = L;
   j["scan_points"] = s.residuals.size();
+  j["starts"] = s.starts;
+  j["candidates"] = s.candidates;
+  j["refine_points"] = {s.refine_body_points, s.refine_scan_points};
   return j;
 }
 
@@ -152,14 +158,18 @@ int run_align(const std::vector<std::string>& tokens) {
   o.rotations = static_cast<int>(args.integer("--rotations", o.rotations, 0, 100000));
   o.refine_points = static_cast<int>(args.integer("--refine-points", o.refine_points, 0, 1L << 30));
   o.keep = static_cast<int>(args.integer("--keep", o.keep, 1, 100000));
-  const std::string score = args.value("--score").value_or("visible");
-  if (score != "visible" && score != "rho")
-    throw UsageError("--score must be visible or rho, got '" + score + "'");
+  const std::string score = args.value("--score").value_or("coverage");
+  if (score == "visible") throw UsageError("--score visible is now --score coverage");
+  if (score != "coverage" && score != "rho")
+    throw UsageError("--score must be coverage or rho, got '" + score + "'");
   o.score = scan::candidate_score_from_string(score);
   o.score_truncation = args.number("--score-cap", o.score_truncation);
   if (!(o.score_truncation > 0.0))
     throw UsageError("--score-cap must be > 0, got " + std::to_string(o.score_truncation));
   o.inlier_distance = args.number("--inlier", o.inlier_distance);
+  if (!(o.inlier_distance > 0.0 && o.inlier_distance < 1.0))
+    throw UsageError("--inlier must be in (0, 1) (a fraction of the body size L), got " +
+                     std::to_string(o.inlier_distance));
   o.threads = static_cast<int>(args.integer("--threads", 0, 0, kMaxThreads));
   const bool json = args.flag("--json");
   const std::vector<std::string> files = args.finish();

@@ -48,9 +48,11 @@ options:
   --distance F     symmetric | scan_to_body | visible (default symmetric;
                    docs/formulation.md section 8): scan_to_body is rho = A alone
                    (TARGET -> MOVING, for a partial scan; B is reported 0), visible
-                   restricts B to the moving points marked in --visible
-  --visible FILE   with --distance visible: N lines of 0 or 1, one per moving point
-                   in the order of MOVING ('#' comments allowed), 1 = in B
+                   restricts B to the moving points the camera mask marks
+  --camera-mask FILE
+                   with --distance visible: N lines of 0 or 1, one per moving point
+                   in the order of MOVING ('#' comments allowed), 1 = seen by the
+                   camera (in B)
   --cap C          soft cap psi_c(d) = (d^-q + c^-q)^(-1/q) on every field value
                    before its beta-mean, C > 0 a length (default 0: no cap)
   --cap-q Q        sharpness q > 0 of the cap (default 4)
@@ -136,7 +138,7 @@ struct DistanceArgs {
   HausdorffOptions options;
   DistanceForm form;
   long dim = 0;
-  std::optional<std::string> visible_path, grad_path;
+  std::optional<std::string> mask_path, grad_path;
   bool json = false;
   scan::ScanCleanup clean;
   std::string weights;
@@ -163,10 +165,11 @@ DistanceArgs parse_distance(Args& args) {
   } catch (const InvalidArgument& e) {
     throw UsageError(std::string("--cap/--cap-q: ") + e.what());
   }
-  a.visible_path = args.value("--visible");
-  if (a.visible_path.has_value() != (a.form.sides == Sides::visible))
-    throw UsageError(a.visible_path ? "--visible needs --distance visible"
-                                    : "--distance visible needs --visible FILE");
+  args.retired("--visible", "--camera-mask");
+  a.mask_path = args.value("--camera-mask");
+  if (a.mask_path.has_value() != (a.form.sides == Sides::visible))
+    throw UsageError(a.mask_path ? "--camera-mask needs --distance visible"
+                                 : "--distance visible needs --camera-mask FILE");
   a.grad_path = args.value("--grad");
   a.json = args.flag("--json");
   if (const auto crop = args.value("--crop")) a.clean.crop = parse_number(*crop, "--crop");
@@ -256,10 +259,10 @@ int run_distance(const std::vector<std::string>& tokens) {
   }
   if (speaker)
     for (const std::string& n : notes) std::cerr << "softhd distance: " << n << '\n';
-  if (a.visible_path) {
-    a.form.visible = read_mask(*a.visible_path);
-    if (a.form.visible.size() != X.size())
-      throw FileError(*a.visible_path + ": " + std::to_string(a.form.visible.size()) +
+  if (a.mask_path) {
+    a.form.camera_mask = read_mask(*a.mask_path);
+    if (a.form.camera_mask.size() != X.size())
+      throw FileError(*a.mask_path + ": " + std::to_string(a.form.camera_mask.size()) +
                       " entries for the " + std::to_string(X.size()) + " points of '" + files[0] +
                       "'");
   }

@@ -18,7 +18,7 @@ skipped with one line on stderr (softhd's rows are still written).
 
   bench/bench_align.py BUILD_DIR [--poses N] [--csv FILE] [--threads T] [--distance D]
                        [--cap C] [--body-points N] [--scan-points N] [--methods a,b]
-                       [--score visible|rho]
+                       [--score coverage|rho]
 """
 import argparse
 import csv
@@ -32,6 +32,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 BODY = os.path.join(ROOT, "data", "targets", "finger_target.ply")
+FINE_MESH = os.path.join(ROOT, "data", "meshes", "finger_fine.msh")  # BODY is its deformed nodes
 
 
 def have(module):
@@ -56,7 +57,7 @@ def main():
     ap.add_argument("--scan-points", type=int, default=2000)
     ap.add_argument("--methods", default="softhd,open3d")
     ap.add_argument("--refine-points", type=int, default=1000)
-    ap.add_argument("--score", default="visible", help="softhd's candidate score: visible | rho")
+    ap.add_argument("--score", default="coverage", help="softhd's candidate score: coverage | rho")
     a = ap.parse_args()
     sys.path.insert(0, os.path.join(os.path.abspath(a.build), "python"))
     sys.path.insert(0, os.path.join(HERE, "peers"))
@@ -69,6 +70,7 @@ def main():
     if "open3d" in methods:
         import open3d_align
     fine, _ = softhd.read_cloud(BODY)
+    triangles = softhd.read_mesh(FINE_MESH, order=2).boundary_triangles
     rng = np.random.default_rng(12345)
     body = fine[np.sort(rng.choice(len(fine), min(a.body_points, len(fine)), replace=False))]
     L = synthetic.body_size(body)
@@ -76,8 +78,8 @@ def main():
     rows = []
     for k in range(a.poses):
         for view in ("full", "half"):
-            scan, P, info = synthetic.view(fine, 1000 + k, view, noise=0.005, outliers=0.03,
-                                                points=a.scan_points)
+            scan, P, info = synthetic.view(fine, triangles, 1000 + k, view, noise=0.005,
+                                           outliers=0.03, points=a.scan_points)
             for m in methods:
                 t0 = time.perf_counter()
                 if m == "softhd":

@@ -491,7 +491,7 @@ def section_align(rows):
             "body), random cameras (softhd.synthetic), views full and half (the left "
             "half of the image), 2000 visible points, noise 0.5 % of the body's size L, 3 % "
             "outliers. softhd: `softhd.align` (distance, cap and candidate score in align.log; "
-            "the default score is the visible-surface score of docs/formulation.md §8.5); Open3D: "
+            "the default score is the coverage score of docs/formulation.md §8.5); Open3D: "
             "FPFH + RANSAC + point-to-plane ICP, voxel L/40 (bench/peers/open3d_align.py). "
             "Success: rotation error < 2 degrees; translation error of the body's centre / L.\n\n")
     out = []

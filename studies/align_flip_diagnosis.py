@@ -7,7 +7,7 @@ shows the camera at the scan frame's origin, over the pixels holding scan points
 mean nearest distance to the scan (capped at 0.05 L) / L. A prototype of the C++ score of
 docs/formulation.md section 8.5 (which also adds the scan's side).
 
-  studies/align_flip_diagnosis.py BUILD_DIR [SEED ...] [--score visible|rho]
+  studies/align_flip_diagnosis.py BUILD_DIR [SEED ...] [--score coverage|rho]
 """
 import argparse
 import os
@@ -22,13 +22,15 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("build")
     ap.add_argument("seeds", nargs="*", type=int, default=[0, 1, 3, 5])
-    ap.add_argument("--score", default="visible")
+    ap.add_argument("--score", default="coverage")
     a = ap.parse_args()
     sys.path.insert(0, os.path.join(os.path.abspath(a.build), "python"))
     import softhd
     from softhd import synthetic as synthetic_scan
     from scipy.spatial import cKDTree
     fine, _ = softhd.read_cloud(os.path.join(HERE, "..", "data", "targets", "finger_target.ply"))
+    triangles = softhd.read_mesh(os.path.join(HERE, "..", "data", "meshes", "finger_fine.msh"),
+                                 order=2).boundary_triangles
     rng = np.random.default_rng(12345)  # as bench_align.py
     body = fine[np.sort(rng.choice(len(fine), 4000, replace=False))]
     L = synthetic_scan.body_size(body)
@@ -64,8 +66,8 @@ def main():
 
     for k in a.seeds:
         for view in ("full", "half"):
-            scan, P, _ = synthetic_scan.view(fine, 1000 + k, view, noise=0.005, outliers=0.03,
-                                             points=2000)
+            scan, P, _ = synthetic_scan.view(fine, triangles, 1000 + k, view, noise=0.005,
+                                             outliers=0.03, points=2000)
             found = softhd.align(body, scan, distance="scan_to_body", threads=1, score=a.score)
             start = softhd.align(body, scan, distance="scan_to_body", threads=1,
                                  global_start=False, initial=P)

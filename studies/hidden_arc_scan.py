@@ -50,7 +50,8 @@ def main():
     g = np.meshgrid(np.linspace(0, LENGTH, 201), np.linspace(0, WIDTH, 41),
                     np.linspace(0, THICK, 3), indexing="ij")
     body = arc(np.stack([c.ravel() for c in g], 1))
-    scan, P, _ = synthetic_scan.view(body, a.seed, "full", noise=0.005, outliers=0.0, points=6000)
+    scan, P, _ = synthetic_scan.view(body, synthetic_scan.box_surface(g[0].shape), a.seed, "full",
+                                     noise=0.005, outliers=0.0, points=6000)
     Y = scan @ P[:3, :3].T + P[:3, 3]  # back into the body's frame
     os.makedirs(a.out, exist_ok=True)
     softhd.write_cloud(os.path.join(a.out, "scan.ply"), Y, np.ones(len(Y)))

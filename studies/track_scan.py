@@ -275,8 +275,9 @@ def main():
     nodes = scene.mesh.nodes
     truth = true_nodes(nodes)
     deformed, _ = softhd.read_cloud(os.path.join(ROOT, "data/targets/finger_target.ply"))
-    scan, P_true, info = synthetic_scan.view(deformed, a.seed, a.view, noise=0.005,
-                                             outliers=0.03, table=True)
+    fine = softhd.read_mesh(os.path.join(ROOT, "data/meshes/finger_fine.msh"), order=2)
+    scan, P_true, info = synthetic_scan.view(deformed, fine.boundary_triangles, a.seed, a.view,
+                                             noise=0.005, outliers=0.03, table=True)
     L = info["size"]
     softhd.write_cloud(os.path.join(a.out, "scan.ply"), scan)
     log(f"view: {len(scan)} points in the camera's frame: {info['kept'] - info['table']} of the "

@@ -223,8 +223,8 @@ PointCloud bent_bar_half_view(Pose* P) {
 // The flip of a one-sided view (formulation §8.5): the scan of arm 1's front face lies as well
 // (to ρ̃: better) on its back face, the bar turned over; both poses are local minima of ρ̃
 // (scan_to_body), which does not see the knob (the scan over it is as near the body). The
-// visible-surface score does: turned over, the camera sees the knob 0.15 before the scan.
-TEST(Align, VisibleScoreTellsAFlippedHalfViewApart) {
+// coverage score does: turned over, the camera sees the knob 0.15 before the scan.
+TEST(Align, CoverageScoreTellsAFlippedHalfViewApart) {
   const PointCloud body = bent_bar();
   const double L = body_size(body);
   Pose P;
@@ -254,17 +254,17 @@ TEST(Align, VisibleScoreTellsAFlippedHalfViewApart) {
     EXPECT_LT((refined.back().pose.t - start.inverse().t).norm(), 1e-3 * L);
   }
   EXPECT_LT(refined[1].rho, refined[0].rho);
-  // The visible-surface score: near 0 at the true pose, 5 times more turned over.
-  const detail::VisibleScore score(body.points(), scan.points(), L, 0.05, 1);
+  // The coverage score: near 0 at the true pose, 5 times more turned over.
+  const detail::CoverageScore score(body.points(), scan.points(), L, 0.05, 1);
   const double s_true = score.value(P.inverse()), s_flip = score.value(flipped.inverse());
   EXPECT_LT(s_true, 1e-3);
   EXPECT_GT(s_flip, 5.0 * s_true);
   // align()'s choice between the two: by ρ̃ (score rho, the old rule) the flip, by the
-  // visible score (after each candidate's nearest-point fit) the true pose.
+  // coverage score (after each candidate's nearest-point fit) the true pose.
   o.score = CandidateScore::rho;
   std::vector<detail::LocalResult> copy = refined;
   EXPECT_EQ(detail::choose_candidate(body, scan, L, o, &copy), 1u);
-  o.score = CandidateScore::visible;
+  o.score = CandidateScore::coverage;
   copy = refined;
   const size_t chosen = detail::choose_candidate(body, scan, L, o, &copy);
   EXPECT_EQ(chosen, 0u);
@@ -284,8 +284,17 @@ TEST(Align, OptionsRefusedNamingTheField) {
   o.keep = 0;
   test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "keep");
   o = AlignOptions{};
+  o.inlier_distance = 1.5;  // a fraction of L: 1 or more measures no overlap
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); },
+                                      "inlier_distance must be in (0, 1)");
+  o = AlignOptions{};
   o.form.sides = Sides::visible;
   test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "visible");
+  EXPECT_EQ(candidate_score_from_string("coverage"), CandidateScore::coverage);
+  EXPECT_EQ(to_string(CandidateScore::coverage), "coverage");
+  // the retired spelling names the new one
+  test::expect_error<InvalidArgument>([] { candidate_score_from_string("visible"); },
+                                      "\"visible\" is now \"coverage\"");
   o = AlignOptions{};
   o.form.cap.c = -1.0;
   test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "cap.c");

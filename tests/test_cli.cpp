@@ -258,6 +258,8 @@ TEST_F(Cli, AlignRecoversAMovedCopyAndRefusesBadInput) {
                    "not a scaled rotation");
   expect_bad_input("align " + good + " " + write("nan.txt", "0 0 0\nnan 1 0\n") + out, "nan.txt:2");
   expect_bad_input("align " + good + " " + good + out + " --score best", "--score must be");
+  expect_bad_input("align " + good + " " + good + out + " --score visible",
+                   "--score visible is now --score coverage");
   expect_bad_input("align " + good + " " + good + out + " --score-cap 0", "--score-cap must be");
   expect_bad_input("align " + good + " " + good + out + " --similarity --scale-min 1.5",
                    "--scale-min must be in (0, 1]");
@@ -293,8 +295,53 @@ TEST_F(Cli, AlignInlierIsAFractionOfTheBodySize) {
   EXPECT_NEAR(def.value("inlier_distance", 0.0), 0.01 * L, 1e-15 * L);  // the default 0.01
   EXPECT_NEAR(wide.value("inlier_distance", 0.0), 0.2 * L, 1e-15 * L);
   EXPECT_GE(wide.value("overlap", 0.0), def.value("overlap", 1.0));
-  expect_bad_input("align " + clouds + " --out " + path("bad") + " --inlier 0",
-                   "inlier_distance must be > 0");
+  // a threshold of L or more (the body's diagonal) measures no overlap: refused naming the flag
+  for (const char* bad : {"0", "-0.1", "1", "1.5"})
+    expect_bad_input("align " + clouds + " --out " + path("bad") + " --inlier " + bad,
+                     "--inlier must be in (0, 1)");
+}
+
+// align --rotations, --keep, --refine-points and --no-global reach the search: pose.json
+// counts the starting poses (rotations + 4 principal-axis ones), the candidates refined (at
+// most --keep, plus --initial) and the refinement's points of body and scan, so a flag
+// that is ignored fails here.
+TEST_F(Cli, AlignSearchFlagsShowInPoseJson) {
+  std::string body_text, scan_text;
+  for (int i = 0; i < 120; ++i) {  // an asymmetric spiral and a shifted copy of 100 of its points
+    const double a = 0.15 * i;
+    const Eigen::Vector3d x(std::cos(a) * (1 + 0.01 * i), std::sin(a), 0.02 * i * (i % 3));
+    body_text +=
+        std::to_string(x.x()) + " " + std::to_string(x.y()) + " " + std::to_string(x.z()) + "\n";
+    if (i >= 100) continue;
+    const Eigen::Vector3d y = x + Eigen::Vector3d(0.3, -0.1, 0.2);
+    scan_text +=
+        std::to_string(y.x()) + " " + std::to_string(y.y()) + " " + std::to_string(y.z()) + "\n";
+  }
+  const std::string clouds =
+      write("body.txt", body_text) + " " + write("scan.txt", scan_text) + " --threads 1 --json";
+  const auto pose = [&](const std::string& flags) {
+    const Outcome r = run("align " + clouds + " --out " + path("al") + flags);
+    EXPECT_EQ(r.status, 0) << flags << ": " << r.err;
+    return r.status == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
+  };
+  const auto points = [](const nlohmann::json& j) {
+    return j.value("refine_points", std::vector<long>{});
+  };
+  const nlohmann::json def = pose("");
+  EXPECT_EQ(def.value("starts", -1), 48 + 4);
+  EXPECT_EQ(def.value("candidates", -1), 4);              // the default --keep
+  EXPECT_EQ(points(def), (std::vector<long>{120, 100}));  // below the default 1000: all
+  EXPECT_EQ(pose(" --rotations 10").value("starts", -1), 10 + 4);
+  EXPECT_EQ(pose(" --rotations 0").value("starts", -1), 4);  // the principal-axis starts only
+  EXPECT_EQ(pose(" --keep 1").value("candidates", -1), 1);
+  EXPECT_EQ(pose(" --keep 2").value("candidates", -1), 2);
+  EXPECT_EQ(points(pose(" --refine-points 30")), (std::vector<long>{30, 30}));
+  EXPECT_EQ(points(pose(" --refine-points 110")), (std::vector<long>{110, 100}));
+  const nlohmann::json local = pose(" --no-global");
+  EXPECT_EQ(local.value("starts", -1), 0);
+  EXPECT_EQ(local.value("candidates", -1), 1);
+  const std::string identity = write("id.txt", "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  EXPECT_EQ(pose(" --keep 2 --initial " + identity).value("candidates", -1), 2 + 1);
 }
 
 // A body or scan that fixes no pose (a single point, coincident or collinear points) is refused
@@ -328,14 +375,15 @@ TEST_F(Cli, DistanceFormsMatchTheLibraryAndRefuseMisuse) {
   DistanceForm form;
   form.sides = Sides::visible;
   form.cap = {0.4, 2.0};
-  form.visible.resize(12);
+  form.camera_mask.resize(12);
   for (int i = 0; i < 12; ++i) {
-    form.visible[i] = i % 3 != 1;
-    lines += form.visible[i] ? "1\n" : "0  # hidden\n";
+    form.camera_mask[i] = i % 3 != 1;
+    lines += form.camera_mask[i] ? "1\n" : "0  # hidden\n";
   }
   const std::string seen = write("seen.txt", lines);
-  const Outcome r = run("distance " + path("x.txt") + " " + path("y.txt") +
-                        " --distance visible --visible " + seen + " --cap 0.4 --cap-q 2 --json");
+  const Outcome r =
+      run("distance " + path("x.txt") + " " + path("y.txt") + " --distance visible --camera-mask " +
+          seen + " --cap 0.4 --cap-q 2 --json");
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(r.out);
   HausdorffRequest req;
@@ -350,8 +398,13 @@ TEST_F(Cli, DistanceFormsMatchTheLibraryAndRefuseMisuse) {
   EXPECT_EQ(nlohmann::json::parse(one.out)["B"].get<double>(), 0.0);
   const std::string xy = path("x.txt") + " " + path("y.txt");
   expect_bad_input("distance " + xy + " --distance both", "unknown distance 'both'");
-  expect_bad_input("distance " + xy + " --distance visible", "--distance visible needs --visible");
-  expect_bad_input("distance " + xy + " --visible " + seen, "--visible needs --distance visible");
+  expect_bad_input("distance " + xy + " --distance visible",
+                   "--distance visible needs --camera-mask");
+  expect_bad_input("distance " + xy + " --camera-mask " + seen,
+                   "--camera-mask needs --distance visible");
+  // the retired spelling of --camera-mask is refused naming the new one
+  expect_bad_input("distance " + xy + " --distance visible --visible " + seen,
+                   "--visible is now --camera-mask");
   expect_bad_input("distance " + xy + " --cap -1", "--cap/--cap-q: distance cap.c must be");
   expect_bad_input("distance " + xy + " --cap 1 --cap-q 0", "distance cap.q must be");
   // Below the accepted ranges (docs/formulation.md §8.3) rho was 0 or the constant cap.
@@ -360,18 +413,21 @@ TEST_F(Cli, DistanceFormsMatchTheLibraryAndRefuseMisuse) {
   expect_bad_input("distance " + xy + " --cap 1e-300",
                    "--cap: distance cap (cap.c) 1e-300 is below");
   expect_bad_input(
-      "distance " + xy + " --distance visible --visible " + write("bad.txt", "1\n0\nyes\n"),
+      "distance " + xy + " --distance visible --camera-mask " + write("bad.txt", "1\n0\nyes\n"),
       "bad.txt:3: expected 0 or 1, got 'yes'");
-  expect_bad_input("distance " + xy + " --distance visible --visible " + write("few.txt", "1\n0\n"),
-                   "few.txt: 2 entries for the 12 points of");
-  expect_bad_input("distance " + xy + " --distance visible --visible " + write("none.txt", "0\n"),
-                   "none.txt: 1 entries");
-  expect_bad_input("distance " + xy + " --distance visible --visible " + write("e.txt", "# no\n"),
-                   "e.txt: no entries");
+  expect_bad_input(
+      "distance " + xy + " --distance visible --camera-mask " + write("few.txt", "1\n0\n"),
+      "few.txt: 2 entries for the 12 points of");
+  expect_bad_input(
+      "distance " + xy + " --distance visible --camera-mask " + write("none.txt", "0\n"),
+      "none.txt: 1 entries");
+  expect_bad_input(
+      "distance " + xy + " --distance visible --camera-mask " + write("e.txt", "# no\n"),
+      "e.txt: no entries");
   std::string zeros;
   for (int i = 0; i < 12; ++i) zeros += "0\n";
-  expect_bad_input("distance " + xy + " --distance visible --visible " + write("z.txt", zeros),
-                   "no moving point is marked visible");
+  expect_bad_input("distance " + xy + " --distance visible --camera-mask " + write("z.txt", zeros),
+                   "the camera_mask marks no moving point");
 }
 
 // distance's cleanup flags act on TARGET as documented: --crop keeps exactly the points in

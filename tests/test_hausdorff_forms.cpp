@@ -34,7 +34,7 @@ DistanceForm make_form(Sides sides, double cap, Eigen::Index n) {
   f.sides = sides;
   f.cap.c = cap;
   f.cap.q = 3.0;
-  if (sides == Sides::visible) f.visible = random_mask(n, 41);
+  if (sides == Sides::visible) f.camera_mask = random_mask(n, 41);
   return f;
 }
 
@@ -242,7 +242,7 @@ TEST(HausdorffForms, AllVisibleIsSymmetric) {
   const PointCloud X = random_cloud(23, 3, 3), Y = random_cloud(31, 3, 4, 0.2, 1.3);
   for (double cap : {0.0, 0.3}) {
     DistanceForm vis = make_form(Sides::visible, cap, X.size());
-    vis.visible.setConstant(true);
+    vis.camera_mask.setConstant(true);
     const DistanceForm sym = make_form(Sides::symmetric, cap, X.size());
     const HausdorffResult a = everything(X, Y, vis), b = everything(X, Y, sym);
     EXPECT_EQ(a.rho, b.rho);
@@ -377,7 +377,7 @@ TEST(HausdorffForms, MatchesADirectReference) {
           direct_mean(dy, Y.volumes(), Mask::Constant(Y.size(), true), req.form.cap, prm.beta);
       long double B = 0, rho = A;
       if (fc.sides != Sides::scan_to_body) {
-        B = direct_mean(dx, X.volumes(), fc.sides == Sides::visible ? req.form.visible : all,
+        B = direct_mean(dx, X.volumes(), fc.sides == Sides::visible ? req.form.camera_mask : all,
                         req.form.cap, prm.beta);
         rho = std::pow((std::pow(A, prm.gamma) + std::pow(B, prm.gamma)) / 2, 1 / prm.gamma);
       }
@@ -403,7 +403,7 @@ TEST(HausdorffForms, NearestCapsAndMasksTheMaxima) {
   for (Eigen::Index j = 0; j < Y.size(); ++j)
     a = std::max(a, brute_nearest(X, Y.points().row(j).transpose()));
   for (Eigen::Index i = 0; i < X.size(); ++i)
-    if (req.form.visible[i]) b = std::max(b, brute_nearest(Y, X.points().row(i).transpose()));
+    if (req.form.camera_mask[i]) b = std::max(b, brute_nearest(Y, X.points().row(i).transpose()));
   EXPECT_NEAR(r.A, static_cast<double>(direct_cap(a, req.form.cap)), 1e-14);
   EXPECT_NEAR(r.B, static_cast<double>(direct_cap(b, req.form.cap)), 1e-14);
   EXPECT_EQ(r.rho, std::max(r.A, r.B));
@@ -499,14 +499,14 @@ TEST(HausdorffForms, InvalidFormsAreRefusedNamingTheField) {
   f.cap.q = std::nan("");
   refuse(f, "cap.q");
   f = DistanceForm{};
-  f.visible = Mask::Constant(X.size(), true);
-  refuse(f, "visible: a mask is given but the distance is symmetric");
+  f.camera_mask = Mask::Constant(X.size(), true);
+  refuse(f, "visible: a camera_mask is given but the distance is symmetric");
   f.sides = Sides::visible;
-  f.visible = Mask::Constant(X.size() + 1, true);
-  refuse(f, "visible: the mask has 11 entries for 10 moving points");
-  f.visible = Mask::Constant(X.size(), false);
-  refuse(f, "visible: no moving point");
-  f.visible = Mask();
+  f.camera_mask = Mask::Constant(X.size() + 1, true);
+  refuse(f, "visible: the camera_mask has 11 entries for 10 moving points");
+  f.camera_mask = Mask::Constant(X.size(), false);
+  refuse(f, "visible: the camera_mask marks no moving point");
+  f.camera_mask = Mask();
   refuse(f, "visible");
   expect_error<InvalidArgument>([] { sides_from_string("both"); }, "distance");
   EXPECT_EQ(sides_from_string("scan_to_body"), Sides::scan_to_body);

@@ -49,8 +49,8 @@ struct Scene {
         target(Y, options(c, prm)) {
     req.form.sides = c.sides;
     if (c.sides == Sides::visible) {
-      req.form.visible.setConstant(X.size(), false);
-      for (Eigen::Index i = 0; i < X.size(); i += 2) req.form.visible[i] = true;
+      req.form.camera_mask.setConstant(X.size(), false);
+      for (Eigen::Index i = 0; i < X.size(); i += 2) req.form.camera_mask[i] = true;
     }
     if (c.capped) {  // the cap near the median field: active on about half the points
       HausdorffRequest fields;

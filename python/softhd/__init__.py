@@ -42,6 +42,7 @@ from ._core import (DistanceResult, Error, FileError, ForwardResult, InvalidArgu
 
 __all__ = ["distance", "align", "hausdorff_nearest", "Target", "read_cloud", "write_cloud", "read_mesh",
            "crop_to_box", "remove_statistical_outliers", "remove_dominant_plane", "area_weights",
+           "visible_points",
            "Scene", "Mesh", "optimise", "optimise_defaults", "DistanceResult", "ForwardResult",
            "OptimiseResult",
            "Iteration", "Error", "InvalidArgument", "FileError", "ResourceError", "NumericalError"]
@@ -75,6 +76,13 @@ def _mask(v, name):
     return _np.ascontiguousarray(arr, dtype=bool)
 
 
+def _retired_visible(visible):
+    """The keyword `visible` (the camera mask's old name) is refused naming the new one."""
+    if visible is not None:
+        raise TypeError("the keyword visible is now camera_mask (the mask of the moving points "
+                        "a camera sees)")
+
+
 class Target:
     """A target cloud Y (volumes VY) prepared for many evaluations: its k-d trees are built once.
 
@@ -99,8 +107,8 @@ class Target:
         return self._target.dim
 
     def evaluate(self, X, VX=None, *, fields=False, gradient=False, gradient_volumes=False,
-                 gradient_target=False, distance="symmetric", cap=0.0, cap_q=4.0, visible=None,
-                 hessian=False):
+                 gradient_target=False, distance="symmetric", cap=0.0, cap_q=4.0, camera_mask=None,
+                 visible=None, hessian=False):
         """rho_H(X, Y) and what is asked for, as a :class:`DistanceResult`.
 
         fields: d~ at every point (``field_moving`` (N,), ``field_target`` (M,); the raw
@@ -108,17 +116,19 @@ class Target:
         gradient_volumes: d rho / d V_i (N,); gradient_target: d rho / d y_j (M, d).
         Unrequested members are None. The form (docs/formulation.md §8): distance
         "symmetric", "scan_to_body" (rho = A, Y -> X only; B reported 0) or "visible" (B over
-        the moving points where ``visible`` (N,) is true, weights renormalised); cap: the soft
+        the moving points where ``camera_mask`` (N,) is true: the points a camera sees,
+        weights renormalised); cap: the soft
         cap c of psi_c(d) = (d^-q + c^-q)^(-1/q) on every field value (0: none), cap_q: q.
         hessian: keep what :meth:`hessian_product` needs at X (the gradient's passes are made).
         X (and VX) follow the module's array rule (no copy of C-contiguous float64).
         """
-        if visible is not None:
-            visible = _mask(visible, "visible")
+        _retired_visible(visible)
+        if camera_mask is not None:
+            camera_mask = _mask(camera_mask, "camera_mask")
         return self._target.evaluate(_as_float64(X, "X"), _volumes(VX, "VX"), fields=fields,
                                      gradient=gradient, gradient_volumes=gradient_volumes,
                                      gradient_target=gradient_target, distance=distance,
-                                     cap=cap, cap_q=cap_q, visible=visible, hessian=hessian)
+                                     cap=cap, cap_q=cap_q, camera_mask=camera_mask, hessian=hessian)
 
     def hessian_product(self, result, V, *, part="full"):
         """H V, the Hessian of rho w.r.t. the moving points (volumes fixed) applied to the
@@ -132,20 +142,21 @@ class Target:
 def distance(X, Y, VX=None, VY=None, *, alpha=4.0, beta=4.0, gamma=2.0, eps=1e-3,
              method="exact", tol=1e-6, fields=False, gradient=False, gradient_volumes=False,
              gradient_target=False, threads=0, distance="symmetric", cap=0.0, cap_q=4.0,
-             visible=None):
+             camera_mask=None, visible=None):
     """The regularised Hausdorff distance rho_H between X (N, d) and Y (M, d).
 
     method: "exact" (all pairs), "tree" (relative error of every kernel sum <= tol) or
     "nearest" (the unregularised Hausdorff distance; no gradients). distance, cap, cap_q,
-    visible: the form of docs/formulation.md §8 (see :meth:`Target.evaluate`). Returns a
+    camera_mask: the form of docs/formulation.md §8 (see :meth:`Target.evaluate`). Returns a
     :class:`DistanceResult` with ``rho``, ``A``, ``B`` and the requested arrays.
     Equivalent to ``Target(Y, VY, ...).evaluate(X, VX, ...)``.
     """
+    _retired_visible(visible)
     target = Target(Y, VY, alpha=alpha, beta=beta, gamma=gamma, eps=eps, method=method, tol=tol,
                     threads=threads)
     return target.evaluate(X, VX, fields=fields, gradient=gradient,
                            gradient_volumes=gradient_volumes, gradient_target=gradient_target,
-                           distance=distance, cap=cap, cap_q=cap_q, visible=visible)
+                           distance=distance, cap=cap, cap_q=cap_q, camera_mask=camera_mask)
 
 
 def hausdorff_nearest(X, Y, *, fields=False, threads=0):
@@ -157,7 +168,7 @@ def hausdorff_nearest(X, Y, *, fields=False, threads=0):
 def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, scale_max=2.0,
           distance="symmetric", cap=0.0, eps=None, alpha=4.0, beta=4.0, gamma=2.0,
           global_start=True, initial=None, rotations=48, refine_points=1000, inlier=0.01,
-          threads=0, score="visible", keep=4):
+          threads=0, score="coverage", keep=4):
     """The pose that takes ``scan`` (M, 3), in the camera's frame, onto ``body`` (N, 3)
     (docs/formulation.md section 8, as ``softhd align``): y -> s R y + t minimising rho over a
     twist, after a global start over ``rotations`` grid rotations (unless ``global_start`` is
@@ -169,16 +180,21 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
     distance: "symmetric" or "scan_to_body" (rho = A, for partial views); cap: the soft cap
     (a length, 0: none). eps: the final refinement's epsilon (None: L/1000, L the diagonal of
     the body's bounding box). refine_points: points of each cloud in the refinement (0: all).
-    inlier: the overlap's threshold as a fraction of L. score: how the global start's poses
-    are ranked and its ``keep`` refined candidates compared: "visible" (the visible-surface
-    score of docs/formulation.md section 8.5; the camera at the scan frame's origin) or "rho"
-    (rho itself, for a scan not in its camera's frame).
+    inlier: the overlap's threshold as a fraction of L, in (0, 1). score: how the global start's poses
+    are ranked and its ``keep`` refined candidates compared: "coverage" (the coverage score
+    of docs/formulation.md section 8.5: the camera at the scan frame's origin, the scan must
+    cover the body's side it shows and lie on the body) or "rho" (rho itself, for a scan not
+    in its camera's frame). The retired spelling "visible" raises InvalidArgument naming
+    "coverage".
 
     Returns a dict: ``matrix`` (4, 4), ``twist`` (7,: omega, v, sigma with R = exp([omega]x),
     t = v, s = e^sigma), ``scale``, ``rho``, ``overlap`` (fraction of scan points within the
     inlier distance of the body), ``inlier_distance``, ``rmse`` (of those points' true
     nearest distances), ``residuals`` (M,: every moved scan point's true nearest distance to
-    the body), ``status``, ``iterations``, ``seconds``. Raises InvalidArgument for bounds
+    the body), ``status``, ``iterations``, ``seconds``, ``starts`` (the global start's
+    starting poses: rotations + 4, 0 without it), ``candidates`` (the candidates refined and
+    compared: at most ``keep``, plus ``initial``), ``refine_points`` (the refinement's points
+    of the body and of the scan). Raises InvalidArgument for bounds
     that exclude 1, a wrong ``initial``, non-3D or non-finite clouds, and a body or scan whose
     points do not span a plane (a single point, coincident or collinear points fix no pose).
     """
@@ -233,6 +249,21 @@ def area_weights(points, method="knn", neighbours=12):
     """(N,) estimated surface areas of a 3D scan (lengths of a 2D curve): "knn" (pi r_k^2 / k)
     or "delaunay" (the tangent-plane Voronoi cell); docs/formulation.md section 8.9."""
     return _core.area_weights(_as_float64(points, "points"), str(method), int(neighbours))
+
+
+def visible_points(points, triangles, camera, tolerance=1e-6):
+    """(N,) bool: the points of a closed, outward triangle surface that a camera at `camera`
+    sees (docs/formulation.md section 8.7): facing (an incident triangle's outward normal n has
+    n.(camera - x) > 0) and the segment from the camera meets no triangle before x (up to
+    `tolerance` times the bounding-box diagonal). points (N, 3); triangles (T, 3) ids into
+    them (e.g. Mesh.boundary_triangles over Mesh.nodes + displacements); a point on no
+    triangle (an interior node) is not seen."""
+    tri = _np.asarray(triangles)
+    if tri.size and tri.dtype.kind not in "iu":
+        raise TypeError(f"triangles must hold integers, got dtype {tri.dtype}")
+    return _core.visible_points(_as_float64(points, "points"),
+                                _np.ascontiguousarray(tri, dtype=_np.int64).reshape(-1, 3),
+                                _as_float64(camera, "camera"), float(tolerance))
 
 
 def write_cloud(path, points, volumes=None):

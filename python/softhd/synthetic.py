@@ -1,16 +1,18 @@
 """Synthetic depth views of a body, for tests, examples and benchmarks of scan tracking.
 
-view(body_points, seed, ...) returns the points one random camera sees, in the camera's frame,
-with the true pose (camera frame -> body frame):
+view(body_points, triangles, seed, ...) returns the points one random camera sees, in the
+camera's frame, with the true pose (camera frame -> body frame):
   1. a random camera: direction uniform on the upper half sphere (z > 0.2: a table lies under
      the body) around the body's centre, at `distance` times the body's size L, looking at
      the centre (random roll);
   2. optionally a table: a plane under the body (its lowest z minus L/100) over its
-     footprint inflated 1.3 times, with half as many points as the body;
-  3. visibility by a z-buffer: the points projected (pinhole) onto a `pixels` square image
-     that frames the body; a point is kept when its depth is within `depth_tol` L of the
-     nearest depth in its pixel (interior nodes and the far side drop out); view_kind
-     "half" keeps only the left half of the image (half the body out of frame);
+     footprint inflated 1.3 times, a jittered triangulated grid of about half as many points
+     as the body;
+  3. visibility by softhd.visible_points, the library's ray cast (docs/formulation.md section
+     8.7) against the body's boundary triangles (and the table's): a point is kept when a
+     triangle through it faces the camera and the segment from the camera meets no other
+     triangle (interior nodes, on no triangle, and the far side drop out); view_kind "half"
+     keeps only the left half of the image (half the body out of frame);
   4. `points`: a random subsample of the visible points;
   5. noise: Gaussian, standard deviation `noise` L per coordinate; outliers: `outliers`
      times the count, uniform in the body's bounding box inflated 1.5 times.
@@ -20,9 +22,14 @@ matched_nodes(nodes, fine_rest, fine_deformed) gives the true deformed positions
 mesh's nodes from a finer mesh that contains them (the reference of a node error), and
 node_errors(...) the largest and RMS distance to them.
 
+box_surface(shape) gives the boundary triangles of a structured grid of points (a box's
+nodes in NumPy's "ij" ravel order), for bodies made without a mesh.
+
 Deterministic for a fixed seed (NumPy's default_rng).
 """
 import numpy as np
+
+import softhd
 
 
 def body_size(points):
@@ -46,48 +53,73 @@ def camera_pose(rng, centre, distance):
     return np.vstack([x, y, z]), c
 
 
-def table_points(rng, body, L, count):
+def box_surface(shape):
+    """(T, 3) int64 outward triangles of the boundary of a structured n1 x n2 x n3 grid of
+    points indexed i3 + n3 (i2 + n2 i1) (np.meshgrid(..., indexing="ij") raveled), each boundary
+    quadrilateral cut by a diagonal. Outward for a grid whose axes are right-handed."""
+    n = tuple(int(k) for k in shape)
+    if len(n) != 3 or min(n) < 2:
+        raise ValueError(f"box_surface: shape must be 3 counts >= 2, got {shape}")
+    idx = np.arange(n[0] * n[1] * n[2]).reshape(n)
+    tri = []
+    for axis in range(3):
+        # a face's quad (i, j), (i+1, j), (i+1, j+1), (i, j+1) over the other two axes turns
+        # by e_a x e_b: +e0, -e1, +e2 for axis 0, 1, 2; flipped where that points inward
+        for side, face in ((0, np.take(idx, 0, axis)), (1, np.take(idx, -1, axis))):
+            p, q, r, s = face[:-1, :-1], face[1:, :-1], face[1:, 1:], face[:-1, 1:]
+            out = (side == 1) == (axis != 1)
+            quad = [p, q, r, s] if out else [p, s, r, q]
+            tri.append(np.stack([quad[0], quad[1], quad[2]], -1).reshape(-1, 3))
+            tri.append(np.stack([quad[0], quad[2], quad[3]], -1).reshape(-1, 3))
+    return np.vstack(tri).astype(np.int64)
+
+
+def table_surface(rng, body, L, count):
+    """(points, triangles): a jittered n x n grid (n^2 >= count) in the plane under the body,
+    triangles facing up (+z)."""
     lo, hi = body.min(0), body.max(0)
     mid, half = (lo + hi) / 2, 0.65 * (hi - lo)
-    p = np.empty((count, 3))
-    p[:, 0] = rng.uniform(mid[0] - half[0], mid[0] + half[0], count)
-    p[:, 1] = rng.uniform(mid[1] - half[1], mid[1] + half[1], count)
+    n = max(2, int(np.ceil(np.sqrt(count))))
+    g = (np.arange(n) + 0.5) / n  # cell centres, jittered by under a third of a cell
+    u = g[:, None] + rng.uniform(-0.3, 0.3, (n, n)) / n
+    v = g[None, :] + rng.uniform(-0.3, 0.3, (n, n)) / n
+    p = np.empty((n * n, 3))
+    p[:, 0] = (mid[0] - half[0] + 2 * half[0] * u).ravel()
+    p[:, 1] = (mid[1] - half[1] + 2 * half[1] * v).ravel()
     p[:, 2] = lo[2] - 0.01 * L
-    return p
+    idx = np.arange(n * n).reshape(n, n)  # idx[i, j]: x index i, y index j
+    a, b, c, d = idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]
+    tri = np.vstack([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    return p, tri
 
 
-def visible(cam, pixels, depth_tol, L, half):
-    """Mask of the camera-frame points `cam` (K, 3) that a z-buffer keeps."""
-    u = cam[:, 0] / cam[:, 2]
-    v = cam[:, 1] / cam[:, 2]
-    lo_u, hi_u, lo_v, hi_v = u.min(), u.max(), v.min(), v.max()
-    span = max(hi_u - lo_u, hi_v - lo_v) * (1 + 1e-9)
-    iu = np.minimum(((u - lo_u) / span * pixels).astype(int), pixels - 1)
-    iv = np.minimum(((v - lo_v) / span * pixels).astype(int), pixels - 1)
-    pix = iv * pixels + iu
-    zbuf = np.full(pixels * pixels, np.inf)
-    np.minimum.at(zbuf, pix, cam[:, 2])
-    keep = cam[:, 2] <= zbuf[pix] + depth_tol * L
-    if half:
-        keep &= u <= np.median(u[keep])
-    return keep
+def visible(world, triangles, camera):
+    """Mask of the points `world` (K, 3) the camera sees: softhd.visible_points."""
+    return softhd.visible_points(world, triangles, camera)
 
 
-def view(body, seed, view_kind="full", noise=0.005, outliers=0.03, table=False, points=0,
-         pixels=120, depth_tol=0.01, distance=3.0):
-    """(scan in the camera frame (M, 3), P (4, 4): camera -> body, info dict)."""
+def view(body, triangles, seed, view_kind="full", noise=0.005, outliers=0.03, table=False,
+         points=0, distance=3.0):
+    """(scan in the camera frame (M, 3), P (4, 4): camera -> body, info dict). body (N, 3)
+    points; triangles (T, 3) the boundary's outward triangles over them (e.g.
+    Mesh.boundary_triangles, or box_surface for a grid)."""
     rng = np.random.default_rng(seed)
+    body = np.ascontiguousarray(body, dtype=float)
     L = body_size(body)
     centre = (body.min(0) + body.max(0)) / 2
     R, c = camera_pose(rng, centre, distance * L)
-    world = body
+    world, tri = body, np.asarray(triangles, dtype=np.int64)
     is_table = np.zeros(len(body), bool)
     if table:
-        t = table_points(rng, body, L, len(body) // 2)
+        t, t_tri = table_surface(rng, body, L, len(body) // 2)
         world = np.vstack([body, t])
+        tri = np.vstack([tri, t_tri + len(body)])
         is_table = np.concatenate([is_table, np.ones(len(t), bool)])
+    keep = visible(world, tri, c)
     cam = (world - c) @ R.T
-    keep = visible(cam, pixels, depth_tol, L, view_kind == "half")
+    if view_kind == "half":
+        u = cam[:, 0] / cam[:, 2]
+        keep &= u <= np.median(u[keep])
     idx = np.flatnonzero(keep)
     if points and len(idx) > points:
         idx = np.sort(rng.choice(idx, points, replace=False))

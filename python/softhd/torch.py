@@ -36,7 +36,7 @@ class HausdorffFunction(torch.autograd.Function):
     """rho_H(X, Y) with volumes VX, VY (None: all 1) as an autograd Function.
 
     apply(X, Y, VX, VY, options): options is a dict of softhd.distance keyword arguments
-    (alpha, beta, gamma, eps, method, tol, threads, distance, cap, cap_q, visible).
+    (alpha, beta, gamma, eps, method, tol, threads, distance, cap, cap_q, camera_mask).
     """
 
     @staticmethod
@@ -80,13 +80,14 @@ class HausdorffLoss(torch.nn.Module):
 
     distance, cap, cap_q: the form of docs/formulation.md §8 (as softhd.distance): "symmetric"
     (default), "scan_to_body" (rho = A: Y is a partial scan, the hidden parts of X are not
-    punished) or "visible" (B over the points of X marked in forward's ``visible``); cap > 0
+    punished) or "visible" (B over the points of X marked in forward's ``camera_mask``); cap > 0
     applies the soft cap psi_c(d) = (d^-q + c^-q)^(-1/q), q = cap_q, to every field value.
 
-    forward(X, Y, VX=None, VY=None, visible=None): X (N, d) and Y (M, d) CPU tensors (d = 2 or
-    3), float32 or float64; VX (N,) and VY (M,) optional positive volumes (weights; only their
-    ratios matter); visible (N,) booleans or 0/1 (tensor or array; other values raise
-    softhd.InvalidArgument), with distance="visible" only, held fixed (no gradient). Returns a
+    forward(X, Y, VX=None, VY=None, camera_mask=None): X (N, d) and Y (M, d) CPU tensors
+    (d = 2 or 3), float32 or float64; VX (N,) and VY (M,) optional positive volumes (weights;
+    only their ratios matter); camera_mask (N,): the points of X a camera sees, booleans or 0/1
+    (tensor or array; other values raise softhd.InvalidArgument; the retired keyword visible
+    raises TypeError naming camera_mask), with distance="visible" only, held fixed (no gradient). Returns a
     0-dimensional tensor of X's dtype; gradients flow to every input that requires one (points,
     target points, and either set of weights; VY only for the symmetric form, the others raise
     NotImplementedError for it).
@@ -103,14 +104,15 @@ class HausdorffLoss(torch.nn.Module):
         self.options = dict(alpha=alpha, beta=beta, gamma=gamma, eps=eps, method=method, tol=tol,
                             threads=threads, distance=distance, cap=cap, cap_q=cap_q)
 
-    def forward(self, X, Y, VX=None, VY=None, visible=None):
+    def forward(self, X, Y, VX=None, VY=None, camera_mask=None, visible=None):
         options = dict(self.options)
         if options["threads"] == 0:
             options["threads"] = torch.get_num_threads()
-        if visible is not None:
-            if isinstance(visible, torch.Tensor):
-                visible = visible.detach().cpu().numpy()
-            options["visible"] = visible  # booleans or 0/1 (softhd.distance refuses others)
+        _softhd._retired_visible(visible)
+        if camera_mask is not None:
+            if isinstance(camera_mask, torch.Tensor):
+                camera_mask = camera_mask.detach().cpu().numpy()
+            options["camera_mask"] = camera_mask  # booleans or 0/1 (softhd.distance refuses others)
         return HausdorffFunction.apply(X, Y, VX, VY, options)
 
     def extra_repr(self):

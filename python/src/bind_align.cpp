@@ -58,6 +58,9 @@ py::dict align_clouds(const Array& body, const std::optional<Array>& body_volume
   d["status"] = scan::to_string(s.status);
   d["iterations"] = s.iterations;
   d["seconds"] = s.seconds;
+  d["starts"] = s.starts;
+  d["candidates"] = s.candidates;
+  d["refine_points"] = py::make_tuple(s.refine_body_points, s.refine_scan_points);
   return d;
 }
 

@@ -35,17 +35,17 @@ HausdorffTarget make_target(const Array& Y, const std::optional<Array>& VY, doub
 /// The distance form of docs/formulation.md §8 from the keyword arguments (validated by the
 /// evaluation, which names the field).
 DistanceForm make_form(const std::string& distance, double cap, double cap_q,
-                       const std::optional<py::array_t<bool, py::array::c_style>>& visible) {
+                       const std::optional<py::array_t<bool, py::array::c_style>>& camera_mask) {
   DistanceForm form;
   form.sides = sides_from_string(distance);
   form.cap.c = cap;
   form.cap.q = cap_q;
-  if (visible) {
-    if (visible->ndim() != 1)
-      throw InvalidArgument("visible must be a 1-D array of N booleans, got " +
-                            std::to_string(visible->ndim()) + " dimensions");
-    form.visible =
-        Eigen::Map<const Eigen::Array<bool, Eigen::Dynamic, 1>>(visible->data(), visible->shape(0));
+  if (camera_mask) {
+    if (camera_mask->ndim() != 1)
+      throw InvalidArgument("camera_mask must be a 1-D array of N booleans, got " +
+                            std::to_string(camera_mask->ndim()) + " dimensions");
+    form.camera_mask = Eigen::Map<const Eigen::Array<bool, Eigen::Dynamic, 1>>(
+        camera_mask->data(), camera_mask->shape(0));
   }
   return form;
 }
@@ -54,12 +54,12 @@ HausdorffResult evaluate(const HausdorffTarget& target, const Array& X,
                          const std::optional<Array>& VX, bool fields, bool gradient,
                          bool gradient_volumes, bool gradient_target, const std::string& distance,
                          double cap, double cap_q,
-                         const std::optional<py::array_t<bool, py::array::c_style>>& visible,
+                         const std::optional<py::array_t<bool, py::array::c_style>>& camera_mask,
                          bool hessian) {
   check_cloud(X, VX, "X");
   HausdorffRequest request;
   request.hessian_points = hessian;
-  request.form = make_form(distance, cap, cap_q, visible);
+  request.form = make_form(distance, cap, cap_q, camera_mask);
   request.fields = fields;
   request.gradient_points = gradient;
   request.gradient_volumes = gradient_volumes;
@@ -149,7 +149,7 @@ void bind_hausdorff(py::module_& m) {
       .def("evaluate", &evaluate, py::arg("X").noconvert(), py::arg("VX").noconvert(),
            py::kw_only(), py::arg("fields"), py::arg("gradient"), py::arg("gradient_volumes"),
            py::arg("gradient_target"), py::arg("distance") = "symmetric", py::arg("cap") = 0.0,
-           py::arg("cap_q") = 4.0, py::arg("visible") = py::none(), py::arg("hessian") = false)
+           py::arg("cap_q") = 4.0, py::arg("camera_mask") = py::none(), py::arg("hessian") = false)
       .def("hessian_product", &hessian_product, py::arg("at"), py::arg("V").noconvert(),
            py::kw_only(), py::arg("part") = "full")
       .def_property_readonly("size", [](const HausdorffTarget& t) { return t.cloud().size(); })

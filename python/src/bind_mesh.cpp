@@ -7,6 +7,7 @@
 
 #include "mesh.hpp"
 #include "scene.hpp"
+#include "softhd/fe/boundary.hpp"
 #include "softhd/fe/gmsh_mesh.hpp"
 
 namespace softhd::python {
@@ -26,6 +27,16 @@ py::array_t<std::int64_t> int_rows(const Matrix& m) {
 py::array_t<std::int64_t> int_vector(const Eigen::VectorXi& v) {
   py::array_t<std::int64_t> out(v.size());
   for (Eigen::Index i = 0; i < v.size(); ++i) out.mutable_at(i) = v[i];
+  return out;
+}
+
+// The boundary triangles over the mesh's node ids (fe::boundary_facets, outward).
+py::array_t<std::int64_t> boundary_triangles(const PyMesh& s) {
+  const fe::BoundaryFacets b = fe::boundary_facets(s.mesh);
+  py::array_t<std::int64_t> out({b.triangles.rows(), Eigen::Index{3}});
+  auto view = out.mutable_unchecked<2>();
+  for (Eigen::Index t = 0; t < b.triangles.rows(); ++t)
+    for (int c = 0; c < 3; ++c) view(t, c) = b.nodes[static_cast<size_t>(b.triangles(t, c))];
   return out;
 }
 
@@ -94,6 +105,10 @@ void bind_mesh(py::module_& m) {
           },
           "dict: boundary name -> sorted int64 node ids (the file's physical groups one "
           "dimension below the body's; a box's faces x0 .. z1)")
+      .def_property_readonly("boundary_triangles", &boundary_triangles,
+                             "(T, 3) int64 node ids of the boundary surface's triangles, "
+                             "outward (3D; each facet cut into flat triangles through its "
+                             "nodes, docs/formulation.md §8.6)")
       .def_property_readonly(
           "volume", [](const PyMesh& s) { return s.volume; },
           "|Omega_0| by softhd's quadrature (sum of w_q det J0; area in 2D)")

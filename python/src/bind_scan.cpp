@@ -1,5 +1,6 @@
-// softhd._core scan clean-up and surface weights (softhd/scan/cleanup.hpp,
-// softhd/scan/surface_weights.hpp): clouds in, kept indices or areas out.
+// softhd._core scan clean-up, surface weights and visibility (softhd/scan/cleanup.hpp,
+// softhd/scan/surface_weights.hpp, softhd/scan/visibility.hpp): clouds in, kept indices, areas
+// or masks out.
 
 #include <cstdint>
 #include <vector>
@@ -8,6 +9,7 @@
 #include "softhd/error.hpp"
 #include "softhd/scan/cleanup.hpp"
 #include "softhd/scan/surface_weights.hpp"
+#include "softhd/scan/visibility.hpp"
 
 namespace softhd::python {
 
@@ -76,6 +78,44 @@ py::array_t<double> areas(const Array& points, const std::string& method, int ne
   return out;
 }
 
+// The surface of (N, 3) points and (T, 3) int64 triangles over them (ids checked by the
+// library: InvalidArgument naming the range).
+TriangleSurface surface_of(const Array& points, const py::array_t<std::int64_t>& triangles) {
+  if (points.ndim() != 2 || points.shape(1) != 3)
+    throw InvalidArgument("visible_points: points must be an (N, 3) array");
+  if (triangles.ndim() != 2 || triangles.shape(1) != 3)
+    throw InvalidArgument("visible_points: triangles must be a (T, 3) integer array");
+  TriangleSurface s;
+  s.points = Eigen::Map<const RowMatrix>(points.data(), points.shape(0), 3);
+  s.triangles.resize(triangles.shape(0), 3);
+  auto t = triangles.unchecked<2>();
+  for (py::ssize_t i = 0; i < triangles.shape(0); ++i)
+    for (py::ssize_t c = 0; c < 3; ++c) {
+      const std::int64_t k = t(i, c);
+      if (k < 0 || k >= points.shape(0))
+        throw InvalidArgument("visible_points: a triangle names point " + std::to_string(k) +
+                              ", outside 0.." + std::to_string(points.shape(0) - 1));
+      s.triangles(i, c) = static_cast<int>(k);
+    }
+  return s;
+}
+
+py::array_t<bool> visible(const Array& points, const py::array_t<std::int64_t>& triangles,
+                          const Array& camera, double tolerance) {
+  const TriangleSurface s = surface_of(points, triangles);
+  if (camera.ndim() != 1 || camera.shape(0) != 3)
+    throw InvalidArgument("visible_points: camera must be a 3-vector");
+  const Eigen::Vector3d c(camera.data()[0], camera.data()[1], camera.data()[2]);
+  Eigen::Array<bool, Eigen::Dynamic, 1> seen;
+  {
+    py::gil_scoped_release release;
+    seen = scan::visible_points(s, c, tolerance);
+  }
+  py::array_t<bool> out(seen.size());
+  for (Eigen::Index i = 0; i < seen.size(); ++i) out.mutable_data()[i] = seen[i];
+  return out;
+}
+
 }  // namespace
 
 void bind_scan(py::module_& m) {
@@ -87,6 +127,8 @@ void bind_scan(py::module_& m) {
         py::arg("iterations"), py::arg("min_fraction"), py::arg("seed"));
   m.def("area_weights", &areas, py::arg("points").noconvert(), py::arg("method"),
         py::arg("neighbours"));
+  m.def("visible_points", &visible, py::arg("points").noconvert(), py::arg("triangles"),
+        py::arg("camera").noconvert(), py::arg("tolerance"));
 }
 
 }  // namespace softhd::python

@@ -45,6 +45,22 @@ def test_moved_subset_recovered(rng, scale):
     assert r["twist"].shape == (7,) and r["twist"][6] == pytest.approx(np.log(s), abs=1e-6)
 
 
+def test_search_counts_follow_the_options(rng):
+    """starts = rotations + 4 (0 without the global start), candidates = keep (plus initial),
+    refine_points = the refinement's points of body and scan (all of a smaller cloud)."""
+    body = body_cloud(rng, 120)
+    scan = body[:90] + [0.1, 0.2, -0.1]
+    r = softhd.align(body, scan, threads=1)
+    assert (r["starts"], r["candidates"], r["refine_points"]) == (52, 4, (120, 90))
+    r = softhd.align(body, scan, threads=1, rotations=6, keep=2, refine_points=50,
+                     initial=np.eye(4))
+    assert (r["starts"], r["candidates"], r["refine_points"]) == (10, 3, (50, 50))
+    r = softhd.align(body, scan, threads=1, global_start=False)
+    assert (r["starts"], r["candidates"]) == (0, 1)
+    with pytest.raises(softhd.InvalidArgument, match=r"inlier_distance must be in \(0, 1\)"):
+        softhd.align(body, scan, inlier=1.5)
+
+
 def test_bad_input_refused(rng):
     body = body_cloud(rng, 60)
     with pytest.raises(softhd.InvalidArgument, match="scale_min"):
@@ -57,6 +73,9 @@ def test_bad_input_refused(rng):
         softhd.align(body, body, initial=bad)
     with pytest.raises(softhd.InvalidArgument, match="distance"):
         softhd.align(body, body, distance="both")
+    # the candidate score's retired spelling names the new one
+    with pytest.raises(softhd.InvalidArgument, match='"visible" is now "coverage"'):
+        softhd.align(body, body, score="visible")
     # clouds that fix no pose: a single point, points on a line; a body of coincident points
     # (its default eps, L/1000, is 0) is named as such
     with pytest.raises(softhd.InvalidArgument, match="the scan: it has a single point"):

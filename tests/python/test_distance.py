@@ -178,7 +178,7 @@ def test_forms_match_their_formulas(rng, distance, cap):
     X, VX = random_cloud(rng, 30)
     Y, VY = random_cloud(rng, 25, shift=0.4)
     visible = rng.random(30) < 0.6 if distance == "visible" else None
-    r = softhd.distance(X, Y, VX, VY, distance=distance, cap=cap, cap_q=3.0, visible=visible,
+    r = softhd.distance(X, Y, VX, VY, distance=distance, cap=cap, cap_q=3.0, camera_mask=visible,
                         fields=True)
     dy, dx = _fields_numpy(X, VX, Y), _fields_numpy(Y, VY, X)
     assert r.field_target == pytest.approx(dy, rel=1e-12)  # raw fields, before the cap
@@ -204,16 +204,19 @@ def test_forms_refused_naming_the_option(rng):
         softhd.distance(X, Y, cap=1.0, cap_q=0.0)
     with pytest.raises(softhd.InvalidArgument, match="visible"):
         softhd.distance(X, Y, distance="visible")
-    with pytest.raises(softhd.InvalidArgument, match="visible: the mask has 3 entries"):
-        softhd.distance(X, Y, distance="visible", visible=[True, False, True])
+    with pytest.raises(softhd.InvalidArgument, match="visible: the camera_mask has 3 entries"):
+        softhd.distance(X, Y, distance="visible", camera_mask=[True, False, True])
+    # the retired keyword is refused naming the new one
+    with pytest.raises(TypeError, match="visible is now camera_mask"):
+        softhd.distance(X, Y, distance="visible", visible=np.ones(10, bool))
     # below the accepted ranges of docs/formulation.md §8.3: rho was 0 or the constant cap
     with pytest.raises(softhd.InvalidArgument, match=r"cap.q must be finite and >= 0.001"):
         softhd.distance(X, Y, cap=1.0, cap_q=1e-300)
     with pytest.raises(softhd.InvalidArgument, match=r"cap \(cap.c\) 1e-300 is below"):
         softhd.distance(X, Y, cap=1e-300)
-    # visible holds booleans or 0/1; 0.5 or 2 is not read as True
-    with pytest.raises(softhd.InvalidArgument, match="visible must hold booleans"):
-        softhd.distance(X, Y, distance="visible", visible=np.r_[0.5, np.ones(9)])
+    # camera_mask holds booleans or 0/1; 0.5 or 2 is not read as True
+    with pytest.raises(softhd.InvalidArgument, match="camera_mask must hold booleans"):
+        softhd.distance(X, Y, distance="visible", camera_mask=np.r_[0.5, np.ones(9)])
 
 
 def test_forms_equal_the_command_line(rng, tmp_path, cli):
@@ -225,8 +228,9 @@ def test_forms_equal_the_command_line(rng, tmp_path, cli):
     visible[0] = True
     (tmp_path / "seen.txt").write_text("".join(f"{int(v)}\n" for v in visible))
     j = cli("distance", tmp_path / "x.txt", tmp_path / "y.txt", "--distance", "visible",
-            "--visible", tmp_path / "seen.txt", "--cap", 0.2, "--cap-q", 2)
-    r = softhd.distance(X, Y, VX, VY, distance="visible", visible=visible, cap=0.2, cap_q=2.0)
+            "--camera-mask", tmp_path / "seen.txt", "--cap", 0.2, "--cap-q", 2)
+    r = softhd.distance(X, Y, VX, VY, distance="visible", camera_mask=visible, cap=0.2,
+                        cap_q=2.0)
     assert (j["rho"], j["A"], j["B"]) == pytest.approx((r.rho, r.A, r.B), rel=1e-14)
     assert j["distance"] == "visible" and j["cap"] == 0.2
 

@@ -87,6 +87,22 @@ def test_read_mesh_order_and_scale(source_dir):
     assert "tet4" in repr(q)
 
 
+@pytest.mark.parametrize("name", ["cube_tet4_v41.msh", "cube_tet10_v41.msh"])
+def test_boundary_triangles_enclose_the_volume(source_dir, name):
+    """Mesh.boundary_triangles: outward triangles over boundary nodes; by the divergence
+    theorem, sum over them of a.(b x c) / 6 is the mesh's volume (flat facets: exact)."""
+    mesh = softhd.read_mesh(mesh_path(source_dir, name))
+    tri = mesh.boundary_triangles
+    assert tri.dtype == np.int64 and tri.shape[1] == 3 and len(tri) > 0
+    x = mesh.nodes
+    a, b, c = x[tri[:, 0]], x[tri[:, 1]], x[tri[:, 2]]
+    assert np.einsum("ij,ij->", a, np.cross(b, c)) / 6 == pytest.approx(mesh.volume, rel=1e-12)
+    # each edge of a closed surface is shared by two triangles, once in each direction
+    e = np.vstack([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    assert len(np.unique(e, axis=0)) == len(e)
+    assert np.array_equal(np.unique(e, axis=0), np.unique(e[:, ::-1], axis=0))
+
+
 def test_read_mesh_errors_name_the_file(source_dir, tmp_path):
     bad = tmp_path / "truncated.msh"
     text = open(mesh_path(source_dir, "cube_tet4_v41.msh")).read()

@@ -49,27 +49,88 @@ def test_plane_and_area_weights(rng):
         softhd.remove_statistical_outliers(sphere, k=0)
 
 
-def test_synthetic_view_is_a_rigidly_moved_visible_subset(rng):
-    """Without noise or outliers a view is a subset of the body moved by the inverse of the
-    pose it returns; with them, the counts and noise level are the ones asked for."""
+def brute_force_visible(points, tri, camera):
+    """The rule of softhd.visible_points with every triangle tried, in NumPy: a point is seen
+    iff a triangle through it faces the camera and no other triangle meets the segment from
+    the camera at t in (0, 1 - 1e-9) (t = 1 the point)."""
+    A, B, C = points[tri[:, 0]], points[tri[:, 1]], points[tri[:, 2]]
+    n = np.cross(B - A, C - A)
+    seen = np.zeros(len(points), bool)
+    for i in range(len(points)):
+        own = (tri == i).any(1)
+        if not (n[own] @ (camera - points[i]) > 0).any():
+            continue
+        d = points[i] - camera  # camera + t d = A + v (B - A) + w (C - A)
+        M = np.stack([-np.broadcast_to(d, A.shape), B - A, C - A], -1)
+        ok = np.abs(np.linalg.det(M)) > 1e-14
+        tvw = np.linalg.solve(M[ok], (camera - A[ok])[..., None])[..., 0]
+        t, v, w = tvw.T
+        hit = (t > 0) & (t < 1 - 1e-9) & (v >= 0) & (w >= 0) & (v + w <= 1) & ~own[ok]
+        seen[i] = not hit.any()
+    return seen
+
+
+def test_visible_points_matches_a_brute_force_ray_test(rng):
+    """A grid box and an L-shaped pair of boxes (one hides part of the other) from cameras
+    around them: the library's ray cast agrees with trying every triangle, and points on no
+    triangle are never seen."""
     from softhd import synthetic
-    body = rng.uniform([0, 0, 0], [4, 1, 0.5], size=(3000, 3))
-    scan, P, info = synthetic.view(body, seed=3, noise=0.0, outliers=0.0)
+    g = np.meshgrid(np.linspace(0, 2, 7), np.linspace(0, 1, 4), np.linspace(0, 0.5, 3),
+                    indexing="ij")
+    box = np.stack([c.ravel() for c in g], 1)
+    tri = synthetic.box_surface(g[0].shape)
+    # outward: the divergence theorem gives the volume 2 x 1 x 0.5
+    A, B, C = box[tri[:, 0]], box[tri[:, 1]], box[tri[:, 2]]
+    assert np.einsum("ij,ij->", A, np.cross(B - A, C - A)) / 6 == pytest.approx(1.0)
+    two = np.vstack([box, box + [0.5, 0.2, 1.0]])  # a second box above, offset
+    tri2 = np.vstack([tri, tri + len(box)])
+    inner = np.flatnonzero(np.isin(np.arange(len(box)), tri, invert=True))
+    assert len(inner) > 0
+    for k in range(8):
+        d = rng.normal(size=3)
+        camera = 1.0 + 4.0 * d / np.linalg.norm(d)
+        for pts, t in ((box, tri), (two, tri2)):
+            seen = softhd.visible_points(pts, t, camera)
+            assert seen.dtype == bool and seen.shape == (len(pts),)
+            assert np.array_equal(seen, brute_force_visible(pts, t, camera)), k
+            assert not seen[inner].any()
+        assert 0 < softhd.visible_points(two, tri2, camera).sum() < len(two)
+    with pytest.raises(softhd.InvalidArgument, match="outside 0"):
+        softhd.visible_points(box, tri + 1000, [5.0, 5.0, 5.0])
+    with pytest.raises(TypeError, match="integers"):
+        softhd.visible_points(box, tri.astype(float), [5.0, 5.0, 5.0])
+
+
+def test_synthetic_view_is_a_rigidly_moved_visible_subset(rng):
+    """Without noise or outliers a view is the body's points the library's ray cast shows the
+    camera, moved by the inverse of the pose it returns; with them, the counts and noise level
+    are the ones asked for."""
+    from softhd import synthetic
+    g = np.meshgrid(np.linspace(0, 4, 41), np.linspace(0, 1, 11), np.linspace(0, 0.5, 6),
+                    indexing="ij")
+    body = np.stack([c.ravel() for c in g], 1)
+    tri = synthetic.box_surface(g[0].shape)
+    scan, P, info = synthetic.view(body, tri, seed=3, noise=0.0, outliers=0.0)
     R, t = P[:3, :3], P[:3, 3]
     assert np.allclose(R.T @ R, np.eye(3), atol=1e-12) and np.linalg.det(R) > 0
     back = scan @ R.T + t  # x = R y + t
-    d = np.sqrt(((back[:, None, :] - body[None, :, :]) ** 2).sum(-1)).min(1)
-    assert d.max() < 1e-9 * synthetic.body_size(body)
+    d = np.sqrt(((back[:, None, :] - body[None, :, :]) ** 2).sum(-1))
+    assert d.min(1).max() < 1e-9 * synthetic.body_size(body)
+    seen = softhd.visible_points(body, tri, info["camera"])
+    assert np.array_equal(np.sort(d.argmin(1)), np.flatnonzero(seen))
     assert 0 < len(scan) == info["kept"] == info["visible"] < len(body)
-    again, P2, _ = synthetic.view(body, seed=3, noise=0.0, outliers=0.0)
+    again, P2, _ = synthetic.view(body, tri, seed=3, noise=0.0, outliers=0.0)
     assert np.array_equal(scan, again) and np.array_equal(P, P2)  # deterministic
-    noisy, P3, info3 = synthetic.view(body, seed=3, noise=0.01, outliers=0.1, points=400)
+    noisy, P3, info3 = synthetic.view(body, tri, seed=3, noise=0.01, outliers=0.1, points=400)
     assert info3["kept"] == 400 and info3["outliers"] == 40 and len(noisy) == 440
     back = noisy[:400] @ P3[:3, :3].T + P3[:3, 3]
     d = np.sqrt(((back[:, None, :] - body[None, :, :]) ** 2).sum(-1)).min(1)
     L = synthetic.body_size(body)
     # noise 0.01 L per coordinate: the distance to the body is at most about 4 sigma sqrt(3)
     assert 0.002 * L < np.median(d) and d.max() < 0.08 * L
+    # a table under the body: some of its points seen, the body's points unchanged
+    _, _, info4 = synthetic.view(body, tri, seed=3, noise=0.0, outliers=0.0, table=True)
+    assert info4["table"] > 0 and info4["kept"] == info["kept"] + info4["table"]
 
 
 def test_synthetic_matched_nodes_finds_the_fine_nodes(rng):

@@ -126,7 +126,7 @@ def test_gradcheck_distance_forms(form):
     visible = torch.tensor([True, False, True, True, False, True, True, False, True])
     loss = st.HausdorffLoss(eps=0.05, **form)
     vis = visible if form.get("distance") == "visible" else None
-    assert torch.autograd.gradcheck(lambda x, y, vx: loss(x, y, vx, VY, visible=vis),
+    assert torch.autograd.gradcheck(lambda x, y, vx: loss(x, y, vx, VY, camera_mask=vis),
                                     (X, Y, VX), eps=1e-6, atol=1e-8, rtol=1e-6)
 
 
@@ -134,12 +134,14 @@ def test_forms_misuse():
     X, Y, _, VY = clouds()
     loss = st.HausdorffLoss(distance="visible")
     one_zero = torch.tensor([1, 0, 1, 1, 0, 1, 1, 0, 1], dtype=torch.float64)
-    assert loss(X, Y, visible=one_zero) == loss(X, Y, visible=one_zero.bool())
+    assert loss(X, Y, camera_mask=one_zero) == loss(X, Y, camera_mask=one_zero.bool())
+    with pytest.raises(TypeError, match="visible is now camera_mask"):
+        loss(X, Y, visible=one_zero)
     for value in (0.5, 2.0):  # not a boolean: refused, not read as True
         bad = one_zero.clone()
         bad[1] = value
-        with pytest.raises(softhd.InvalidArgument, match="visible must hold booleans"):
-            loss(X, Y, visible=bad)
+        with pytest.raises(softhd.InvalidArgument, match="camera_mask must hold booleans"):
+            loss(X, Y, camera_mask=bad)
     with pytest.raises(ValueError, match="distance must be"):
         st.HausdorffLoss(distance="both")
     VY.requires_grad_()

@@ -103,7 +103,7 @@ enum class Sides {
   symmetric,     ///< ρ̃ = ((A^γ + B^γ)/2)^(1/γ) (§2; the default)
   scan_to_body,  ///< ρ̃ = A: a partial scan does not punish the body's hidden parts
   visible,  ///< ρ̃ = ((A^γ + B_V^γ)/2)^(1/γ), B_V the β-mean over the moving points marked
-            ///< in DistanceForm::visible, their weights renormalised over them
+            ///< in DistanceForm::camera_mask, their weights renormalised over them
 };
 
 /// "symmetric" / "scan_to_body" / "visible"; sides_from_string throws InvalidArgument for
@@ -132,10 +132,11 @@ struct SoftCap {
 struct DistanceForm {
   Sides sides = Sides::symmetric;  ///< which directed terms make ρ̃
   SoftCap cap;                     ///< the soft cap on every field value (default: none)
-  /// Sides::visible only: N entries, true for the moving points in B_V (at least one).
-  Eigen::Array<bool, Eigen::Dynamic, 1> visible;
+  /// Sides::visible only: the camera mask, N entries, true for the moving points a camera
+  /// sees (those in B_V; at least one).
+  Eigen::Array<bool, Eigen::Dynamic, 1> camera_mask;
 
-  /// Throws InvalidArgument naming `cap.c`, `cap.q` or `visible` (its size against N, none
+  /// Throws InvalidArgument naming `cap.c`, `cap.q` or `camera_mask` (its size against N, none
   /// marked, or a mask given for other sides). Every evaluation calls it.
   void validate(Eigen::Index moving_points) const;
 };

@@ -105,7 +105,7 @@ struct ShapeObjective::Impl {
   DistanceForm form(const Eigen::VectorXd& u, const std::optional<Eigen::Vector3d>& camera) const {
     DistanceForm f = options.form;
     if (f.sides != Sides::visible || !camera) return f;  // no mask to make
-    f.visible = cloud.visible_from(u, *camera);
+    f.camera_mask = cloud.visible_from(u, *camera);
     return f;
   }
   ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient, const Eigen::VectorXd& xi);
@@ -141,17 +141,18 @@ void ShapeObjectiveOptions::validate() const {
   const bool has_camera = camera || pose;  // a pose gives the camera (Sides::visible)
   if (has_camera && (camera || form.sides == Sides::visible)) {
     // the mask is made per evaluation: only the cap to check here
-    if (form.visible.size() != 0)
+    if (form.camera_mask.size() != 0)
       throw InvalidArgument(
-          "form.visible: with a camera the objective marks the visible points (leave it empty)");
+          "form.camera_mask: with a camera the objective marks the visible points (leave it "
+          "empty)");
     DistanceForm cap_only = form;
     cap_only.sides = Sides::symmetric;
     cap_only.validate(0);
   } else {  // a given mask, checked against the moving cloud's size by the objective
-    if (form.sides == Sides::visible && form.visible.size() == 0)
+    if (form.sides == Sides::visible && form.camera_mask.size() == 0)
       throw InvalidArgument(
-          "camera: distance visible needs the camera position (or a mask in form.visible)");
-    form.validate(form.sides == Sides::visible ? form.visible.size() : 0);
+          "camera: distance visible needs the camera position (or a mask in form.camera_mask)");
+    form.validate(form.sides == Sides::visible ? form.camera_mask.size() : 0);
   }
   if (form.sides == Sides::visible && has_camera) {
     if (camera && !camera->allFinite()) throw InvalidArgument("camera must be finite");

@@ -231,7 +231,7 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
     f["form"] = to_string(so.form.sides) + " cap " + exact_text(so.form.cap.c) + " q " +
                 exact_text(so.form.cap.q);
     if (so.form.sides == Sides::visible)
-      f["form"] += " visible " + hash_of(so.form.visible.cast<double>().matrix().eval());
+      f["form"] += " visible " + hash_of(so.form.camera_mask.cast<double>().matrix().eval());
   }
   f["threads"] = std::to_string(resolve_threads(h.threads));
   f["objective"] = "particles " + to_string(so.particles) + " volumes " + to_string(so.volumes) +

@@ -46,16 +46,18 @@ void DistanceForm::validate(Eigen::Index moving_points) const {
     throw InvalidArgument(
         got("distance cap.q must be finite and >= 0.001 (the soft cap's sharpness cap_q)", cap.q));
   if (sides != Sides::visible) {
-    if (visible.size() != 0)
-      throw InvalidArgument("distance visible: a mask is given but the distance is " +
+    if (camera_mask.size() != 0)
+      throw InvalidArgument("distance visible: a camera_mask is given but the distance is " +
                             to_string(sides));
     return;
   }
-  if (visible.size() != moving_points) {
-    throw InvalidArgument("distance visible: the mask has " + std::to_string(visible.size()) +
-                          " entries for " + std::to_string(moving_points) + " moving points");
+  if (camera_mask.size() != moving_points) {
+    throw InvalidArgument("distance visible: the camera_mask has " +
+                          std::to_string(camera_mask.size()) + " entries for " +
+                          std::to_string(moving_points) + " moving points");
   }
-  if (!visible.any()) throw InvalidArgument("distance visible: no moving point is marked visible");
+  if (!camera_mask.any())
+    throw InvalidArgument("distance visible: the camera_mask marks no moving point");
 }
 
 void check_cap_length(const SoftCap& cap, const PointCloud& X, const PointCloud& Y) {
@@ -123,7 +125,7 @@ Eigen::VectorXd b_weights(const PointCloud& X, const DistanceForm& form, double&
     volume = X.total_volume();
     return X.volumes() / volume;
   }
-  const Eigen::VectorXd V = form.visible.select(X.volumes(), 0.0);
+  const Eigen::VectorXd V = form.camera_mask.select(X.volumes(), 0.0);
   volume = V.sum();
   return V / volume;
 }

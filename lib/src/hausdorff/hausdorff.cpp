@@ -191,7 +191,7 @@ HausdorffResult HausdorffTarget::Impl::evaluate_nearest(const PointCloud& X,
   r.A = detail::soft_cap(dist_target.maxCoeff(), form.cap.c, form.cap.q);
   if (!one_sided) {
     const double largest = form.sides == Sides::visible
-                               ? form.visible.select(dist_moving.array(), 0.0).maxCoeff()
+                               ? form.camera_mask.select(dist_moving.array(), 0.0).maxCoeff()
                                : dist_moving.maxCoeff();
     r.B = detail::soft_cap(largest, form.cap.c, form.cap.q);
   }
@@ -351,9 +351,9 @@ void HausdorffTarget::Impl::pass_b(SumsEvaluation* e, HausdorffResult* r) const 
     e->dt_x = fields_of(e->scale_x, e->p2.S, e->prm.alpha, e->prm.epsilon);
   }
   if (!e->one_sided)
-    e->mean_b = detail::side_mean(e->dt_x, detail::b_weights(e->X, req.form, e->volume_b),
-                                  req.form.cap, e->prm.beta, req.any_gradient(),
-                                  req.form.sides == Sides::visible ? &req.form.visible : nullptr);
+    e->mean_b = detail::side_mean(
+        e->dt_x, detail::b_weights(e->X, req.form, e->volume_b), req.form.cap, e->prm.beta,
+        req.any_gradient(), req.form.sides == Sides::visible ? &req.form.camera_mask : nullptr);
 }
 
 /// ∂ρ̃/∂x_i = ρ̃_A (V_i/|X|) G2_i + ρ̃_B f_i G_i.
@@ -381,7 +381,7 @@ void HausdorffTarget::Impl::volume_gradient(const SumsEvaluation& e, double rho_
   for (Eigen::Index i = 0; i < e.X.size(); ++i) {
     if (req.differentiate.size() != 0 && !req.differentiate[i]) continue;
     const double dA = -(e.p2.H[i] - sum_a) / (alpha * volX);
-    const bool in_b = !e.one_sided && (req.form.sides != Sides::visible || req.form.visible[i]);
+    const bool in_b = !e.one_sided && (req.form.sides != Sides::visible || req.form.camera_mask[i]);
     const double dB = in_b && B > 0.0
                           ? B / (beta * e.volume_b) * (std::pow(e.mean_b.capped[i] / B, beta) - 1.0)
                           : 0.0;

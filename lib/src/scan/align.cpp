@@ -25,7 +25,7 @@ constexpr EnumNames<AlignStatus, 3> kAlignStatusNames{
      {AlignStatus::iteration_limit, "iteration_limit"},
      {AlignStatus::failed, "failed"}}};
 constexpr EnumNames<CandidateScore, 2> kCandidateScoreNames{
-    {{CandidateScore::visible, "visible"}, {CandidateScore::rho, "rho"}}};
+    {{CandidateScore::coverage, "coverage"}, {CandidateScore::rho, "rho"}}};
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw InvalidArgument("align: " + what);
@@ -115,12 +115,14 @@ std::vector<Pose> starting_poses(const Eigen::MatrixXd& body, const Eigen::Matri
 }
 
 /// Global start: every starting pose minimised briefly on the coarse level (in parallel over
-/// the poses), then the `keep` best that differ by more than 10° or L/10.
+/// the poses), then the `keep` best that differ by more than 10° or L/10. `tried`: the count
+/// of starting poses.
 std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& scan, double L,
-                                    const AlignOptions& o) {
+                                    const AlignOptions& o, int* tried) {
   const detail::PoseObjective coarse =
       make_level(body, scan, o.coarse_points, o.coarse_epsilon * L, 1, o);
   const std::vector<Pose> starts = starting_poses(body.points(), scan.points(), o.rotations);
+  *tried = static_cast<int>(starts.size());
   const detail::LocalSettings st = local_settings(o, L, 20, 1e-4);
   std::vector<detail::LocalResult> found(starts.size());
   const int n = static_cast<int>(starts.size());
@@ -128,11 +130,11 @@ std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& sc
                 [&](size_t i) { found[i] = detail::minimise_pose(coarse, starts[i], st); });
   std::vector<double> score(found.size());
   for (size_t k = 0; k < found.size(); ++k) score[k] = found[k].rho;
-  if (o.score == CandidateScore::visible) {  // rank by the visible-surface score instead
-    const detail::VisibleScore visible(body.points(), scan.points(), L, o.score_truncation,
-                                       o.threads);
+  if (o.score == CandidateScore::coverage) {  // rank by the coverage score instead
+    const detail::CoverageScore coverage(body.points(), scan.points(), L, o.score_truncation,
+                                         o.threads);
     for (size_t k = 0; k < found.size(); ++k)
-      if (std::isfinite(score[k])) score[k] = visible.value(found[k].pose);
+      if (std::isfinite(score[k])) score[k] = coverage.value(found[k].pose);
   }
   std::vector<size_t> order(found.size());
   std::iota(order.begin(), order.end(), size_t{0});
@@ -175,6 +177,8 @@ void report_nearest(const detail::NearestPoints& nearest, const PointCloud& scan
 std::string to_string(AlignStatus status) { return enum_name(kAlignStatusNames, status); }
 std::string to_string(CandidateScore score) { return enum_name(kCandidateScoreNames, score); }
 CandidateScore candidate_score_from_string(const std::string& name) {
+  if (name == "visible")
+    throw InvalidArgument("score \"visible\" is now \"coverage\" (the same score)");
   return enum_from_name(kCandidateScoreNames, name, "score");
 }
 
@@ -190,7 +194,7 @@ void AlignOptions::validate() const {
   require(form.sides != Sides::visible,
           "distance visible is not supported (align has no camera model; use scan_to_body for "
           "a partial view)");
-  form.validate(form.visible.size() > 0 ? form.visible.size() : 1);
+  form.validate(form.camera_mask.size() > 0 ? form.camera_mask.size() : 1);
   if (initial) {
     require(initial->R.allFinite() && initial->t.allFinite() && std::isfinite(initial->s) &&
                 initial->s > 0.0,
@@ -212,7 +216,10 @@ void AlignOptions::validate() const {
   require(std::isfinite(score_truncation) && score_truncation > 0.0,
           "score_truncation must be > 0");
   require(nearest_iterations >= 0, "nearest_iterations must be >= 0");
-  require(std::isfinite(inlier_distance) && inlier_distance > 0.0, "inlier_distance must be > 0");
+  // A threshold of L or more counts every scan point near the body's box: no overlap measure.
+  require(std::isfinite(inlier_distance) && inlier_distance > 0.0 && inlier_distance < 1.0,
+          "inlier_distance must be in (0, 1) (a fraction of the body size L), got " +
+              std::to_string(inlier_distance));
   check_threads(threads);
 }
 
@@ -265,15 +272,16 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
 
   // The global start's candidates and the user's start, which competes with them.
   std::vector<Pose> candidates;
-  if (options.global_start) candidates = global_candidates(body, scan, L, options);
+  AlignSummary out;
+  if (options.global_start) candidates = global_candidates(body, scan, L, options, &out.starts);
   if (options.initial) candidates.push_back(options.initial->inverse());
   if (candidates.empty()) candidates.push_back(Pose());
+  out.candidates = static_cast<int>(candidates.size());
 
   // Refinement: continuation in ε (a hundredth of L, then the user's) on the refine level.
   std::vector<double> eps;
   if (options.distance.params.epsilon < 0.01 * L) eps.push_back(0.01 * L);
   eps.push_back(options.distance.params.epsilon);
-  AlignSummary out;
   bool limit = false;
   {
     // Every candidate on the first level, one per thread, each evaluation serial (small
@@ -283,6 +291,8 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
         body.size(), options.refine_points > 0 ? options.refine_points : body.size());
     const Eigen::Index ns = std::min<Eigen::Index>(
         scan.size(), options.refine_points > 0 ? options.refine_points : scan.size());
+    out.refine_body_points = nb;
+    out.refine_scan_points = ns;
     const int eval_threads =
         static_cast<double>(nb) * static_cast<double>(ns) > 4e6 ? options.threads : 1;
     const bool spread = candidates.size() > 1;

@@ -80,10 +80,10 @@ using NearestPoints = softhd::detail::NearestIndex;
 /// the body. S(Q) = ½ [mean_j min(d(y_j, Q(B)), c) + mean_{x∈V} min(d(x, Y), c)] / (s_Q L),
 /// c = truncation · s_Q L: dimensionless, 0 for a perfect fit. Exact nearest distances (k-d
 /// trees built once); no gradient (it only ranks local minima).
-class VisibleScore {
+class CoverageScore {
  public:
-  VisibleScore(const Eigen::MatrixXd& body, const Eigen::MatrixXd& scan, double size,
-               double truncation, int threads);
+  CoverageScore(const Eigen::MatrixXd& body, const Eigen::MatrixXd& scan, double size,
+                double truncation, int threads);
   double value(const Pose& Q) const;
 
  private:
@@ -99,7 +99,7 @@ class VisibleScore {
 };
 
 /// The refined candidate (Q: body → scan frame) align() continues from: the lowest ρ̃ (score
-/// rho), or (score visible) the lowest VisibleScore after each candidate is taken by
+/// rho), or (score coverage) the lowest CoverageScore after each candidate is taken by
 /// nearest_refinement (its pose replaced by the fitted one); ties: the first.
 size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double size,
                         const AlignOptions& options, std::vector<LocalResult>* refined);

@@ -1,4 +1,4 @@
-// The visible-surface score by which align() ranks its starts and chooses among its refined
+// The coverage score by which align() ranks its starts and chooses among its refined
 // candidates (docs/formulation.md §8.5): a flipped one-sided view shows the camera the side
 // of the body the scan does not have.
 
@@ -11,8 +11,8 @@
 
 namespace softhd::scan::detail {
 
-VisibleScore::VisibleScore(const Eigen::MatrixXd& body, const Eigen::MatrixXd& scan, double size,
-                           double truncation, int threads)
+CoverageScore::CoverageScore(const Eigen::MatrixXd& body, const Eigen::MatrixXd& scan, double size,
+                             double truncation, int threads)
     : body_(body),
       scan_(scan),
       size_(size),
@@ -57,7 +57,7 @@ VisibleScore::VisibleScore(const Eigen::MatrixXd& body, const Eigen::MatrixXd& s
   }
 }
 
-Eigen::Index VisibleScore::pixel_of(const Eigen::Vector3d& p) const {
+Eigen::Index CoverageScore::pixel_of(const Eigen::Vector3d& p) const {
   const double z = p.dot(e3_);
   if (!(z > 0.0) || nu_ == 0) return -1;
   const double fu = std::floor((p.dot(e1_) / z - lo_u_) / pixel_);
@@ -67,7 +67,7 @@ Eigen::Index VisibleScore::pixel_of(const Eigen::Vector3d& p) const {
   return static_cast<Eigen::Index>(fv) * nu_ + static_cast<Eigen::Index>(fu);
 }
 
-double VisibleScore::value(const Pose& Q) const {
+double CoverageScore::value(const Pose& Q) const {
   // In the scan's frame (Q(B) has size s_Q L), c = truncation · s_Q L:
   //   S = ½ [(1/M) Σ_j min(d(y_j, Q(B)), c) + (1/|V|) Σ_{x∈V} min(d(x, Y), c)] / (s_Q L),
   // V the moved body points within half a pixel width of the nearest to the camera in their
@@ -111,7 +111,7 @@ size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double s
   if (r.size() < 2) return 0;
   std::vector<double> score(r.size());
   for (size_t k = 0; k < r.size(); ++k) score[k] = r[k].rho;
-  if (options.score == CandidateScore::visible) {
+  if (options.score == CandidateScore::coverage) {
     if (options.nearest_iterations > 0) {
       const NearestPoints nearest(body.points());
       AlignOptions serial = options;
@@ -125,10 +125,10 @@ size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double s
       }
       for (size_t k = 0; k < r.size(); ++k) r[k].pose = fitted[k].inverse();
     }
-    const VisibleScore visible(body.points(), scan.points(), size, options.score_truncation,
-                               options.threads);
+    const CoverageScore coverage(body.points(), scan.points(), size, options.score_truncation,
+                                 options.threads);
     for (size_t k = 0; k < r.size(); ++k)
-      if (std::isfinite(score[k])) score[k] = visible.value(r[k].pose);
+      if (std::isfinite(score[k])) score[k] = coverage.value(r[k].pose);
   }
   size_t best = 0;
   for (size_t k = 1; k < r.size(); ++k)

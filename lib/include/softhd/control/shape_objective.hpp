@@ -47,10 +47,10 @@ struct ShapeObjectiveOptions {
   /// moving cloud's points, or (with `camera`) none: every evaluation then marks the moving
   /// points seen from the camera (§8.7).
   DistanceForm form;
-  /// Sides::visible only: the camera in the body's frame (then form.visible is empty). The moving
-  /// points marked are the boundary nodes scan::visible_points finds on the deformed boundary
-  /// (fe::boundary_surface) — for particles = boundary the cloud's own points, for nodes the
-  /// boundary nodes among them; quadrature points are refused. Held fixed in the gradient.
+  /// Sides::visible only: the camera in the body's frame (then form.camera_mask is empty). The
+  /// moving points marked are the boundary nodes scan::visible_points finds on the deformed
+  /// boundary (fe::boundary_surface) — for particles = boundary the cloud's own points, for nodes
+  /// the boundary nodes among them; quadrature points are refused. Held fixed in the gradient.
   std::optional<Eigen::Vector3d> camera;
   fe::NewtonOptions newton;   ///< state solver settings
   int warm_start_states = 8;  ///< converged states kept for warm starts (≥ 1)

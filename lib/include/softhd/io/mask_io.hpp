@@ -1,10 +1,10 @@
 #pragma once
 /// \file mask_io.hpp
-/// Reading a per-point mask (e.g. the visible moving points of DistanceForm::visible,
-/// docs/formulation.md §8.2) from a text file: one `0` or `1` per line, `#` comments (whole
-/// line or trailing), blank lines skipped, CRLF accepted. Every problem throws
+/// Reading a per-point mask (e.g. the camera mask DistanceForm::camera_mask: the moving points
+/// a camera sees, docs/formulation.md §8.2) from a text file: one `0` or `1` per line, `#`
+/// comments (whole line or trailing), blank lines skipped, CRLF accepted. Every problem throws
 /// softhd::FileError naming the file and, where there is one, the line:
-/// `visible.txt:3: expected 0 or 1, got '2'`.
+/// `camera_mask.txt:3: expected 0 or 1, got '2'`.
 
 #include <Eigen/Core>
 #include <string>

@@ -4,7 +4,7 @@
 /// chosen form: symmetric, scan_to_body, visible; with or without the soft cap) over a twist
 /// about the moved scan's centroid, with the exact gradient from ∂ρ̃/∂y_j, after a global
 /// start over a grid of rotations (and the principal-axis variants) evaluated cheaply on
-/// subsampled clouds with a larger ε, its poses ranked by a visible-surface score that tells a
+/// subsampled clouds with a larger ε, its poses ranked by a coverage score that tells a
 /// flipped one-sided view from the true one (CandidateScore).
 
 #include <optional>
@@ -17,14 +17,15 @@
 namespace softhd::scan {
 
 /// How align() compares the refined candidates of its global start (docs/formulation.md §8.5).
-///   visible: the visible-surface score S: the camera at the scan frame's origin, the body
-///            points the pose shows it (over the scan's image) must lie on the scan and the
-///            scan on the body; tells a flipped one-sided view from the true one.
-///   rho:     ρ̃ on the candidate clouds (the camera unknown, e.g. a scan in another frame).
-enum class CandidateScore { visible, rho };
-/// "visible" / "rho".
+///   coverage: the coverage score S: the camera at the scan frame's origin, the body points
+///             the pose shows it (over the scan's image) must lie on the scan and the scan
+///             on the body; tells a flipped one-sided view from the true one.
+///   rho:      ρ̃ on the candidate clouds (the camera unknown, e.g. a scan in another frame).
+enum class CandidateScore { coverage, rho };
+/// "coverage" / "rho".
 std::string to_string(CandidateScore score);
-/// The CandidateScore named "visible" or "rho"; throws InvalidArgument naming `score`.
+/// The CandidateScore named "coverage" or "rho"; throws InvalidArgument naming `score` (for
+/// the retired spelling "visible": naming "coverage").
 CandidateScore candidate_score_from_string(const std::string& name);
 
 /// Settings of align(); defaults documented per field and validated by validate().
@@ -40,18 +41,19 @@ struct AlignOptions {
   /// alignment (scale 1 to Pose::kScaleTolerance).
   std::optional<Pose> initial;
   bool global_start = true;  ///< search rotations first (else start at `initial`)
-  int rotations = 48;        ///< global start: grid rotations tried (plus 4 principal-axis ones)
+  int rotations = 48;        ///< global start: grid rotations tried (plus 4 principal-axis ones; 0:
+                             ///< those 4 only)
   int coarse_points = 150;   ///< global start: points of each subsampled cloud
   double coarse_epsilon = 0.05;  ///< global start: ε as a fraction of the body's size L
   int keep = 4;                  ///< global start: best distinct poses refined further
   int candidate_points = 400;    ///< points of each cloud when the kept poses are refined
-  CandidateScore score = CandidateScore::visible;  ///< how the refined candidates are compared
-  double score_truncation = 0.05;  ///< visible score: nearest distances capped at this × L
+  CandidateScore score = CandidateScore::coverage;  ///< how the refined candidates are compared
+  double score_truncation = 0.05;  ///< coverage score: nearest distances capped at this × L
   int refine_points = 1000;        ///< points of each cloud in the refinement (0: all)
   int max_iterations = 200;        ///< refinement iterations (per level)
   double tolerance = 1e-10;        ///< stop when a step moves no point more than this × L
   int nearest_iterations = 50;     ///< final nearest-point refinement iterations (0: none)
-  double inlier_distance = 0.01;   ///< the overlap's threshold as a fraction of L
+  double inlier_distance = 0.01;   ///< the overlap's threshold as a fraction of L, in (0, 1)
   int threads = 0;                 ///< as HausdorffOptions::threads
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
@@ -72,7 +74,11 @@ struct AlignSummary {
   double rmse = 0.0;             ///< RMS true nearest-neighbour distance of the overlapping points
   Eigen::VectorXd residuals;     ///< true nearest-neighbour distance of each moved scan point
   int iterations = 0;            ///< refinement iterations of the best candidate, over its levels
-  double seconds = 0.0;          ///< wall time of align()
+  int starts = 0;      ///< global start: starting poses tried (rotations + 4; 0 without it)
+  int candidates = 0;  ///< candidates refined and compared (the kept starts, plus `initial`)
+  Eigen::Index refine_body_points = 0;  ///< points of the body in the refinement
+  Eigen::Index refine_scan_points = 0;  ///< points of the scan in the refinement
+  double seconds = 0.0;                 ///< wall time of align()
   /// One line: status, rotation and translation of the pose, ρ̃, overlap, rmse, time.
   std::string BriefReport() const;
 };
