@@ -76,10 +76,11 @@ options:
                      (along its even axes; with none, every axis of >= 4 cells to
                      (n+1)/2: 25x5x1 -> 13x3x1; a mesh file of order 2: N = 2, its P1/Q1
                      level first) with a coarse target and tree tolerance
-                     max(--tol, {coarse_tol}), at most --coarse-iterations K (default
-                     {coarse_iterations}; at most --max-iter) iterations per coarse level, ending
-                     earlier once rho decreased by less than {switch_decrease} (relative) twice in
-                     a row; then the next finer level from its control (default {levels}:
+                     max(--tol, --coarse-tol T (default {coarse_tol})), at most
+                     --coarse-iterations K (default {coarse_iterations}; at most --max-iter)
+                     iterations per coarse level, ending earlier once rho decreased by less
+                     than --switch-decrease S (default {switch_decrease}; relative, in [0, 1))
+                     twice in a row; then the next finer level from its control (default {levels}:
                      automatic, where the target has a known map (an arc, a manufactured
                      state) 1 + every coarser level of >= 32 elements (bending: 3), else 1:
                      the user's mesh alone; 1 for a cloud without a known map, e.g. a scan;
@@ -126,6 +127,8 @@ scene targets ("target" in the scene file):
           (then no "camera": the visible distance's camera is the pose's; no clean.crop)
       "align": "rigid" | "similarity"   what the pose may change (default rigid)
       "pose": FILE   the start pose (softhd align's pose.txt); default: align at rest
+      --pose-move F   the pose's move limit as a fraction of the control's, in (0, 1]
+          (default {pose_move}; a target in the camera's frame only)
       the final pose is printed and written to summary.json ("pose") and history.csv
 
 writes: history.csv, control.csv (readable by 'softhd forward --control'),
@@ -194,6 +197,7 @@ std::string usage() {
       {"levels", std::to_string(d.levels)},
       {"coarse_iterations", std::to_string(d.coarse_iterations)},
       {"switch_decrease", number_text(d.switch_decrease)},
+      {"pose_move", number_text(d.pose_move)},
       {"coarse_tol", number_text(d.coarse_tolerance)},
       {"refined_move_limit", number_text(d.refined_move_limit)},
       {"max_memory", number_text(d.memory_limit / (1u << 30))},
@@ -269,7 +273,10 @@ OptimiseArgs parse_optimise(Args& args) {
   o.levels = static_cast<int>(args.integer("--levels", d.levels, 0, 16));
   o.coarse_iterations =
       static_cast<int>(args.integer("--coarse-iterations", d.coarse_iterations, 1, 1000000));
+  o.switch_decrease = args.number("--switch-decrease", d.switch_decrease);
+  o.coarse_tolerance = args.number("--coarse-tol", d.coarse_tolerance);
   o.refined_move_limit = args.number("--refined-move-limit", d.refined_move_limit);
+  o.pose_move = args.number("--pose-move", d.pose_move);
   const double gib = args.number("--max-memory", d.memory_limit / (1u << 30));
   if (!(gib > 0.0 && gib <= 1e6)) throw UsageError("--max-memory: expected GiB in (0, 1e6]");
   o.memory_limit = gib * (1u << 30);

@@ -296,6 +296,24 @@ TEST_F(OptimiseCli, MultilevelKilledAndResumedRunsAreTheUninterruptedRun) {
   std::cout << "coarse-level resumes in the random trials: " << coarse_resumes << "\n";
 }
 
+// --coarse-iterations, --switch-decrease and --coarse-tol reach the coarse level: at most 2
+// iterations there with --coarse-iterations 2, more (ended by its ρ̃ decrease) without.
+TEST_F(OptimiseCli, CoarseLevelFlagsChangeTheCoarseLevel) {
+  const std::string common =
+      " --levels 2 --max-iter 4 --rel-tol 0 --threads 1 --vtu-every 0 --quiet";
+  auto coarse_iterations = [&](const std::string& name, const std::string& flags) {
+    const fs::path o = dir_ / name;
+    EXPECT_EQ(run(scene() + " --out " + o.string() + common + flags), 0) << flags;
+    const nlohmann::json s = nlohmann::json::parse(read_text(o / "summary.json"));
+    return s["levels"][0]["iterations"].get<int>();
+  };
+  const int plain = coarse_iterations("plain", "");
+  EXPECT_GT(plain, 2);
+  EXPECT_EQ(coarse_iterations("two", " --coarse-iterations 2"), 2);
+  // switch_decrease 0.9: the coarse level ends once ρ̃ decreases by less than 90 % twice.
+  EXPECT_LT(coarse_iterations("early", " --switch-decrease 0.9"), plain);
+}
+
 // --levels asks for more halvings than the box allows ((6, 1, 2) -> (3, 1, 1) -> none): bad
 // input naming the option.
 TEST_F(OptimiseCli, TooManyLevelsIsBadInput) {
@@ -459,6 +477,12 @@ TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
   expect_refused(scene() + " --method fast", "unknown method 'fast'");
   expect_refused(scene() + " --method tree --tol 2", "tolerance");
   expect_refused(scene() + " --coarse-level on", "--coarse-level: expected auto or off");
+  // The flags reach the run's validation (TrackingRunOptions::validate).
+  expect_refused(scene() + " --switch-decrease 1", "switch_decrease must be in [0, 1)");
+  expect_refused(scene() + " --coarse-tol 0", "coarse_tolerance must be in (0, 1)");
+  expect_refused(scene() + " --pose-move 0", "pose_move must be in (0, 1]");
+  expect_refused(scene() + " --pose-move 0.5",
+                 "pose_move moves the pose of a target in the camera");
   expect_refused(scene() + " --state-backend petsc", "--state-backend: unknown state backend");
   if (!softhd::fe::petsc_backend_available())  // an MPI build runs it (tests/mpi/cli_mpi.py)
     expect_refused(scene() + " --state-backend petsc-mumps", "-DSOFTHD_WITH_MPI=ON");

@@ -86,6 +86,9 @@ py::dict optimise_defaults() {
   out["coarse_level"] = to_string(d.coarse_level);
   out["levels"] = d.levels;
   out["refined_move_limit"] = d.refined_move_limit;
+  out["coarse_iterations"] = d.coarse_iterations;
+  out["switch_decrease"] = d.switch_decrease;
+  out["coarse_tolerance"] = d.coarse_tolerance;
   // The form is the target's unless given (TrackingRunOptions::distance).
   out["distance"] = py::none();
   out["cap"] = py::none();
@@ -203,10 +206,11 @@ void bind_optimise(py::module_& m) {
          const std::optional<std::string>& method, std::optional<double> tol,
          std::optional<double> tikhonov_mass, std::optional<double> tikhonov_grad,
          const std::optional<std::string>& coarse_level, std::optional<int> levels,
-         std::optional<double> refined_move_limit, const std::optional<std::string>& distance,
-         std::optional<double> cap, std::optional<double> cap_q,
-         const std::optional<Eigen::VectorXd>& initial, std::optional<double> pose_move,
-         const py::object& callback, int threads) {
+         std::optional<double> refined_move_limit, std::optional<int> coarse_iterations,
+         std::optional<double> switch_decrease, std::optional<double> coarse_tolerance,
+         const std::optional<std::string>& distance, std::optional<double> cap,
+         std::optional<double> cap_q, const std::optional<Eigen::VectorXd>& initial,
+         std::optional<double> pose_move, const py::object& callback, int threads) {
         TrackingRunOptions o;
         if (initial) o.initial_control = *initial;
         if (pose_move) o.pose_move = *pose_move;
@@ -235,6 +239,9 @@ void bind_optimise(py::module_& m) {
         if (coarse_level) o.coarse_level = coarse_level_from_string(*coarse_level);
         if (levels) o.levels = *levels;
         if (refined_move_limit) o.refined_move_limit = *refined_move_limit;
+        if (coarse_iterations) o.coarse_iterations = *coarse_iterations;
+        if (switch_decrease) o.switch_decrease = *switch_decrease;
+        if (coarse_tolerance) o.coarse_tolerance = *coarse_tolerance;
         o.threads = threads;
         return optimise(s, points, volumes, file, o, callback);
       },
@@ -244,6 +251,7 @@ void bind_optimise(py::module_& m) {
       py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("eps"),
       py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"), py::arg("tikhonov_grad"),
       py::arg("coarse_level"), py::arg("levels"), py::arg("refined_move_limit"),
+      py::arg("coarse_iterations"), py::arg("switch_decrease"), py::arg("coarse_tolerance"),
       py::arg("distance"), py::arg("cap"), py::arg("cap_q"), py::arg("initial"),
       py::arg("pose_move"), py::arg("callback"), py::arg("threads"));
   m.def("optimise_defaults", &optimise_defaults,

@@ -137,6 +137,8 @@ def as_in_the_csv(value):
      dict(alpha=5, eps=2e-3, move_limit=0.2, volumes="deformed", tikhonov_mass=1e-12,
           rel_tol=0, coarse_level="off")),
     (["--levels", 2], dict(levels=2)),  # a coarse level's rows first, then 8 on the mesh
+    (["--levels", 2, "--coarse-iterations", 2, "--switch-decrease", 0, "--coarse-tol", 0.1],
+     dict(levels=2, coarse_iterations=2, switch_decrease=0, coarse_tolerance=0.1)),
 ])
 def test_history_equals_the_command_line_tools(scene_file, cli, tmp_path, cli_options,
                                                py_options):
@@ -153,6 +155,8 @@ def test_history_equals_the_command_line_tools(scene_file, cli, tmp_path, cli_op
     assert len(rows) == len(r.history)
     assert [it.level for it in r.history].count(0) == 8
     assert ("levels" in py_options) == (r.history[0].level == 1)
+    if "coarse_iterations" in py_options:  # the keyword reaches the coarse level
+        assert [it.level for it in r.history].count(1) == py_options["coarse_iterations"]
     for row, it in zip(rows, r.history):
         for column in HISTORY_COLUMNS + ["level"]:
             assert row[column] == as_in_the_csv(getattr(it, column)), (column, row, it)
@@ -188,7 +192,8 @@ def test_defaults_are_the_command_line_tools(cli_help):
              "|grad m|^2", "coarse_level": "or for a mesh file of order 2 as P1/Q1 on its vertices",
              "levels": "then the next finer level from its control",
              "refined_move_limit": "the move limit of each level started from a coarser "
-             "level's control"}
+             "level's control", "coarse_iterations": "--coarse-iterations K",
+             "switch_decrease": "--switch-decrease S", "coarse_tolerance": "--coarse-tol T"}
     for name, before in flags.items():
         m = re.search(re.escape(before) + r" \(default ([^;,:)]+)", text)
         assert m, name
