@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -296,22 +297,34 @@ TEST_F(OptimiseCli, MultilevelKilledAndResumedRunsAreTheUninterruptedRun) {
   std::cout << "coarse-level resumes in the random trials: " << coarse_resumes << "\n";
 }
 
-// --coarse-iterations, --switch-decrease and --coarse-tol reach the coarse level: at most 2
-// iterations there with --coarse-iterations 2, more (ended by its ρ̃ decrease) without.
-TEST_F(OptimiseCli, CoarseLevelFlagsChangeTheCoarseLevel) {
+// --switch-decrease and --coarse-tol reach the coarse level of --levels 2. With S = 0 the
+// coarse level runs its min(--coarse-iterations, --max-iter) = 6 iterations; with S = 0.9 (ρ̃
+// decreasing by less than 90 % twice ends it) it switches before. Its checkpoint records its
+// tree tolerance max(--tol, --coarse-tol): a resume with another --coarse-tol is refused naming
+// the distance, one with the same continues.
+TEST_F(OptimiseCli, SwitchDecreaseAndCoarseTolActOnTheCoarseLevel) {
   const std::string common =
-      " --levels 2 --max-iter 4 --rel-tol 0 --threads 1 --vtu-every 0 --quiet";
-  auto coarse_iterations = [&](const std::string& name, const std::string& flags) {
+      " --levels 2 --max-iter 6 --rel-tol 0 --threads 1 --vtu-every 0 --quiet";
+  std::string err;
+  auto coarse_level = [&](const std::string& name, const std::string& flags) {
     const fs::path o = dir_ / name;
-    EXPECT_EQ(run(scene() + " --out " + o.string() + common + flags), 0) << flags;
-    const nlohmann::json s = nlohmann::json::parse(read_text(o / "summary.json"));
-    return s["levels"][0]["iterations"].get<int>();
+    EXPECT_EQ(run(scene() + " --out " + o.string() + common + flags, &err), 0) << flags << err;
+    return nlohmann::json::parse(read_text(o / "summary.json"))["levels"][0];
   };
-  const int plain = coarse_iterations("plain", "");
-  EXPECT_GT(plain, 2);
-  EXPECT_EQ(coarse_iterations("two", " --coarse-iterations 2"), 2);
-  // switch_decrease 0.9: the coarse level ends once ρ̃ decreases by less than 90 % twice.
-  EXPECT_LT(coarse_iterations("early", " --switch-decrease 0.9"), plain);
+  const nlohmann::json all = coarse_level("all", " --switch-decrease 0");
+  EXPECT_EQ(all["iterations"].get<int>(), 6) << all.dump();
+  const nlohmann::json early = coarse_level("early", " --switch-decrease 0.9");
+  EXPECT_LT(early["iterations"].get<int>(), 6) << early.dump();
+  EXPECT_NE(early["termination"].get<std::string>().find("less than 0.9 twice"), std::string::npos)
+      << early.dump();
+
+  const std::string tol = scene() + " --out " + (dir_ / "tol").string() + common;
+  ASSERT_EQ(run(tol + " --coarse-tol 0.1", &err), 0) << err;
+  EXPECT_EQ(run(tol + " --coarse-tol 0.2 --resume", &err), 2);
+  EXPECT_NE(err.find("checkpoint_level1.bin was written for another run: distance differs"),
+            std::string::npos)
+      << err;
+  EXPECT_EQ(run(tol + " --coarse-tol 0.1 --resume", &err), 0) << err;
 }
 
 // --levels asks for more halvings than the box allows ((6, 1, 2) -> (3, 1, 1) -> none): bad
@@ -609,6 +622,27 @@ TEST_F(OptimiseCli, CameraFrameTargetRefinesThePoseWithTheControl) {
             std::string::npos)
       << header;
   EXPECT_TRUE(fs::exists(fs::path(out2) / "target_aligned.ply"));
+
+  // --pose-move F: the pose's move limit is F times the control's, so with 0.05 the first
+  // iteration moves the pose (its twist, rotation and translation) less than with the default 1.
+  auto first_pose_step = [&](const std::string& name, const std::string& flags) {
+    const fs::path o = dir_ / name;
+    EXPECT_EQ(run(joint + " --out " + o.string() + " --max-iter 1 --quiet" + flags, &err), 0)
+        << err;
+    const nlohmann::json s = nlohmann::json::parse(std::ifstream(o / "summary.json"));
+    double step = 0.0;
+    for (int k = 0; k < 6; ++k) {
+      const double d =
+          s["pose"]["twist"][k].get<double>() - s["pose_start"]["twist"][k].get<double>();
+      step += d * d;
+    }
+    return std::sqrt(step);
+  };
+  const double full = first_pose_step("move1", ""),
+               small = first_pose_step("move005", " --pose-move 0.05");
+  std::cout << "first pose step: --pose-move 1 " << full << ", 0.05 " << small << "\n";
+  EXPECT_GT(full, 0.0);
+  EXPECT_LT(small, 0.5 * full);
 
   std::ofstream(dir_ / "bad_pose.txt") << "1 0 0 0\n0 2 0 0\n0 0 1 0\n0 0 0 1\n";
   std::ofstream(dir_ / "tiny_pose.txt") << "1e-100 0 0 0\n0 1e-100 0 0\n0 0 1e-100 0\n0 0 0 1\n";

@@ -263,7 +263,7 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
              algorithm=None, move_limit=None, particles=None, volumes=None, alpha=None,
              beta=None, gamma=None, eps=None, method=None, tol=None, tikhonov_mass=None,
              tikhonov_grad=None, coarse_level=None, levels=None, refined_move_limit=None,
-             coarse_iterations=None, switch_decrease=None, coarse_tolerance=None,
+             coarse_iterations=None, switch_decrease=None, coarse_tol=None,
              distance=None, cap=None, cap_q=None, initial=None, pose_move=None, callback=None,
              threads=0):
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
@@ -278,7 +278,7 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     each level after the coarsest with the move limit refined_move_limit, 0.02, as
     ``--refined-move-limit``; each coarse level at most coarse_iterations, 30, iterations, ending
     earlier once rho decreased by less than switch_decrease, 0.01, relative twice in a row, with
-    the tree tolerance max(tol, coarse_tolerance), 5e-2, as ``--coarse-iterations``,
+    the tree tolerance max(tol, coarse_tol), 5e-2, as ``--coarse-iterations``,
     ``--switch-decrease``, ``--coarse-tol``). Returns an :class:`OptimiseResult`.
 
     target: None (the scene's own "target"), a cloud file path, an (M, d) array, or a tuple
@@ -311,7 +311,7 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
                           coarse_level=coarse_level, levels=levels,
                           refined_move_limit=refined_move_limit,
                           coarse_iterations=coarse_iterations, switch_decrease=switch_decrease,
-                          coarse_tolerance=coarse_tolerance, distance=distance,
+                          coarse_tol=coarse_tol, distance=distance,
                           cap=cap, cap_q=cap_q,
                           initial=None if initial is None else _as_float64(initial, "initial"),
                           pose_move=pose_move, callback=callback, threads=threads)

@@ -88,7 +88,7 @@ py::dict optimise_defaults() {
   out["refined_move_limit"] = d.refined_move_limit;
   out["coarse_iterations"] = d.coarse_iterations;
   out["switch_decrease"] = d.switch_decrease;
-  out["coarse_tolerance"] = d.coarse_tolerance;
+  out["coarse_tol"] = d.coarse_tolerance;
   // The form is the target's unless given (TrackingRunOptions::distance).
   out["distance"] = py::none();
   out["cap"] = py::none();
@@ -207,7 +207,7 @@ void bind_optimise(py::module_& m) {
          std::optional<double> tikhonov_mass, std::optional<double> tikhonov_grad,
          const std::optional<std::string>& coarse_level, std::optional<int> levels,
          std::optional<double> refined_move_limit, std::optional<int> coarse_iterations,
-         std::optional<double> switch_decrease, std::optional<double> coarse_tolerance,
+         std::optional<double> switch_decrease, std::optional<double> coarse_tol,
          const std::optional<std::string>& distance, std::optional<double> cap,
          std::optional<double> cap_q, const std::optional<Eigen::VectorXd>& initial,
          std::optional<double> pose_move, const py::object& callback, int threads) {
@@ -241,7 +241,7 @@ void bind_optimise(py::module_& m) {
         if (refined_move_limit) o.refined_move_limit = *refined_move_limit;
         if (coarse_iterations) o.coarse_iterations = *coarse_iterations;
         if (switch_decrease) o.switch_decrease = *switch_decrease;
-        if (coarse_tolerance) o.coarse_tolerance = *coarse_tolerance;
+        if (coarse_tol) o.coarse_tolerance = *coarse_tol;
         o.threads = threads;
         return optimise(s, points, volumes, file, o, callback);
       },
@@ -251,7 +251,7 @@ void bind_optimise(py::module_& m) {
       py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("eps"),
       py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"), py::arg("tikhonov_grad"),
       py::arg("coarse_level"), py::arg("levels"), py::arg("refined_move_limit"),
-      py::arg("coarse_iterations"), py::arg("switch_decrease"), py::arg("coarse_tolerance"),
+      py::arg("coarse_iterations"), py::arg("switch_decrease"), py::arg("coarse_tol"),
       py::arg("distance"), py::arg("cap"), py::arg("cap_q"), py::arg("initial"),
       py::arg("pose_move"), py::arg("callback"), py::arg("threads"));
   m.def("optimise_defaults", &optimise_defaults,

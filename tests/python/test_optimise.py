@@ -138,7 +138,7 @@ def as_in_the_csv(value):
           rel_tol=0, coarse_level="off")),
     (["--levels", 2], dict(levels=2)),  # a coarse level's rows first, then 8 on the mesh
     (["--levels", 2, "--coarse-iterations", 2, "--switch-decrease", 0, "--coarse-tol", 0.1],
-     dict(levels=2, coarse_iterations=2, switch_decrease=0, coarse_tolerance=0.1)),
+     dict(levels=2, coarse_iterations=2, switch_decrease=0, coarse_tol=0.1)),
 ])
 def test_history_equals_the_command_line_tools(scene_file, cli, tmp_path, cli_options,
                                                py_options):
@@ -160,6 +160,27 @@ def test_history_equals_the_command_line_tools(scene_file, cli, tmp_path, cli_op
     for row, it in zip(rows, r.history):
         for column in HISTORY_COLUMNS + ["level"]:
             assert row[column] == as_in_the_csv(getattr(it, column)), (column, row, it)
+
+
+def test_coarse_level_keywords_act_on_the_coarse_level(scene_file):
+    """levels=2: switch_decrease=0 runs the coarse level's min(coarse_iterations, max_iter) = 6
+    iterations, 0.9 ends it earlier (rho decreasing by less than 90 % twice); coarse_iterations
+    caps it. coarse_tol reaches the run's validation (its effect on the coarse level's tree
+    tolerance: tests/test_optimise_cli.cpp, where the level's checkpoint records it)."""
+    scene = softhd.Scene.load(scene_file(SMALL_PLATE))
+
+    def coarse_iterations(**kw):
+        r = softhd.optimise(scene, max_iter=6, rel_tol=0, threads=1, levels=2, **kw)
+        return [it.level for it in r.history].count(1)
+
+    assert coarse_iterations(switch_decrease=0) == 6
+    assert coarse_iterations(switch_decrease=0.9) < 6
+    assert coarse_iterations(switch_decrease=0, coarse_iterations=3) == 3
+    for keyword, value, message in (("switch_decrease", 1.0, r"switch_decrease must be in \[0, 1\)"),
+                                    ("coarse_tol", 1.0, r"coarse_tolerance must be in \(0, 1\)"),
+                                    ("coarse_iterations", 0, "coarse_iterations must be >= 1")):
+        with pytest.raises(softhd.InvalidArgument, match=message):
+            softhd.optimise(scene, max_iter=1, **{keyword: value})
 
 
 @pytest.fixture
@@ -193,7 +214,8 @@ def test_defaults_are_the_command_line_tools(cli_help):
              "levels": "then the next finer level from its control",
              "refined_move_limit": "the move limit of each level started from a coarser "
              "level's control", "coarse_iterations": "--coarse-iterations K",
-             "switch_decrease": "--switch-decrease S", "coarse_tolerance": "--coarse-tol T"}
+             "switch_decrease": "--switch-decrease S", "coarse_tol": "--coarse-tol T",
+             "pose_move": "as a fraction of the control's, in (0, 1]"}
     for name, before in flags.items():
         m = re.search(re.escape(before) + r" \(default ([^;,:)]+)", text)
         assert m, name
@@ -230,6 +252,14 @@ def test_camera_frame_target_returns_the_pose(scene_file, tmp_path):
         return np.arccos(np.clip((np.trace(P[:3, :3] @ truth[:3, :3].T) - 1) / 2, -1, 1))
 
     assert angle(r.pose) < angle(truth @ off)
+    # pose_move: the pose's move limit as a fraction of the control's; 0.05 moves the pose less
+    # in the first iteration than the default 1.
+    def first_step(**kw):
+        P = softhd.optimise(softhd.Scene.load(scene_file(spec, "camera.json")), max_iter=1,
+                            **kw).pose
+        return np.linalg.norm(P - truth @ off)
+
+    assert first_step(pose_move=0.05) < 0.5 * first_step()
     assert softhd.optimise(scene, max_iter=1).pose is None
     bad = dict(spec, target=dict(spec["target"], frame="world"))
     with pytest.raises(softhd.InvalidArgument, match='target.frame must be "body" or "camera"'):
