@@ -150,9 +150,9 @@ PointCloud arc_surface(const fe::Scene& box, const ArcMap& T, double spacing, in
 }
 
 RunSettings::RunSettings() {
-  run.max_iterations = 60;
-  run.method = Method::exact;
-  run.tolerance = 1e-6;
+  run.optimiser.max_iterations = 60;
+  run.distance.method = Method::exact;
+  run.distance.tolerance = 1e-6;
 }
 
 bool Run::finite() const {

@@ -4,7 +4,10 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include <memory>
+
 #include "scene.hpp"
+#include "softhd/control/run_fields.hpp"
 #include "softhd/control/scene_target.hpp"
 #include "softhd/control/tracking_run.hpp"
 #include "softhd/error.hpp"
@@ -39,8 +42,12 @@ SceneTarget array_target(const PyScene& s, const Array& points,
 PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
                     const std::optional<Array>& volumes, const std::optional<std::string>& file,
                     TrackingRunOptions o, const py::object& callback) {
-  if (file) o.target_file = *file;
-  o.validate();
+  if (file) o.target.file = *file;
+  try {
+    o.validate();
+  } catch (const InvalidArgument& e) {  // the fields by their keywords
+    throw InvalidArgument(name_fields(e.what(), FrontEnd::python));
+  }
   ThreadScope scope(o.threads);  // the FE assembly's threads too
   TrackingRunCallbacks cb;
   if (!callback.is_none()) {
@@ -55,9 +62,14 @@ PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
   py::gil_scoped_release release;
   SceneTarget target =
       points ? array_target(s, *points, volumes) : tracking_target(s.scene, s.assembler.mesh(), o);
-  TrackingRun run(s.scene, s.assembler, s.control, std::move(target), o);
+  std::unique_ptr<TrackingRun> run;
+  try {
+    run = std::make_unique<TrackingRun>(s.scene, s.assembler, s.control, std::move(target), o);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(name_fields(e.what(), FrontEnd::python));
+  }
   PyOptimise out;
-  out.summary = run.run(cb);
+  out.summary = run->run(cb);
   out.dim = s.scene.dim();
   return out;
 }
@@ -66,29 +78,29 @@ PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
 py::dict optimise_defaults() {
   const TrackingRunOptions d;
   py::dict out;
-  out["max_iter"] = d.max_iterations;
+  out["max_iter"] = d.optimiser.max_iterations;
   out["initial"] = py::none();  // the scene's control.initial
-  out["pose_move"] = d.pose_move;
-  out["max_seconds"] = d.max_seconds;
-  out["rel_tol"] = d.relative_change;
-  out["algorithm"] = to_string(d.algorithm);
-  out["move_limit"] = d.move_limit;
-  out["particles"] = to_string(d.particles);
-  out["volumes"] = to_string(d.volumes);
-  out["alpha"] = d.params.alpha;
-  out["beta"] = d.params.beta;
-  out["gamma"] = d.params.gamma;
-  out["eps"] = d.params.epsilon;
-  out["method"] = to_string(d.method);
-  out["tol"] = d.tolerance;
-  out["tikhonov_mass"] = d.tikhonov_mass;
-  out["tikhonov_grad"] = d.tikhonov_gradient;
-  out["coarse_level"] = to_string(d.coarse_level);
-  out["levels"] = d.levels;
-  out["refined_move_limit"] = d.refined_move_limit;
-  out["coarse_iterations"] = d.coarse_iterations;
-  out["switch_decrease"] = d.switch_decrease;
-  out["coarse_tol"] = d.coarse_tolerance;
+  out["pose_move"] = d.pose.move;
+  out["max_seconds"] = d.optimiser.max_seconds;
+  out["rel_tol"] = d.optimiser.relative_change;
+  out["algorithm"] = to_string(d.optimiser.algorithm);
+  out["move_limit"] = d.optimiser.move_limit;
+  out["particles"] = to_string(d.distance.particles);
+  out["volumes"] = to_string(d.distance.volumes);
+  out["alpha"] = d.distance.params.alpha;
+  out["beta"] = d.distance.params.beta;
+  out["gamma"] = d.distance.params.gamma;
+  out["eps"] = d.distance.params.epsilon;
+  out["method"] = to_string(d.distance.method);
+  out["tol"] = d.distance.tolerance;
+  out["tikhonov_mass"] = d.tikhonov.mass;
+  out["tikhonov_grad"] = d.tikhonov.gradient;
+  out["coarse_level"] = to_string(d.state.coarse_level);
+  out["levels"] = d.levels.count;
+  out["refined_move_limit"] = d.levels.refined_move_limit;
+  out["coarse_iterations"] = d.levels.coarse_iterations;
+  out["switch_decrease"] = d.levels.switch_decrease;
+  out["coarse_tol"] = d.levels.coarse_tolerance;
   // The form is the target's unless given (TrackingRunOptions::distance).
   out["distance"] = py::none();
   out["cap"] = py::none();
@@ -212,36 +224,36 @@ void bind_optimise(py::module_& m) {
          std::optional<double> cap_q, const std::optional<Eigen::VectorXd>& initial,
          std::optional<double> pose_move, const py::object& callback, int threads) {
         TrackingRunOptions o;
-        if (initial) o.initial_control = *initial;
-        if (pose_move) o.pose_move = *pose_move;
+        if (initial) o.optimiser.initial_control = *initial;
+        if (pose_move) o.pose.move = *pose_move;
         if (distance || cap || cap_q) {  // the form as a whole (TrackingRunOptions::distance)
           TargetDistance form;
           if (distance) form.sides = sides_from_string(*distance);
           if (cap) form.cap = *cap;
           if (cap_q) form.cap_q = *cap_q;
-          o.distance = form;
+          o.distance.form = form;
         }
-        if (max_iter) o.max_iterations = *max_iter;
-        if (max_seconds) o.max_seconds = *max_seconds;
-        if (rel_tol) o.relative_change = *rel_tol;
-        if (algorithm) o.algorithm = algorithm_from_string(*algorithm);
-        if (move_limit) o.move_limit = *move_limit;
-        if (particles) o.particles = particles_from_string(*particles);
-        if (volumes_kind) o.volumes = particle_volumes_from_string(*volumes_kind);
-        if (alpha) o.params.alpha = *alpha;
-        if (beta) o.params.beta = *beta;
-        if (gamma) o.params.gamma = *gamma;
-        if (eps) o.params.epsilon = *eps;
-        if (method) o.method = method_from_string(*method);
-        if (tol) o.tolerance = *tol;
-        if (tikhonov_mass) o.tikhonov_mass = *tikhonov_mass;
-        if (tikhonov_grad) o.tikhonov_gradient = *tikhonov_grad;
-        if (coarse_level) o.coarse_level = coarse_level_from_string(*coarse_level);
-        if (levels) o.levels = *levels;
-        if (refined_move_limit) o.refined_move_limit = *refined_move_limit;
-        if (coarse_iterations) o.coarse_iterations = *coarse_iterations;
-        if (switch_decrease) o.switch_decrease = *switch_decrease;
-        if (coarse_tol) o.coarse_tolerance = *coarse_tol;
+        if (max_iter) o.optimiser.max_iterations = *max_iter;
+        if (max_seconds) o.optimiser.max_seconds = *max_seconds;
+        if (rel_tol) o.optimiser.relative_change = *rel_tol;
+        if (algorithm) o.optimiser.algorithm = algorithm_from_string(*algorithm);
+        if (move_limit) o.optimiser.move_limit = *move_limit;
+        if (particles) o.distance.particles = particles_from_string(*particles);
+        if (volumes_kind) o.distance.volumes = particle_volumes_from_string(*volumes_kind);
+        if (alpha) o.distance.params.alpha = *alpha;
+        if (beta) o.distance.params.beta = *beta;
+        if (gamma) o.distance.params.gamma = *gamma;
+        if (eps) o.distance.params.epsilon = *eps;
+        if (method) o.distance.method = method_from_string(*method);
+        if (tol) o.distance.tolerance = *tol;
+        if (tikhonov_mass) o.tikhonov.mass = *tikhonov_mass;
+        if (tikhonov_grad) o.tikhonov.gradient = *tikhonov_grad;
+        if (coarse_level) o.state.coarse_level = coarse_level_from_string(*coarse_level);
+        if (levels) o.levels.count = *levels;
+        if (refined_move_limit) o.levels.refined_move_limit = *refined_move_limit;
+        if (coarse_iterations) o.levels.coarse_iterations = *coarse_iterations;
+        if (switch_decrease) o.levels.switch_decrease = *switch_decrease;
+        if (coarse_tol) o.levels.coarse_tolerance = *coarse_tol;
         o.threads = threads;
         return optimise(s, points, volumes, file, o, callback);
       },

@@ -177,7 +177,7 @@ def test_coarse_level_keywords_act_on_the_coarse_level(scene_file):
     assert coarse_iterations(switch_decrease=0.9) < 6
     assert coarse_iterations(switch_decrease=0, coarse_iterations=3) == 3
     for keyword, value, message in (("switch_decrease", 1.0, r"switch_decrease must be in \[0, 1\)"),
-                                    ("coarse_tol", 1.0, r"coarse_tolerance must be in \(0, 1\)"),
+                                    ("coarse_tol", 1.0, r"coarse_tol must be in \(0, 1\)"),
                                     ("coarse_iterations", 0, "coarse_iterations must be >= 1")):
         with pytest.raises(softhd.InvalidArgument, match=message):
             softhd.optimise(scene, max_iter=1, **{keyword: value})
@@ -274,16 +274,16 @@ def test_initial_control_starts_there(scene_file):
     r2 = softhd.optimise(scene, max_iter=1, initial=r1.control)
     assert r2.rho_start == pytest.approx(r1.rho_final, rel=1e-6)
     assert r2.rho_start < softhd.optimise(scene, max_iter=1).rho_start
-    with pytest.raises(softhd.InvalidArgument, match="initial_control has 3 values, expected"):
+    with pytest.raises(softhd.InvalidArgument, match="initial has 3 values, expected"):
         softhd.optimise(scene, max_iter=1, initial=[0.0, 0.0, 0.0])
     # An empty control is not None; values outside the bounds [-1e5, 0] are refused, not clipped.
-    with pytest.raises(softhd.InvalidArgument, match="initial_control is empty"):
+    with pytest.raises(softhd.InvalidArgument, match="initial is empty"):
         softhd.optimise(scene, max_iter=1, initial=np.empty(0))
     for k, value, text in ((0, 5.0, "5"), (3, -1e9, "-1000000000")):
         m = np.array(r1.control)
         m[k] = value
         with pytest.raises(softhd.InvalidArgument,
-                           match=rf"initial_control\[{k}\] = {text} is outside its bounds "
+                           match=rf"initial\[{k}\] = {text} is outside its bounds "
                                  r"\[-100000, 0\]"):
             softhd.optimise(scene, max_iter=1, initial=m)
     # pose_move moves a camera-frame target's pose: refused for this body-frame target.

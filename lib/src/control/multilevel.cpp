@@ -63,19 +63,20 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
                                                             const TrackingRunOptions& options) {
   std::vector<std::unique_ptr<CoarseProblem>> levels;  // finest first while built
   TrackingRunOptions o = options;
-  if (o.method == Method::tree) o.tolerance = std::max(options.tolerance, options.coarse_tolerance);
+  if (o.distance.method == Method::tree)
+    o.distance.tolerance = std::max(options.distance.tolerance, options.levels.coarse_tolerance);
   ShapeObjectiveOptions so = o.objective();
   apply_target_settings(target, &so);  // the user's target's view on every level
   const fe::Scene* finer = &scene;
   const SceneTarget* finer_target = &target;
-  for (int level = 1; level < options.levels; ++level) {
+  for (int level = 1; level < options.levels.count; ++level) {
     auto p = std::make_unique<CoarseProblem>();
     p->level = level;
     try {
       p->scene = fe::coarsened(*finer, fe::Halving::rounded);
     } catch (const InvalidArgument& e) {
-      throw InvalidArgument("levels: " + std::to_string(options.levels) + " asks for " +
-                            std::to_string(options.levels - 1) +
+      throw InvalidArgument("levels.count: " + std::to_string(options.levels.count) + " asks for " +
+                            std::to_string(options.levels.count - 1) +
                             " coarser levels of the body, but it has " + std::to_string(level - 1) +
                             ": " + e.what());
     }
@@ -84,11 +85,11 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
     p->target.emplace(coarse_target(p->scene, p->assembler->mesh(), *finer_target, options));
     p->objective = std::make_unique<ShapeObjective>(
         *p->assembler, *p->control, HausdorffTarget(p->target->cloud, so.hausdorff), so,
-        fe::state_solver_factory(p->scene, options.state_backend, p->assembler.get(),
+        fe::state_solver_factory(p->scene, options.state.backend, p->assembler.get(),
                                  p->control.get()));
-    if (options.distance) p->target->distance = *options.distance;
+    if (options.distance.form) p->target->distance = *options.distance.form;
     apply_target_form(*p->objective, *p->target);
-    if (options.coarse_level == CoarseLevel::automatic &&
+    if (options.state.coarse_level == CoarseLevel::automatic &&
         fe::grid_levels(p->scene, fe::GridSequencingOptions{}) > 0) {
       p->two_level.emplace(fe::coarsened(p->scene).make_assembler());
       p->objective->state_path().use_coarse_level(*p->two_level);
