@@ -266,6 +266,18 @@ void bind_optimise(py::module_& m) {
       py::arg("coarse_iterations"), py::arg("switch_decrease"), py::arg("coarse_tol"),
       py::arg("distance"), py::arg("cap"), py::arg("cap_q"), py::arg("initial"),
       py::arg("pose_move"), py::arg("callback"), py::arg("threads"));
+  m.def(
+      "optimise_fields",
+      [] {
+        py::list rows;
+        for (const RunField& f : tracking_run_fields())
+          rows.append(py::dict(py::arg("path") = f.path, py::arg("flag") = f.flag,
+                               py::arg("keyword") = f.keyword, py::arg("why_not") = f.why_not));
+        return rows;
+      },
+      "The fields of the run's options (TrackingRunOptions) by their nested path, with the flag "
+      "of softhd optimise and the keyword of optimise that set each one (\"\": none, why_not "
+      "says why).");
   m.def("optimise_defaults", &optimise_defaults,
         "The defaults of optimise's options (softhd optimise's: TrackingRunOptions).");
 }

@@ -230,6 +230,23 @@ def test_defaults_are_the_command_line_tools(cli_help):
                                                                    "eps")]
 
 
+def test_keywords_are_the_fields_of_the_table():
+    """Every keyword of optimise sets a field of the run's options table (the one `softhd
+    optimise --help` is checked against in tests/test_run_fields.cpp), and every field of the
+    table has a keyword or says why not; callback is Python's own."""
+    fields = softhd._core.optimise_fields()
+    keywords = {p.name for p in inspect.signature(softhd.optimise).parameters.values()
+                if p.name != "scene"}
+    table = {f["keyword"] for f in fields if f["keyword"]}
+    assert keywords - {"callback"} == table
+    for f in fields:
+        assert f["keyword"] or f["why_not"], f["path"]
+    # The keyword is the flag without its dashes, with underscores (where both exist).
+    for f in fields:
+        if f["keyword"] and f["flag"]:
+            assert f["flag"] == "--" + f["keyword"].replace("_", "-"), f
+
+
 def test_camera_frame_target_returns_the_pose(scene_file, tmp_path):
     """A scene target in the camera's frame (docs/formulation.md §8.10): the body at rest moved by
     a rigid motion, the start pose 0.1 rad off; result.pose (None for a body-frame target) is the
