@@ -70,10 +70,11 @@ options:
   --vtu-every K      VTU output every K iterations (default {vtu_every}; 0: start and end only)
   --checkpoint-every K  save the warm-start states every K iterations (default {checkpoint_every}): a
                      resume recomputes at most the K-1 iterations after the last save
-  --coarse-level C   auto | off: two-level starts, a large control step solved first on
-                     the mesh with half the cells along the even axes, or for a mesh file
-                     of order 2 as P1/Q1 on its vertices (default {coarse_level}: when that
-                     mesh has >= 32 elements)
+  --coarse-levels C  auto | 0: the state solves' coarse start (as softhd forward's, at
+                     most one level here: two-level starts), a large control step solved
+                     first on the mesh with half the cells along the even axes, or for a
+                     mesh file of order 2 as P1/Q1 on its vertices (default {coarse_levels}:
+                     when that mesh has >= 32 elements; 0: none)
   --levels N         multilevel optimisation: solve first on the box halved N-1 times
                      (along its even axes; with none, every axis of >= 4 cells to
                      (n+1)/2: 25x5x1 -> 13x3x1; a mesh file of order 2: N = 2, its P1/Q1
@@ -195,7 +196,7 @@ std::string usage() {
       {"tikhonov_grad", number_text(d.tikhonov.gradient)},
       {"vtu_every", std::to_string(d.output.vtu_every)},
       {"checkpoint_every", std::to_string(d.output.checkpoint_every)},
-      {"coarse_level", to_string(d.state.coarse_level)},
+      {"coarse_levels", to_string(d.state.coarse_levels)},
       {"levels", std::to_string(d.levels.count)},
       {"coarse_iterations", std::to_string(d.levels.coarse_iterations)},
       {"switch_decrease", number_text(d.levels.switch_decrease)},
@@ -285,10 +286,16 @@ OptimiseArgs parse_optimise(Args& args) {
       static_cast<int>(args.integer("--vtu-every", d.output.vtu_every, 0, 1000000000));
   o.output.checkpoint_every =
       static_cast<int>(args.integer("--checkpoint-every", d.output.checkpoint_every, 1, 1000000));
-  const std::string coarse = args.value("--coarse-level").value_or(to_string(d.state.coarse_level));
-  if (coarse != "auto" && coarse != "off")
-    throw UsageError("--coarse-level: expected auto or off, got '" + coarse + "'");
-  o.state.coarse_level = coarse_level_from_string(coarse);
+  if (args.value("--coarse-level"))  // the retired spelling
+    throw UsageError("--coarse-level is now --coarse-levels (auto or 0)");
+  const std::string coarse =
+      args.value("--coarse-levels").value_or(to_string(d.state.coarse_levels));
+  if (coarse != "auto" && coarse != "0")
+    throw UsageError(
+        "--coarse-levels: expected auto or 0 (softhd optimise's state solves start "
+        "from at most one coarse level), got '" +
+        coarse + "'");
+  o.state.coarse_levels = coarse_level_from_string(coarse);
   o.levels.count = static_cast<int>(args.integer("--levels", d.levels.count, 0, 16));
   o.levels.coarse_iterations =
       static_cast<int>(args.integer("--coarse-iterations", d.levels.coarse_iterations, 1, 1000000));

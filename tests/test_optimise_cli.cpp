@@ -327,6 +327,24 @@ TEST_F(OptimiseCli, SwitchDecreaseAndCoarseTolActOnTheCoarseLevel) {
   EXPECT_EQ(run(tol + " --coarse-tol 0.1 --resume", &err), 0) << err;
 }
 
+// --coarse-levels: the state solves' coarse start. On a box of 16 x 4 x 4 cells the coarse
+// level (8 x 2 x 2, 32 elements) is used by default (auto) and named in the progress lines;
+// --coarse-levels 0 solves on the user's mesh alone.
+TEST_F(OptimiseCli, CoarseLevelsZeroTurnsTheCoarseStartOff) {
+  nlohmann::json j = nlohmann::json::parse(kScene);
+  j["mesh"]["cells"] = {16, 4, 4};
+  j["target"]["cells"] = {16, 4, 4};
+  const std::string path = (dir_ / "fine.json").string();
+  std::ofstream(path) << j.dump();
+  const std::string line = "two-level starts on the coarse level (cells 8 2 2)";
+  std::string err;
+  const std::string common = " --max-iter 1 --levels 1 --threads 1 --vtu-every 0 --out ";
+  ASSERT_EQ(run(path + common + (dir_ / "auto").string(), &err), 0) << err;
+  EXPECT_NE(err.find(line), std::string::npos) << err;
+  ASSERT_EQ(run(path + common + (dir_ / "off").string() + " --coarse-levels 0", &err), 0) << err;
+  EXPECT_EQ(err.find("two-level starts"), std::string::npos) << err;
+}
+
 // --levels asks for more halvings than the box allows ((6, 1, 2) -> (3, 1, 1) -> none): bad
 // input naming the option.
 TEST_F(OptimiseCli, TooManyLevelsIsBadInput) {
@@ -489,7 +507,10 @@ TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
   expect_refused(scene() + " --method nearest", "--method: nearest has no gradient");
   expect_refused(scene() + " --method fast", "unknown method 'fast'");
   expect_refused(scene() + " --method tree --tol 2", "tolerance");
-  expect_refused(scene() + " --coarse-level on", "--coarse-level: expected auto or off");
+  expect_refused(scene() + " --coarse-levels off", "--coarse-levels: expected auto or 0");
+  // The retired spelling names the new one.
+  expect_refused(scene() + " --coarse-level off",
+                 "--coarse-level is now --coarse-levels (auto or 0)");
   // The flags reach the run's validation (TrackingRunOptions::validate).
   expect_refused(scene() + " --switch-decrease 1", "--switch-decrease must be in [0, 1)");
   expect_refused(scene() + " --coarse-tol 0", "--coarse-tol must be in (0, 1)");

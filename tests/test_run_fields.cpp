@@ -63,7 +63,7 @@ TEST(RunFields, EveryFieldOfTheOptionsHasARow) {
   EXPECT_EQ(fields_under("tikhonov.").size(), 2u);
   [[maybe_unused]] auto& [file] = o.target;
   EXPECT_EQ(fields_under("target.").size(), 1u);
-  [[maybe_unused]] auto& [backend, coarse_level] = o.state;
+  [[maybe_unused]] auto& [backend, coarse_levels] = o.state;
   EXPECT_EQ(fields_under("state.").size(), 2u);
   [[maybe_unused]] auto& [count, coarse_iterations, switch_decrease, coarse_tolerance,
                           refined_move_limit] = o.levels;

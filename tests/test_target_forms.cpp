@@ -104,7 +104,7 @@ TEST(TargetForms, RunOptionsReplaceTheTargetsForm) {
   TrackingRunOptions options;
   options.optimiser.max_iterations = 1;
   options.threads = 1;
-  options.state.coarse_level = CoarseLevel::off;
+  options.state.coarse_levels = CoarseLevel::off;
   options.distance.form = TargetDistance{};
   options.distance.form->sides = Sides::scan_to_body;
   const TrackingRunSummary s = run_tracking(scene, options);
@@ -159,7 +159,7 @@ TEST(TargetForms, OneSidedRunAgainstAHalfTargetRecoversTheShape) {
   TrackingRunOptions options;
   options.optimiser.max_iterations = 40;
   options.threads = 1;
-  options.state.coarse_level = CoarseLevel::off;
+  options.state.coarse_levels = CoarseLevel::off;
   auto node_error = [&](const SceneTarget& target) {
     TrackingRun run(scene, assembler, control, target, options);
     const TrackingRunSummary s = run.run();

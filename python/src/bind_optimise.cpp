@@ -95,7 +95,7 @@ py::dict optimise_defaults() {
   out["tol"] = d.distance.tolerance;
   out["tikhonov_mass"] = d.tikhonov.mass;
   out["tikhonov_grad"] = d.tikhonov.gradient;
-  out["coarse_level"] = to_string(d.state.coarse_level);
+  out["coarse_levels"] = to_string(d.state.coarse_levels);
   out["levels"] = d.levels.count;
   out["refined_move_limit"] = d.levels.refined_move_limit;
   out["coarse_iterations"] = d.levels.coarse_iterations;
@@ -217,7 +217,7 @@ void bind_optimise(py::module_& m) {
          std::optional<double> beta, std::optional<double> gamma, std::optional<double> eps,
          const std::optional<std::string>& method, std::optional<double> tol,
          std::optional<double> tikhonov_mass, std::optional<double> tikhonov_grad,
-         const std::optional<std::string>& coarse_level, std::optional<int> levels,
+         const std::optional<std::string>& coarse_levels, std::optional<int> levels,
          std::optional<double> refined_move_limit, std::optional<int> coarse_iterations,
          std::optional<double> switch_decrease, std::optional<double> coarse_tol,
          const std::optional<std::string>& distance, std::optional<double> cap,
@@ -248,7 +248,13 @@ void bind_optimise(py::module_& m) {
         if (tol) o.distance.tolerance = *tol;
         if (tikhonov_mass) o.tikhonov.mass = *tikhonov_mass;
         if (tikhonov_grad) o.tikhonov.gradient = *tikhonov_grad;
-        if (coarse_level) o.state.coarse_level = coarse_level_from_string(*coarse_level);
+        if (coarse_levels) {
+          try {
+            o.state.coarse_levels = coarse_level_from_string(*coarse_levels);
+          } catch (const InvalidArgument& e) {  // named by its keyword
+            throw InvalidArgument(name_fields(e.what(), FrontEnd::python));
+          }
+        }
         if (levels) o.levels.count = *levels;
         if (refined_move_limit) o.levels.refined_move_limit = *refined_move_limit;
         if (coarse_iterations) o.levels.coarse_iterations = *coarse_iterations;
@@ -262,7 +268,7 @@ void bind_optimise(py::module_& m) {
       py::arg("rel_tol"), py::arg("algorithm"), py::arg("move_limit"), py::arg("particles"),
       py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("eps"),
       py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"), py::arg("tikhonov_grad"),
-      py::arg("coarse_level"), py::arg("levels"), py::arg("refined_move_limit"),
+      py::arg("coarse_levels"), py::arg("levels"), py::arg("refined_move_limit"),
       py::arg("coarse_iterations"), py::arg("switch_decrease"), py::arg("coarse_tol"),
       py::arg("distance"), py::arg("cap"), py::arg("cap_q"), py::arg("initial"),
       py::arg("pose_move"), py::arg("callback"), py::arg("threads"));

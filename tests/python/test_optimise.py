@@ -133,9 +133,9 @@ def as_in_the_csv(value):
 @pytest.mark.parametrize("cli_options, py_options", [
     ([], {}),  # the defaults on both sides
     (["--alpha", 5, "--eps", 2e-3, "--move-limit", 0.2, "--volumes", "deformed",
-      "--tikhonov-mass", 1e-12, "--rel-tol", 0, "--coarse-level", "off"],
+      "--tikhonov-mass", 1e-12, "--rel-tol", 0, "--coarse-levels", 0],
      dict(alpha=5, eps=2e-3, move_limit=0.2, volumes="deformed", tikhonov_mass=1e-12,
-          rel_tol=0, coarse_level="off")),
+          rel_tol=0, coarse_levels=0)),
     (["--levels", 2], dict(levels=2)),  # a coarse level's rows first, then 8 on the mesh
     (["--levels", 2, "--coarse-iterations", 2, "--switch-decrease", 0, "--coarse-tol", 0.1],
      dict(levels=2, coarse_iterations=2, switch_decrease=0, coarse_tol=0.1)),
@@ -210,7 +210,7 @@ def test_defaults_are_the_command_line_tools(cli_help):
              "method": "--method M exact | tree: the distance's pair sums",
              "tol": "relative error bound on every kernel sum", "tikhonov_mass":
              "--tikhonov-mass M (M/2) int m^2", "tikhonov_grad": "--tikhonov-grad E (E/2) int "
-             "|grad m|^2", "coarse_level": "or for a mesh file of order 2 as P1/Q1 on its vertices",
+             "|grad m|^2", "coarse_levels": "mesh file of order 2 as P1/Q1 on its vertices",
              "levels": "then the next finer level from its control",
              "refined_move_limit": "the move limit of each level started from a coarser "
              "level's control", "coarse_iterations": "--coarse-iterations K",

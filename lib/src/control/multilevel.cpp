@@ -89,7 +89,7 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const fe::Scene& sce
                                  p->control.get()));
     if (options.distance.form) p->target->distance = *options.distance.form;
     apply_target_form(*p->objective, *p->target);
-    if (options.state.coarse_level == CoarseLevel::automatic &&
+    if (options.state.coarse_levels == CoarseLevel::automatic &&
         fe::grid_levels(p->scene, fe::GridSequencingOptions{}) > 0) {
       p->two_level.emplace(fe::coarsened(p->scene).make_assembler());
       p->objective->state_path().use_coarse_level(*p->two_level);

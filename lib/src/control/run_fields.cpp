@@ -47,7 +47,7 @@ const std::vector<RunField>& tracking_run_fields() {
       {"state.backend", "--state-backend", "",
        "Python: cholmod only (the PETSc backends distribute the state over the ranks of "
        "mpiexec, which starts the CLI)"},
-      {"state.coarse_level", "--coarse-level", "coarse_level", ""},
+      {"state.coarse_levels", "--coarse-levels", "coarse_levels", ""},
       {"levels.count", "--levels", "levels", ""},
       {"levels.coarse_iterations", "--coarse-iterations", "coarse_iterations", ""},
       {"levels.switch_decrease", "--switch-decrease", "switch_decrease", ""},

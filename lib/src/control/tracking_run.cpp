@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr EnumNames<CoarseLevel, 2> kCoarseLevelNames{
-    {{CoarseLevel::automatic, "auto"}, {CoarseLevel::off, "off"}}};
+    {{CoarseLevel::automatic, "auto"}, {CoarseLevel::off, "0"}}};
 
 // The content hash of a file's bytes (empty if it cannot be read): the fingerprint's "scene".
 std::string file_hash(const std::string& path) {
@@ -108,7 +108,7 @@ void validate_form(const TargetDistance& d) {
 std::string to_string(CoarseLevel level) { return enum_name(kCoarseLevelNames, level); }
 
 CoarseLevel coarse_level_from_string(const std::string& name) {
-  return enum_from_name(kCoarseLevelNames, name, "coarse_level");
+  return enum_from_name(kCoarseLevelNames, name, "state.coarse_levels");
 }
 
 void TrackingRunOptions::validate() const {
@@ -221,7 +221,7 @@ struct TrackingRun::Impl {
         fe::state_solver_factory(scene, options.state.backend, &a, &c));
     if (options.distance.form) target.distance = *options.distance.form;
     detail::apply_target_form(*objective, target);
-    if (options.state.coarse_level == CoarseLevel::automatic &&
+    if (options.state.coarse_levels == CoarseLevel::automatic &&
         fe::grid_levels(scene, fe::GridSequencingOptions{}) > 0) {
       const fe::Scene level = fe::coarsened(scene);
       coarse.emplace(level.make_assembler());

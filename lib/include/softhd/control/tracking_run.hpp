@@ -28,16 +28,17 @@
 
 namespace softhd {
 
-/// Two-level starts (docs/formulation.md §4.7): a large control step is solved first on the
+/// The coarse start of a run's state solves, its two-level starts (docs/formulation.md §4.7;
+/// `--coarse-levels`, as `softhd forward`'s): a large control step is solved first on the
 /// coarse level of fe::coarsened (a box with half the cells along the even axes, a mesh file
-/// of order 2 as P1/Q1 on its vertices).
+/// of order 2 as P1/Q1 on its vertices), at most one level.
 enum class CoarseLevel {
   automatic,  ///< "auto": when that mesh exists and has >= 32 elements (fe::grid_levels)
-  off,        ///< "off": every state solve on the user's mesh alone
+  off,        ///< "0": every state solve on the user's mesh alone
 };
-/// "auto" or "off".
+/// "auto" or "0".
 std::string to_string(CoarseLevel level);
-/// The CoarseLevel named by to_string; throws InvalidArgument naming `coarse_level`.
+/// The CoarseLevel named by to_string; throws InvalidArgument naming `state.coarse_levels`.
 CoarseLevel coarse_level_from_string(const std::string& name);
 
 /// Settings of one tracking run, grouped by concern. The defaults are those of
@@ -90,7 +91,7 @@ struct TrackingRunOptions {
   /// The state solves.
   struct State {
     fe::StateBackend backend = fe::StateBackend::kCholmod;  ///< the state solver (cholmod)
-    CoarseLevel coarse_level = CoarseLevel::automatic;      ///< two-level starts (auto)
+    CoarseLevel coarse_levels = CoarseLevel::automatic;     ///< two-level starts (auto)
   };
   /// Multilevel optimisation (docs/formulation.md §4.8): with count = N > 1 the control
   /// problem is solved first on the N − 1 coarser levels of fe::coarsened with
