@@ -232,18 +232,33 @@ struct OptimiseArgs {
   bool resume = false, json = false, quiet = false;
 };
 
+// from_string(text), its InvalidArgument naming `flag`: "--algorithm: unknown algorithm 'x' ...".
+template <class F>
+auto named(const std::string& flag, const std::string& text, F from_string) {
+  try {
+    return from_string(text);
+  } catch (const InvalidArgument& e) {
+    throw UsageError(flag + ": " + e.what());
+  }
+}
+
+// The value of `flag` (`fallback` if not given) read by from_string, its error naming the flag.
+template <class F>
+auto choice(Args& args, const std::string& flag, const std::string& fallback, F from_string) {
+  return named(flag, args.value(flag).value_or(fallback), from_string);
+}
+
 // The objective's flags (the moving cloud, the distance, the Tikhonov weights).
 void parse_objective(Args& args, const TrackingRunOptions& d, TrackingRunOptions& o) {
   o.distance.particles =
-      particles_from_string(args.value("--particles").value_or(to_string(d.distance.particles)));
+      choice(args, "--particles", to_string(d.distance.particles), particles_from_string);
   o.distance.volumes =
-      particle_volumes_from_string(args.value("--volumes").value_or(to_string(d.distance.volumes)));
+      choice(args, "--volumes", to_string(d.distance.volumes), particle_volumes_from_string);
   o.distance.params.alpha = args.number("--alpha", d.distance.params.alpha);
   o.distance.params.beta = args.number("--beta", d.distance.params.beta);
   o.distance.params.gamma = args.number("--gamma", d.distance.params.gamma);
   o.distance.params.epsilon = args.number("--eps", d.distance.params.epsilon);
-  o.distance.method =
-      method_from_string(args.value("--method").value_or(to_string(d.distance.method)));
+  o.distance.method = choice(args, "--method", to_string(d.distance.method), method_from_string);
   if (o.distance.method == Method::nearest)
     throw UsageError("--method: nearest has no gradient; expected exact or tree");
   o.distance.tolerance = args.number("--tol", d.distance.tolerance);
@@ -254,7 +269,7 @@ void parse_objective(Args& args, const TrackingRunOptions& d, TrackingRunOptions
   if (distance || cap || cap_q) {
     TargetDistance form;
     if (distance) {
-      form.sides = sides_from_string(*distance);
+      form.sides = named("--distance", *distance, sides_from_string);
       if (form.sides == Sides::visible)
         throw UsageError(
             "--distance visible needs the camera: give the scene target's \"camera\" "
@@ -277,7 +292,7 @@ OptimiseArgs parse_optimise(Args& args) {
   o.optimiser.max_seconds = args.number("--max-seconds", d.optimiser.max_seconds);
   o.optimiser.relative_change = args.number("--rel-tol", d.optimiser.relative_change);
   o.optimiser.algorithm =
-      algorithm_from_string(args.value("--algorithm").value_or(to_string(d.optimiser.algorithm)));
+      choice(args, "--algorithm", to_string(d.optimiser.algorithm), algorithm_from_string);
   o.optimiser.move_limit = args.number("--move-limit", d.optimiser.move_limit);
   parse_objective(args, d, o);
   o.threads = static_cast<int>(args.integer("--threads", d.threads, 0, kMaxThreads));
@@ -321,7 +336,7 @@ OptimiseArgs parse_optimise(Args& args) {
   const std::vector<std::string> pos = args.finish();
   if (pos.size() != 1) throw UsageError("expected one scene file (see --help)");
   a.scene_file = pos[0];
-  with_flag_names([&] { o.validate(); });
+  validate_naming_fields(o, FrontEnd::cli);
   return a;
 }
 

@@ -517,6 +517,25 @@ TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
   expect_refused(scene() + " --pose-move 0", "--pose-move must be in (0, 1]");
   expect_refused(scene() + " --pose-move 0.5",
                  "--pose-move moves the pose of a target in the camera");
+  // Every bad value names its flag first, also where the objective's or the optimiser's own
+  // check refuses it.
+  for (const auto& [args, start] : std::vector<std::pair<std::string, std::string>>{
+           {" --max-seconds -1", "--max-seconds: "},
+           {" --rel-tol -1", "--rel-tol: "},
+           {" --move-limit 2", "--move-limit: "},
+           {" --algorithm x", "--algorithm: unknown algorithm 'x'"},
+           {" --particles x", "--particles: unknown particles 'x'"},
+           {" --volumes x", "--volumes: unknown volumes 'x'"},
+           {" --alpha 0", "--alpha: "},
+           {" --beta -1", "--beta: "},
+           {" --gamma 0", "--gamma: "},
+           {" --eps 0", "--eps: "},
+           {" --method x", "--method: unknown method 'x'"},
+           {" --tol 2", "--tol: "},
+           {" --distance x", "--distance: unknown distance 'x'"},
+           {" --tikhonov-mass -1", "--tikhonov-mass: "},
+           {" --tikhonov-grad -1", "--tikhonov-grad: "}})
+    expect_refused(scene() + args, "error: " + start);
   expect_refused(scene() + " --state-backend petsc", "--state-backend: unknown state backend");
   if (!softhd::fe::petsc_backend_available())  // an MPI build runs it (tests/mpi/cli_mpi.py)
     expect_refused(scene() + " --state-backend petsc-mumps", "-DSOFTHD_WITH_MPI=ON");

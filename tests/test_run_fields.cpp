@@ -208,4 +208,31 @@ TEST(RunFields, ValidateNamesTheNestedPath) {
   }
 }
 
+// A check of the objective's or the optimiser's own names no path: the field to blame is the
+// first that is invalid on its own, by the front end's name.
+TEST(RunFields, ValidateNamingFieldsBlamesTheFieldByItsName) {
+  TrackingRunOptions o;
+  o.optimiser.max_iterations = 7;  // valid: not blamed
+  o.tikhonov.gradient = -1.0;
+  auto message = [&](FrontEnd front_end) {
+    try {
+      softhd::validate_naming_fields(o, front_end);
+    } catch (const softhd::InvalidArgument& e) {
+      return std::string(e.what());
+    }
+    return std::string("not refused");
+  };
+  EXPECT_EQ(message(FrontEnd::cli).rfind("--tikhonov-grad: tikhonov_gradient", 0), 0u)
+      << message(FrontEnd::cli);
+  EXPECT_EQ(message(FrontEnd::python).rfind("tikhonov_grad: tikhonov_gradient", 0), 0u)
+      << message(FrontEnd::python);
+  // A path in the message is replaced, not prefixed.
+  o = TrackingRunOptions{};
+  o.levels.switch_decrease = 1.0;
+  EXPECT_EQ(message(FrontEnd::cli), "--switch-decrease must be in [0, 1)");
+  EXPECT_EQ(message(FrontEnd::python), "switch_decrease must be in [0, 1)");
+  o = TrackingRunOptions{};
+  EXPECT_EQ(message(FrontEnd::cli), "not refused");
+}
+
 }  // namespace

@@ -43,12 +43,8 @@ PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
                     const std::optional<Array>& volumes, const std::optional<std::string>& file,
                     TrackingRunOptions o, const py::object& callback) {
   if (file) o.target.file = *file;
-  try {
-    o.validate();
-  } catch (const InvalidArgument& e) {  // the fields by their keywords
-    throw InvalidArgument(name_fields(e.what(), FrontEnd::python));
-  }
-  ThreadScope scope(o.threads);  // the FE assembly's threads too
+  validate_naming_fields(o, FrontEnd::python);  // the fields by their keywords
+  ThreadScope scope(o.threads);                 // the FE assembly's threads too
   TrackingRunCallbacks cb;
   if (!callback.is_none()) {
     // Returning False (the object itself, not any false value) ends the run; an exception

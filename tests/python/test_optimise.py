@@ -176,7 +176,9 @@ def test_coarse_level_keywords_act_on_the_coarse_level(scene_file):
     assert coarse_iterations(switch_decrease=0) == 6
     assert coarse_iterations(switch_decrease=0.9) < 6
     assert coarse_iterations(switch_decrease=0, coarse_iterations=3) == 3
-    for keyword, value, message in (("switch_decrease", 1.0, r"switch_decrease must be in \[0, 1\)"),
+    for keyword, value, message in (("alpha", 0.0, "^alpha: Hausdorff parameter alpha must be"),
+                                    ("rel_tol", -1.0, "^rel_tol: optimizer: relative_change"),
+                                    ("switch_decrease", 1.0, r"switch_decrease must be in \[0, 1\)"),
                                     ("coarse_tol", 1.0, r"coarse_tol must be in \(0, 1\)"),
                                     ("coarse_iterations", 0, "coarse_iterations must be >= 1")):
         with pytest.raises(softhd.InvalidArgument, match=message):

@@ -11,12 +11,16 @@
 
 namespace softhd {
 
+struct TrackingRunOptions;
+
 /// One field of TrackingRunOptions and its names on the front ends.
 struct RunField {
   const char* path;     ///< e.g. "levels.refined_move_limit"
   const char* flag;     ///< of `softhd optimise`, e.g. "--refined-move-limit"; "": none
   const char* keyword;  ///< of Python's `softhd.optimise`, e.g. "refined_move_limit"; "": none
   const char* why_not;  ///< why a front end has no name for it ("" when both have one)
+  /// Copies this field (alone) of `from` into `to`.
+  void (*copy)(const TrackingRunOptions& from, TrackingRunOptions& to);
 };
 
 /// Every field of TrackingRunOptions, in declaration order; a field that is itself a struct
@@ -38,5 +42,12 @@ enum class FrontEnd { cli, python };
 /// "levels.refined_move_limit", not part of a longer one) replaced by that front end's name
 /// for the field (its flag or keyword); a path the front end has no name for stays.
 std::string name_fields(const std::string& message, FrontEnd front_end);
+
+/// options.validate(), its InvalidArgument naming the field by the front end's name: the paths
+/// in the message by name_fields, and a message that names no path (one of the objective's or
+/// the optimiser's own checks, e.g. "Hausdorff parameter alpha must be ...") after the name of
+/// the first field that is invalid on its own (that field of `options` on the defaults),
+/// "--alpha: Hausdorff parameter alpha must be ...".
+void validate_naming_fields(const TrackingRunOptions& options, FrontEnd front_end);
 
 }  // namespace softhd
