@@ -29,8 +29,8 @@ const std::vector<RunField>& tracking_run_fields();
 
 /// A flag of `softhd optimise` that sets no field (e.g. "--json"), with what it does.
 struct CliOnlyFlag {
-  const char* flag;
-  const char* what;
+  const char* flag;  ///< e.g. "--json"
+  const char* what;  ///< what it does
 };
 /// The flags of `softhd optimise` that are not fields of TrackingRunOptions.
 const std::vector<CliOnlyFlag>& optimise_cli_only_flags();

@@ -144,14 +144,14 @@ struct TrackingRunOptions {
     int vtu_every = 10;        ///< body_NNNN.vtu every this many iterations (10; 0: start, end)
   };
 
-  Optimiser optimiser;
-  Distance distance;
-  Tikhonov tikhonov;
-  Target target;
-  State state;
-  Levels levels;
-  Pose pose;
-  Output output;
+  Optimiser optimiser;  ///< the optimiser and its start
+  Distance distance;    ///< the distance and its form
+  Tikhonov tikhonov;    ///< the Tikhonov terms
+  Target target;        ///< the target
+  State state;          ///< the state solves
+  Levels levels;        ///< multilevel optimisation
+  Pose pose;            ///< a camera-frame target's pose
+  Output output;        ///< the run's files
   /// OpenMP threads of the pair sums, 0 to kMaxThreads (0, the default: OpenMP's). The FE
   /// assembly's are the caller's (set_threads); the CLI and Python set both.
   int threads = 0;
