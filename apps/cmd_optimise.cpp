@@ -14,11 +14,13 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <optional>
 #include <sstream>
 
 #include "cli.hpp"
 #include "commands.hpp"
+#include "softhd/control/run_fields.hpp"
 #include "softhd/control/scene.hpp"
 #include "softhd/control/tracking_run.hpp"
 #include "softhd/parallel.hpp"
@@ -68,18 +70,20 @@ options:
   --vtu-every K      VTU output every K iterations (default {vtu_every}; 0: start and end only)
   --checkpoint-every K  save the warm-start states every K iterations (default {checkpoint_every}): a
                      resume recomputes at most the K-1 iterations after the last save
-  --coarse-level C   auto | off: two-level starts, a large control step solved first on
-                     the mesh with half the cells along the even axes, or for a mesh file
-                     of order 2 as P1/Q1 on its vertices (default {coarse_level}: when that
-                     mesh has >= 32 elements)
+  --coarse-levels C  auto | 0: the state solves' coarse start (as softhd forward's, at
+                     most one level here: two-level starts), a large control step solved
+                     first on the mesh with half the cells along the even axes, or for a
+                     mesh file of order 2 as P1/Q1 on its vertices (default {coarse_levels}:
+                     when that mesh has >= 32 elements; 0: none)
   --levels N         multilevel optimisation: solve first on the box halved N-1 times
                      (along its even axes; with none, every axis of >= 4 cells to
                      (n+1)/2: 25x5x1 -> 13x3x1; a mesh file of order 2: N = 2, its P1/Q1
                      level first) with a coarse target and tree tolerance
-                     max(--tol, {coarse_tol}), at most --coarse-iterations K (default
-                     {coarse_iterations}; at most --max-iter) iterations per coarse level, ending
-                     earlier once rho decreased by less than {switch_decrease} (relative) twice in
-                     a row; then the next finer level from its control (default {levels}:
+                     max(--tol, --coarse-tol T (default {coarse_tol})), at most
+                     --coarse-iterations K (default {coarse_iterations}; at most --max-iter)
+                     iterations per coarse level, ending earlier once rho decreased by less
+                     than --switch-decrease S (default {switch_decrease}; relative, in [0, 1))
+                     twice in a row; then the next finer level from its control (default {levels}:
                      automatic, where the target has a known map (an arc, a manufactured
                      state) 1 + every coarser level of >= 32 elements (bending: 3), else 1:
                      the user's mesh alone; 1 for a cloud without a known map, e.g. a scan;
@@ -126,6 +130,8 @@ scene targets ("target" in the scene file):
           (then no "camera": the visible distance's camera is the pose's; no clean.crop)
       "align": "rigid" | "similarity"   what the pose may change (default rigid)
       "pose": FILE   the start pose (softhd align's pose.txt); default: align at rest
+      --pose-move F   the pose's move limit as a fraction of the control's, in (0, 1]
+          (default {pose_move}; a target in the camera's frame only)
       the final pose is printed and written to summary.json ("pose") and history.csv
 
 writes: history.csv, control.csv (readable by 'softhd forward --control'),
@@ -174,30 +180,31 @@ std::string number_text(double v) {
 std::string usage() {
   const TrackingRunOptions d;
   const std::map<std::string, std::string> fields{
-      {"max_iter", std::to_string(d.max_iterations)},
-      {"rel_tol", number_text(d.relative_change)},
-      {"algorithm", to_string(d.algorithm)},
-      {"move_limit", number_text(d.move_limit)},
-      {"particles", to_string(d.particles)},
-      {"volumes", to_string(d.volumes)},
-      {"alpha", number_text(d.params.alpha)},
-      {"beta", number_text(d.params.beta)},
-      {"gamma", number_text(d.params.gamma)},
-      {"eps", number_text(d.params.epsilon)},
-      {"method", to_string(d.method)},
-      {"tol", number_text(d.tolerance)},
-      {"tikhonov_mass", number_text(d.tikhonov_mass)},
-      {"tikhonov_grad", number_text(d.tikhonov_gradient)},
-      {"vtu_every", std::to_string(d.vtu_every)},
-      {"checkpoint_every", std::to_string(d.checkpoint_every)},
-      {"coarse_level", to_string(d.coarse_level)},
-      {"levels", std::to_string(d.levels)},
-      {"coarse_iterations", std::to_string(d.coarse_iterations)},
-      {"switch_decrease", number_text(d.switch_decrease)},
-      {"coarse_tol", number_text(d.coarse_tolerance)},
-      {"refined_move_limit", number_text(d.refined_move_limit)},
+      {"max_iter", std::to_string(d.optimiser.max_iterations)},
+      {"rel_tol", number_text(d.optimiser.relative_change)},
+      {"algorithm", to_string(d.optimiser.algorithm)},
+      {"move_limit", number_text(d.optimiser.move_limit)},
+      {"particles", to_string(d.distance.particles)},
+      {"volumes", to_string(d.distance.volumes)},
+      {"alpha", number_text(d.distance.params.alpha)},
+      {"beta", number_text(d.distance.params.beta)},
+      {"gamma", number_text(d.distance.params.gamma)},
+      {"eps", number_text(d.distance.params.epsilon)},
+      {"method", to_string(d.distance.method)},
+      {"tol", number_text(d.distance.tolerance)},
+      {"tikhonov_mass", number_text(d.tikhonov.mass)},
+      {"tikhonov_grad", number_text(d.tikhonov.gradient)},
+      {"vtu_every", std::to_string(d.output.vtu_every)},
+      {"checkpoint_every", std::to_string(d.output.checkpoint_every)},
+      {"coarse_levels", to_string(d.state.coarse_levels)},
+      {"levels", std::to_string(d.levels.count)},
+      {"coarse_iterations", std::to_string(d.levels.coarse_iterations)},
+      {"switch_decrease", number_text(d.levels.switch_decrease)},
+      {"pose_move", number_text(d.pose.move)},
+      {"coarse_tol", number_text(d.levels.coarse_tolerance)},
+      {"refined_move_limit", number_text(d.levels.refined_move_limit)},
       {"max_memory", number_text(d.memory_limit / (1u << 30))},
-      {"state_backend", to_string(d.state_backend)}};
+      {"state_backend", to_string(d.state.backend)}};
   std::string text = kUsage;
   for (const auto& [name, value] : fields) {
     const std::string key = "{" + name + "}";
@@ -207,6 +214,17 @@ std::string usage() {
   return text;
 }
 
+// Calls f; an InvalidArgument it throws names the fields of TrackingRunOptions by their flags
+// ("levels.refined_move_limit must be in [0, 1]" -> "--refined-move-limit must be ...").
+template <class F>
+void with_flag_names(F&& f) {
+  try {
+    f();
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(name_fields(e.what(), FrontEnd::cli));
+  }
+}
+
 struct OptimiseArgs {
   std::optional<std::string> out;
   std::string scene_file;
@@ -214,26 +232,44 @@ struct OptimiseArgs {
   bool resume = false, json = false, quiet = false;
 };
 
+// from_string(text), its InvalidArgument naming `flag`: "--algorithm: unknown algorithm 'x' ...".
+template <class F>
+auto named(const std::string& flag, const std::string& text, F from_string) {
+  try {
+    return from_string(text);
+  } catch (const InvalidArgument& e) {
+    throw UsageError(flag + ": " + e.what());
+  }
+}
+
+// The value of `flag` (`fallback` if not given) read by from_string, its error naming the flag.
+template <class F>
+auto choice(Args& args, const std::string& flag, const std::string& fallback, F from_string) {
+  return named(flag, args.value(flag).value_or(fallback), from_string);
+}
+
 // The objective's flags (the moving cloud, the distance, the Tikhonov weights).
 void parse_objective(Args& args, const TrackingRunOptions& d, TrackingRunOptions& o) {
-  o.particles = particles_from_string(args.value("--particles").value_or(to_string(d.particles)));
-  o.volumes = particle_volumes_from_string(args.value("--volumes").value_or(to_string(d.volumes)));
-  o.params.alpha = args.number("--alpha", d.params.alpha);
-  o.params.beta = args.number("--beta", d.params.beta);
-  o.params.gamma = args.number("--gamma", d.params.gamma);
-  o.params.epsilon = args.number("--eps", d.params.epsilon);
-  o.method = method_from_string(args.value("--method").value_or(to_string(d.method)));
-  if (o.method == Method::nearest)
+  o.distance.particles =
+      choice(args, "--particles", to_string(d.distance.particles), particles_from_string);
+  o.distance.volumes =
+      choice(args, "--volumes", to_string(d.distance.volumes), particle_volumes_from_string);
+  o.distance.params.alpha = args.number("--alpha", d.distance.params.alpha);
+  o.distance.params.beta = args.number("--beta", d.distance.params.beta);
+  o.distance.params.gamma = args.number("--gamma", d.distance.params.gamma);
+  o.distance.params.epsilon = args.number("--eps", d.distance.params.epsilon);
+  o.distance.method = choice(args, "--method", to_string(d.distance.method), method_from_string);
+  if (o.distance.method == Method::nearest)
     throw UsageError("--method: nearest has no gradient; expected exact or tree");
-  o.tolerance = args.number("--tol", d.tolerance);
-  o.tikhonov_mass = args.number("--tikhonov-mass", d.tikhonov_mass);
-  o.tikhonov_gradient = args.number("--tikhonov-grad", d.tikhonov_gradient);
+  o.distance.tolerance = args.number("--tol", d.distance.tolerance);
+  o.tikhonov.mass = args.number("--tikhonov-mass", d.tikhonov.mass);
+  o.tikhonov.gradient = args.number("--tikhonov-grad", d.tikhonov.gradient);
   const std::optional<std::string> distance = args.value("--distance");
   const std::optional<std::string> cap = args.value("--cap"), cap_q = args.value("--cap-q");
   if (distance || cap || cap_q) {
     TargetDistance form;
     if (distance) {
-      form.sides = sides_from_string(*distance);
+      form.sides = named("--distance", *distance, sides_from_string);
       if (form.sides == Sides::visible)
         throw UsageError(
             "--distance visible needs the camera: give the scene target's \"camera\" "
@@ -241,7 +277,7 @@ void parse_objective(Args& args, const TrackingRunOptions& d, TrackingRunOptions
     }
     if (cap) form.cap = parse_number(*cap, "--cap");
     if (cap_q) form.cap_q = parse_number(*cap_q, "--cap-q");
-    o.distance = form;
+    o.distance.form = form;
   }
 }
 
@@ -250,36 +286,48 @@ OptimiseArgs parse_optimise(Args& args) {
   OptimiseArgs a;
   TrackingRunOptions& o = a.run;
   a.out = args.value("--out");
-  o.target_file = args.value("--target").value_or("");
-  o.max_iterations = static_cast<int>(args.integer("--max-iter", d.max_iterations, 1, 1000000));
-  o.max_seconds = args.number("--max-seconds", d.max_seconds);
-  o.relative_change = args.number("--rel-tol", d.relative_change);
-  o.algorithm = algorithm_from_string(args.value("--algorithm").value_or(to_string(d.algorithm)));
-  o.move_limit = args.number("--move-limit", d.move_limit);
+  o.target.file = args.value("--target").value_or("");
+  o.optimiser.max_iterations =
+      static_cast<int>(args.integer("--max-iter", d.optimiser.max_iterations, 1, 1000000));
+  o.optimiser.max_seconds = args.number("--max-seconds", d.optimiser.max_seconds);
+  o.optimiser.relative_change = args.number("--rel-tol", d.optimiser.relative_change);
+  o.optimiser.algorithm =
+      choice(args, "--algorithm", to_string(d.optimiser.algorithm), algorithm_from_string);
+  o.optimiser.move_limit = args.number("--move-limit", d.optimiser.move_limit);
   parse_objective(args, d, o);
   o.threads = static_cast<int>(args.integer("--threads", d.threads, 0, kMaxThreads));
   set_threads(o.threads);  // the FE assembly too
-  o.vtu_every = static_cast<int>(args.integer("--vtu-every", d.vtu_every, 0, 1000000000));
-  o.checkpoint_every =
-      static_cast<int>(args.integer("--checkpoint-every", d.checkpoint_every, 1, 1000000));
-  const std::string coarse = args.value("--coarse-level").value_or(to_string(d.coarse_level));
-  if (coarse != "auto" && coarse != "off")
-    throw UsageError("--coarse-level: expected auto or off, got '" + coarse + "'");
-  o.coarse_level = coarse_level_from_string(coarse);
-  o.levels = static_cast<int>(args.integer("--levels", d.levels, 0, 16));
-  o.coarse_iterations =
-      static_cast<int>(args.integer("--coarse-iterations", d.coarse_iterations, 1, 1000000));
-  o.refined_move_limit = args.number("--refined-move-limit", d.refined_move_limit);
+  o.output.vtu_every =
+      static_cast<int>(args.integer("--vtu-every", d.output.vtu_every, 0, 1000000000));
+  o.output.checkpoint_every =
+      static_cast<int>(args.integer("--checkpoint-every", d.output.checkpoint_every, 1, 1000000));
+  if (args.value("--coarse-level"))  // the retired spelling
+    throw UsageError("--coarse-level is now --coarse-levels (auto or 0)");
+  const std::string coarse =
+      args.value("--coarse-levels").value_or(to_string(d.state.coarse_levels));
+  if (coarse != "auto" && coarse != "0")
+    throw UsageError(
+        "--coarse-levels: expected auto or 0 (softhd optimise's state solves start "
+        "from at most one coarse level), got '" +
+        coarse + "'");
+  o.state.coarse_levels = coarse_level_from_string(coarse);
+  o.levels.count = static_cast<int>(args.integer("--levels", d.levels.count, 0, 16));
+  o.levels.coarse_iterations =
+      static_cast<int>(args.integer("--coarse-iterations", d.levels.coarse_iterations, 1, 1000000));
+  o.levels.switch_decrease = args.number("--switch-decrease", d.levels.switch_decrease);
+  o.levels.coarse_tolerance = args.number("--coarse-tol", d.levels.coarse_tolerance);
+  o.levels.refined_move_limit = args.number("--refined-move-limit", d.levels.refined_move_limit);
+  o.pose.move = args.number("--pose-move", d.pose.move);
   const double gib = args.number("--max-memory", d.memory_limit / (1u << 30));
   if (!(gib > 0.0 && gib <= 1e6)) throw UsageError("--max-memory: expected GiB in (0, 1e6]");
   o.memory_limit = gib * (1u << 30);
-  const std::string backend = args.value("--state-backend").value_or(to_string(d.state_backend));
+  const std::string backend = args.value("--state-backend").value_or(to_string(d.state.backend));
   try {
-    o.state_backend = fe::parse_state_backend(backend);
+    o.state.backend = fe::parse_state_backend(backend);
   } catch (const InvalidArgument& e) {
     throw UsageError(std::string("--state-backend: ") + e.what());
   }
-  if (o.state_backend != fe::StateBackend::kCholmod && !fe::petsc_backend_available())
+  if (o.state.backend != fe::StateBackend::kCholmod && !fe::petsc_backend_available())
     throw UsageError("--state-backend " + backend +
                      " needs softhd built with -DSOFTHD_WITH_MPI=ON (this build has cholmod only)");
   a.resume = args.flag("--resume");
@@ -288,7 +336,7 @@ OptimiseArgs parse_optimise(Args& args) {
   const std::vector<std::string> pos = args.finish();
   if (pos.size() != 1) throw UsageError("expected one scene file (see --help)");
   a.scene_file = pos[0];
-  o.validate();
+  validate_naming_fields(o, FrontEnd::cli);
   return a;
 }
 
@@ -397,11 +445,12 @@ int run_optimise(const std::vector<std::string>& tokens) {
   if (!writer) a.quiet = true;
 
   const softhd::Scene scene = softhd::load_scene(a.scene_file, a.run.memory_limit);
-  a.run.out = (a.out ? fs::path(*a.out) : fs::path("results") / scene.name).string();
-  a.run.resume = a.resume;
-  TrackingRun run(scene, a.run);  // the body, the target and the objective
+  a.run.output.folder = (a.out ? fs::path(*a.out) : fs::path("results") / scene.name).string();
+  a.run.output.resume = a.resume;
+  std::unique_ptr<TrackingRun> run;  // the body, the target and the objective
+  with_flag_names([&] { run = std::make_unique<TrackingRun>(scene, a.run); });
   const fs::path out = output_directory(a, scene);
-  const TrackingRunSummary s = run.run(progress(scene, a.quiet));
+  const TrackingRunSummary s = run->run(progress(scene, a.quiet));
   if (!writer) return 0;
 #ifdef SOFTHD_PLOT_SCRIPT
   // No shell: the folder is one argument, whatever characters it holds.

@@ -78,14 +78,15 @@ int main(int argc, char** argv) {
         quick ? std::vector<Eigen::Vector3i>{{10, 2, 1}, {20, 4, 1}}
               : std::vector<Eigen::Vector3i>{{25, 3, 1}, {50, 5, 2}};
     RunSettings settings;
-    settings.run.max_iterations = std::stoi(max_iter.empty() ? (quick ? "3" : "40") : max_iter);
-    settings.run.max_seconds = max_seconds;
+    settings.run.optimiser.max_iterations =
+        std::stoi(max_iter.empty() ? (quick ? "3" : "40") : max_iter);
+    settings.run.optimiser.max_seconds = max_seconds;
     for (size_t i = 0; i < meshes.size(); ++i) {
       Body body = make_body(scene, meshes[i]);
       const Eigen::VectorXd map = arc_displacement(T, body.mesh());
       for (const Variant& v : variants(i == 1 || quick, quick)) {
-        settings.run.method = v.method;
-        settings.run.tolerance = v.method == Method::tree ? v.tau : 1e-6;
+        settings.run.distance.method = v.method;
+        settings.run.distance.tolerance = v.method == Method::tree ? v.tau : 1e-6;
         record(run_tracking({{"scene", "bending"},
                              {"mesh", cells_label(meshes[i])},
                              {"method", to_string(v.method)},
@@ -103,16 +104,16 @@ int main(int argc, char** argv) {
     const NodalMap T(softhd::load_scene(dir + "torsion_fine.json").body.make_mesh(), target);
     const std::vector<Eigen::Vector3i> meshes = {{13, 1, 1}, {25, 2, 1}, {50, 4, 2}};
     RunSettings settings;
-    settings.run.max_iterations = std::stoi(max_iter.empty() ? "120" : max_iter);
-    settings.run.max_seconds = max_seconds;
+    settings.run.optimiser.max_iterations = std::stoi(max_iter.empty() ? "120" : max_iter);
+    settings.run.optimiser.max_seconds = max_seconds;
     for (size_t i = 0; i < meshes.size(); ++i) {
       Body body = make_body(scene, meshes[i]);
       const Eigen::VectorXd map = T.displacement(body.mesh());
       // m*(X) = −1e6 X3/2 at the control vertices (exactly representable: linear in X3).
       const Eigen::VectorXd m_star = -1e6 * body.space->positions(body.mesh()).col(2) / 2.0;
       for (const Variant& v : variants(i == 1, quick)) {
-        settings.run.method = v.method;
-        settings.run.tolerance = v.method == Method::tree ? v.tau : 1e-6;
+        settings.run.distance.method = v.method;
+        settings.run.distance.tolerance = v.method == Method::tree ? v.tau : 1e-6;
         Run r = run_tracking({{"scene", "torsion"},
                               {"mesh", cells_label(meshes[i])},
                               {"method", to_string(v.method)},

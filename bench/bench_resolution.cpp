@@ -51,8 +51,9 @@ int main(int argc, char** argv) {
   const bool quick = has_flag(argc, argv, "--quick");
   const std::string csv = option(argc, argv, "--csv", "bench_resolution.csv");
   RunSettings settings;
-  settings.run.max_iterations = std::stoi(option(argc, argv, "--max-iter", quick ? "4" : "40"));
-  settings.run.max_seconds = std::stod(option(argc, argv, "--max-seconds", "0"));
+  settings.run.optimiser.max_iterations =
+      std::stoi(option(argc, argv, "--max-iter", quick ? "4" : "40"));
+  settings.run.optimiser.max_seconds = std::stod(option(argc, argv, "--max-seconds", "0"));
 
   const softhd::Scene scene = scene_file("bending");
   // The Q2 25×3×1 mesh (1 071 nodes): 40 iterations of the 50×5×2 mesh cost 5× more, and the

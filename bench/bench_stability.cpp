@@ -34,8 +34,9 @@ int main(int argc, char** argv) {
   const bool quick = has_flag(argc, argv, "--quick");
   const std::string csv = option(argc, argv, "--csv", "bench_stability.csv");
   RunSettings base;
-  base.run.max_iterations = std::stoi(option(argc, argv, "--max-iter", quick ? "3" : "40"));
-  base.run.max_seconds = std::stod(option(argc, argv, "--max-seconds", "0"));
+  base.run.optimiser.max_iterations =
+      std::stoi(option(argc, argv, "--max-iter", quick ? "3" : "40"));
+  base.run.optimiser.max_seconds = std::stod(option(argc, argv, "--max-seconds", "0"));
 
   const softhd::Scene scene = scene_file("bending");
   const Eigen::Vector3i cells = quick ? Eigen::Vector3i(10, 2, 1) : Eigen::Vector3i(25, 3, 1);
@@ -51,8 +52,8 @@ int main(int argc, char** argv) {
   auto params = [](const std::string& c, const RunSettings& s, const std::string& bounds,
                    const std::string& note) -> std::vector<std::pair<std::string, std::string>> {
     return {{"case", c},
-            {"alpha", fmt(s.run.params.alpha)},
-            {"eps", fmt(s.run.params.epsilon)},
+            {"alpha", fmt(s.run.distance.params.alpha)},
+            {"eps", fmt(s.run.distance.params.epsilon)},
             {"bounds", bounds},
             {"note", note}};
   };
@@ -62,8 +63,8 @@ int main(int argc, char** argv) {
   for (double alpha : {4.0, 16.0, 64.0, 256.0})
     for (double eps : {1e-2, 1e-3, 1e-6, 1e-9}) {
       RunSettings s = base;
-      s.run.params.alpha = alpha;
-      s.run.params.epsilon = eps;
+      s.run.distance.params.alpha = alpha;
+      s.run.distance.params.epsilon = eps;
       record(run_tracking(params("alpha-eps", s, "[-1e5, 0]", ""), body, target, map, s));
     }
   const double rho_base = runs[1].summary.rho_final;  // α = 4, ε = 1e-3: the defaults
@@ -103,8 +104,8 @@ int main(int argc, char** argv) {
   // 12 minutes on Nov 28).
   const int huge = quick ? 10000 : 1000000;
   RunSettings tree = base;
-  tree.run.method = Method::tree;
-  tree.run.tolerance = 1e-2;
+  tree.run.distance.method = Method::tree;
+  tree.run.distance.tolerance = 1e-2;
   record(run_tracking(
       params("huge target", tree, "[-1e5, 0]", fmt(huge) + " random points, tree tau = 1e-2"), body,
       arc_random(scene, T, huge, 22), map, tree));

@@ -152,9 +152,9 @@ PointCloud arc_surface(const softhd::Scene& box, const ArcMap& T, double spacing
 }
 
 RunSettings::RunSettings() {
-  run.max_iterations = 60;
-  run.method = Method::exact;
-  run.tolerance = 1e-6;
+  run.optimiser.max_iterations = 60;
+  run.distance.method = Method::exact;
+  run.distance.tolerance = 1e-6;
 }
 
 bool Run::finite() const {

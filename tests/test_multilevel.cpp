@@ -1,4 +1,4 @@
-// Multilevel tracking runs (TrackingRunOptions::levels, lib/src/control/multilevel.cpp): the
+// Multilevel tracking runs (TrackingRunOptions::Levels, lib/src/control/multilevel.cpp): the
 // coarse target keeps the total volume, the prolongation reproduces what Q1 interpolation and
 // piecewise constants reproduce exactly, and a run's levels, history and caller stop.
 
@@ -14,9 +14,9 @@
 #include "expect_error.hpp"
 #include "softhd/control/tracking_run.hpp"
 #include "softhd/fe/gmsh_mesh.hpp"
+#include "softhd/fe/mesh_hierarchy.hpp"
 #include "softhd/fe/materials.hpp"
 #include "softhd/fe/mesh.hpp"
-#include "softhd/fe/mesh_hierarchy.hpp"
 
 namespace softhd::test {
 namespace {
@@ -109,8 +109,8 @@ class MultilevelRun : public ::testing::Test {
       "target": { "kind": "arc", "angle": 0.6 }
     })";
     scene_ = softhd::load_scene(file_.string());
-    options_.max_iterations = 5;
-    options_.relative_change = 0.0;
+    options_.optimiser.max_iterations = 5;
+    options_.optimiser.relative_change = 0.0;
     options_.threads = 1;
   }
   fs::path file_;
@@ -125,8 +125,8 @@ TEST_F(MultilevelRun, CoarseLevelFirstThenTheUsersMeshFromItsControl) {
 
   // The coarse level's iterations are bounded by max_iterations too: room for the switch
   // rule here, and the user's mesh stopped after 5 iterations as the single-level run.
-  options_.levels = 2;
-  options_.max_iterations = 30;
+  options_.levels.count = 2;
+  options_.optimiser.max_iterations = 30;
   TrackingRunCallbacks stop_at_5;
   stop_at_5.on_iteration = [](const TrackingIteration& it, const Eigen::VectorXd&) {
     if (it.level == 0 && it.iteration == 5) throw StopRequest{};
@@ -149,12 +149,12 @@ TEST_F(MultilevelRun, CoarseLevelFirstThenTheUsersMeshFromItsControl) {
   EXPECT_LT(two.rho_start, 0.7 * one.rho_start) << two.rho_start << " vs " << one.rho_start;
   EXPECT_GT(two.control.cwiseAbs().maxCoeff(), 0.0);
   ASSERT_GT(coarse, 2) << "the bound below could not fail";
-  options_.max_iterations = 2;
+  options_.optimiser.max_iterations = 2;
   EXPECT_EQ(run_tracking(scene_, options_).levels[0].iterations, 2);
 }
 
 TEST_F(MultilevelRun, ACallerStopOnACoarseLevelEndsTheRunAfterOneIterationOnTheUsersMesh) {
-  options_.levels = 2;
+  options_.levels.count = 2;
   TrackingRunCallbacks cb;
   cb.on_iteration = [](const TrackingIteration& it, const Eigen::VectorXd&) {
     if (it.level == 1) throw StopRequest{};
@@ -171,12 +171,12 @@ TEST_F(MultilevelRun, ACallerStopOnACoarseLevelEndsTheRunAfterOneIterationOnTheU
 // §4.8): its first iterate lies in the first round's box around the start. With the coarse
 // level's move limit instead, the same first step leaves that box (the bound can fail).
 TEST_F(MultilevelRun, LevelsAfterTheCoarsestStepWithinTheRefinedMoveLimit) {
-  options_.levels = 2;
-  options_.coarse_iterations = 3;
-  options_.max_iterations = 1;
+  options_.levels.count = 2;
+  options_.levels.coarse_iterations = 3;
+  options_.optimiser.max_iterations = 1;
   const double range = scene_.body.control_upper - scene_.body.control_lower;
   auto first_step = [&](double refined) {
-    options_.refined_move_limit = refined;
+    options_.levels.refined_move_limit = refined;
     Eigen::VectorXd start, first;
     TrackingRunCallbacks cb;
     cb.on_start = [&](const ShapeTrackingSummary& s) { start = s.control; };
@@ -191,18 +191,18 @@ TEST_F(MultilevelRun, LevelsAfterTheCoarsestStepWithinTheRefinedMoveLimit) {
   const double step = first_step(small);
   EXPECT_GT(step, 0.0);
   EXPECT_LE(step, small * (1.0 + 1e-12));
-  EXPECT_GT(first_step(options_.move_limit), small) << "the check could not fail";
+  EXPECT_GT(first_step(options_.optimiser.move_limit), small) << "the check could not fail";
 }
 
 // A level stopped under a move limit below kCertifyingMoveLimit is not converged: the user's
 // mesh started from the coarse level with refined_move_limit 1e-6 (steps too short to tell a
 // minimum) ends with status move_limit, its level report saying why.
 TEST_F(MultilevelRun, ALevelStoppedUnderATinyMoveLimitIsNotConverged) {
-  options_.levels = 2;
-  options_.coarse_iterations = 3;
-  options_.max_iterations = 30;
-  options_.relative_change = 1e-6;
-  options_.refined_move_limit = 1e-6;
+  options_.levels.count = 2;
+  options_.levels.coarse_iterations = 3;
+  options_.optimiser.max_iterations = 30;
+  options_.optimiser.relative_change = 1e-6;
+  options_.levels.refined_move_limit = 1e-6;
   const TrackingRunSummary s = run_tracking(scene_, options_);
   EXPECT_EQ(s.status, OptimizerStatus::move_limit) << s.termination;
   EXPECT_FALSE(s.converged());
@@ -217,7 +217,7 @@ TEST_F(MultilevelRun, ALevelStoppedUnderATinyMoveLimitIsNotConverged) {
 // to (n + 1) / 2; the counts by hand), else 1; 1 against a cloud with no known map (a scan)
 // or in the camera's frame; an explicit count is kept.
 TEST_F(MultilevelRun, AutomaticLevelsAreEveryCoarserLevelOfAtLeast32Elements) {
-  EXPECT_EQ(TrackingRunOptions{}.levels, 0);
+  EXPECT_EQ(TrackingRunOptions{}.levels.count, 0);
   const std::pair<std::string, int> cases[] = {
       {"[6, 1, 2]", 1},    // (3, 1, 1): 3 elements
       {"[14, 4, 4]", 1},   // (7, 2, 2): 28
@@ -242,22 +242,24 @@ TEST_F(MultilevelRun, AutomaticLevelsAreEveryCoarserLevelOfAtLeast32Elements) {
     EXPECT_EQ(tracking_levels(scene, TrackingRunOptions{}, scan), 1) << cells;
     EXPECT_EQ(tracking_levels(scene, TrackingRunOptions{}, camera), 1) << cells;
     TrackingRunOptions explicit_one, explicit_two;
-    explicit_one.levels = 1;
-    explicit_two.levels = 2;
+    explicit_one.levels.count = 1;
+    explicit_two.levels.count = 2;
     EXPECT_EQ(tracking_levels(scene, explicit_one, known), 1) << cells;
     EXPECT_EQ(tracking_levels(scene, explicit_two, scan), 2) << cells;
   }
 }
 
 TEST_F(MultilevelRun, MoreLevelsThanHalvingsAreRefusedNamingLevels) {
-  options_.levels = 3;  // (6, 1, 2) -> (3, 1, 1) -> no even count: one coarser level
-  expect_error<InvalidArgument>([&] { run_tracking(scene_, options_); },
-                                "levels: 3: 2 coarser levels asked for, but the body has 1");
-  options_.levels = -1;
-  expect_error<InvalidArgument>([&] { options_.validate(); }, "levels");
-  options_.levels = 2;
-  options_.refined_move_limit = 1.5;
-  expect_error<InvalidArgument>([&] { options_.validate(); }, "refined_move_limit");
+  options_.levels.count = 3;  // (6, 1, 2) -> (3, 1, 1) -> no even count: one coarser level
+  expect_error<InvalidArgument>(
+      [&] { run_tracking(scene_, options_); },
+      "levels.count: 3: 2 coarser levels asked for, but the body has 1");
+  options_.levels.count = -1;
+  expect_error<InvalidArgument>([&] { options_.validate(); }, "levels.count must be >= 1");
+  options_.levels.count = 2;
+  options_.levels.refined_move_limit = 1.5;
+  expect_error<InvalidArgument>([&] { options_.validate(); },
+                                "levels.refined_move_limit must be in [0, 1]");
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -296,12 +297,60 @@ TEST_F(OptimiseCli, MultilevelKilledAndResumedRunsAreTheUninterruptedRun) {
   std::cout << "coarse-level resumes in the random trials: " << coarse_resumes << "\n";
 }
 
+// --switch-decrease and --coarse-tol reach the coarse level of --levels 2. With S = 0 the
+// coarse level runs its min(--coarse-iterations, --max-iter) = 6 iterations; with S = 0.9 (ρ̃
+// decreasing by less than 90 % twice ends it) it switches before. Its checkpoint records its
+// tree tolerance max(--tol, --coarse-tol): a resume with another --coarse-tol is refused naming
+// the distance, one with the same continues.
+TEST_F(OptimiseCli, SwitchDecreaseAndCoarseTolActOnTheCoarseLevel) {
+  const std::string common =
+      " --levels 2 --max-iter 6 --rel-tol 0 --threads 1 --vtu-every 0 --quiet";
+  std::string err;
+  auto coarse_level = [&](const std::string& name, const std::string& flags) {
+    const fs::path o = dir_ / name;
+    EXPECT_EQ(run(scene() + " --out " + o.string() + common + flags, &err), 0) << flags << err;
+    return nlohmann::json::parse(read_text(o / "summary.json"))["levels"][0];
+  };
+  const nlohmann::json all = coarse_level("all", " --switch-decrease 0");
+  EXPECT_EQ(all["iterations"].get<int>(), 6) << all.dump();
+  const nlohmann::json early = coarse_level("early", " --switch-decrease 0.9");
+  EXPECT_LT(early["iterations"].get<int>(), 6) << early.dump();
+  EXPECT_NE(early["termination"].get<std::string>().find("less than 0.9 twice"), std::string::npos)
+      << early.dump();
+
+  const std::string tol = scene() + " --out " + (dir_ / "tol").string() + common;
+  ASSERT_EQ(run(tol + " --coarse-tol 0.1", &err), 0) << err;
+  EXPECT_EQ(run(tol + " --coarse-tol 0.2 --resume", &err), 2);
+  EXPECT_NE(err.find("checkpoint_level1.bin was written for another run: distance differs"),
+            std::string::npos)
+      << err;
+  EXPECT_EQ(run(tol + " --coarse-tol 0.1 --resume", &err), 0) << err;
+}
+
+// --coarse-levels: the state solves' coarse start. On a box of 16 x 4 x 4 cells the coarse
+// level (8 x 2 x 2, 32 elements) is used by default (auto) and named in the progress lines;
+// --coarse-levels 0 solves on the user's mesh alone.
+TEST_F(OptimiseCli, CoarseLevelsZeroTurnsTheCoarseStartOff) {
+  nlohmann::json j = nlohmann::json::parse(kScene);
+  j["mesh"]["cells"] = {16, 4, 4};
+  j["target"]["cells"] = {16, 4, 4};
+  const std::string path = (dir_ / "fine.json").string();
+  std::ofstream(path) << j.dump();
+  const std::string line = "two-level starts on the coarse level (cells 8 2 2)";
+  std::string err;
+  const std::string common = " --max-iter 1 --levels 1 --threads 1 --vtu-every 0 --out ";
+  ASSERT_EQ(run(path + common + (dir_ / "auto").string(), &err), 0) << err;
+  EXPECT_NE(err.find(line), std::string::npos) << err;
+  ASSERT_EQ(run(path + common + (dir_ / "off").string() + " --coarse-levels 0", &err), 0) << err;
+  EXPECT_EQ(err.find("two-level starts"), std::string::npos) << err;
+}
+
 // --levels asks for more halvings than the box allows ((6, 1, 2) -> (3, 1, 1) -> none): bad
 // input naming the option.
 TEST_F(OptimiseCli, TooManyLevelsIsBadInput) {
   std::string err;
   EXPECT_EQ(run(scene() + " --out " + out() + " --levels 3 --quiet", &err), 2);
-  EXPECT_NE(err.find("levels"), std::string::npos) << err;
+  EXPECT_NE(err.find("--levels: 3 asks for 2 coarser levels"), std::string::npos) << err;
 }
 
 // --target FILE is the run of a scene whose target is {"kind": "cloud", "file": FILE}
@@ -374,8 +423,8 @@ TEST_F(OptimiseCli, CoarseIterationsAndRefinedMoveLimitActOnTheirLevels) {
   EXPECT_LT(slow_drop, 0.1 * fine_drop);
   for (const auto& [args, needle] : std::vector<std::pair<std::string, std::string>>{
            {" --coarse-iterations 0", "--coarse-iterations"},
-           {" --refined-move-limit -1", "refined_move_limit must be in [0, 1]"},
-           {" --refined-move-limit 2", "refined_move_limit must be in [0, 1]"}}) {
+           {" --refined-move-limit -1", "--refined-move-limit must be in [0, 1]"},
+           {" --refined-move-limit 2", "--refined-move-limit must be in [0, 1]"}}) {
     EXPECT_EQ(run(scene() + args, &err), 2) << args;
     EXPECT_NE(err.find(needle), std::string::npos) << args << "\n" << err;
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
@@ -427,8 +476,8 @@ TEST_F(OptimiseCli, DistanceFormFromTheSceneOrTheFlags) {
   for (const auto& [args, needle] : std::vector<std::pair<std::string, std::string>>{
            {" --distance visible", "--distance visible needs the camera"},
            {" --distance both", "unknown distance 'both'"},
-           {" --cap -1", "distance cap must be"},
-           {" --cap-q 0", "distance cap_q must be"}}) {
+           {" --cap -1", "--cap must be"},
+           {" --cap-q 0", "--cap-q must be"}}) {
     EXPECT_EQ(run(scene() + args, &err), 2) << args;
     EXPECT_NE(err.find(needle), std::string::npos) << args << "\n" << err;
     EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
@@ -458,7 +507,35 @@ TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
   expect_refused(scene() + " --method nearest", "--method: nearest has no gradient");
   expect_refused(scene() + " --method fast", "unknown method 'fast'");
   expect_refused(scene() + " --method tree --tol 2", "tolerance");
-  expect_refused(scene() + " --coarse-level on", "--coarse-level: expected auto or off");
+  expect_refused(scene() + " --coarse-levels off", "--coarse-levels: expected auto or 0");
+  // The retired spelling names the new one.
+  expect_refused(scene() + " --coarse-level off",
+                 "--coarse-level is now --coarse-levels (auto or 0)");
+  // The flags reach the run's validation (TrackingRunOptions::validate).
+  expect_refused(scene() + " --switch-decrease 1", "--switch-decrease must be in [0, 1)");
+  expect_refused(scene() + " --coarse-tol 0", "--coarse-tol must be in (0, 1)");
+  expect_refused(scene() + " --pose-move 0", "--pose-move must be in (0, 1]");
+  expect_refused(scene() + " --pose-move 0.5",
+                 "--pose-move moves the pose of a target in the camera");
+  // Every bad value names its flag first, also where the objective's or the optimiser's own
+  // check refuses it.
+  for (const auto& [args, start] : std::vector<std::pair<std::string, std::string>>{
+           {" --max-seconds -1", "--max-seconds: "},
+           {" --rel-tol -1", "--rel-tol: "},
+           {" --move-limit 2", "--move-limit: "},
+           {" --algorithm x", "--algorithm: unknown algorithm 'x'"},
+           {" --particles x", "--particles: unknown particles 'x'"},
+           {" --volumes x", "--volumes: unknown volumes 'x'"},
+           {" --alpha 0", "--alpha: "},
+           {" --beta -1", "--beta: "},
+           {" --gamma 0", "--gamma: "},
+           {" --eps 0", "--eps: "},
+           {" --method x", "--method: unknown method 'x'"},
+           {" --tol 2", "--tol: "},
+           {" --distance x", "--distance: unknown distance 'x'"},
+           {" --tikhonov-mass -1", "--tikhonov-mass: "},
+           {" --tikhonov-grad -1", "--tikhonov-grad: "}})
+    expect_refused(scene() + args, "error: " + start);
   expect_refused(scene() + " --state-backend petsc", "--state-backend: unknown state backend");
   if (!softhd::fe::petsc_backend_available())  // an MPI build runs it (tests/mpi/cli_mpi.py)
     expect_refused(scene() + " --state-backend petsc-mumps", "-DSOFTHD_WITH_MPI=ON");
@@ -585,6 +662,27 @@ TEST_F(OptimiseCli, CameraFrameTargetRefinesThePoseWithTheControl) {
             std::string::npos)
       << header;
   EXPECT_TRUE(fs::exists(fs::path(out2) / "target_aligned.ply"));
+
+  // --pose-move F: the pose's move limit is F times the control's, so with 0.05 the first
+  // iteration moves the pose (its twist, rotation and translation) less than with the default 1.
+  auto first_pose_step = [&](const std::string& name, const std::string& flags) {
+    const fs::path o = dir_ / name;
+    EXPECT_EQ(run(joint + " --out " + o.string() + " --max-iter 1 --quiet" + flags, &err), 0)
+        << err;
+    const nlohmann::json s = nlohmann::json::parse(std::ifstream(o / "summary.json"));
+    double step = 0.0;
+    for (int k = 0; k < 6; ++k) {
+      const double d =
+          s["pose"]["twist"][k].get<double>() - s["pose_start"]["twist"][k].get<double>();
+      step += d * d;
+    }
+    return std::sqrt(step);
+  };
+  const double full = first_pose_step("move1", ""),
+               small = first_pose_step("move005", " --pose-move 0.05");
+  std::cout << "first pose step: --pose-move 1 " << full << ", 0.05 " << small << "\n";
+  EXPECT_GT(full, 0.0);
+  EXPECT_LT(small, 0.5 * full);
 
   std::ofstream(dir_ / "bad_pose.txt") << "1 0 0 0\n0 2 0 0\n0 0 1 0\n0 0 0 1\n";
   std::ofstream(dir_ / "tiny_pose.txt") << "1e-100 0 0 0\n0 1e-100 0 0\n0 0 1e-100 0\n0 0 0 1\n";

@@ -102,22 +102,23 @@ TEST(TargetForms, QuantileCapIsSetFromTheRestStateAndUsed) {
 TEST(TargetForms, RunOptionsReplaceTheTargetsForm) {
   const softhd::Scene scene = bend_scene("override", R"(, "cap": 0.2)");
   TrackingRunOptions options;
-  options.max_iterations = 1;
+  options.optimiser.max_iterations = 1;
   options.threads = 1;
-  options.coarse_level = CoarseLevel::off;
-  options.distance = TargetDistance{};
-  options.distance->sides = Sides::scan_to_body;
+  options.state.coarse_levels = CoarseLevel::off;
+  options.distance.form = TargetDistance{};
+  options.distance.form->sides = Sides::scan_to_body;
   const TrackingRunSummary s = run_tracking(scene, options);
   EXPECT_NE(s.target.find("distance scan_to_body"), std::string::npos) << s.target;
   EXPECT_EQ(s.target.find("cap"), std::string::npos) << s.target;  // the block's cap replaced
   ASSERT_FALSE(s.history.empty());
   EXPECT_EQ(s.history.back().B, 0.0);
   EXPECT_EQ(s.history.back().rho, s.history.back().A);
-  options.distance->sides = Sides::visible;
-  expect_error<InvalidArgument>([&] { options.validate(); }, "distance visible needs the camera");
-  options.distance->sides = Sides::symmetric;
-  options.distance->cap = -1.0;
-  expect_error<InvalidArgument>([&] { options.validate(); }, "distance cap must be");
+  options.distance.form->sides = Sides::visible;
+  expect_error<InvalidArgument>([&] { options.validate(); },
+                                "distance.form.sides visible needs the camera");
+  options.distance.form->sides = Sides::symmetric;
+  options.distance.form->cap = -1.0;
+  expect_error<InvalidArgument>([&] { options.validate(); }, "distance.form.cap must be");
 }
 
 // The arc target cut at the middle of its z range: the points above it (`upper`) or below.
@@ -156,9 +157,9 @@ TEST(TargetForms, OneSidedRunAgainstAHalfTargetRecoversTheShape) {
   const fe::ControlSpace control = scene.body.make_control_space(assembler);
   const SceneTarget full = scene_target(scene, assembler.mesh());
   TrackingRunOptions options;
-  options.max_iterations = 40;
+  options.optimiser.max_iterations = 40;
   options.threads = 1;
-  options.coarse_level = CoarseLevel::off;
+  options.state.coarse_levels = CoarseLevel::off;
   auto node_error = [&](const SceneTarget& target) {
     TrackingRun run(scene, assembler, control, target, options);
     const TrackingRunSummary s = run.run();

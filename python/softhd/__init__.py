@@ -303,20 +303,25 @@ def read_mesh(path, order=None, scale=1.0):
 def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=None,
              algorithm=None, move_limit=None, particles=None, volumes=None, alpha=None,
              beta=None, gamma=None, eps=None, method=None, tol=None, tikhonov_mass=None,
-             tikhonov_grad=None, coarse_level=None, levels=None, refined_move_limit=None,
+             tikhonov_grad=None, coarse_levels=None, levels=None, refined_move_limit=None,
+             coarse_iterations=None, switch_decrease=None, coarse_tol=None,
              distance=None, cap=None, cap_q=None, initial=None, pose_move=None, callback=None,
              threads=0):
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
     target: the run ``softhd optimise`` makes (the library's TrackingRun), with its options and
     its defaults for every option left None (:func:`optimise_defaults` lists them, e.g. method
-    "tree" with tol 1e-2, move_limit 0.1, coarse_level "auto": two-level starts on the coarse level
-    (a box with half the cells, a mesh file of order 2 as P1/Q1 on its vertices), levels 0:
+    "tree" with tol 1e-2, move_limit 0.1, coarse_levels "auto" (0: none; ``--coarse-levels``):
+    the state solves' coarse start, two-level starts on the coarse level (a box with half the
+    cells, a mesh file of order 2 as P1/Q1 on its vertices), levels 0:
     automatic, where the target has a known map (an arc, a manufactured state) 1 + every coarser
     level of at least 32 elements (a box halved along its even axes, else every axis of at least 4
     cells to (n + 1) / 2; bending: 3), else 1 (the user's mesh alone; a scan-like cloud runs on one
     level); levels N > 1 solves first on the N - 1 coarser levels, as ``--levels N``,
     each level after the coarsest with the move limit refined_move_limit, 0.02, as
-    ``--refined-move-limit``). Returns an :class:`OptimiseResult`.
+    ``--refined-move-limit``; each coarse level at most coarse_iterations, 30, iterations, ending
+    earlier once rho decreased by less than switch_decrease, 0.01, relative twice in a row, with
+    the tree tolerance max(tol, coarse_tol), 5e-2, as ``--coarse-iterations``,
+    ``--switch-decrease``, ``--coarse-tol``). Returns an :class:`OptimiseResult`.
 
     target: None (the scene's own "target"), a cloud file path, an (M, d) array, or a tuple
     (points, volumes). distance ("symmetric" or "scan_to_body"), cap (a length), cap_q: the
@@ -345,8 +350,11 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
                           particles=particles, volumes_kind=volumes, alpha=alpha, beta=beta,
                           gamma=gamma, eps=eps, method=method, tol=tol,
                           tikhonov_mass=tikhonov_mass, tikhonov_grad=tikhonov_grad,
-                          coarse_level=coarse_level, levels=levels,
-                          refined_move_limit=refined_move_limit, distance=distance,
+                          coarse_levels=None if coarse_levels is None else str(coarse_levels),
+                          levels=levels,
+                          refined_move_limit=refined_move_limit,
+                          coarse_iterations=coarse_iterations, switch_decrease=switch_decrease,
+                          coarse_tol=coarse_tol, distance=distance,
                           cap=cap, cap_q=cap_q,
                           initial=None if initial is None else _as_float64(initial, "initial"),
                           pose_move=pose_move, callback=callback, threads=threads)

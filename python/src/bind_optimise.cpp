@@ -4,7 +4,10 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include <memory>
+
 #include "scene.hpp"
+#include "softhd/control/run_fields.hpp"
 #include "softhd/control/scene_target.hpp"
 #include "softhd/control/tracking_run.hpp"
 #include "softhd/error.hpp"
@@ -39,9 +42,9 @@ SceneTarget array_target(const PyScene& s, const Array& points,
 PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
                     const std::optional<Array>& volumes, const std::optional<std::string>& file,
                     TrackingRunOptions o, const py::object& callback) {
-  if (file) o.target_file = *file;
-  o.validate();
-  ThreadScope scope(o.threads);  // the FE assembly's threads too
+  if (file) o.target.file = *file;
+  validate_naming_fields(o, FrontEnd::python);  // the fields by their keywords
+  ThreadScope scope(o.threads);                 // the FE assembly's threads too
   TrackingRunCallbacks cb;
   if (!callback.is_none()) {
     // Returning False (the object itself, not any false value) ends the run; an exception
@@ -55,9 +58,14 @@ PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
   py::gil_scoped_release release;
   SceneTarget target =
       points ? array_target(s, *points, volumes) : tracking_target(s.scene, s.assembler.mesh(), o);
-  TrackingRun run(s.scene, s.assembler, s.control, std::move(target), o);
+  std::unique_ptr<TrackingRun> run;
+  try {
+    run = std::make_unique<TrackingRun>(s.scene, s.assembler, s.control, std::move(target), o);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(name_fields(e.what(), FrontEnd::python));
+  }
   PyOptimise out;
-  out.summary = run.run(cb);
+  out.summary = run->run(cb);
   out.dim = s.scene.body.dim();
   return out;
 }
@@ -66,26 +74,29 @@ PyOptimise optimise(const PyScene& s, const std::optional<Array>& points,
 py::dict optimise_defaults() {
   const TrackingRunOptions d;
   py::dict out;
-  out["max_iter"] = d.max_iterations;
+  out["max_iter"] = d.optimiser.max_iterations;
   out["initial"] = py::none();  // the scene's control.initial
-  out["pose_move"] = d.pose_move;
-  out["max_seconds"] = d.max_seconds;
-  out["rel_tol"] = d.relative_change;
-  out["algorithm"] = to_string(d.algorithm);
-  out["move_limit"] = d.move_limit;
-  out["particles"] = to_string(d.particles);
-  out["volumes"] = to_string(d.volumes);
-  out["alpha"] = d.params.alpha;
-  out["beta"] = d.params.beta;
-  out["gamma"] = d.params.gamma;
-  out["eps"] = d.params.epsilon;
-  out["method"] = to_string(d.method);
-  out["tol"] = d.tolerance;
-  out["tikhonov_mass"] = d.tikhonov_mass;
-  out["tikhonov_grad"] = d.tikhonov_gradient;
-  out["coarse_level"] = to_string(d.coarse_level);
-  out["levels"] = d.levels;
-  out["refined_move_limit"] = d.refined_move_limit;
+  out["pose_move"] = d.pose.move;
+  out["max_seconds"] = d.optimiser.max_seconds;
+  out["rel_tol"] = d.optimiser.relative_change;
+  out["algorithm"] = to_string(d.optimiser.algorithm);
+  out["move_limit"] = d.optimiser.move_limit;
+  out["particles"] = to_string(d.distance.particles);
+  out["volumes"] = to_string(d.distance.volumes);
+  out["alpha"] = d.distance.params.alpha;
+  out["beta"] = d.distance.params.beta;
+  out["gamma"] = d.distance.params.gamma;
+  out["eps"] = d.distance.params.epsilon;
+  out["method"] = to_string(d.distance.method);
+  out["tol"] = d.distance.tolerance;
+  out["tikhonov_mass"] = d.tikhonov.mass;
+  out["tikhonov_grad"] = d.tikhonov.gradient;
+  out["coarse_levels"] = to_string(d.state.coarse_levels);
+  out["levels"] = d.levels.count;
+  out["refined_move_limit"] = d.levels.refined_move_limit;
+  out["coarse_iterations"] = d.levels.coarse_iterations;
+  out["switch_decrease"] = d.levels.switch_decrease;
+  out["coarse_tol"] = d.levels.coarse_tolerance;
   // The form is the target's unless given (TrackingRunOptions::distance).
   out["distance"] = py::none();
   out["cap"] = py::none();
@@ -202,39 +213,49 @@ void bind_optimise(py::module_& m) {
          std::optional<double> beta, std::optional<double> gamma, std::optional<double> eps,
          const std::optional<std::string>& method, std::optional<double> tol,
          std::optional<double> tikhonov_mass, std::optional<double> tikhonov_grad,
-         const std::optional<std::string>& coarse_level, std::optional<int> levels,
-         std::optional<double> refined_move_limit, const std::optional<std::string>& distance,
-         std::optional<double> cap, std::optional<double> cap_q,
-         const std::optional<Eigen::VectorXd>& initial, std::optional<double> pose_move,
-         const py::object& callback, int threads) {
+         const std::optional<std::string>& coarse_levels, std::optional<int> levels,
+         std::optional<double> refined_move_limit, std::optional<int> coarse_iterations,
+         std::optional<double> switch_decrease, std::optional<double> coarse_tol,
+         const std::optional<std::string>& distance, std::optional<double> cap,
+         std::optional<double> cap_q, const std::optional<Eigen::VectorXd>& initial,
+         std::optional<double> pose_move, const py::object& callback, int threads) {
         TrackingRunOptions o;
-        if (initial) o.initial_control = *initial;
-        if (pose_move) o.pose_move = *pose_move;
+        if (initial) o.optimiser.initial_control = *initial;
+        if (pose_move) o.pose.move = *pose_move;
         if (distance || cap || cap_q) {  // the form as a whole (TrackingRunOptions::distance)
           TargetDistance form;
           if (distance) form.sides = sides_from_string(*distance);
           if (cap) form.cap = *cap;
           if (cap_q) form.cap_q = *cap_q;
-          o.distance = form;
+          o.distance.form = form;
         }
-        if (max_iter) o.max_iterations = *max_iter;
-        if (max_seconds) o.max_seconds = *max_seconds;
-        if (rel_tol) o.relative_change = *rel_tol;
-        if (algorithm) o.algorithm = algorithm_from_string(*algorithm);
-        if (move_limit) o.move_limit = *move_limit;
-        if (particles) o.particles = particles_from_string(*particles);
-        if (volumes_kind) o.volumes = particle_volumes_from_string(*volumes_kind);
-        if (alpha) o.params.alpha = *alpha;
-        if (beta) o.params.beta = *beta;
-        if (gamma) o.params.gamma = *gamma;
-        if (eps) o.params.epsilon = *eps;
-        if (method) o.method = method_from_string(*method);
-        if (tol) o.tolerance = *tol;
-        if (tikhonov_mass) o.tikhonov_mass = *tikhonov_mass;
-        if (tikhonov_grad) o.tikhonov_gradient = *tikhonov_grad;
-        if (coarse_level) o.coarse_level = coarse_level_from_string(*coarse_level);
-        if (levels) o.levels = *levels;
-        if (refined_move_limit) o.refined_move_limit = *refined_move_limit;
+        if (max_iter) o.optimiser.max_iterations = *max_iter;
+        if (max_seconds) o.optimiser.max_seconds = *max_seconds;
+        if (rel_tol) o.optimiser.relative_change = *rel_tol;
+        if (algorithm) o.optimiser.algorithm = algorithm_from_string(*algorithm);
+        if (move_limit) o.optimiser.move_limit = *move_limit;
+        if (particles) o.distance.particles = particles_from_string(*particles);
+        if (volumes_kind) o.distance.volumes = particle_volumes_from_string(*volumes_kind);
+        if (alpha) o.distance.params.alpha = *alpha;
+        if (beta) o.distance.params.beta = *beta;
+        if (gamma) o.distance.params.gamma = *gamma;
+        if (eps) o.distance.params.epsilon = *eps;
+        if (method) o.distance.method = method_from_string(*method);
+        if (tol) o.distance.tolerance = *tol;
+        if (tikhonov_mass) o.tikhonov.mass = *tikhonov_mass;
+        if (tikhonov_grad) o.tikhonov.gradient = *tikhonov_grad;
+        if (coarse_levels) {
+          try {
+            o.state.coarse_levels = coarse_level_from_string(*coarse_levels);
+          } catch (const InvalidArgument& e) {  // named by its keyword
+            throw InvalidArgument(name_fields(e.what(), FrontEnd::python));
+          }
+        }
+        if (levels) o.levels.count = *levels;
+        if (refined_move_limit) o.levels.refined_move_limit = *refined_move_limit;
+        if (coarse_iterations) o.levels.coarse_iterations = *coarse_iterations;
+        if (switch_decrease) o.levels.switch_decrease = *switch_decrease;
+        if (coarse_tol) o.levels.coarse_tolerance = *coarse_tol;
         o.threads = threads;
         return optimise(s, points, volumes, file, o, callback);
       },
@@ -243,9 +264,22 @@ void bind_optimise(py::module_& m) {
       py::arg("rel_tol"), py::arg("algorithm"), py::arg("move_limit"), py::arg("particles"),
       py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("eps"),
       py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"), py::arg("tikhonov_grad"),
-      py::arg("coarse_level"), py::arg("levels"), py::arg("refined_move_limit"),
+      py::arg("coarse_levels"), py::arg("levels"), py::arg("refined_move_limit"),
+      py::arg("coarse_iterations"), py::arg("switch_decrease"), py::arg("coarse_tol"),
       py::arg("distance"), py::arg("cap"), py::arg("cap_q"), py::arg("initial"),
       py::arg("pose_move"), py::arg("callback"), py::arg("threads"));
+  m.def(
+      "optimise_fields",
+      [] {
+        py::list rows;
+        for (const RunField& f : tracking_run_fields())
+          rows.append(py::dict(py::arg("path") = f.path, py::arg("flag") = f.flag,
+                               py::arg("keyword") = f.keyword, py::arg("why_not") = f.why_not));
+        return rows;
+      },
+      "The fields of the run's options (TrackingRunOptions) by their nested path, with the flag "
+      "of softhd optimise and the keyword of optimise that set each one (\"\": none, why_not "
+      "says why).");
   m.def("optimise_defaults", &optimise_defaults,
         "The defaults of optimise's options (softhd optimise's: TrackingRunOptions).");
 }

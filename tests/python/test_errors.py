@@ -120,8 +120,8 @@ def test_optimise_errors(scene_file):
         softhd.optimise(scene, target, algorithm="nelder-mead")
     with pytest.raises(ValueError, match="max_iter"):
         softhd.optimise(scene, target, max_iter=0)
-    with pytest.raises(ValueError, match="coarse_level"):
-        softhd.optimise(scene, target, coarse_level="on")
+    with pytest.raises(ValueError, match=r"unknown coarse_levels 'on' \(expected auto or 0\)"):
+        softhd.optimise(scene, target, coarse_levels="on")
     with pytest.raises(ValueError, match="3D but the scene's body is 2D"):
         softhd.optimise(scene, np.zeros((4, 3)))
     with pytest.raises(OSError, match="nothing.ply"):

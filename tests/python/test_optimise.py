@@ -133,10 +133,12 @@ def as_in_the_csv(value):
 @pytest.mark.parametrize("cli_options, py_options", [
     ([], {}),  # the defaults on both sides
     (["--alpha", 5, "--eps", 2e-3, "--move-limit", 0.2, "--volumes", "deformed",
-      "--tikhonov-mass", 1e-12, "--rel-tol", 0, "--coarse-level", "off"],
+      "--tikhonov-mass", 1e-12, "--rel-tol", 0, "--coarse-levels", 0],
      dict(alpha=5, eps=2e-3, move_limit=0.2, volumes="deformed", tikhonov_mass=1e-12,
-          rel_tol=0, coarse_level="off")),
+          rel_tol=0, coarse_levels=0)),
     (["--levels", 2], dict(levels=2)),  # a coarse level's rows first, then 8 on the mesh
+    (["--levels", 2, "--coarse-iterations", 2, "--switch-decrease", 0, "--coarse-tol", 0.1],
+     dict(levels=2, coarse_iterations=2, switch_decrease=0, coarse_tol=0.1)),
 ])
 def test_history_equals_the_command_line_tools(scene_file, cli, tmp_path, cli_options,
                                                py_options):
@@ -153,9 +155,34 @@ def test_history_equals_the_command_line_tools(scene_file, cli, tmp_path, cli_op
     assert len(rows) == len(r.history)
     assert [it.level for it in r.history].count(0) == 8
     assert ("levels" in py_options) == (r.history[0].level == 1)
+    if "coarse_iterations" in py_options:  # the keyword reaches the coarse level
+        assert [it.level for it in r.history].count(1) == py_options["coarse_iterations"]
     for row, it in zip(rows, r.history):
         for column in HISTORY_COLUMNS + ["level"]:
             assert row[column] == as_in_the_csv(getattr(it, column)), (column, row, it)
+
+
+def test_coarse_level_keywords_act_on_the_coarse_level(scene_file):
+    """levels=2: switch_decrease=0 runs the coarse level's min(coarse_iterations, max_iter) = 6
+    iterations, 0.9 ends it earlier (rho decreasing by less than 90 % twice); coarse_iterations
+    caps it. coarse_tol reaches the run's validation (its effect on the coarse level's tree
+    tolerance: tests/test_optimise_cli.cpp, where the level's checkpoint records it)."""
+    scene = softhd.Scene.load(scene_file(SMALL_PLATE))
+
+    def coarse_iterations(**kw):
+        r = softhd.optimise(scene, max_iter=6, rel_tol=0, threads=1, levels=2, **kw)
+        return [it.level for it in r.history].count(1)
+
+    assert coarse_iterations(switch_decrease=0) == 6
+    assert coarse_iterations(switch_decrease=0.9) < 6
+    assert coarse_iterations(switch_decrease=0, coarse_iterations=3) == 3
+    for keyword, value, message in (("alpha", 0.0, "^alpha: Hausdorff parameter alpha must be"),
+                                    ("rel_tol", -1.0, "^rel_tol: optimizer: relative_change"),
+                                    ("switch_decrease", 1.0, r"switch_decrease must be in \[0, 1\)"),
+                                    ("coarse_tol", 1.0, r"coarse_tol must be in \(0, 1\)"),
+                                    ("coarse_iterations", 0, "coarse_iterations must be >= 1")):
+        with pytest.raises(softhd.InvalidArgument, match=message):
+            softhd.optimise(scene, max_iter=1, **{keyword: value})
 
 
 @pytest.fixture
@@ -185,10 +212,12 @@ def test_defaults_are_the_command_line_tools(cli_help):
              "method": "--method M exact | tree: the distance's pair sums",
              "tol": "relative error bound on every kernel sum", "tikhonov_mass":
              "--tikhonov-mass M (M/2) int m^2", "tikhonov_grad": "--tikhonov-grad E (E/2) int "
-             "|grad m|^2", "coarse_level": "or for a mesh file of order 2 as P1/Q1 on its vertices",
+             "|grad m|^2", "coarse_levels": "mesh file of order 2 as P1/Q1 on its vertices",
              "levels": "then the next finer level from its control",
              "refined_move_limit": "the move limit of each level started from a coarser "
-             "level's control"}
+             "level's control", "coarse_iterations": "--coarse-iterations K",
+             "switch_decrease": "--switch-decrease S", "coarse_tol": "--coarse-tol T",
+             "pose_move": "as a fraction of the control's, in (0, 1]"}
     for name, before in flags.items():
         m = re.search(re.escape(before) + r" \(default ([^;,:)]+)", text)
         assert m, name
@@ -201,6 +230,23 @@ def test_defaults_are_the_command_line_tools(cli_help):
     m = re.search(r"functional parameters \(default (\S+) (\S+) (\S+) (\S+)\)", text)
     assert [float(v) for v in m.groups()] == [defaults[k] for k in ("alpha", "beta", "gamma",
                                                                    "eps")]
+
+
+def test_keywords_are_the_fields_of_the_table():
+    """Every keyword of optimise sets a field of the run's options table (the one `softhd
+    optimise --help` is checked against in tests/test_run_fields.cpp), and every field of the
+    table has a keyword or says why not; callback is Python's own."""
+    fields = softhd._core.optimise_fields()
+    keywords = {p.name for p in inspect.signature(softhd.optimise).parameters.values()
+                if p.name != "scene"}
+    table = {f["keyword"] for f in fields if f["keyword"]}
+    assert keywords - {"callback"} == table
+    for f in fields:
+        assert f["keyword"] or f["why_not"], f["path"]
+    # The keyword is the flag without its dashes, with underscores (where both exist).
+    for f in fields:
+        if f["keyword"] and f["flag"]:
+            assert f["flag"] == "--" + f["keyword"].replace("_", "-"), f
 
 
 def test_camera_frame_target_returns_the_pose(scene_file, tmp_path):
@@ -225,6 +271,14 @@ def test_camera_frame_target_returns_the_pose(scene_file, tmp_path):
         return np.arccos(np.clip((np.trace(P[:3, :3] @ truth[:3, :3].T) - 1) / 2, -1, 1))
 
     assert angle(r.pose) < angle(truth @ off)
+    # pose_move: the pose's move limit as a fraction of the control's; 0.05 moves the pose less
+    # in the first iteration than the default 1.
+    def first_step(**kw):
+        P = softhd.optimise(softhd.Scene.load(scene_file(spec, "camera.json")), max_iter=1,
+                            **kw).pose
+        return np.linalg.norm(P - truth @ off)
+
+    assert first_step(pose_move=0.05) < 0.5 * first_step()
     assert softhd.optimise(scene, max_iter=1).pose is None
     bad = dict(spec, target=dict(spec["target"], frame="world"))
     with pytest.raises(softhd.InvalidArgument, match='target.frame must be "body" or "camera"'):
@@ -239,16 +293,16 @@ def test_initial_control_starts_there(scene_file):
     r2 = softhd.optimise(scene, max_iter=1, initial=r1.control)
     assert r2.rho_start == pytest.approx(r1.rho_final, rel=1e-6)
     assert r2.rho_start < softhd.optimise(scene, max_iter=1).rho_start
-    with pytest.raises(softhd.InvalidArgument, match="initial_control has 3 values, expected"):
+    with pytest.raises(softhd.InvalidArgument, match="initial has 3 values, expected"):
         softhd.optimise(scene, max_iter=1, initial=[0.0, 0.0, 0.0])
     # An empty control is not None; values outside the bounds [-1e5, 0] are refused, not clipped.
-    with pytest.raises(softhd.InvalidArgument, match="initial_control is empty"):
+    with pytest.raises(softhd.InvalidArgument, match="initial is empty"):
         softhd.optimise(scene, max_iter=1, initial=np.empty(0))
     for k, value, text in ((0, 5.0, "5"), (3, -1e9, "-1000000000")):
         m = np.array(r1.control)
         m[k] = value
         with pytest.raises(softhd.InvalidArgument,
-                           match=rf"initial_control\[{k}\] = {text} is outside its bounds "
+                           match=rf"initial\[{k}\] = {text} is outside its bounds "
                                  r"\[-100000, 0\]"):
             softhd.optimise(scene, max_iter=1, initial=m)
     # pose_move moves a camera-frame target's pose: refused for this body-frame target.

@@ -45,7 +45,7 @@ fe::MeshHierarchy level_hierarchy(const fe::Body& body, int levels) {
   try {
     return fe::MeshHierarchy(body, fe::Halving::rounded, levels - 1);
   } catch (const InvalidArgument& e) {
-    throw InvalidArgument("levels: " + std::to_string(levels) + ": " + e.what());
+    throw InvalidArgument("levels.count: " + std::to_string(levels) + ": " + e.what());
   }
 }
 
@@ -72,12 +72,13 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const Scene& scene,
                                                             const TrackingRunOptions& options) {
   std::vector<std::unique_ptr<CoarseProblem>> levels;  // finest first while built
   TrackingRunOptions o = options;
-  if (o.method == Method::tree) o.tolerance = std::max(options.tolerance, options.coarse_tolerance);
+  if (o.distance.method == Method::tree)
+    o.distance.tolerance = std::max(options.distance.tolerance, options.levels.coarse_tolerance);
   ShapeObjectiveOptions so = o.objective();
   apply_target_settings(target, &so);  // the user's target's view on every level
-  const fe::MeshHierarchy hierarchy = level_hierarchy(scene.body, options.levels);
+  const fe::MeshHierarchy hierarchy = level_hierarchy(scene.body, options.levels.count);
   const SceneTarget* finer_target = &target;
-  for (int level = 1; level < options.levels; ++level) {
+  for (int level = 1; level < options.levels.count; ++level) {
     auto p = std::make_unique<CoarseProblem>();
     p->level = level;
     p->scene = scene;  // the name, source and target of the scene
@@ -88,11 +89,11 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const Scene& scene,
     p->target.emplace(coarse_target(p->scene, p->assembler->mesh(), *finer_target, options));
     p->objective = std::make_unique<ShapeObjective>(
         *p->assembler, *p->control, HausdorffTarget(p->target->cloud, so.hausdorff), so,
-        fe::state_solver_factory(p->scene.body, options.state_backend, p->assembler.get(),
+        fe::state_solver_factory(p->scene.body, options.state.backend, p->assembler.get(),
                                  p->control.get()));
-    if (options.distance) p->target->distance = *options.distance;
+    if (options.distance.form) p->target->distance = *options.distance.form;
     apply_target_form(*p->objective, *p->target);
-    if (options.coarse_level == CoarseLevel::automatic &&
+    if (options.state.coarse_levels == CoarseLevel::automatic &&
         fe::grid_levels(p->scene.body, fe::GridSequencingOptions{}) > 0) {
       p->two_level.emplace(
           fe::MeshHierarchy(p->scene.body, fe::Halving::nested, 1).level(1).make_assembler());

@@ -1,5 +1,5 @@
 #pragma once
-// The coarse levels of a multilevel tracking run (TrackingRunOptions::levels,
+// The coarse levels of a multilevel tracking run (TrackingRunOptions::Levels,
 // docs/formulation.md §4.8): each level's body, control space, target and objective, and the
 // prolongation of a level's control to the next finer one.
 

@@ -38,7 +38,7 @@ class RunFiles {
              const Eigen::VectorXd& u0);
   /// After an accepted iteration (u: the state of the best control m, unless replayed).
   void iteration(const TrackingIteration& it, const Eigen::VectorXd& m, const Eigen::VectorXd& u);
-  /// After an accepted iteration of a coarse level (TrackingRunOptions::levels): its row.
+  /// After an accepted iteration of a coarse level (TrackingRunOptions::Levels): its row.
   void level_iteration(const TrackingIteration& it);
   /// summary.json's entries of the set-up and the end (e.g. the levels), kept from now on.
   nlohmann::json& summary() { return summary_; }

@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr EnumNames<CoarseLevel, 2> kCoarseLevelNames{
-    {{CoarseLevel::automatic, "auto"}, {CoarseLevel::off, "off"}}};
+    {{CoarseLevel::automatic, "auto"}, {CoarseLevel::off, "0"}}};
 
 // The content hash of a file's bytes (empty if it cannot be read): the fingerprint's "scene".
 std::string file_hash(const std::string& path) {
@@ -44,31 +44,63 @@ std::string decimal(double v) {
   return text;
 }
 
-// The options checked against the scene and the target: initial_control's length and bounds
-// (those of track_shape: control.lower/upper where a control acts, 0 elsewhere), pose_move (a
-// camera-frame target's only).
+// The options checked against the scene and the target: optimiser.initial_control's length and
+// bounds (those of track_shape: control.lower/upper where a control acts, 0 elsewhere),
+// pose.move (a camera-frame target's only).
 void check_against_scene(const Scene& scene, const fe::ControlSpace& control,
                          const SceneTarget& target, const TrackingRunOptions& o) {
-  if (o.initial_control) {
-    const Eigen::VectorXd& m = *o.initial_control;
+  if (o.optimiser.initial_control) {
+    const Eigen::VectorXd& m = *o.optimiser.initial_control;
     if (m.size() != control.size())
-      throw InvalidArgument("initial_control has " + std::to_string(m.size()) +
+      throw InvalidArgument("optimiser.initial_control has " + std::to_string(m.size()) +
                             " values, expected " + std::to_string(control.size()) +
                             " (the scene's controls)");
     const Eigen::VectorXd lower = control.constant(scene.body.control_lower);
     const Eigen::VectorXd upper = control.constant(scene.body.control_upper);
     for (Eigen::Index k = 0; k < m.size(); ++k)
       if (!(m[k] >= lower[k] && m[k] <= upper[k]))
-        throw InvalidArgument("initial_control[" + std::to_string(k) + "] = " + decimal(m[k]) +
-                              " is outside its bounds [" + decimal(lower[k]) + ", " +
-                              decimal(upper[k]) +
+        throw InvalidArgument("optimiser.initial_control[" + std::to_string(k) +
+                              "] = " + decimal(m[k]) + " is outside its bounds [" +
+                              decimal(lower[k]) + ", " + decimal(upper[k]) +
                               "] (the scene's control.lower and control.upper; 0 and 0 where the "
                               "control acts on no region)");
   }
-  if (o.pose_move != 1.0 && target.frame != TargetFrame::camera)
+  if (o.pose.move != 1.0 && target.frame != TargetFrame::camera)
     throw InvalidArgument(
-        "pose_move moves the pose of a target in the camera's frame; this target is in the "
+        "pose.move moves the pose of a target in the camera's frame; this target is in the "
         "body's frame (it has no pose)");
+}
+
+void validate_levels(const TrackingRunOptions::Levels& levels) {
+  if (levels.count < 0)
+    throw InvalidArgument("levels.count must be >= 1 (0: automatic), got " +
+                          std::to_string(levels.count));
+  if (levels.coarse_iterations < 1)
+    throw InvalidArgument("levels.coarse_iterations must be >= 1, got " +
+                          std::to_string(levels.coarse_iterations));
+  if (!(levels.switch_decrease >= 0.0 && levels.switch_decrease < 1.0))
+    throw InvalidArgument("levels.switch_decrease must be in [0, 1)");
+  if (!(levels.coarse_tolerance > 0.0 && levels.coarse_tolerance < 1.0))
+    throw InvalidArgument("levels.coarse_tolerance must be in (0, 1)");
+  if (!(levels.refined_move_limit >= 0.0 && levels.refined_move_limit <= 1.0))
+    throw InvalidArgument("levels.refined_move_limit must be in [0, 1]");
+}
+
+// The distance's form of the options (distance.form): the one a run can use.
+void validate_form(const TargetDistance& d) {
+  if (d.sides == Sides::visible)
+    throw InvalidArgument(
+        "distance.form.sides visible needs the camera's position, which a tracking run "
+        "cannot give yet; use symmetric or scan_to_body");
+  if (!(std::isfinite(d.cap) && d.cap >= 0.0))
+    throw InvalidArgument("distance.form.cap must be 0 (none) or finite and > 0");
+  if (!(std::isfinite(d.cap_q) && d.cap_q >= SoftCap::kMinQ))
+    throw InvalidArgument("distance.form.cap_q must be finite and >= 0.001, got " +
+                          decimal(d.cap_q));
+  if (!(d.cap_quantile >= 0.0 && d.cap_quantile <= 1.0))
+    throw InvalidArgument("distance.form.cap_quantile must be in [0, 1]");
+  if (!(std::isfinite(d.cap_factor) && d.cap_factor >= 0.0))
+    throw InvalidArgument("distance.form.cap_factor must be 0 (no rule) or finite and > 0");
 }
 
 }  // namespace
@@ -76,112 +108,93 @@ void check_against_scene(const Scene& scene, const fe::ControlSpace& control,
 std::string to_string(CoarseLevel level) { return enum_name(kCoarseLevelNames, level); }
 
 CoarseLevel coarse_level_from_string(const std::string& name) {
-  return enum_from_name(kCoarseLevelNames, name, "coarse_level");
+  return enum_from_name(kCoarseLevelNames, name, "state.coarse_levels");
 }
 
 void TrackingRunOptions::validate() const {
-  if (max_iterations < 1)
-    throw InvalidArgument("max_iterations must be >= 1, got " + std::to_string(max_iterations));
-  if (max_evaluations < 0)
-    throw InvalidArgument("max_evaluations must be >= 0 (0: 5 x max_iterations + 20), got " +
-                          std::to_string(max_evaluations));
-  if (method == Method::nearest)
-    throw InvalidArgument("method: nearest has no gradient; expected exact or tree");
-  if (vtu_every < 0) throw InvalidArgument("vtu_every must be >= 0");
+  const Optimiser& op = optimiser;
+  if (op.max_iterations < 1)
+    throw InvalidArgument("optimiser.max_iterations must be >= 1, got " +
+                          std::to_string(op.max_iterations));
+  if (op.max_evaluations < 0)
+    throw InvalidArgument(
+        "optimiser.max_evaluations must be >= 0 (0: 5 x max_iterations + 20), got " +
+        std::to_string(op.max_evaluations));
+  if (distance.method == Method::nearest)
+    throw InvalidArgument("distance.method: nearest has no gradient; expected exact or tree");
+  if (output.vtu_every < 0) throw InvalidArgument("output.vtu_every must be >= 0");
   if (!(memory_limit > 0.0)) throw InvalidArgument("memory_limit must be > 0");
-  if (levels < 0)
-    throw InvalidArgument("levels must be >= 1 (0: automatic), got " + std::to_string(levels));
-  if (coarse_iterations < 1)
-    throw InvalidArgument("coarse_iterations must be >= 1, got " +
-                          std::to_string(coarse_iterations));
-  if (!(switch_decrease >= 0.0 && switch_decrease < 1.0))
-    throw InvalidArgument("switch_decrease must be in [0, 1)");
-  if (!(coarse_tolerance > 0.0 && coarse_tolerance < 1.0))
-    throw InvalidArgument("coarse_tolerance must be in (0, 1)");
-  if (!(refined_move_limit >= 0.0 && refined_move_limit <= 1.0))
-    throw InvalidArgument("refined_move_limit must be in [0, 1]");
-  if (resume && out.empty())
-    throw InvalidArgument("resume needs the run's folder (the out field is empty)");
-  if (initial_control && levels > 1)
+  validate_levels(levels);
+  if (output.resume && output.folder.empty())
+    throw InvalidArgument("output.resume needs the run's folder (output.folder is empty)");
+  if (op.initial_control && levels.count > 1)
     throw InvalidArgument(
-        "initial_control: a multilevel run (levels > 1) starts from its coarse "
-        "levels' control; give levels 1");
-  if (initial_control && initial_control->size() == 0)
+        "optimiser.initial_control: a multilevel run (levels.count > 1) starts from its coarse "
+        "levels' control; give levels.count 1");
+  if (op.initial_control && op.initial_control->size() == 0)
     throw InvalidArgument(
-        "initial_control is empty: give one value per control (or none for the scene's "
-        "control.initial)");
-  if (initial_control && !initial_control->allFinite())
-    throw InvalidArgument("initial_control must be finite");
-  if (!(pose_move > 0.0 && pose_move <= 1.0))
-    throw InvalidArgument("pose_move must be in (0, 1] (the pose's move limit over the control's)");
-  if (distance) {
-    const TargetDistance& d = *distance;
-    if (d.sides == Sides::visible)
-      throw InvalidArgument(
-          "distance visible needs the camera's position, which a tracking run "
-          "cannot give yet; use symmetric or scan_to_body");
-    if (!(std::isfinite(d.cap) && d.cap >= 0.0))
-      throw InvalidArgument("distance cap must be 0 (none) or finite and > 0");
-    if (!(std::isfinite(d.cap_q) && d.cap_q >= SoftCap::kMinQ))
-      throw InvalidArgument("distance cap_q must be finite and >= 0.001, got " + decimal(d.cap_q));
-    if (!(d.cap_quantile >= 0.0 && d.cap_quantile <= 1.0))
-      throw InvalidArgument("distance cap_quantile must be in [0, 1]");
-    if (!(std::isfinite(d.cap_factor) && d.cap_factor >= 0.0))
-      throw InvalidArgument("distance cap_factor must be 0 (no rule) or finite and > 0");
-  }
+        "optimiser.initial_control is empty: give one value per control (or none for the "
+        "scene's control.initial)");
+  if (op.initial_control && !op.initial_control->allFinite())
+    throw InvalidArgument("optimiser.initial_control must be finite");
+  if (!(pose.move > 0.0 && pose.move <= 1.0))
+    throw InvalidArgument("pose.move must be in (0, 1] (the pose's move limit over the control's)");
+  if (distance.form) validate_form(*distance.form);
   objective().validate();
   tracking().validate();
 }
 
 ShapeObjectiveOptions TrackingRunOptions::objective() const {
   ShapeObjectiveOptions o;
-  o.hausdorff.params = params;
-  o.hausdorff.method = method;
-  o.hausdorff.tolerance = tolerance;
+  o.hausdorff.params = distance.params;
+  o.hausdorff.method = distance.method;
+  o.hausdorff.tolerance = distance.tolerance;
   o.hausdorff.threads = threads;
   o.hausdorff.share = share;
-  o.particles = particles;
-  o.volumes = volumes;
-  o.tikhonov_mass = tikhonov_mass;
-  o.tikhonov_gradient = tikhonov_gradient;
+  o.particles = distance.particles;
+  o.volumes = distance.volumes;
+  o.tikhonov_mass = tikhonov.mass;
+  o.tikhonov_gradient = tikhonov.gradient;
   return o;
 }
 
 ShapeTrackingOptions TrackingRunOptions::tracking() const {
   ShapeTrackingOptions t;
   BoundedOptimizerOptions& o = t.optimizer;
-  o.algorithm = algorithm;
-  o.max_iterations = max_iterations;
-  const long evaluations = 5L * max_iterations + 20;  // a failed or repeated one per step, and more
-  o.max_evaluations = max_evaluations > 0 ? max_evaluations
-                                          : static_cast<int>(std::min<long>(INT_MAX, evaluations));
-  o.max_seconds = max_seconds;
-  o.relative_change = relative_change;
-  o.move_limit = move_limit;
-  t.checkpoint_every = checkpoint_every;
-  t.pose_bounds.move = pose_move;
-  if (!out.empty()) t.checkpoint = (fs::path(out) / "checkpoint.bin").string();
-  t.resume = resume;
+  o.algorithm = optimiser.algorithm;
+  o.max_iterations = optimiser.max_iterations;
+  // A failed or repeated evaluation per step, and more.
+  const long evaluations = 5L * optimiser.max_iterations + 20;
+  o.max_evaluations = optimiser.max_evaluations > 0
+                          ? optimiser.max_evaluations
+                          : static_cast<int>(std::min<long>(INT_MAX, evaluations));
+  o.max_seconds = optimiser.max_seconds;
+  o.relative_change = optimiser.relative_change;
+  o.move_limit = optimiser.move_limit;
+  t.checkpoint_every = output.checkpoint_every;
+  t.pose_bounds.move = pose.move;
+  if (!output.folder.empty()) t.checkpoint = (fs::path(output.folder) / "checkpoint.bin").string();
+  t.resume = output.resume;
   return t;
 }
 
 int tracking_levels(const Scene& scene, const TrackingRunOptions& options,
                     const SceneTarget& target) {
-  if (options.levels > 0) return options.levels;
+  if (options.levels.count > 0) return options.levels.count;
   // A given start or a joint pose runs on one level (validate, TrackingRun refuse more).
-  if (options.initial_control || target.frame == TargetFrame::camera) return 1;
+  if (options.optimiser.initial_control || target.frame == TargetFrame::camera) return 1;
   // A cloud without a known map (a scan): one level. On noisy one-sided scans the coarse
   // start ends at a lower ρ̃ but a larger shape error (docs/formulation.md §4.8).
   if (!target.map_displacement) return 1;
   // Else every coarser level (fe::Halving::rounded) of at least 32 elements, the two-level
   // starts' smallest (fe::GridSequencingOptions::min_elements).
-  return 1 + fe::coarser_levels(scene.body, fe::Halving::rounded,
-                                fe::GridSequencingOptions{}.min_elements);
+  return 1 +
+         fe::coarser_levels(scene.body, fe::Halving::rounded, fe::GridSequencingOptions{}.min_elements);
 }
 
 SceneTarget tracking_target(const Scene& scene, const fe::Mesh& mesh,
                             const TrackingRunOptions& options) {
-  if (!options.target_file.empty()) return file_target(options.target_file, scene.body.dim());
+  if (!options.target.file.empty()) return file_target(options.target.file, scene.body.dim());
   return scene_target(scene, mesh, options.memory_limit);
 }
 
@@ -191,31 +204,31 @@ struct TrackingRun::Impl {
       : scene(s), assembler(a), control(c), options(o), target(std::move(t)) {
     options.validate();
     check_against_scene(scene, c, target, options);
-    options.levels = tracking_levels(scene, options, target);
+    options.levels.count = tracking_levels(scene, options, target);
     if (target.cloud.dim() != scene.body.dim())
       throw InvalidArgument("the target cloud is " + std::to_string(target.cloud.dim()) +
                             "D but the scene's body is " + std::to_string(scene.body.dim()) + "D");
     ShapeObjectiveOptions so = options.objective();
     apply_target_settings(target, &so);
     if (target.frame == TargetFrame::camera) {  // the pose joins the control (§8.10)
-      if (options.levels > 1)
+      if (options.levels.count > 1)
         throw InvalidArgument(
             "levels: a target in the camera's frame (joint pose) runs on one level (levels 1)");
       so.pose = start_pose(target, a, so, options.threads);
     }
     objective = std::make_unique<ShapeObjective>(
         a, c, HausdorffTarget(target.cloud, so.hausdorff), so,
-        fe::state_solver_factory(scene.body, options.state_backend, &a, &c));
-    if (options.distance) target.distance = *options.distance;
+        fe::state_solver_factory(scene.body, options.state.backend, &a, &c));
+    if (options.distance.form) target.distance = *options.distance.form;
     detail::apply_target_form(*objective, target);
-    if (options.coarse_level == CoarseLevel::automatic &&
+    if (options.state.coarse_levels == CoarseLevel::automatic &&
         fe::grid_levels(scene.body, fe::GridSequencingOptions{}) > 0) {
       const fe::Body level = fe::MeshHierarchy(scene.body, fe::Halving::nested, 1).level(1);
       coarse.emplace(level.make_assembler());
       objective->state_path().use_coarse_level(*coarse);
       setup.coarse_level = fe::describe_level(level);
     }
-    if (options.levels > 1) levels = detail::coarse_problems(scene, target, options);
+    if (options.levels.count > 1) levels = detail::coarse_problems(scene, target, options);
     setup.target = target.description;
     setup.target_points = static_cast<long>(target.cloud.size());
     setup.nodes = static_cast<long>(a.mesh().num_nodes());
@@ -230,10 +243,10 @@ struct TrackingRun::Impl {
     sum["target_points"] = setup.target_points;
     sum["nodes"] = setup.nodes;
     sum["controls"] = setup.controls;
-    sum["algorithm"] = to_string(options.algorithm);
+    sum["algorithm"] = to_string(options.optimiser.algorithm);
     sum["particles"] = to_string(objective->options().particles);  // the target's may differ
     sum["volumes"] = to_string(objective->options().volumes);
-    sum["state_backend"] = to_string(options.state_backend);
+    sum["state_backend"] = to_string(options.state.backend);
     if (const std::optional<scan::Pose>& p = objective->options().pose) {
       sum["frame"] = "camera";
       sum["align"] = scan::to_string(objective->options().pose_kind);
@@ -244,10 +257,10 @@ struct TrackingRun::Impl {
     return sum;
   }
 
-  /// With options.out: the folder (created, locked), the checkpoint's file and fingerprint,
-  /// a resume checked before any output, and the run's files.
+  /// With options.output.folder: the folder (created, locked), the checkpoint's file and
+  /// fingerprint, a resume checked before any output, and the run's files.
   void prepare_folder(ShapeTrackingOptions& to) {
-    const fs::path dir(options.out);
+    const fs::path dir(options.output.folder);
     std::error_code ec;
     fs::create_directories(dir, ec);
     if (ec || !fs::is_directory(dir))
@@ -261,27 +274,29 @@ struct TrackingRun::Impl {
     // Another backend or partition gives other round-off: a resume must keep both (the keys
     // are absent for the serial default, so older checkpoints stay valid).
     const int ranks = options.share ? options.share->size() : 1;
-    if (options.state_backend != fe::StateBackend::kCholmod)
-      to.fingerprint["state"] = to_string(options.state_backend);
+    if (options.state.backend != fe::StateBackend::kCholmod)
+      to.fingerprint["state"] = to_string(options.state.backend);
     if (ranks > 1) to.fingerprint["ranks"] = std::to_string(ranks);
-    if (options.levels > 1) {
-      to.fingerprint["levels"] = std::to_string(options.levels);
-      if (!options.resume) {  // a fresh run: no finer level's checkpoint of an earlier run
+    if (options.levels.count > 1) {
+      to.fingerprint["levels"] = std::to_string(options.levels.count);
+      if (!options.output.resume) {  // a fresh run: no finer level's checkpoint of an earlier run
         fs::remove(to.checkpoint, ec);
         for (const auto& p : levels) fs::remove(level_checkpoint(p->level), ec);
       }
     }
     // A multilevel run starts on its coarsest level, whose checkpoint a resume needs.
     const std::string first = levels.empty() ? to.checkpoint : level_checkpoint(levels[0]->level);
-    if (options.resume && !fs::exists(first))
+    if (options.output.resume && !fs::exists(first))
       throw FileError("resume: no checkpoint '" + first + "'");
-    if (options.resume) read_run_log(first);  // a malformed one refused before output
-    files.emplace(dir, *objective, control, options.vtu_every, writer, summary_entries(ranks));
+    if (options.output.resume) read_run_log(first);  // a malformed one refused before output
+    files.emplace(dir, *objective, control, options.output.vtu_every, writer,
+                  summary_entries(ranks));
   }
 
   /// The checkpoint of coarse level `level` in the run's folder.
   std::string level_checkpoint(int level) const {
-    return (fs::path(options.out) / ("checkpoint_level" + std::to_string(level) + ".bin")).string();
+    return (fs::path(options.output.folder) / ("checkpoint_level" + std::to_string(level) + ".bin"))
+        .string();
   }
 
   Eigen::VectorXd run_coarse_levels(const ShapeTrackingOptions& fine,
@@ -341,19 +356,20 @@ Eigen::VectorXd TrackingRun::Impl::run_coarse_levels(const ShapeTrackingOptions&
     if (k == 0) m = p.control->constant(p.scene.body.control_initial);
     ShapeTrackingOptions to = fine;
     // A level's iterations: coarse_iterations, and never more than the run's own limit.
-    const int iterations = std::min(options.coarse_iterations, options.max_iterations);
+    const int iterations =
+        std::min(options.levels.coarse_iterations, options.optimiser.max_iterations);
     to.optimizer.max_iterations = iterations;
     to.optimizer.max_evaluations = 5 * iterations + 20;
-    if (k > 0) to.optimizer.move_limit = options.refined_move_limit;  // from a coarser level
-    if (options.max_seconds > 0.0)
-      to.optimizer.max_seconds = std::max(1e-9, options.max_seconds - seconds);
+    if (k > 0) to.optimizer.move_limit = options.levels.refined_move_limit;  // from a coarser level
+    if (options.optimiser.max_seconds > 0.0)
+      to.optimizer.max_seconds = std::max(1e-9, options.optimiser.max_seconds - seconds);
     to.fingerprint["level"] = std::to_string(p.level) + ", at most " + std::to_string(iterations) +
-                              " iterations, switch " + exact_text(options.switch_decrease);
+                              " iterations, switch " + exact_text(options.levels.switch_decrease);
     if (!to.checkpoint.empty()) {
       to.checkpoint = level_checkpoint(p.level);
-      to.resume = options.resume && fs::exists(to.checkpoint);
+      to.resume = options.output.resume && fs::exists(to.checkpoint);
     }
-    SwitchRule rule(options.switch_decrease);
+    SwitchRule rule(options.levels.switch_decrease);
     bool switched = false;
     ShapeTrackingCallbacks cb;
     cb.on_failure = callbacks.on_failure;
@@ -393,7 +409,7 @@ Eigen::VectorXd TrackingRun::Impl::run_coarse_levels(const ShapeTrackingOptions&
     char rule_text[96];
     std::snprintf(rule_text, sizeof rule_text,
                   "switched: rho decreased by less than %g twice in a row",
-                  options.switch_decrease);
+                  options.levels.switch_decrease);
     lr.termination = switched ? rule_text : r.termination;
     s->levels.push_back(lr);
     seconds += r.seconds;
@@ -404,7 +420,7 @@ Eigen::VectorXd TrackingRun::Impl::run_coarse_levels(const ShapeTrackingOptions&
     const std::vector<int>& regions =
         last ? scene.body.control_regions : levels[k + 1]->scene.body.control_regions;
     m = fe::prolongate_control(p.assembler->mesh(), *p.control, r.control, finer, finer_control,
-                               regions);
+                           regions);
     // ... and its state, the next level's first warm start (as the two-level starts do). The
     // level's state is bitwise the uninterrupted run's after any resume (track_shape), so the
     // next level's start is too.
@@ -438,23 +454,23 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
   if (d.ran) throw InvalidArgument("TrackingRun::run: a run is made once");
   d.ran = true;
   ShapeTrackingOptions to = d.options.tracking();
-  if (!d.options.out.empty()) d.prepare_folder(to);
+  if (!d.options.output.folder.empty()) d.prepare_folder(to);
   if (callbacks.on_begin) callbacks.on_begin(d.setup);
-  if (d.files) d.files->begin(d.options.resume);
+  if (d.files) d.files->begin(d.options.output.resume);
 
   TrackingRunSummary s = d.setup;
   // The scene's bounds and start where a control acts (0 where it touches none of its
   // regions); a multilevel run starts from its coarse levels' control.
   const Eigen::VectorXd m0 = !d.levels.empty() ? d.run_coarse_levels(to, callbacks, &s)
-                             : d.options.initial_control
-                                 ? *d.options.initial_control
+                             : d.options.optimiser.initial_control
+                                 ? *d.options.optimiser.initial_control
                                  : d.control.constant(d.scene.body.control_initial);
   double offset = 0.0;  // the coarse levels' time
   for (const LevelReport& l : s.levels) offset += l.seconds;
-  if (!d.levels.empty() && d.options.max_seconds > 0.0)
-    to.optimizer.max_seconds = std::max(1e-9, d.options.max_seconds - offset);
+  if (!d.levels.empty() && d.options.optimiser.max_seconds > 0.0)
+    to.optimizer.max_seconds = std::max(1e-9, d.options.optimiser.max_seconds - offset);
   if (!d.levels.empty()) {
-    to.optimizer.move_limit = d.options.refined_move_limit;  // started from a coarser level
+    to.optimizer.move_limit = d.options.levels.refined_move_limit;  // started from a coarser level
     // A multilevel run killed on a coarse level has no checkpoint of this level yet.
     if (to.resume) to.resume = fs::exists(to.checkpoint);
   }

@@ -40,7 +40,7 @@ struct TrackingIteration {
   ///@}
   double seconds = 0.0;   ///< wall time of the run (over all resumes)
   bool replayed = false;  ///< served from the checkpoint of a resumed run (no state at hand)
-  /// The multilevel level (TrackingRunOptions::levels): how many times the user's mesh was
+  /// The multilevel level (TrackingRunOptions::Levels): how many times the user's mesh was
   /// halved for it, 0 on the user's mesh.
   int level = 0;
   /// With a pose (docs/formulation.md §8.10): the twist (ω, t, log s) of the best pose P so far

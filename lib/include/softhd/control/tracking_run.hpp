@@ -16,7 +16,6 @@
 #include <vector>
 
 #include "softhd/control/bounded_optimizer.hpp"
-#include "softhd/control/scene.hpp"
 #include "softhd/control/scene_target.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/control/shape_tracking.hpp"
@@ -28,122 +27,150 @@
 
 namespace softhd {
 
-/// Two-level starts (docs/formulation.md §4.7): a large control step is solved first on the
+/// The coarse start of a run's state solves, its two-level starts (docs/formulation.md §4.7;
+/// `--coarse-levels`, as `softhd forward`'s): a large control step is solved first on the
 /// coarse level of fe::coarsened (a box with half the cells along the even axes, a mesh file
-/// of order 2 as P1/Q1 on its vertices).
+/// of order 2 as P1/Q1 on its vertices), at most one level.
 enum class CoarseLevel {
   automatic,  ///< "auto": when that mesh exists and has >= 32 elements (fe::grid_levels)
-  off,        ///< "off": every state solve on the user's mesh alone
+  off,        ///< "0": every state solve on the user's mesh alone
 };
-/// "auto" or "off".
+/// "auto" or "0".
 std::string to_string(CoarseLevel level);
-/// The CoarseLevel named by to_string; throws InvalidArgument naming `coarse_level`.
+/// The CoarseLevel named by to_string; throws InvalidArgument naming `state.coarse_levels`.
 CoarseLevel coarse_level_from_string(const std::string& name);
 
-/// Settings of one tracking run. The defaults are those of `softhd optimise` and of Python's
-/// `softhd.optimise` (written here only).
+/// Settings of one tracking run, grouped by concern. The defaults are those of
+/// `softhd optimise` and of Python's `softhd.optimise` (written here only); the flag and the
+/// keyword of each field are in tracking_run_fields() (softhd/control/run_fields.hpp).
 struct TrackingRunOptions {
-  ///@{
-  /// The optimiser (BoundedOptimizerOptions).
-  Algorithm algorithm = Algorithm::mma;
-  int max_iterations = 200;       ///< accepted iterations, over all resumes
-  int max_evaluations = 0;        ///< objective evaluations; 0: 5 × max_iterations + 20
-  double max_seconds = 0.0;       ///< wall-clock limit over all resumes; 0: none
-  double relative_change = 1e-6;  ///< stop when J changes by ≤ this relative, 3 times in a row
-  double move_limit = 0.1;  ///< rounds of ≤ 10 evaluations move m by ≤ this × bound range
-  ///@}
-  ///@{
-  /// The objective (ShapeObjectiveOptions): the moving cloud, the distance and the Tikhonov
-  /// weights.
-  Particles particles = Particles::nodes;
-  ParticleVolumes volumes = ParticleVolumes::reference;
-  HausdorffParams params;  ///< α, β, γ, ε (4, 4, 2, 1e-3)
-  /// The distance's pair sums: the tree sums exactly wherever its far field would not be
-  /// cheaper.
-  Method method = Method::tree;
-  /// The tree's relative error bound on every kernel sum: 1e-2 ends the bending and torsion
-  /// runs at the exact method's ρ̃/floor (docs/guide.md §5).
-  double tolerance = 1e-2;
-  double tikhonov_mass = 0.0;      ///< M of (M/2) ∫ m²
-  double tikhonov_gradient = 0.0;  ///< ε_m of (ε_m/2) ∫ |∇m|²
-  ///@}
-  /// OpenMP threads of the pair sums, 0 to kMaxThreads (0: OpenMP's default). The FE
-  /// assembly's are the caller's (set_threads); the CLI and Python set both.
-  int threads = 0;
-  /// The processes sharing each evaluation's pair sums (HausdorffOptions::share; the CLI:
-  /// world_share()). Null: this process alone.
-  std::shared_ptr<const WorkShare> share;
-  CoarseLevel coarse_level = CoarseLevel::automatic;  ///< two-level starts
-  ///@{
-  /// Multilevel optimisation (docs/formulation.md §4.8): with levels = N > 1 the control
+  /// The optimiser (BoundedOptimizerOptions) and its start.
+  struct Optimiser {
+    Algorithm algorithm = Algorithm::mma;  ///< mma
+    int max_iterations = 200;              ///< accepted iterations, over all resumes (200)
+    int max_evaluations = 0;   ///< objective evaluations; 0 (default): 5 × max_iterations + 20
+    double max_seconds = 0.0;  ///< wall-clock limit over all resumes; 0 (default): none
+    double relative_change = 1e-6;  ///< stop when J changes by ≤ this relative, 3 times in a row
+    double move_limit = 0.1;  ///< rounds of ≤ 10 evaluations move m by ≤ this × bound range (0.1)
+    /// The starting control (one value per control, each within the scene's control bounds;
+    /// TrackingRun refuses any other), e.g. an earlier run's: a staged run (docs/formulation.md
+    /// §8.10). None (default): the scene's control.initial everywhere; an empty vector is
+    /// refused. Single-level runs only (levels 1; the automatic levels are 1 then).
+    std::optional<Eigen::VectorXd> initial_control;
+  };
+  /// The distance (ShapeObjectiveOptions::hausdorff): the moving cloud, the functional and its
+  /// pair sums, and its form.
+  struct Distance {
+    Particles particles = Particles::nodes;                ///< nodes
+    ParticleVolumes volumes = ParticleVolumes::reference;  ///< reference
+    HausdorffParams params;                                ///< α, β, γ, ε (4, 4, 2, 1e-3)
+    /// The pair sums (tree, the default): the tree sums exactly wherever its far field would
+    /// not be cheaper.
+    Method method = Method::tree;
+    /// The tree's relative error bound on every kernel sum (1e-2: it ends the bending and
+    /// torsion runs at the exact method's ρ̃/floor, docs/guide.md §5).
+    double tolerance = 1e-2;
+    /// The distance's form (docs/formulation.md §8), replacing the target's own as a whole (a
+    /// scene's "distance", "cap", "cap_q"; a file or array target has the symmetric form
+    /// without a cap). Unset (default): the target's. Sides::visible is refused (it needs the
+    /// camera).
+    std::optional<TargetDistance> form;
+  };
+  /// The Tikhonov terms of the objective (ShapeObjectiveOptions).
+  struct Tikhonov {
+    double mass = 0.0;      ///< M of (M/2) ∫ m² (0)
+    double gradient = 0.0;  ///< ε_m of (ε_m/2) ∫ |∇m|² (0)
+  };
+  /// The target: the scene's "target" unless a file is given.
+  struct Target {
+    /// A target cloud file (text or PLY) instead of the scene's "target"; empty (default):
+    /// the scene's.
+    std::string file;
+  };
+  /// The state solves.
+  struct State {
+    fe::StateBackend backend = fe::StateBackend::kCholmod;  ///< the state solver (cholmod)
+    CoarseLevel coarse_levels = CoarseLevel::automatic;     ///< two-level starts (auto)
+  };
+  /// Multilevel optimisation (docs/formulation.md §4.8): with count = N > 1 the control
   /// problem is solved first on the N − 1 coarser levels of fe::coarsened with
   /// fe::Halving::rounded (the box halved N − 1 times, along its even axes, else every axis of
   /// at least 4 cells to (n + 1) / 2; a mesh file of order 2 its P1/Q1 level), then on each
-  /// finer level in turn,
-  /// each from the control of the level below prolongated (vertex controls interpolated,
-  /// element controls the containing coarse element's; unchanged from a P1/Q1 level),
-  /// finishing on the user's mesh, target and tolerance with max_iterations. A coarse level
-  /// has the scene's target for its body (an arc grid twice as fine as its nodes), or, for a target
-  /// with as many points as the finer level's, every 2^d-th point with the volumes scaled to keep
-  /// their total; the tree tolerance max(tolerance, coarse_tolerance); at most
-  /// min(coarse_iterations, max_iterations) iterations, and it ends earlier once ρ̃ decreased by
-  /// less than switch_decrease (relative) in two iterations in a row. 1: the user's mesh alone. 0
-  /// (the default): where the target has a known map, 1 + every coarser level of at least 32
-  /// elements (fe::coarser_levels; the two-level starts' smallest mesh), else 1; 1 for a cloud
-  /// without a
-  /// known map (a scan: there the coarse start ends at a lower ρ̃ but a larger shape error), a
-  /// run from initial_control or with a joint pose (tracking_levels). Every level started from a
-  /// coarser level's control has the move limit refined_move_limit instead of move_limit: its start
-  /// is near its optimum already, and a step as large as a first one's curls the body far from the
-  /// state it was started from (docs/formulation.md §4.8).
-  int levels = 0;
-  int coarse_iterations = 30;
-  double switch_decrease = 0.01;
-  double coarse_tolerance = 5e-2;
-  double refined_move_limit = 0.02;
-  ///@}
-  fe::StateBackend state_backend = fe::StateBackend::kCholmod;  ///< the state solver
-  /// The starting control (one value per control, each within the scene's control bounds;
-  /// TrackingRun refuses any other), e.g. an earlier run's: a staged run (docs/formulation.md
-  /// §8.10). None (default): the scene's control.initial everywhere; an empty vector is refused.
-  /// Single-level runs only (levels 1; the automatic levels are 1 then).
-  std::optional<Eigen::VectorXd> initial_control;
-  /// A camera-frame target (docs/formulation.md §8.10): the pose's move limit as a fraction of
-  /// the control's, in (0, 1] (PoseBounds::move; default 1).
-  double pose_move = 1.0;
-  /// A target cloud file (text or PLY) instead of the scene's "target"; empty: the scene's.
-  std::string target_file;
-  /// The distance's form (docs/formulation.md §8), replacing the target's own as a whole (a
-  /// scene's "distance", "cap", "cap_q"; a file or array target has the symmetric form without
-  /// a cap). Unset: the target's. Sides::visible is refused (it needs the camera).
-  std::optional<TargetDistance> distance;
-  /// Refuse an arc target grid whose estimated memory exceeds this many bytes.
-  double memory_limit = fe::kDefaultMemoryLimit;
-  ///@{
-  /// The run's folder (created if missing; locked while the run lasts): history.csv,
-  /// summary.json, checkpoint.bin, body_NNNN.vtu, body.pvd, target.vtu, target.ply,
-  /// body_final.ply and control.csv, each kept up to date as the run goes. Empty: no files
-  /// and no checkpoint. The checkpoint's fingerprint holds a content hash of the scene file
-  /// (Scene::source), so a resume needs the scene's file unchanged.
-  std::string out;
-  /// Continue the run recorded in out/checkpoint.bin (ShapeTrackingOptions::resume): the
-  /// same run as an uninterrupted one.
-  bool resume = false;
-  int checkpoint_every = 5;  ///< warm-start states saved every this many iterations
-  int vtu_every = 10;        ///< body_NNNN.vtu every this many iterations (0: start, end)
-  ///@}
+  /// finer level in turn, each from the control of the level below prolongated (vertex
+  /// controls interpolated, element controls the containing coarse element's; unchanged from a
+  /// P1/Q1 level), finishing on the user's mesh, target and tolerance with
+  /// optimiser.max_iterations. A coarse level has the scene's target for its body (an arc grid
+  /// twice as fine as its nodes), or, for a target with as many points as the finer level's,
+  /// every 2^d-th point with the volumes scaled to keep their total.
+  struct Levels {
+    /// N. 1: the user's mesh alone. 0 (the default): where the target has a known map, 1 +
+    /// every coarser level of at least 32 elements (fe::coarser_levels; the two-level starts'
+    /// smallest mesh), else 1; 1 for a cloud without a known map (a scan: there the coarse
+    /// start ends at a lower ρ̃ but a larger shape error), a run from
+    /// optimiser.initial_control or with a joint pose (tracking_levels).
+    int count = 0;
+    /// At most min(coarse_iterations, optimiser.max_iterations) iterations per coarse level
+    /// (30).
+    int coarse_iterations = 30;
+    /// A coarse level ends once ρ̃ decreased by less than this (relative) in two iterations
+    /// in a row (0.01).
+    double switch_decrease = 0.01;
+    /// A coarse level's tree tolerance is max(distance.tolerance, coarse_tolerance) (5e-2).
+    double coarse_tolerance = 5e-2;
+    /// Every level started from a coarser level's control has this move limit instead of
+    /// optimiser.move_limit (0.02): its start is near its optimum already, and a step as large
+    /// as a first one's curls the body far from the state it was started from
+    /// (docs/formulation.md §4.8).
+    double refined_move_limit = 0.02;
+  };
+  /// A target in the camera's frame (docs/formulation.md §8.10): its pose, refined jointly.
+  struct Pose {
+    /// The pose's move limit as a fraction of the control's, in (0, 1] (PoseBounds::move; 1).
+    double move = 1.0;
+  };
+  /// The run's files.
+  struct Output {
+    /// The run's folder (created if missing; locked while the run lasts): history.csv,
+    /// summary.json, checkpoint.bin, body_NNNN.vtu, body.pvd, target.vtu, target.ply,
+    /// body_final.ply and control.csv, each kept up to date as the run goes. Empty (default):
+    /// no files and no checkpoint. The checkpoint's fingerprint holds a content hash of the
+    /// scene file (Scene::source), so a resume needs the scene's file unchanged.
+    std::string folder;
+    /// Continue the run recorded in folder/checkpoint.bin (ShapeTrackingOptions::resume): the
+    /// same run as an uninterrupted one (false).
+    bool resume = false;
+    int checkpoint_every = 5;  ///< warm-start states saved every this many iterations (5)
+    int vtu_every = 10;        ///< body_NNNN.vtu every this many iterations (10; 0: start, end)
+  };
 
-  /// Throws InvalidArgument naming the first invalid field (those of the objective and the
-  /// optimiser included).
+  Optimiser optimiser;  ///< the optimiser and its start
+  Distance distance;    ///< the distance and its form
+  Tikhonov tikhonov;    ///< the Tikhonov terms
+  Target target;        ///< the target
+  State state;          ///< the state solves
+  Levels levels;        ///< multilevel optimisation
+  Pose pose;            ///< a camera-frame target's pose
+  Output output;        ///< the run's files
+  /// OpenMP threads of the pair sums, 0 to kMaxThreads (0, the default: OpenMP's). The FE
+  /// assembly's are the caller's (set_threads); the CLI and Python set both.
+  int threads = 0;
+  /// The processes sharing each evaluation's pair sums (HausdorffOptions::share; the CLI:
+  /// world_share()). Null (default): this process alone.
+  std::shared_ptr<const WorkShare> share;
+  /// Refuse an arc target grid whose estimated memory exceeds this many bytes (8 GiB).
+  double memory_limit = fe::kDefaultMemoryLimit;
+
+  /// Throws InvalidArgument naming the first invalid field by its path (e.g.
+  /// "levels.refined_move_limit"; those of the objective and the optimiser included).
   void validate() const;
   /// The objective's options these settings give.
   ShapeObjectiveOptions objective() const;
   /// track_shape's options these settings give: the optimiser's, the checkpoint schedule, and
-  /// with `out` the checkpoint file and resume (TrackingRun::run adds the fingerprint).
+  /// with output.folder the checkpoint file and resume (TrackingRun::run adds the fingerprint).
   ShapeTrackingOptions tracking() const;
 };
 
-/// One level of a multilevel run (TrackingRunOptions::levels).
+/// One level of a multilevel run (TrackingRunOptions::Levels).
 struct LevelReport {
   int level = 0;                ///< halvings of the user's mesh (0: the user's mesh)
   long nodes = 0;               ///< of its mesh
@@ -181,17 +208,17 @@ struct TrackingRunCallbacks : ShapeTrackingCallbacks {
   std::function<void(const TrackingRunSummary&)> on_begin;
 };
 
-/// The target of a run on the body `mesh` of `scene`: the cloud file options.target_file (no
+/// The target of a run on the body `mesh` of `scene`: the cloud file options.target.file (no
 /// known map), else the scene's "target" (scene_target, options.memory_limit). Throws as those.
 SceneTarget tracking_target(const Scene& scene, const fe::Mesh& mesh,
                             const TrackingRunOptions& options);
 
-/// The levels of a run of `options` on `scene` against `target`: options.levels, or for 0
+/// The levels of a run of `options` on `scene` against `target`: options.levels.count, or for 0
 /// (automatic) 1 + the body's coarser levels of at least 32 elements (fe::coarser_levels with
 /// fe::Halving::rounded) where the target has a known map (an arc, a manufactured state), else
 /// 1; always 1 for a run from
-/// options.initial_control or against a target in the camera's frame (a joint pose), which
-/// run on one level.
+/// options.optimiser.initial_control or against a target in the camera's frame (a joint pose),
+/// which run on one level.
 int tracking_levels(const Scene& scene, const TrackingRunOptions& options,
                     const SceneTarget& target);
 
@@ -199,14 +226,15 @@ int tracking_levels(const Scene& scene, const TrackingRunOptions& options,
 class TrackingRun {
  public:
   /// The body of `scene` (its mesh, control space, bounds and initial control) against the
-  /// target of options.target_file, else the scene's "target". `scene` must outlive the run.
+  /// target of options.target.file, else the scene's "target". `scene` must outlive the run.
   /// Throws InvalidArgument (invalid options, a missing or malformed target, dimensions that
   /// differ), FileError or ResourceError.
   TrackingRun(const Scene& scene, const TrackingRunOptions& options);
   /// The same on a body already built from `scene` (assembler and control space outlive the
-  /// run) against `target` (options.target_file is ignored).
-  TrackingRun(const Scene& scene, const fe::Assembler& assembler, const fe::ControlSpace& control,
-              SceneTarget target, const TrackingRunOptions& options);
+  /// run) against `target` (options.target.file is ignored).
+  TrackingRun(const Scene& scene, const fe::Assembler& assembler,
+              const fe::ControlSpace& control, SceneTarget target,
+              const TrackingRunOptions& options);
   ~TrackingRun();
   TrackingRun(const TrackingRun&) = delete;
   TrackingRun& operator=(const TrackingRun&) = delete;
