@@ -350,7 +350,9 @@ TEST_F(OptimiseCli, CoarseLevelsZeroTurnsTheCoarseStartOff) {
 TEST_F(OptimiseCli, TooManyLevelsIsBadInput) {
   std::string err;
   EXPECT_EQ(run(scene() + " --out " + out() + " --levels 3 --quiet", &err), 2);
-  EXPECT_NE(err.find("--levels: 3 asks for 2 coarser levels"), std::string::npos) << err;
+  EXPECT_NE(err.find("--levels: 3: 2 coarser levels asked for, but the body has 1"),
+            std::string::npos)
+      << err;
 }
 
 // --target FILE is the run of a scene whose target is {"kind": "cloud", "file": FILE}
@@ -504,6 +506,7 @@ TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
   };
   expect_refused((dir_ / "missing.json").string(), "missing.json");
   expect_refused(scene() + " --algorithm gcmma", "unknown algorithm 'gcmma'");
+  expect_refused(scene() + " --algorithm newton", "newton is not available for shape tracking");
   expect_refused(scene() + " --method nearest", "--method: nearest has no gradient");
   expect_refused(scene() + " --method fast", "unknown method 'fast'");
   expect_refused(scene() + " --method tree --tol 2", "tolerance");

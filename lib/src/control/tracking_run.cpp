@@ -122,6 +122,12 @@ void TrackingRunOptions::validate() const {
         std::to_string(op.max_evaluations));
   if (distance.method == Method::nearest)
     throw InvalidArgument("distance.method: nearest has no gradient; expected exact or tree");
+  // The optimiser's newton needs a Hessian-vector product of J(m), which the tracking layer
+  // does not provide yet (the distance's exists, the state's second-order terms do not).
+  if (op.algorithm == Algorithm::newton)
+    throw InvalidArgument(
+        "optimiser.algorithm: newton is not available for shape tracking yet (it needs the "
+        "Hessian-vector product of J(m)); expected mma, ccsaq, lbfgs or slsqp");
   if (output.vtu_every < 0) throw InvalidArgument("output.vtu_every must be >= 0");
   if (!(memory_limit > 0.0)) throw InvalidArgument("memory_limit must be > 0");
   validate_levels(levels);
@@ -188,8 +194,8 @@ int tracking_levels(const Scene& scene, const TrackingRunOptions& options,
   if (!target.map_displacement) return 1;
   // Else every coarser level (fe::Halving::rounded) of at least 32 elements, the two-level
   // starts' smallest (fe::GridSequencingOptions::min_elements).
-  return 1 +
-         fe::coarser_levels(scene.body, fe::Halving::rounded, fe::GridSequencingOptions{}.min_elements);
+  return 1 + fe::coarser_levels(scene.body, fe::Halving::rounded,
+                                fe::GridSequencingOptions{}.min_elements);
 }
 
 SceneTarget tracking_target(const Scene& scene, const fe::Mesh& mesh,
@@ -420,7 +426,7 @@ Eigen::VectorXd TrackingRun::Impl::run_coarse_levels(const ShapeTrackingOptions&
     const std::vector<int>& regions =
         last ? scene.body.control_regions : levels[k + 1]->scene.body.control_regions;
     m = fe::prolongate_control(p.assembler->mesh(), *p.control, r.control, finer, finer_control,
-                           regions);
+                               regions);
     // ... and its state, the next level's first warm start (as the two-level starts do). The
     // level's state is bitwise the uninterrupted run's after any resume (track_shape), so the
     // next level's start is too.
