@@ -128,7 +128,7 @@ nlopt::algorithm nlopt_algorithm(Algorithm a) {
 }
 
 // Why the driver asked NLopt to stop (NLopt only knows "forced stop").
-enum class Stop { none, iterations, relative_change, gradient, target, time, requested };
+using detail::Stop;
 
 // The scale of f for one NLopt run. MMA's conservative approximation adds, per variable,
 // (|g_j| σ_j + ρ/2) Δz_j² / (σ_j² − Δz_j²) to the linear term, ρ starting at 1 in every run
@@ -483,29 +483,9 @@ NloptEnd run_rounds(Driver* d) {
 /// The summary's status and termination text from why the run stopped: the driver's own
 /// stop, or (none) why NLopt returned.
 void set_termination(Stop stop, const NloptEnd& end, BoundedOptimizerSummary* s) {
-  struct Reason {
-    Stop stop;
-    OptimizerStatus status;
-    const char* text;
-  };
-  static constexpr Reason kReasons[] = {
-      {Stop::iterations, OptimizerStatus::iteration_limit, "the iteration limit was reached"},
-      {Stop::relative_change, OptimizerStatus::relative_change,
-       "the relative change of J fell below the tolerance"},
-      {Stop::gradient, OptimizerStatus::gradient_tolerance,
-       "the projected gradient norm fell below the tolerance"},
-      {Stop::target, OptimizerStatus::target_value, "J reached the target value"},
-      {Stop::time, OptimizerStatus::time_limit, "the wall-clock limit was reached"},
-      {Stop::requested, OptimizerStatus::stopped, "stopped by the caller"},
-  };
   s->status = end.status;
   s->termination = end.reason;
-  for (const Reason& r : kReasons) {
-    if (r.stop == stop) {
-      s->status = r.status;
-      s->termination = r.text;
-    }
-  }
+  detail::set_stop(stop, s);
 }
 
 class NloptBackend : public detail::OptimizerBackend {
@@ -552,5 +532,39 @@ BoundedOptimizerSummary minimise(
     const std::function<void(const IterationRecord&, const Eigen::VectorXd&)>& on_iteration) {
   return minimise(objective, BoundedHessVec(), x0, lower, upper, options, on_iteration);
 }
+
+namespace detail {
+
+bool set_stop(Stop stop, BoundedOptimizerSummary* s) {
+  struct Reason {
+    Stop stop;
+    OptimizerStatus status;
+    const char* text;
+  };
+  static constexpr Reason kReasons[] = {
+      {Stop::iterations, OptimizerStatus::iteration_limit, "the iteration limit was reached"},
+      {Stop::evaluations, OptimizerStatus::evaluation_limit, "the evaluation limit was reached"},
+      {Stop::relative_change, OptimizerStatus::relative_change,
+       "the relative change of J fell below the tolerance"},
+      {Stop::gradient, OptimizerStatus::gradient_tolerance,
+       "the projected gradient norm fell below the tolerance"},
+      {Stop::target, OptimizerStatus::target_value, "J reached the target value"},
+      {Stop::time, OptimizerStatus::time_limit, "the wall-clock limit was reached"},
+      {Stop::requested, OptimizerStatus::stopped, "stopped by the caller"},
+      {Stop::radius, OptimizerStatus::no_progress,
+       "no progress: rejected steps shrank the trust radius below min_radius"},
+      {Stop::hessian, OptimizerStatus::hessian_failed, "a Hessian-vector product failed"},
+  };
+  for (const Reason& r : kReasons) {
+    if (r.stop == stop) {
+      s->status = r.status;
+      s->termination = r.text;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace detail
 
 }  // namespace softhd

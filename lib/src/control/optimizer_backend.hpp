@@ -34,6 +34,24 @@ class OptimizerBackend {
 const OptimizerBackend& nlopt_backend();  ///< mma, ccsaq, lbfgs, slsqp
 const OptimizerBackend& rol_backend();    ///< newton
 
+/// Why a backend's own stopping tests ended a run; none: the algorithm ended it by itself.
+enum class Stop {
+  none,
+  iterations,
+  evaluations,
+  relative_change,
+  gradient,
+  target,
+  time,
+  requested,
+  radius,  ///< the trust radius fell below its minimum (ROL)
+  hessian  ///< a Hessian-vector product failed (ROL)
+};
+
+/// Sets s->status and s->termination (one line) for a stop of ours and returns true; returns
+/// false, s unchanged, for Stop::none.
+bool set_stop(Stop stop, BoundedOptimizerSummary* s);
+
 /// Throws InvalidArgument for options, bounds or a start the optimiser cannot take.
 void check_problem(const Eigen::VectorXd& x0, const Eigen::VectorXd& lower,
                    const Eigen::VectorXd& upper, const BoundedOptimizerOptions& options);

@@ -63,18 +63,7 @@ double power_of_two_above(double v) {
 }
 
 // Why the run stopped, when we stopped it (ROL itself only stops through our status test).
-enum class Stop {
-  none,
-  iterations,
-  evaluations,
-  relative_change,
-  gradient,
-  target,
-  time,
-  requested,
-  radius,
-  hessian
-};
+using detail::Stop;
 
 // A Hessian-vector product failed: thrown through ROL to end the run at the best point.
 struct HessianFailed {};
@@ -279,33 +268,9 @@ bool start(Run* r) {
 }
 
 void set_termination(Stop stop, BoundedOptimizerSummary* s) {
-  struct Reason {
-    Stop stop;
-    OptimizerStatus status;
-    const char* text;
-  };
-  static constexpr Reason kReasons[] = {
-      {Stop::iterations, OptimizerStatus::iteration_limit, "the iteration limit was reached"},
-      {Stop::evaluations, OptimizerStatus::evaluation_limit, "the evaluation limit was reached"},
-      {Stop::relative_change, OptimizerStatus::relative_change,
-       "the relative change of J fell below the tolerance"},
-      {Stop::gradient, OptimizerStatus::gradient_tolerance,
-       "the projected gradient norm fell below the tolerance"},
-      {Stop::target, OptimizerStatus::target_value, "J reached the target value"},
-      {Stop::time, OptimizerStatus::time_limit, "the wall-clock limit was reached"},
-      {Stop::requested, OptimizerStatus::stopped, "stopped by the caller"},
-      {Stop::radius, OptimizerStatus::no_progress,
-       "no progress: rejected steps shrank the trust radius below min_radius"},
-      {Stop::hessian, OptimizerStatus::hessian_failed, "a Hessian-vector product failed"},
-  };
+  if (detail::set_stop(stop, s)) return;
   s->status = OptimizerStatus::nlopt_failure;
   s->termination = "ROL stopped for no reason of ours";
-  for (const Reason& r : kReasons) {
-    if (r.stop == stop) {
-      s->status = r.status;
-      s->termination = r.text;
-    }
-  }
 }
 
 class RolBackend : public detail::OptimizerBackend {
