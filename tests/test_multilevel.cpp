@@ -14,9 +14,9 @@
 #include "expect_error.hpp"
 #include "softhd/control/tracking_run.hpp"
 #include "softhd/fe/gmsh_mesh.hpp"
-#include "softhd/fe/mesh_hierarchy.hpp"
 #include "softhd/fe/materials.hpp"
 #include "softhd/fe/mesh.hpp"
+#include "softhd/fe/mesh_hierarchy.hpp"
 
 namespace softhd::test {
 namespace {
@@ -251,9 +251,8 @@ TEST_F(MultilevelRun, AutomaticLevelsAreEveryCoarserLevelOfAtLeast32Elements) {
 
 TEST_F(MultilevelRun, MoreLevelsThanHalvingsAreRefusedNamingLevels) {
   options_.levels.count = 3;  // (6, 1, 2) -> (3, 1, 1) -> no even count: one coarser level
-  expect_error<InvalidArgument>(
-      [&] { run_tracking(scene_, options_); },
-      "levels.count: 3: 2 coarser levels asked for, but the body has 1");
+  expect_error<InvalidArgument>([&] { run_tracking(scene_, options_); },
+                                "levels.count: 3: 2 coarser levels asked for, but the body has 1");
   options_.levels.count = -1;
   expect_error<InvalidArgument>([&] { options_.validate(); }, "levels.count must be >= 1");
   options_.levels.count = 2;

@@ -232,9 +232,8 @@ class TrackingRun {
   TrackingRun(const Scene& scene, const TrackingRunOptions& options);
   /// The same on a body already built from `scene` (assembler and control space outlive the
   /// run) against `target` (options.target.file is ignored).
-  TrackingRun(const Scene& scene, const fe::Assembler& assembler,
-              const fe::ControlSpace& control, SceneTarget target,
-              const TrackingRunOptions& options);
+  TrackingRun(const Scene& scene, const fe::Assembler& assembler, const fe::ControlSpace& control,
+              SceneTarget target, const TrackingRunOptions& options);
   ~TrackingRun();
   TrackingRun(const TrackingRun&) = delete;
   TrackingRun& operator=(const TrackingRun&) = delete;
