@@ -5,6 +5,9 @@
 // The Python keywords are checked against the same table in tests/python/test_optimise.py.
 
 #include <gtest/gtest.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -14,10 +17,13 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "softhd/control/run_fields.hpp"
 #include "softhd/control/tracking_run.hpp"
 #include "softhd/error.hpp"
+
+extern char** environ;
 
 namespace {
 
@@ -92,22 +98,35 @@ TEST(RunFields, EveryRowWithoutAFlagOrKeywordSaysWhy) {
   }
 }
 
-std::string command_output(const std::string& command) {
+// The standard output of the program argv[0] run with the arguments argv (no shell).
+std::string program_output(const std::vector<std::string>& argv) {
+  int fds[2];
+  if (pipe(fds) != 0) return "";
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[1], 1);
+  posix_spawn_file_actions_addclose(&actions, fds[0]);
+  std::vector<char*> args;
+  for (const std::string& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  pid_t pid = 0;
+  const int spawned = posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  close(fds[1]);
   std::string out;
-  FILE* p = popen(command.c_str(), "r");
-  if (!p) return out;
   char buffer[4096];
-  for (size_t n; (n = fread(buffer, 1, sizeof buffer, p)) > 0;) out.append(buffer, n);
-  pclose(p);
+  for (ssize_t n; (n = read(fds[0], buffer, sizeof buffer)) > 0;)
+    out.append(buffer, static_cast<size_t>(n));
+  close(fds[0]);
+  if (spawned == 0) waitpid(pid, nullptr, 0);
   return out;
 }
 
 // The flags `softhd optimise --help` names (those of other commands, quoted as 'softhd forward
 // --control', left out).
 std::set<std::string> help_flags() {
-  const std::string help =
-      std::regex_replace(command_output(std::string(SOFTHD_CLI) + " optimise --help"),
-                         std::regex("'softhd [^']*'"), "");
+  const std::string help = std::regex_replace(program_output({SOFTHD_CLI, "optimise", "--help"}),
+                                              std::regex("'softhd [^']*'"), "");
   std::set<std::string> flags;
   const std::regex flag("--[a-z][a-z0-9-]*");
   for (auto it = std::sregex_iterator(help.begin(), help.end(), flag); it != std::sregex_iterator();
