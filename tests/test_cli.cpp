@@ -67,6 +67,16 @@ class Cli : public ::testing::Test {
     EXPECT_NE(r.err.find(needle), std::string::npos) << args << " -> " << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   }
+  // "x y z\n" of one point, as the text cloud files hold it.
+  static std::string xyz_line(const Eigen::Vector3d& x) {
+    return std::to_string(x.x()) + " " + std::to_string(x.y()) + " " + std::to_string(x.z()) + "\n";
+  }
+  // The pose.json (--json output) of `align CLOUDS --out al FLAGS`, expected to succeed.
+  nlohmann::json align_json(const std::string& clouds, const std::string& flags) const {
+    const Outcome r = run("align " + clouds + " --out " + path("al") + flags);
+    EXPECT_EQ(r.status, 0) << flags << ": " << r.err;
+    return r.status == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
+  }
   // A scene on the Gmsh file `mesh` (clamped on "base", vertex control in [-1, 0]) with
   // the "fibers" value `fibers` (JSON text).
   std::string fibre_scene(const std::string& name, const std::string& mesh,
@@ -230,8 +240,7 @@ TEST_F(Cli, AlignRecoversAMovedCopyAndRefusesBadInput) {
     const double a = 0.15 * i;
     const Eigen::Vector3d x(std::cos(a) * (1 + 0.01 * i), std::sin(a), 0.02 * i * (i % 3));
     const Eigen::Vector3d y = R.transpose() * (x - t);  // P⁻¹ x
-    body_text +=
-        std::to_string(x.x()) + " " + std::to_string(x.y()) + " " + std::to_string(x.z()) + "\n";
+    body_text += xyz_line(x);
     std::ostringstream os;
     os.precision(17);
     os << y.x() << ' ' << y.y() << ' ' << y.z() << '\n';
@@ -277,18 +286,12 @@ TEST_F(Cli, AlignInlierIsAFractionOfTheBodySize) {
     const double a = 0.15 * i;
     const Eigen::Vector3d x(std::cos(a) * (1 + 0.01 * i), std::sin(a), 0.02 * i * (i % 3));
     const Eigen::Vector3d y = x + Eigen::Vector3d(0.3, -0.1, 0.05 * std::sin(7.0 * i));
-    body_text +=
-        std::to_string(x.x()) + " " + std::to_string(x.y()) + " " + std::to_string(x.z()) + "\n";
-    scan_text +=
-        std::to_string(y.x()) + " " + std::to_string(y.y()) + " " + std::to_string(y.z()) + "\n";
+    body_text += xyz_line(x);
+    scan_text += xyz_line(y);
   }
   const std::string clouds =
       write("body.txt", body_text) + " " + write("scan.txt", scan_text) + " --threads 1 --json";
-  const auto pose = [&](const std::string& flags) {
-    const Outcome r = run("align " + clouds + " --out " + path("al") + flags);
-    EXPECT_EQ(r.status, 0) << flags << ": " << r.err;
-    return r.status == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
-  };
+  const auto pose = [&](const std::string& flags) { return align_json(clouds, flags); };
   const nlohmann::json def = pose(""), wide = pose(" --inlier 0.2");
   const double L = def.value("body_size", 0.0);
   ASSERT_GT(L, 0.0);
@@ -310,20 +313,14 @@ TEST_F(Cli, AlignSearchFlagsShowInPoseJson) {
   for (int i = 0; i < 120; ++i) {  // an asymmetric spiral and a shifted copy of 100 of its points
     const double a = 0.15 * i;
     const Eigen::Vector3d x(std::cos(a) * (1 + 0.01 * i), std::sin(a), 0.02 * i * (i % 3));
-    body_text +=
-        std::to_string(x.x()) + " " + std::to_string(x.y()) + " " + std::to_string(x.z()) + "\n";
+    body_text += xyz_line(x);
     if (i >= 100) continue;
     const Eigen::Vector3d y = x + Eigen::Vector3d(0.3, -0.1, 0.2);
-    scan_text +=
-        std::to_string(y.x()) + " " + std::to_string(y.y()) + " " + std::to_string(y.z()) + "\n";
+    scan_text += xyz_line(y);
   }
   const std::string clouds =
       write("body.txt", body_text) + " " + write("scan.txt", scan_text) + " --threads 1 --json";
-  const auto pose = [&](const std::string& flags) {
-    const Outcome r = run("align " + clouds + " --out " + path("al") + flags);
-    EXPECT_EQ(r.status, 0) << flags << ": " << r.err;
-    return r.status == 0 ? nlohmann::json::parse(r.out) : nlohmann::json::object();
-  };
+  const auto pose = [&](const std::string& flags) { return align_json(clouds, flags); };
   const auto points = [](const nlohmann::json& j) {
     return j.value("refine_points", std::vector<long>{});
   };
