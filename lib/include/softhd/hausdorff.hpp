@@ -19,6 +19,7 @@
 #include <memory>
 #include <string>
 
+#include "softhd/hessian_part.hpp"
 #include "softhd/point_cloud.hpp"
 #include "softhd/work_share.hpp"
 
@@ -173,14 +174,6 @@ struct HausdorffRequest {
 
   /// True if any gradient is requested.
   bool any_gradient() const { return gradient_points || gradient_volumes || gradient_target; }
-};
-
-/// Which second derivative of ρ̃ w.r.t. the moving points HausdorffTarget::hessian_product
-/// applies (docs/formulation.md §2.7).
-enum class HessianPart {
-  full,          ///< the exact Hessian (volumes held fixed)
-  gauss_newton,  ///< its positive semi-definite part H_GN (H = H_GN + a negative semi-definite
-                 ///< rest)
 };
 
 /// The per-point quantities of one evaluation at X that Hessian-vector products reuse

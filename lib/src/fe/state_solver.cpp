@@ -71,6 +71,17 @@ int StateSolver::adjoint_factorizations() const {
   return newton_->last_tangent_solve().factorizations;
 }
 
+Eigen::VectorXd StateSolver::sensitivity(const Eigen::VectorXd&) {
+  throw InvalidArgument(
+      "state solver: Hessian-vector products are not available with the serial backend");
+}
+
+Eigen::VectorXd StateSolver::hessian_product(const Eigen::VectorXd&, const Eigen::VectorXd&,
+                                             const Eigen::VectorXd&, HessianPart) {
+  throw InvalidArgument(
+      "state solver: Hessian-vector products are not available with the serial backend");
+}
+
 double StateSolver::energy() const {
   double e = 0.0;
   assembler_->evaluate(state_.u, state_.m_qp, &e, nullptr, nullptr);

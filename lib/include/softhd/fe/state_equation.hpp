@@ -22,6 +22,7 @@
 #include "softhd/fe/grid_sequencing.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/state_backend.hpp"
+#include "softhd/hessian_part.hpp"
 
 namespace softhd::fe {
 
@@ -67,6 +68,26 @@ class StateEquation {
   virtual Eigen::VectorXd gradient(const Eigen::VectorXd& g) = 0;
   /// Numeric factorisations (or preconditioner set-ups) made by the last gradient().
   virtual int adjoint_factorizations() const = 0;
+
+  ///@{
+  /// The state's side of the reduced Hessian-vector product of J(m) = F(u(m), m)
+  /// (docs/formulation.md §4.4.1), at the converged state of the last solve and the adjoint λ
+  /// of the gradient() made there, reusing the tangent's kept factorisation (no new one).
+  /// Both throw InvalidArgument if the last solve did not converge, if no gradient() followed
+  /// it, or for vectors of the wrong size.
+  ///
+  /// w = (du/dm) v for a control direction v (one value per control): K w = −(∂R/∂m) v
+  /// (num_nodes · dim, fixed entries zero).
+  virtual Eigen::VectorXd sensitivity(const Eigen::VectorXd& v) = 0;
+  /// s (one value per control) such that H v = ∂²F/∂m² v + ∂²F/∂m∂u w + s, given v, w =
+  /// sensitivity(v) and q = ∂²F/∂u² w + ∂²F/∂u∂m v (num_nodes · dim): the incremental adjoint
+  /// μ from K μ = q − [the λ-weighted state's ∂²/∂u² w and ∂²/∂u∂m v], then s = the (∂R/∂m)ᵀ μ
+  /// term − [the λ-weighted state's ∂²/∂m∂u w], with gradient()'s sign convention.
+  /// HessianPart::gauss_newton drops the bracketed terms (then H v = Sᵀ F_uu S v with
+  /// S = du/dm when F has no m–u cross term).
+  virtual Eigen::VectorXd hessian_product(const Eigen::VectorXd& v, const Eigen::VectorXd& w,
+                                          const Eigen::VectorXd& q, HessianPart part) = 0;
+  ///@}
 
   ///@{
   /// Π(u; m), ∫ J dX and min J at the current state, over the whole mesh.

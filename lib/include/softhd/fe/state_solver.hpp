@@ -63,6 +63,11 @@ class StateSolver final : public StateEquation {
   Eigen::VectorXd gradient(const Eigen::VectorXd& g) override;
   /// Factorisations of the last tangent solve (the adjoint's after gradient()).
   int adjoint_factorizations() const override;
+  /// w = (du/dm) v (StateEquation::sensitivity).
+  Eigen::VectorXd sensitivity(const Eigen::VectorXd& v) override;
+  /// The state's side of the reduced Hessian-vector product (StateEquation::hessian_product).
+  Eigen::VectorXd hessian_product(const Eigen::VectorXd& v, const Eigen::VectorXd& w,
+                                  const Eigen::VectorXd& q, HessianPart part) override;
 
   ///@{
   /// Π(u; m), ∫ J dX and min J at the current state.

@@ -147,6 +147,17 @@ void PetscStateSolver::reset() {
 
 int PetscStateSolver::adjoint_factorizations() const { return impl_->newton.adjoint_attempts(); }
 
+Eigen::VectorXd PetscStateSolver::sensitivity(const Eigen::VectorXd&) {
+  throw InvalidArgument(
+      "state solver: Hessian-vector products are not available with the petsc backend");
+}
+
+Eigen::VectorXd PetscStateSolver::hessian_product(const Eigen::VectorXd&, const Eigen::VectorXd&,
+                                                  const Eigen::VectorXd&, HessianPart) {
+  throw InvalidArgument(
+      "state solver: Hessian-vector products are not available with the petsc backend");
+}
+
 Eigen::VectorXd PetscStateSolver::displacement() const {
   const Impl& s = *impl_;
   const int dim = s.system.part().mesh.dim;
