@@ -1,9 +1,9 @@
 #!/usr/bin/python3
-"""The Gmsh finger (issue 30): softhd against FEniCS on the same tetrahedra, in one run, and
-the finger's optimisation.
+"""The Gmsh finger's state solve: softhd against FEniCS on the same tetrahedra, in one run (its
+optimisation is in bench_time_to_floor.py).
 
-Forward cases, each from rest under the uniform control m = --m0 (file meshes have no grid
-sequencing, so softhd starts from rest too), P2 on straight-sided tetrahedra: the finger's
+Forward cases, each from rest under the uniform control m = --m0 (softhd as `softhd forward` runs
+by default: a P1 solve on the vertices first, then P2 from it; FEniCS with load stepping), P2 on straight-sided tetrahedra: the finger's
 first-order file with "order": 2 (legacy dolfin has no curved geometry; softhd adds the
 same edge midpoints):
   finger_q7     data/meshes/finger.msh (14 547 dofs), quadrature degree 7 on both sides:
@@ -24,16 +24,10 @@ Differences from FEniCS's run of the same repeat: probes (max over probes of
 |u - u_F|_inf / |u_F|), total energy and deformed volume (relative), and every P2 node
 (max |u - u_F| / max |u_F|, softhd's nodes read from its VTU, 12 significant digits).
 
---optimise also runs `softhd optimise data/scenes/finger.json` (--max-iter
---optimise-max-iter) and writes one row of
---optimise-csv: seconds, iterations, final rho / matched floor, the iteration and time at
-which rho first fell to 2, 1.5 and 1.25 x the floor, the shape error, the termination.
-
 Without python3-dolfin the FEniCS rows are skipped with one line on stderr.
 
   bench/bench_finger.py BUILD_DIR [--repeats N] [--csv FILE] [--threads T] [--m0 M]
-                        [--cases a,b] [--fine-size H] [--optimise --optimise-csv FILE
-                        --optimise-max-iter N]
+                        [--cases a,b] [--fine-size H]
 """
 import argparse
 import json
@@ -175,31 +169,6 @@ def forward_rows(a, work, fenics):
     return rows
 
 
-def reached(hist, k):
-    for h in hist:
-        if float(h["rho_over_floor"]) <= k:
-            return h["iteration"], h["seconds"]
-    return "", ""
-
-
-def optimise_row(a, work):
-    out = os.path.join(work, "optimise")
-    cmd = [os.path.join(a.build, "apps", "softhd"), "optimise", SCENE, "--out", out,
-           "--threads", str(a.threads), "--vtu-every", "0", "--max-iter",
-           str(a.optimise_max_iter)]
-    subprocess.run(cmd, capture_output=True, text=True, check=True)
-    with open(os.path.join(out, "summary.json")) as f:
-        s = json.load(f)
-    import csv
-    with open(os.path.join(out, "history.csv"), newline="") as f:
-        hist = list(csv.DictReader(f))
-    row = ["finger", s["nodes"], s["controls"], s["seconds"], s["iterations"],
-           s["floor_matched"], s["rho_final"], s["rho_final_over_floor"]]
-    for k in (2, 1.5, 1.25):
-        row += list(reached(hist, k))
-    return row + [s["shape_error_max"], s["shape_error_rms"], s["termination"]]
-
-
 def write_csv(path, header, rows):
     text = "\n".join([header] + [",".join(str(v) for v in r) for r in rows]) + "\n"
     sys.stdout.write(text)
@@ -234,10 +203,6 @@ def main():
     ap.add_argument("--cases", default=",".join(CASES))
     ap.add_argument("--fine-size", type=float, default=1.65, help="finger50k's MeshSizeMax")
     ap.add_argument("--csv")
-    ap.add_argument("--optimise", action="store_true")
-    ap.add_argument("--optimise-csv")
-    ap.add_argument("--optimise-max-iter", type=int, default=200,
-                    help="softhd optimise --max-iter (its default: 200)")
     a = ap.parse_args()
     a.cases = [c for c in a.cases.split(",") if c]
     for c in a.cases:
@@ -255,11 +220,6 @@ def main():
               "u2_probe,u3_probe,probe_rel_diff,energy_rel_diff,volume_rel_diff,"
               "nodal_rel_diff", rows)
     summary(rows)
-    if a.optimise:
-        write_csv(a.optimise_csv, "scene,nodes,controls,seconds,iterations,floor_matched,"
-                  "rho_final,rho_over_floor,it_2,t_2,it_1.5,t_1.5,it_1.25,t_1.25,"
-                  "shape_error_max,shape_error_rms,termination", [optimise_row(a, work)])
-
 
 if __name__ == "__main__":
     main()

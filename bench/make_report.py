@@ -407,11 +407,12 @@ def section_forward(rows):
 
 
 def section_finger(rows, out):
-    """The Gmsh finger against FEniCS and its optimisation (bench/bench_finger.py, issue 30)."""
+    """The Gmsh finger's state solve against FEniCS (bench/bench_finger.py)."""
     text = ("## The Gmsh finger against FEniCS (issue 30)\n\n"
             "`data/scenes/finger.json`'s body (P2 on the straight-sided tetrahedra of a "
             "first-order Gmsh file, two materials, clamped base) from rest under a uniform "
-            "m, softhd (`softhd forward`, from rest: file meshes have no grid sequencing) "
+            "m, softhd (`softhd forward` as it runs by default: the P1 problem on the vertices "
+            "first, then P2 from it) "
             "and the independent FEniCS 2019 solver (`bench/peers/fenics_forward.py scene`, "
             "P2, MUMPS, load stepping) on the same mesh and quadrature degree. At degree 7 "
             "both codes use the same 64-point rule (the discrete problems are the same); at "
@@ -444,19 +445,6 @@ def section_finger(rows, out):
                    "energy diff", "volume diff", "nodes diff"], body)
     if not any(c == "fenics" for _, c in best):
         text += "\nFEniCS was not installed for this run (apt-get install python3-dolfin).\n"
-    opt = load(os.path.join(out, "finger_optimise.csv"))
-    if opt:
-        text += ("\n`softhd optimise data/scenes/finger.json` (MMA, %s iterations at most "
-                 "here); ρ̃/floor against the matched floor ρ̃(T(Ω₀), Ω_d), the target made "
-                 "on a 2× finer mesh with a known control:\n\n" % opt[0]["iterations"])
-        text += table(["scene", "nodes", "controls", "seconds", "it", "floor matched",
-                       "ρ̃ final", "ρ̃/floor", "to 2×", "to 1.5×", "to 1.25×",
-                       "shape err max", "shape err RMS", "termination"],
-                      [[r["scene"], int(num(r, "nodes")), int(num(r, "controls")),
-                        num(r, "seconds"), int(num(r, "iterations")), num(r, "floor_matched"),
-                        num(r, "rho_final"), num(r, "rho_over_floor"), reached(r, "2"),
-                        reached(r, "1.5"), reached(r, "1.25"), num(r, "shape_error_max"),
-                        num(r, "shape_error_rms"), r["termination"]] for r in opt])
     return text
 
 

@@ -108,15 +108,14 @@ else
   # softhd forward against FEniCS (skipped, with a line, without python3-dolfin).
   run forward_fenics /usr/bin/python3 "$here/bench/bench_forward_fenics.py" "$build" \
     --repeats 3 --csv "$out/forward_fenics.csv"
-  # The Gmsh finger against FEniCS on the same tetrahedra, and its optimisation (issue 30;
-  # FEniCS skipped, with a line, without python3-dolfin).
-  run finger /usr/bin/python3 "$here/bench/bench_finger.py" "$build" --repeats 1 \
-    --csv "$out/finger.csv" --optimise --optimise-max-iter 30 \
-    --optimise-csv "$out/finger_optimise.csv"
+  # The Gmsh finger's state solve against FEniCS on the same tetrahedra (FEniCS skipped, with a
+  # line, without python3-dolfin); its optimisation is in time_to_floor.
+  run finger /usr/bin/python3 "$here/bench/bench_finger.py" "$build" --repeats 2 \
+    --csv "$out/finger.csv"
   # softhd align against Open3D's FPFH + RANSAC + ICP (issue 32; Open3D skipped, with a
-  # line, without python3-open3d): issue 32's 100 poses x 2 views (its wall time in
-  # docs/bench/align.meta).
-  align_bench --poses 100 --distance scan_to_body
+  # line, without python3-open3d): 40 poses x 2 views (100 took 21 minutes, a third of the
+  # hour make bench may take; its wall time in docs/bench/align.meta).
+  align_bench --poses 40 --distance scan_to_body
   # The Python module: overhead over C++ and HausdorffLoss against plain PyTorch (issue 14).
   python_bench --n 10000 --torch-n 10000 --repeats 5
 fi
