@@ -14,7 +14,7 @@ packages=(
   libtrilinos-rol-dev libtrilinos-teuchos-dev libtrilinos-kokkos-dev
   python3 python3-matplotlib python3-numpy
   python3-dev pybind11-dev python3-pytest python3-torch
-  clang libclang-rt-14-dev libomp-14-dev
+  clang libclang-rt-14-dev libomp-14-dev lld
   doxygen
   gmsh python3-meshio
 )

@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 
 #include "expect_error.hpp"
+#include "softhd/control/bounded_optimizer.hpp"
 #include "softhd/control/shape_objective.hpp"
 #include "softhd/enum_names.hpp"
 #include "softhd/fe/control.hpp"
+#include "softhd/fe/reference_element.hpp"
 
 namespace softhd {
 namespace {
@@ -23,6 +25,21 @@ TEST(EnumNames, BothDirections) {
   EXPECT_EQ(enum_choices(kColours), "red, green or blue");
   expect_error<InvalidArgument>([] { enum_from_name(kColours, "Red", "colour"); },
                                 "unknown colour 'Red' (expected red, green or blue)");
+}
+
+TEST(EnumNames, ASequenceIsTheTableOfItsValuesInOrder) {
+  constexpr auto seq = enum_sequence<Colour::blue>({"red", "green", "blue"});
+  static_assert(seq.size() == 3);
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_EQ(seq[k].first, kColours[k].first);
+    EXPECT_STREQ(seq[k].second, kColours[k].second);
+  }
+  // The library's sequences name each value, the last included, in declaration order.
+  EXPECT_EQ(to_string(Algorithm::newton), "newton");
+  EXPECT_EQ(to_string(OptimizerStatus::iteration_limit), "iteration_limit");
+  EXPECT_EQ(to_string(OptimizerStatus::hessian_failed), "hessian_failed");
+  EXPECT_EQ(fe::to_string(fe::CellType::kHex27), "hex27");
+  EXPECT_EQ(fe::parse_cell_type("tet10"), fe::CellType::kTet10);
 }
 
 TEST(EnumNames, LibraryParsers) {

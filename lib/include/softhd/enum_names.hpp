@@ -9,6 +9,12 @@
 ///     enum_name(kParticleNames, Particles::nodes)          // "nodes"
 ///     enum_from_name(kParticleNames, "grid", "particles")  // throws InvalidArgument:
 ///         // unknown particles 'grid' (expected nodes or quadrature)
+///
+/// An enum whose values are 0, 1, ..., N-1 (no initialisers: declaration order) writes its
+/// table as its last value and the list of names in that order:
+///
+///     constexpr auto kParticleNames =
+///         enum_sequence<Particles::quadrature>({"nodes", "quadrature"});
 
 #include <array>
 #include <cstddef>
@@ -22,6 +28,22 @@ namespace softhd {
 /// The (value, name) table of an enum with N values.
 template <class E, std::size_t N>
 using EnumNames = std::array<std::pair<E, const char*>, N>;
+
+namespace detail {
+template <class E, std::size_t N, std::size_t... K>
+constexpr EnumNames<E, N> enum_sequence(const char* const (&names)[N], std::index_sequence<K...>) {
+  return {{{static_cast<E>(K), names[K]}...}};
+}
+}  // namespace detail
+
+/// The table of an enum E whose values are 0, 1, ..., N-1, `Last` its last value:
+/// names[k] is the name of E(k). A value inserted before `Last` without its name does not
+/// compile.
+template <auto Last, std::size_t N>
+constexpr EnumNames<decltype(Last), N> enum_sequence(const char* const (&names)[N]) {
+  static_assert(static_cast<std::size_t>(Last) + 1 == N, "one name per value, in order");
+  return detail::enum_sequence<decltype(Last), N>(names, std::make_index_sequence<N>{});
+}
 
 /// The name of `value` in `names`; "unknown" if the table misses it (a bug).
 template <class E, std::size_t N>

@@ -13,13 +13,8 @@
 
 namespace softhd {
 
-namespace {
-constexpr EnumNames<Algorithm, 5> kAlgorithmNames{{{Algorithm::mma, "mma"},
-                                                   {Algorithm::ccsaq, "ccsaq"},
-                                                   {Algorithm::lbfgs, "lbfgs"},
-                                                   {Algorithm::slsqp, "slsqp"},
-                                                   {Algorithm::newton, "newton"}}};
-}  // namespace
+constexpr auto kAlgorithmNames =
+    enum_sequence<Algorithm::newton>({"mma", "ccsaq", "lbfgs", "slsqp", "newton"});
 
 std::string to_string(Algorithm a) { return enum_name(kAlgorithmNames, a); }
 
@@ -27,23 +22,10 @@ Algorithm algorithm_from_string(const std::string& name) {
   return enum_from_name(kAlgorithmNames, name, "algorithm");
 }
 
-namespace {
-constexpr EnumNames<OptimizerStatus, 13> kStatusNames{{
-    {OptimizerStatus::iteration_limit, "iteration_limit"},
-    {OptimizerStatus::evaluation_limit, "evaluation_limit"},
-    {OptimizerStatus::time_limit, "time_limit"},
-    {OptimizerStatus::relative_change, "relative_change"},
-    {OptimizerStatus::target_value, "target_value"},
-    {OptimizerStatus::nlopt_converged, "nlopt_converged"},
-    {OptimizerStatus::no_progress, "no_progress"},
-    {OptimizerStatus::move_limit, "move_limit"},
-    {OptimizerStatus::stopped, "stopped"},
-    {OptimizerStatus::start_failed, "start_failed"},
-    {OptimizerStatus::nlopt_failure, "nlopt_failure"},
-    {OptimizerStatus::gradient_tolerance, "gradient_tolerance"},
-    {OptimizerStatus::hessian_failed, "hessian_failed"},
-}};
-}  // namespace
+constexpr auto kStatusNames = enum_sequence<OptimizerStatus::hessian_failed>(
+    {"iteration_limit", "evaluation_limit", "time_limit", "relative_change", "target_value",
+     "nlopt_converged", "no_progress", "move_limit", "stopped", "start_failed", "nlopt_failure",
+     "gradient_tolerance", "hessian_failed"});
 
 namespace {
 // A tolerance stop (relative_change, no_progress) under a move limit below

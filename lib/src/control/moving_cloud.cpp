@@ -10,11 +10,8 @@
 namespace softhd {
 
 namespace {
-constexpr EnumNames<Particles, 3> kParticles{{{Particles::nodes, "nodes"},
-                                              {Particles::quadrature, "quadrature"},
-                                              {Particles::boundary, "boundary"}}};
-constexpr EnumNames<ParticleVolumes, 2> kVolumes{
-    {{ParticleVolumes::reference, "reference"}, {ParticleVolumes::deformed, "deformed"}}};
+constexpr auto kParticles = enum_sequence<Particles::boundary>({"nodes", "quadrature", "boundary"});
+constexpr auto kVolumes = enum_sequence<ParticleVolumes::deformed>({"reference", "deformed"});
 
 fe::CloudPoints cloud_points(Particles p) {
   return p == Particles::nodes ? fe::CloudPoints::kNodes : fe::CloudPoints::kQuadraturePoints;

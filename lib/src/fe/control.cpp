@@ -10,10 +10,7 @@
 
 namespace softhd::fe {
 
-namespace {
-constexpr EnumNames<ControlKind, 2> kControlKinds{
-    {{ControlKind::kVertex, "vertex"}, {ControlKind::kElement, "element"}}};
-}  // namespace
+constexpr auto kControlKinds = enum_sequence<ControlKind::kElement>({"vertex", "element"});
 
 ControlKind parse_control_kind(const std::string& name) {
   return enum_from_name(kControlKinds, name, "control space");

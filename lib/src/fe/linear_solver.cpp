@@ -13,12 +13,8 @@ namespace softhd::fe {
 
 using Sparse = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
-namespace {
-constexpr EnumNames<LinearSolverType, 3> kLinearSolverNames{
-    {{LinearSolverType::kEigenLLT, "eigen-llt"},
-     {LinearSolverType::kEigenLDLT, "eigen-ldlt"},
-     {LinearSolverType::kCholmod, "cholmod"}}};
-}  // namespace
+constexpr auto kLinearSolverNames =
+    enum_sequence<LinearSolverType::kCholmod>({"eigen-llt", "eigen-ldlt", "cholmod"});
 
 std::string to_string(LinearSolverType type) { return enum_name(kLinearSolverNames, type); }
 

@@ -7,6 +7,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "../common/seconds_since.hpp"
 #include "newton_load_step.hpp"
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
@@ -19,14 +20,8 @@ double residual_floor(double stiffness_scale, double volume, int dim) {
   return 1e-10 * stiffness_scale * std::pow(volume, (dim - 1.0) / dim);
 }
 
-namespace {
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-}  // namespace
+using detail::Clock;
+using detail::seconds_since;
 
 void NewtonOptions::validate() const {
   auto check = [](bool ok, const std::string& m) {
@@ -58,13 +53,8 @@ void NewtonOptions::validate() const {
   }
 }
 
-namespace {
-constexpr EnumNames<NewtonStatus, 4> kNewtonStatusNames{
-    {{NewtonStatus::kConverged, "converged"},
-     {NewtonStatus::kLoadIncrementTooSmall, "load increment too small"},
-     {NewtonStatus::kTooManyLoadSteps, "too many load steps"},
-     {NewtonStatus::kTooManyIterations, "too many Newton iterations"}}};
-}  // namespace
+constexpr auto kNewtonStatusNames = enum_sequence<NewtonStatus::kTooManyIterations>(
+    {"converged", "load increment too small", "too many load steps", "too many Newton iterations"});
 
 std::string to_string(NewtonStatus status) { return enum_name(kNewtonStatusNames, status); }
 

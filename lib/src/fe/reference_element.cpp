@@ -204,14 +204,8 @@ std::array<ReferenceElement, 8> make_table() {
   };
 }
 
-constexpr EnumNames<CellType, 8> kCellTypeNames{{{CellType::kQuad4, "quad4"},
-                                                 {CellType::kQuad9, "quad9"},
-                                                 {CellType::kTri3, "tri3"},
-                                                 {CellType::kTri6, "tri6"},
-                                                 {CellType::kHex8, "hex8"},
-                                                 {CellType::kHex27, "hex27"},
-                                                 {CellType::kTet4, "tet4"},
-                                                 {CellType::kTet10, "tet10"}}};
+constexpr auto kCellTypeNames = enum_sequence<CellType::kTet10>(
+    {"quad4", "quad9", "tri3", "tri6", "hex8", "hex27", "tet4", "tet10"});
 
 }  // namespace
 

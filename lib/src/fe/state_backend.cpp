@@ -4,11 +4,8 @@
 
 namespace softhd::fe {
 
-namespace {
-constexpr EnumNames<StateBackend, 3> kStateBackendNames{{{StateBackend::kCholmod, "cholmod"},
-                                                         {StateBackend::kPetscMumps, "petsc-mumps"},
-                                                         {StateBackend::kPetscGamg, "petsc-gamg"}}};
-}  // namespace
+constexpr auto kStateBackendNames =
+    enum_sequence<StateBackend::kPetscGamg>({"cholmod", "petsc-mumps", "petsc-gamg"});
 
 std::string to_string(StateBackend backend) { return enum_name(kStateBackendNames, backend); }
 

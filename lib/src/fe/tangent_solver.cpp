@@ -3,20 +3,15 @@
 #include <chrono>
 #include <cmath>
 
+#include "../common/seconds_since.hpp"
 #include "softhd/error.hpp"
 
 namespace softhd::fe {
 
 using Sparse = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
-namespace {
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-}  // namespace
+using detail::Clock;
+using detail::seconds_since;
 
 void TangentSolverOptions::validate() const {
   if (max_krylov_iterations < 1)

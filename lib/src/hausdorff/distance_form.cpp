@@ -15,11 +15,8 @@
 
 namespace softhd {
 
-namespace {
-constexpr EnumNames<Sides, 3> kSidesNames{{{Sides::symmetric, "symmetric"},
-                                           {Sides::scan_to_body, "scan_to_body"},
-                                           {Sides::visible, "visible"}}};
-}  // namespace
+constexpr auto kSidesNames =
+    enum_sequence<Sides::visible>({"symmetric", "scan_to_body", "visible"});
 
 std::string to_string(Sides sides) { return enum_name(kSidesNames, sides); }
 

@@ -70,10 +70,7 @@ void check_coordinates(const PointCloud& cloud, const std::string& which) {
   }
 }
 
-namespace {
-constexpr EnumNames<Method, 3> kMethodNames{
-    {{Method::exact, "exact"}, {Method::tree, "tree"}, {Method::nearest, "nearest"}}};
-}  // namespace
+constexpr auto kMethodNames = enum_sequence<Method::nearest>({"exact", "tree", "nearest"});
 
 std::string to_string(Method method) { return enum_name(kMethodNames, method); }
 

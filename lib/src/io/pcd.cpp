@@ -183,31 +183,28 @@ PcdHeader parse_pcd_header(const std::string& path, const std::string& data,
   }
 }
 
+// An integer of `size` bytes at p (of type I8, I16, I32 or I64), converted to double
+// (exactly; 64-bit integers: rounded).
+template <class I8, class I16, class I32, class I64>
+double load_pcd_integer(int size, const char* p) {
+  switch (size) {
+    case 1:
+      return load_le<I8>(p);
+    case 2:
+      return load_le<I16>(p);
+    case 4:
+      return load_le<I32>(p);
+    default:
+      return static_cast<double>(load_le<I64>(p));
+  }
+}
+
 // A value of field f at p, converted exactly to double (64-bit integers: rounded).
 double load_pcd(const PcdField& f, const char* p) {
   if (f.type == 'F') return f.size == 4 ? load_le<float>(p) : load_le<double>(p);
-  if (f.type == 'I') {
-    switch (f.size) {
-      case 1:
-        return load_le<std::int8_t>(p);
-      case 2:
-        return load_le<std::int16_t>(p);
-      case 4:
-        return load_le<std::int32_t>(p);
-      default:
-        return static_cast<double>(load_le<std::int64_t>(p));
-    }
-  }
-  switch (f.size) {
-    case 1:
-      return load_le<std::uint8_t>(p);
-    case 2:
-      return load_le<std::uint16_t>(p);
-    case 4:
-      return load_le<std::uint32_t>(p);
-    default:
-      return static_cast<double>(load_le<std::uint64_t>(p));
-  }
+  if (f.type == 'I')
+    return load_pcd_integer<std::int8_t, std::int16_t, std::int32_t, std::int64_t>(f.size, p);
+  return load_pcd_integer<std::uint8_t, std::uint16_t, std::uint32_t, std::uint64_t>(f.size, p);
 }
 
 // Appends point `i`'s x y z [V] (row[4], in role order) to `values`, or drops it if x, y and z

@@ -20,12 +20,9 @@ namespace softhd::scan {
 
 namespace {
 
-constexpr EnumNames<AlignStatus, 3> kAlignStatusNames{
-    {{AlignStatus::converged, "converged"},
-     {AlignStatus::iteration_limit, "iteration_limit"},
-     {AlignStatus::failed, "failed"}}};
-constexpr EnumNames<CandidateScore, 2> kCandidateScoreNames{
-    {{CandidateScore::coverage, "coverage"}, {CandidateScore::rho, "rho"}}};
+constexpr auto kAlignStatusNames =
+    enum_sequence<AlignStatus::failed>({"converged", "iteration_limit", "failed"});
+constexpr auto kCandidateScoreNames = enum_sequence<CandidateScore::rho>({"coverage", "rho"});
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw InvalidArgument("align: " + what);

@@ -9,10 +9,7 @@
 
 namespace softhd::scan {
 
-namespace {
-constexpr EnumNames<PoseKind, 2> kPoseKindNames{
-    {{PoseKind::rigid, "rigid"}, {PoseKind::similarity, "similarity"}}};
-}  // namespace
+constexpr auto kPoseKindNames = enum_sequence<PoseKind::similarity>({"rigid", "similarity"});
 
 std::string to_string(PoseKind kind) { return enum_name(kPoseKindNames, kind); }
 PoseKind pose_kind_from_string(const std::string& name) {

@@ -17,8 +17,7 @@ namespace softhd::scan {
 
 namespace {
 
-constexpr EnumNames<AreaEstimate, 2> kAreaEstimateNames{
-    {{AreaEstimate::knn, "knn"}, {AreaEstimate::delaunay, "delaunay"}}};
+constexpr auto kAreaEstimateNames = enum_sequence<AreaEstimate::delaunay>({"knn", "delaunay"});
 
 // knn: a surface A = π r_k² / k, a curve L = 2 r_k / k (for a Poisson sample of density ρ,
 // π r_k² ρ is Gamma(k, 1)-distributed, so its mean is k/ρ: the estimate of 1/ρ is unbiased).

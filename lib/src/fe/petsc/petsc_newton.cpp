@@ -6,6 +6,7 @@
 #include <iostream>
 #include <string>
 
+#include "../../common/seconds_since.hpp"
 #include "../newton_load_step.hpp"
 #include "softhd/error.hpp"
 
@@ -13,10 +14,8 @@ namespace softhd::fe::petsc_detail {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+using detail::Clock;
+using detail::seconds_since;
 
 NewtonOptions validated(NewtonOptions options) {
   options.validate();
