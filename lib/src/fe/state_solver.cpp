@@ -1,6 +1,7 @@
 #include "softhd/fe/state_solver.hpp"
 
 #include "softhd/error.hpp"
+#include "softhd/fe/second_order.hpp"
 #if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
 #include "softhd/fe/petsc_state.hpp"
 #endif
@@ -35,6 +36,7 @@ NewtonSummary StateSolver::solve(const Eigen::VectorXd& m) {
   if (m.size() != control_->size())
     throw InvalidArgument("state solver: the control has " + std::to_string(m.size()) +
                           " values, expected " + std::to_string(control_->size()));
+  have_adjoint_ = false;  // λ belongs to the previous state
   const NewtonSummary summary = newton_->solve(control_->to_quadrature(m), &state_);
   converged_ = summary.converged();
   return summary;
@@ -46,6 +48,7 @@ void StateSolver::set_state(const State& state) {
     throw InvalidArgument("state solver: set_state with a state of another problem");
   state_ = state;
   converged_ = false;  // the kept tangent is not this state's
+  have_adjoint_ = false;
 }
 
 GridSequencingReport StateSolver::grid_sequenced_start(const Body& body, const Eigen::VectorXd& m,
@@ -53,27 +56,46 @@ GridSequencingReport StateSolver::grid_sequenced_start(const Body& body, const E
   GridSequencingReport report;
   state_ = fe::grid_sequenced_start(body, *assembler_, m, options_, options, &report);
   converged_ = false;
+  have_adjoint_ = false;
   return report;
 }
 
 void StateSolver::reset() {
   newton_.emplace(*assembler_, options_);
   converged_ = false;
+  have_adjoint_ = false;
 }
 
 Eigen::VectorXd StateSolver::gradient(const Eigen::VectorXd& g) {
   if (!converged_) throw InvalidArgument("state solver: gradient() needs a converged solve");
-  const Eigen::VectorXd lambda = solve_adjoint(*assembler_, *newton_, g);
-  return control_gradient(*assembler_, *control_, state_.u, lambda);
+  lambda_ = solve_adjoint(*assembler_, *newton_, g);
+  have_adjoint_ = true;
+  return control_gradient(*assembler_, *control_, state_.u, lambda_);
 }
 
 int StateSolver::adjoint_factorizations() const {
   return newton_->last_tangent_solve().factorizations;
 }
 
-Eigen::VectorXd StateSolver::sensitivity(const Eigen::VectorXd&) {
-  throw InvalidArgument(
-      "state solver: Hessian-vector products are not available with the serial backend");
+void StateSolver::require_adjoint(const char* what) const {
+  if (!converged_ || !have_adjoint_)
+    throw InvalidArgument(std::string("state solver: ") + what +
+                          " needs a converged solve followed by gradient()");
+}
+
+Eigen::VectorXd StateSolver::solve_tangent(const Eigen::VectorXd& b) {
+  const DofMap& dofs = assembler_->dofs();
+  if (dofs.num_free == 0) return Eigen::VectorXd::Zero(dofs.num_dofs);
+  return dofs.expand(newton_->solve_converged_tangent(dofs.restrict(b)));
+}
+
+Eigen::VectorXd StateSolver::sensitivity(const Eigen::VectorXd& v) {
+  require_adjoint("sensitivity()");
+  if (v.size() != control_->size())
+    throw InvalidArgument("state solver: sensitivity() needs " + std::to_string(control_->size()) +
+                          " control values, got " + std::to_string(v.size()));
+  // K w = −(∂R/∂m) v
+  return solve_tangent(-control_force(*assembler_, *control_, state_.u, v));
 }
 
 Eigen::VectorXd StateSolver::hessian_product(const Eigen::VectorXd&, const Eigen::VectorXd&,
