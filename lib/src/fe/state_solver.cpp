@@ -98,10 +98,19 @@ Eigen::VectorXd StateSolver::sensitivity(const Eigen::VectorXd& v) {
   return solve_tangent(-control_force(*assembler_, *control_, state_.u, v));
 }
 
-Eigen::VectorXd StateSolver::hessian_product(const Eigen::VectorXd&, const Eigen::VectorXd&,
-                                             const Eigen::VectorXd&, HessianPart) {
-  throw InvalidArgument(
-      "state solver: Hessian-vector products are not available with the serial backend");
+Eigen::VectorXd StateSolver::hessian_product(const Eigen::VectorXd& v, const Eigen::VectorXd& w,
+                                             const Eigen::VectorXd& q, HessianPart part) {
+  require_adjoint("hessian_product()");
+  const Eigen::Index n = assembler_->dofs().num_dofs;
+  if (v.size() != control_->size() || w.size() != n || q.size() != n)
+    throw InvalidArgument("state solver: hessian_product() needs v with " +
+                          std::to_string(control_->size()) + " values and w, q with " +
+                          std::to_string(n));
+  if (part != HessianPart::gauss_newton)
+    throw InvalidArgument("state solver: the full Hessian-vector product is not available yet");
+  // K μ = q; s = −(∂R/∂m)ᵀ μ = ∫ M_k (F a₀)·(∇μ a₀) dX (the gradient's map with μ for λ)
+  const Eigen::VectorXd mu = solve_tangent(q);
+  return control_gradient(*assembler_, *control_, state_.u, mu);
 }
 
 double StateSolver::energy() const {
