@@ -282,6 +282,26 @@ std::vector<double> gradient_remainders(const TaylorCase& k, double h0) {
 
 }  // namespace
 
+// Taylor test of the reduced gradient with the full product: the remainder falls as h².
+TEST(StateSolverHessian, FullProductPassesTheTaylorTestOfTheGradient) {
+  const std::vector<TaylorCase> cases = {
+      {"3D Q2 Mooney-Rivlin bending", {3, 2, false, ControlKind::kVertex}, -0.4, HessianPart::full},
+      {"3D Q2 transversely isotropic torsion",
+       {3, 2, true, ControlKind::kVertex},
+       -0.6,
+       HessianPart::full},
+      {"2D Q2 Mooney-Rivlin", {2, 2, false, ControlKind::kVertex}, -0.4, HessianPart::full}};
+  for (const TaylorCase& k : cases) {
+    const std::vector<double> rem = gradient_remainders(k, 0.1);
+    for (size_t i = 1; i < rem.size(); ++i) {
+      const double order = std::log2(rem[i - 1] / rem[i]);
+      std::printf("%s: h-halving %zu, remainder %.3e, observed order %.3f\n", k.name, i, rem[i],
+                  order);
+      EXPECT_GT(order, 1.9) << k.name;
+    }
+  }
+}
+
 // Gauss–Newton drops the λ-weighted terms: where they matter (λ ≠ 0) its gradient remainder
 // falls only as h, which shows the Taylor test above sees them.
 TEST(StateSolverHessian, GaussNewtonMissesTheStateCurvatureWhenTheAdjointIsNotZero) {
@@ -295,12 +315,29 @@ TEST(StateSolverHessian, GaussNewtonMissesTheStateCurvatureWhenTheAdjointIsNotZe
   EXPECT_LT(order, 1.2);
 }
 
+// With F_u = 0 at the state (the target is the state itself) λ = 0: the full product is the
+// Gauss–Newton one, and both are Sᵀ F_uu S + F_mm with S = du/dm, computed here from two
+// sensitivities.
+TEST(StateSolverHessian, GaussNewtonIsTheFullProductWhenTheAdjointIsZero) {
+  Converged x(/*zero_adjoint=*/true);
+  const Eigen::Index n = x.m.size();
+  const Eigen::VectorXd a = fe_test::random_vector(n, 1.0, 51),
+                        b = fe_test::random_vector(n, 1.0, 52);
+  const Eigen::VectorXd full = x.J.hessian(b, HessianPart::full);
+  const Eigen::VectorXd gn = x.J.hessian(b, HessianPart::gauss_newton);
+  EXPECT_LE((full - gn).norm(), 1e-14 * gn.norm());
+  // aᵀ H b = (S a)ᵀ F_uu (S b) + aᵀ F_mm b
+  const Eigen::VectorXd Sa = x.S.sensitivity(a), Sb = x.S.sensitivity(b);
+  const double expected = Sa.dot(x.J.c.cwiseProduct(Sb)) + a.dot(x.J.tikhonov(b));
+  EXPECT_NEAR(a.dot(gn), expected, 1e-9 * std::abs(expected));
+}
+
 // Symmetric (to the solves' tolerance) for both parts, and Gauss–Newton positive semi-definite
 // (F_uu ≥ 0 here) and equal to Sᵀ F_uu S + F_mm also where λ ≠ 0.
 TEST(StateSolverHessian, ProductsAreSymmetricAndGaussNewtonIsPositive) {
   Converged x(/*zero_adjoint=*/false);
   const Eigen::Index n = x.m.size();
-  for (HessianPart part : {HessianPart::gauss_newton}) {
+  for (HessianPart part : {HessianPart::full, HessianPart::gauss_newton}) {
     const Eigen::VectorXd a = fe_test::random_vector(n, 1.0, 61);
     const Eigen::VectorXd b = fe_test::random_vector(n, 1.0, 62);
     const Eigen::VectorXd Ha = x.J.hessian(a, part), Hb = x.J.hessian(b, part);
@@ -328,7 +365,7 @@ TEST(StateSolverHessian, ProductsMakeNoFactorisation) {
     const Eigen::VectorXd v = fe_test::random_vector(x.m.size(), 1.0, seed);
     const Eigen::VectorXd w = x.S.sensitivity(v);
     EXPECT_EQ(x.S.adjoint_factorizations(), 0);
-    x.S.hessian_product(v, w, x.J.c.cwiseProduct(w), HessianPart::gauss_newton);
+    x.S.hessian_product(v, w, x.J.c.cwiseProduct(w), HessianPart::full);
     EXPECT_EQ(x.S.adjoint_factorizations(), 0);
   }
 }
@@ -348,7 +385,7 @@ TEST(StateSolverHessian, NeedsAGradientAtTheConvergedStateAndRightSizes) {
   expect_error<InvalidArgument>([&] { S.hessian_product(v, v, u0, HessianPart::gauss_newton); },
                                 "hessian_product() needs");
   S.set_state(S.state());  // a new state: λ is gone
-  expect_error<InvalidArgument>([&] { S.hessian_product(v, u0, u0, HessianPart::gauss_newton); },
+  expect_error<InvalidArgument>([&] { S.hessian_product(v, u0, u0, HessianPart::full); },
                                 "followed by gradient()");
   ASSERT_TRUE(S.solve(v.array() - 0.1).converged());
   expect_error<InvalidArgument>([&] { S.sensitivity(v); }, "followed by gradient()");

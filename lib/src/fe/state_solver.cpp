@@ -101,16 +101,23 @@ Eigen::VectorXd StateSolver::sensitivity(const Eigen::VectorXd& v) {
 Eigen::VectorXd StateSolver::hessian_product(const Eigen::VectorXd& v, const Eigen::VectorXd& w,
                                              const Eigen::VectorXd& q, HessianPart part) {
   require_adjoint("hessian_product()");
-  const Eigen::Index n = assembler_->dofs().num_dofs;
-  if (v.size() != control_->size() || w.size() != n || q.size() != n)
+  const DofMap& dofs = assembler_->dofs();
+  if (v.size() != control_->size() || w.size() != dofs.num_dofs || q.size() != dofs.num_dofs)
     throw InvalidArgument("state solver: hessian_product() needs v with " +
                           std::to_string(control_->size()) + " values and w, q with " +
-                          std::to_string(n));
-  if (part != HessianPart::gauss_newton)
-    throw InvalidArgument("state solver: the full Hessian-vector product is not available yet");
-  // K μ = q; s = −(∂R/∂m)ᵀ μ = ∫ M_k (F a₀)·(∇μ a₀) dX (the gradient's map with μ for λ)
-  const Eigen::VectorXd mu = solve_tangent(q);
-  return control_gradient(*assembler_, *control_, state_.u, mu);
+                          std::to_string(dofs.num_dofs));
+  const Assembler& A = *assembler_;
+  const Eigen::VectorXd w_free = dofs.expand(dofs.restrict(w));  // fixed entries ignored
+  // K μ = q − [∂²(λᵀR)/∂u² w + ∂²(λᵀR)/∂u∂m v]   (Gauss–Newton: K μ = q)
+  Eigen::VectorXd rhs = q;
+  if (part == HessianPart::full)
+    rhs -= adjoint_curvature(A, state_.u, w_free, lambda_) +
+           adjoint_mixed_um(A, *control_, lambda_, v);
+  const Eigen::VectorXd mu = solve_tangent(rhs);
+  // s = −(∂R/∂m)ᵀ μ − ∂²(λᵀR)/∂m∂u w, −(∂R/∂m)ᵀ μ = ∫ M_k (F a₀)·(∇μ a₀) dX (the gradient's map)
+  Eigen::VectorXd s = control_gradient(A, *control_, state_.u, mu);
+  if (part == HessianPart::full) s -= adjoint_mixed_mu(A, *control_, lambda_, w_free);
+  return s;
 }
 
 double StateSolver::energy() const {
