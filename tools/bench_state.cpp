@@ -8,6 +8,10 @@
 //                                  OMP_NUM_THREADS=1 and =2 to compare threads
 //                                  (SOFTHD_BENCH_REPORT=1: the warm solve's iteration
 //                                  table, with PCG iterations and factorisations)
+//   bench_state hessian SCENE      one reduced Hessian-vector product's state side
+//                                  (sensitivity + hessian_product, full and Gauss–Newton)
+//                                  against one adjoint gradient at the state of `newton`
+//                                  (minimum of 5 each, and the factorisations they made)
 //   bench_state assembly SCENE     assembly times, 1 and 2 threads (minimum of 7)
 //   bench_state qp-cost SCENE...   one thread: energy + residual + tangent assembly (with
 //                                  the merge into K) and the element kernels alone, per
@@ -33,6 +37,8 @@
 #include "softhd/fe/adjoint.hpp"
 #include "softhd/fe/newton.hpp"
 #include "softhd/fe/output.hpp"
+#include "softhd/fe/second_order.hpp"
+#include "softhd/fe/state_solver.hpp"
 #include "softhd/parallel.hpp"
 
 #ifdef _OPENMP
@@ -161,6 +167,72 @@ int newton(const std::string& name, const std::string& solver) {
   if (std::getenv("SOFTHD_BENCH_REPORT")) std::fprintf(stderr, "%s", warm.FullReport().c_str());
   std::printf("adjoint_fraction_of_warm_solve=%.4f\n", t_adj / warm.seconds_total);
   return cold.converged() && warm.converged() ? 0 : 1;
+}
+
+// The control of `newton` for a scene: the linear bend, or the torsion scene's top half.
+Eigen::VectorXd bench_control(const std::string& name, const Scene& s, const ControlSpace& c,
+                              const Mesh& mesh) {
+  if (name == "bending") return linear_bend(c, mesh);
+  const Eigen::MatrixXd P = c.positions(mesh);
+  return (P.col(2).array() > 0.5 * s.body.upper[2]).cast<double>() * 0.02 * s.body.control_lower;
+}
+
+// The minimum wall time of `reps` calls of f.
+template <class F>
+double min_time(int reps, F&& f) {
+  double best = 1e300;
+  for (int r = 0; r < reps; ++r) {
+    const auto t0 = Clock::now();
+    f();
+    best = std::min(best, since(t0));
+  }
+  return best;
+}
+
+int hessian(const std::string& name) {
+  const Scene s = scene_file(name);
+  StateSolverOptions options;
+  const auto solver = make_state_solver(s.body, options);
+  auto& S = dynamic_cast<StateSolver&>(*solver);
+  const Assembler& A = S.assembler();
+  const Eigen::VectorXd m = bench_control(name, s, S.control(), A.mesh());
+  const NewtonSummary cold = S.solve(m);
+  print_summary("cold", cold);
+  if (!cold.converged()) return 1;
+  // J = Σ_tip |u|²: g = 2 u, F_uu w = 2 w at the tip nodes.
+  Eigen::VectorXd tip = Eigen::VectorXd::Zero(A.dofs().num_dofs);
+  for (int n : A.mesh().face("x1")) tip.segment(3 * n, 3).setConstant(2.0);
+  const Eigen::VectorXd g = tip.cwiseProduct(S.displacement());
+  auto t0 = Clock::now();
+  S.gradient(g);
+  std::printf("first_gradient_s=%.4f,factorizations=%d\n", since(t0), S.adjoint_factorizations());
+  const double t_grad = min_time(5, [&] { S.gradient(g); });
+  const Eigen::VectorXd v = 0.1 * Eigen::VectorXd::Ones(m.size()) * m.cwiseAbs().maxCoeff();
+  for (softhd::HessianPart part : {softhd::HessianPart::full, softhd::HessianPart::gauss_newton}) {
+    int factorizations = 0;
+    const double t_prod = min_time(5, [&] {
+      const Eigen::VectorXd w = S.sensitivity(v);
+      factorizations += S.adjoint_factorizations();
+      S.hessian_product(v, w, tip.cwiseProduct(w), part);
+      factorizations += S.adjoint_factorizations();
+    });
+    std::printf("%s: gradient_s=%.4f,product_s=%.4f,product/gradient=%.2f,factorizations=%d\n",
+                part == softhd::HessianPart::full ? "full" : "gauss_newton", t_grad, t_prod,
+                t_prod / t_grad, factorizations);
+  }
+  // The element loops of a product alone (the rest is the two PCG solves).
+  const Eigen::VectorXd& u = S.current_state().u;
+  const Eigen::VectorXd w = S.sensitivity(v);
+  const ControlSpace& c = S.control();
+  std::printf(
+      "loops_s: control_force=%.4f,curvature=%.4f,mixed_um=%.4f,mixed_mu=%.4f,"
+      "control_gradient=%.4f\n",
+      min_time(5, [&] { control_force(A, c, u, v); }),
+      min_time(5, [&] { adjoint_curvature(A, u, w, w); }),
+      min_time(5, [&] { adjoint_mixed_um(A, c, w, v); }),
+      min_time(5, [&] { adjoint_mixed_mu(A, c, w, w); }),
+      min_time(5, [&] { control_gradient(A, c, u, w); }));
+  return 0;
 }
 
 double tip_z(int order, int nx, int ny, int nz, int* iterations) {
@@ -346,11 +418,12 @@ int main(int argc, char** argv) {
   if (mode == "newton" && argc > 2) return newton(argv[2], argc > 3 ? argv[3] : "");
   if (mode == "refine") return refine();
   if (mode == "assembly" && argc > 2) return assembly(argv[2]);
+  if (mode == "hessian" && argc > 2) return hessian(argv[2]);
   if (mode == "qp-cost" && argc > 2)
     return qp_cost(std::vector<std::string>(argv + 2, argv + argc));
   if (mode == "hard") return hard(argc > 2 ? std::atoi(argv[2]) : 50);
   std::fprintf(stderr,
                "usage: bench_state solvers [scale] | newton bending|torsion [solver] | "
-               "assembly SCENE | qp-cost SCENE... | refine | hard [cells_x]\n");
+               "assembly SCENE | hessian SCENE | qp-cost SCENE... | refine | hard [cells_x]\n");
   return 2;
 }
