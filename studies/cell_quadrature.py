@@ -1,0 +1,329 @@
+#!/usr/bin/python3
+"""Collocation against two cell-integrated discretisations of rho~ (boxes on hex grids).
+
+Bodies are boxes meshed by hex grids of spacing h (cubic cells). Three ways to compute rho~
+(alpha = beta = 4, gamma = 2, eps = 1e-3, formulation section 2):
+
+  colloc-c / colloc-n   the library's collocation on the cell centres (V = h^3) or on the grid's
+                        nodes with lumped (trapezoid) volumes, all pairs.
+  split-c / split-n     (a) split kernel: at the outer body's nodes
+                        J(y) = sum_i V_i (|y - x_i| + a)^-4 + P_eps(sd(y)) - P_a(sd(y)), a = c_a h_src,
+                        sources the cell centres (-c) or the lumped nodes (-n).
+  near                  (b) cell integration: J(y) = sum over the source cells of a Gauss rule
+                        (g^3 points), the cells within c_near h_src of y integrated exactly instead
+                        (the closed-form radial / Gauss angle rule of continuum_reference.py: the
+                        near-singular quadrature of a boundary-element code).
+
+P_eps is the half-space profile (formulation 2.8), sd the source body's signed distance.
+The outer integral of both cell methods is the same: the expensive J is evaluated only at the
+outer body's nodes (as many points as collocation), R = J - P_eps(sd) is interpolated
+trilinearly inside each outer cell, and d~^4 = ((R + P_eps(sd))/|X|)^-1 ... is integrated by
+2^3 Gauss points per cell, graded geometrically (first panel d0, ratio q, n points) along an
+axis where the source body's face crosses or touches the cell (the eps-layer: "cut cells").
+
+Cases: the unit cube against itself for every pair of resolutions, the translations
+0.0025..0.02, the ranking (cube of side 0.875, cube shifted by one spacing), the plate
+10 x 2 x 0.1 against itself. Reference values from continuum_reference.py.
+
+    OPENBLAS_NUM_THREADS=1 nice -n 10 studies/cell_quadrature.py [--suite self|shift|rank|plate|all]
+        [--cap PAIRS] [--csv FILE]
+"""
+import argparse
+import csv
+import itertools
+import math
+import sys
+import time
+
+import numpy as np
+
+from continuum_reference import EPS, Rule, corner, graded_1d, halfspace
+
+REF = {"self": 0.124155377, 0.0025: None, 0.005: None, 0.01: None, 0.02: None, 0.0625: None,
+       "side0.875": None, "plate": None}  # filled from continuum_reference.py's output (--ref)
+
+
+class Grid:
+    """A box [lo, hi] meshed by n = (nx, ny, nz) cubic cells of spacing h."""
+
+    def __init__(self, lo, hi, h):
+        self.lo = np.asarray(lo, float)
+        self.hi = np.asarray(hi, float)
+        self.n = np.rint((self.hi - self.lo) / h).astype(int)
+        self.h = h
+        assert np.allclose(self.n * h, self.hi - self.lo), (lo, hi, h)
+        self.vol = float(np.prod(self.hi - self.lo))
+
+    def axes_nodes(self):
+        return [self.lo[a] + self.h * np.arange(self.n[a] + 1) for a in range(3)]
+
+    def centres(self):
+        ax = [self.lo[a] + self.h * (np.arange(self.n[a]) + 0.5) for a in range(3)]
+        P = np.stack(np.meshgrid(*ax, indexing="ij"), -1).reshape(-1, 3)
+        return P, np.full(len(P), self.h ** 3)
+
+    def nodes(self):
+        ax = self.axes_nodes()
+        P = np.stack(np.meshgrid(*ax, indexing="ij"), -1).reshape(-1, 3)
+        w1 = [np.full(len(a), self.h) for a in ax]
+        for w in w1:
+            w[0] = w[-1] = 0.5 * self.h
+        W = np.einsum("i,j,k->ijk", *w1).ravel()
+        return P, W
+
+    def gauss(self, g):
+        xg, wg = np.polynomial.legendre.leggauss(g)
+        ax, ww = [], []
+        for a in range(3):
+            c = self.lo[a] + self.h * (np.arange(self.n[a]) + 0.5)
+            ax.append((c[:, None] + 0.5 * self.h * xg[None, :]).ravel())
+            ww.append(np.tile(0.5 * self.h * wg, self.n[a]))
+        P = np.stack(np.meshgrid(*ax, indexing="ij"), -1).reshape(-1, 3)
+        return P, np.einsum("i,j,k->ijk", *ww).ravel()
+
+
+def sd_box(y, lo, hi):
+    """Signed distance to the box, positive inside."""
+    d_in = np.minimum(y - lo, hi - y)
+    inside = np.all(d_in >= 0, axis=1)
+    out = np.sqrt(np.sum(np.maximum(0, np.maximum(lo - y, y - hi)) ** 2, axis=1))
+    return np.where(inside, d_in.min(axis=1), -out)
+
+
+def P(sd, a):
+    return halfspace(sd, a)
+
+
+COUNT = {"pairs": 0, "near_cells": 0}
+
+
+def kernel_sum(Y, X, V, a, budget=3_000_000):
+    """sum_i V_i (|y - x_i| + a)^-4 for every y (all pairs, chunked)."""
+    out = np.empty(len(Y))
+    c = max(1, budget // max(1, len(X)))
+    for s in range(0, len(Y), c):
+        Yc = Y[s:s + c]
+        d2 = (Yc[:, 0, None] - X[None, :, 0]) ** 2
+        d2 += (Yc[:, 1, None] - X[None, :, 1]) ** 2
+        d2 += (Yc[:, 2, None] - X[None, :, 2]) ** 2
+        t = 1.0 / (np.sqrt(d2) + a)
+        t *= t
+        out[s:s + c] = (t * t) @ V
+    COUNT["pairs"] += len(Y) * len(X)
+    return out
+
+
+def J_boxes(y, lo, hi, eps, rule):
+    """Exact int over per-point boxes [lo_k, hi_k] of (|y_k - x| + eps)^-4."""
+    tot = np.zeros(len(y))
+    for i, j, k in itertools.product((0, 1), repeat=3):
+        d = np.stack([(hi if b else lo)[:, ax] - y[:, ax] for ax, b in enumerate((i, j, k))])
+        sign = np.prod(np.sign(d), axis=0) * (-1) ** (3 - i - j - k)
+        ad = np.abs(d)
+        tot += sign * corner(ad[0], ad[1], ad[2], eps, rule)
+    return tot
+
+
+def J_near(Y, src, g=2, c_near=1.5, nu=20):
+    """Method (b): Gauss g^3 on every source cell, exact on the cells within c_near h of y."""
+    XG, WG = src.gauss(g)
+    J = kernel_sum(Y, XG, WG, EPS)
+    rule = Rule(nu)
+    xg, wg = np.polynomial.legendre.leggauss(g)
+    base = np.floor((Y - src.lo) / src.h).astype(int)
+    m = int(math.ceil(c_near)) + 1
+    for off in itertools.product(range(-m, m + 1), repeat=3):
+        idx = base + np.array(off)
+        ok = np.all((idx >= 0) & (idx < src.n), axis=1)
+        lo = src.lo + src.h * idx
+        hi = lo + src.h
+        dist = np.sqrt(np.sum(np.maximum(0, np.maximum(lo - Y, Y - hi)) ** 2, axis=1))
+        ok &= dist < c_near * src.h
+        if not np.any(ok):
+            continue
+        y, l, u = Y[ok], lo[ok], hi[ok]
+        exact = J_boxes(y, l, u, EPS, rule)
+        # the Gauss rule's share of these cells, to be replaced
+        gpts = [(l[:, a, None] + 0.5 * src.h * (xg[None, :] + 1)) for a in range(3)]
+        gw = 0.5 * src.h * wg
+        approx = np.zeros(len(y))
+        for p, q, r in itertools.product(range(g), repeat=3):
+            dd = np.sqrt((gpts[0][:, p] - y[:, 0]) ** 2 + (gpts[1][:, q] - y[:, 1]) ** 2
+                         + (gpts[2][:, r] - y[:, 2]) ** 2)
+            approx += gw[p] * gw[q] * gw[r] * (dd + EPS) ** -4
+        J[ok] += exact - approx
+        COUNT["near_cells"] += int(ok.sum())
+    return J
+
+
+def outer_rule_1d(lo, n, h, feats, d0, q, ng):
+    """Per cell along one axis: (cell index, local coordinate in [0,1], weight); cells whose
+    span (widened by h/2) holds a source face coordinate get the graded rule."""
+    xg, wg = np.polynomial.legendre.leggauss(2)
+    cells, xi, w = [], [], []
+    for i in range(n):
+        a, b = lo + i * h, lo + (i + 1) * h
+        near = [f for f in feats if a - 0.5 * h <= f <= b + 0.5 * h]
+        if near:
+            x, ww = graded_1d(a, b, near, d0, q, ng)
+        else:
+            x, ww = a + 0.5 * h * (xg + 1), 0.5 * h * wg
+        cells.append(np.full(len(x), i))
+        xi.append((x - a) / h)
+        w.append(ww)
+    return np.concatenate(cells), np.concatenate(xi), np.concatenate(w)
+
+
+SAMPLES = {  # where the expensive J is evaluated, in units of h from the grid's lower corner
+    "n": lambda n: np.arange(n + 1.0),                      # the nodes
+    "c": lambda n: np.arange(n) + 0.5,                      # the cell centres
+    "g": lambda n: (np.arange(n)[:, None] + 0.5 + np.array([-0.5, 0.5]) / math.sqrt(3)).ravel(),
+}
+
+
+def sample_points(grid, at):
+    ax = [grid.lo[a] + grid.h * SAMPLES[at](grid.n[a]) for a in range(3)]
+    return np.stack(np.meshgrid(*ax, indexing="ij"), -1).reshape(-1, 3)
+
+
+def outer_mean4(outer, Rs, src_lo, src_hi, src_vol, at="n", d0=EPS / 50, q=4.0, ng=4):
+    """(1/|Y|) int_Y d~^4: R = J - P_eps(sd) given at the sample points (at = n/c/g), interpolated
+    piecewise trilinearly (extrapolated beyond the outermost samples), P_eps(sd) exact at every
+    quadrature point of the outer cells."""
+    rules = [outer_rule_1d(outer.lo[a], outer.n[a], outer.h, [src_lo[a], src_hi[a]], d0, q, ng)
+             for a in range(3)]
+    R = Rs.reshape(tuple(len(SAMPLES[at](outer.n[a])) for a in range(3)))
+    lin = []
+    for a in range(3):
+        smp = SAMPLES[at](outer.n[a])
+        cell, xi, w = rules[a]
+        u = cell + xi
+        iL = np.clip(np.searchsorted(smp, u) - 1, 0, len(smp) - 2)
+        t = (u - smp[iL]) / (smp[iL + 1] - smp[iL])
+        lin.append((iL, t, w, outer.lo[a] + outer.h * u))
+    (ix, tx, wx, Yx), (iy, ty, wy, Yy), (iz, tz, wz, Yz) = lin
+    total, npts = 0.0, 0
+    step = max(1, 2_000_000 // (len(iy) * len(iz)))
+    for s in range(0, len(ix), step):
+        sl = slice(s, s + step)
+        val = np.zeros((len(ix[sl]), len(iy), len(iz)))
+        for a, b, c in itertools.product((0, 1), repeat=3):
+            la = tx[sl] if a else 1 - tx[sl]
+            lb = ty if b else 1 - ty
+            lc = tz if c else 1 - tz
+            val += (R[np.ix_(ix[sl] + a, iy + b, iz + c)]
+                    * la[:, None, None] * lb[None, :, None] * lc[None, None, :])
+        pts = np.stack(np.broadcast_arrays(Yx[sl, None, None], Yy[None, :, None],
+                                           Yz[None, None, :]), -1).reshape(-1, 3)
+        J = val.ravel() + P(sd_box(pts, src_lo, src_hi), EPS)
+        dt = (J / src_vol) ** -0.25 - EPS
+        W = (wx[sl, None, None] * wy[None, :, None] * wz[None, None, :]).ravel()
+        total += float(W @ dt ** 4)
+        npts += len(pts)
+    return total / outer.vol, npts
+
+
+def directed(method, src, outer, opt):
+    """A^4 = (1/|Y|) int_Y d~_X^4 (X = src, Y = outer) by the given method; returns (A^4, points)."""
+    if method.startswith("colloc"):
+        X, V = src.centres() if method.endswith("c") else src.nodes()
+        Y, W = outer.centres() if method.endswith("c") else outer.nodes()
+        S = kernel_sum(Y, X, V, EPS)
+        dt = (S / V.sum()) ** -0.25 - EPS
+        return float(W @ dt ** 4) / W.sum(), len(Y)
+    inner, at = method.rsplit("/", 1)
+    Y = sample_points(outer, at)
+    sd = sd_box(Y, src.lo, src.hi)
+    if inner.startswith("split"):
+        X, V = src.centres() if inner.endswith("c") else src.nodes()
+        a = opt.c_a * src.h
+        Jn = kernel_sum(Y, X, V, a) + P(sd, EPS) - P(sd, a)
+    elif inner == "near":
+        Jn = J_near(Y, src, g=opt.g, c_near=opt.c_near, nu=opt.nu)
+    else:
+        raise ValueError(method)
+    Rn = Jn - P(sd, EPS)
+    return outer_mean4(outer, Rn, src.lo, src.hi, src.vol, at=at)
+
+
+def rho(method, X, Y, opt):
+    A4, n1 = directed(method, X, Y, opt)
+    B4, n2 = directed(method, Y, X, opt)
+    A, B = A4 ** 0.25, B4 ** 0.25
+    return math.sqrt(0.5 * (A * A + B * B)), n1 + n2
+
+
+METHODS = ["colloc-c", "colloc-n", "split-c/n", "split-n/n", "near/n", "near/c", "near/g"]
+
+
+def run_case(writer, case, ref, X, Y, opt, methods):
+    for m in methods:
+        npair = len(X.nodes()[0]) * len(Y.nodes()[0])
+        if m.startswith("near"):
+            npair *= opt.g ** 3 * (8 if m.endswith("/g") else 1)
+        if npair > opt.cap or (m.endswith("/c") and min(X.n.min(), Y.n.min()) < 2):
+            continue  # too many pairs; or centres cannot interpolate across one cell
+        COUNT["pairs"] = COUNT["near_cells"] = 0
+        t = time.process_time()
+        v, npts = rho(m, X, Y, opt)
+        dt = time.process_time() - t
+        err = (v / ref - 1) if ref else float("nan")
+        row = [case, f"{X.h:.5g}", f"{Y.h:.5g}", m, f"{v:.6f}", f"{ref:.6f}" if ref else "",
+               f"{100 * err:+.3f}", COUNT["pairs"], COUNT["near_cells"], npts, f"{dt:.2f}"]
+        writer.writerow(row)
+        sys.stdout.flush()
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--suite", default="all")
+    ap.add_argument("--cap", type=float, default=4e8, help="largest pair count per direction")
+    ap.add_argument("--c-a", dest="c_a", type=float, default=1.0, help="a = c_a h (split)")
+    ap.add_argument("--g", type=int, default=2, help="far Gauss points per axis (near)")
+    ap.add_argument("--c-near", dest="c_near", type=float, default=1.5)
+    ap.add_argument("--nu", type=int, default=20, help="angle points of the exact cells")
+    ap.add_argument("--methods", default=",".join(METHODS))
+    ap.add_argument("--ns", default="4,8,12,16,24,32,64", help="cube cells per side")
+    ap.add_argument("--ref", default="/tmp/cells/ref.json,/tmp/cells/ref2.json",
+                    help="continuum_reference.py --json outputs (comma-separated)")
+    ap.add_argument("--csv")
+    opt = ap.parse_args()
+    import json
+    for f in opt.ref.split(","):
+        try:
+            vals = json.load(open(f))["values"]
+        except (OSError, KeyError, ValueError):
+            continue
+        for k, v in vals.items():
+            REF[float(k) if k[0].isdigit() else k] = v["levels"][-1]
+    methods = opt.methods.split(",")
+    out = open(opt.csv, "w") if opt.csv else sys.stdout
+    w = csv.writer(out)
+    w.writerow(["case", "hX", "hY", "method", "rho", "ref", "err_pct", "pairs", "near_cells",
+                "outer_points", "cpu_s"])
+    ns = [int(s) for s in opt.ns.split(",")]
+    unit = ([0, 0, 0], [1, 1, 1])
+    if opt.suite in ("self", "all"):
+        for nx, ny in itertools.product(ns, ns):
+            if nx <= ny:
+                run_case(w, "self", REF["self"], Grid(*unit, 1 / nx), Grid(*unit, 1 / ny), opt, methods)
+    if opt.suite in ("shift", "all"):
+        for n2 in (16, 12):
+            for s in (0.0, 0.0025, 0.005, 0.01, 0.02):
+                Y = Grid([s, 0, 0], [1 + s, 1, 1], 1 / n2)
+                run_case(w, f"shift{s}", REF[s] if s else REF["self"], Grid(*unit, 1 / 16), Y, opt, methods)
+    if opt.suite in ("rank", "all"):
+        for n2 in (16, 12):
+            h = 1 / 16
+            run_case(w, "rank-side0.875", REF["side0.875"], Grid(*unit, h),
+                     Grid([0.0625] * 3, [0.9375] * 3, h if n2 == 16 else 0.875 / 11), opt, methods)
+            run_case(w, "rank-shift1/16", REF[0.0625], Grid(*unit, h), Grid([h, 0, 0], [1 + h, 1, 1], 1 / n2), opt, methods)
+    if opt.suite in ("plate", "all"):
+        for hx, hy in ((0.1, 0.1), (0.1, 0.05), (0.05, 0.05)):
+            run_case(w, "plate", REF["plate"], Grid([0, 0, 0], [10, 2, 0.1], hx),
+                     Grid([0, 0, 0], [10, 2, 0.1], hy), opt, methods)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
