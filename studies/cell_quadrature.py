@@ -9,24 +9,42 @@ Bodies are boxes meshed by hex grids of spacing h (cubic cells). Three ways to c
   split-c / split-n     (a) split kernel: at the outer body's nodes
                         J(y) = sum_i V_i (|y - x_i| + a)^-4 + P_eps(sd(y)) - P_a(sd(y)), a = c_a h_src,
                         sources the cell centres (-c) or the lumped nodes (-n).
+  bnd                   (b) in boundary form: the same integral by the divergence theorem over the
+                        source's boundary facets (Gauss g^2 per facet, the near facets exact).
   near                  (b) cell integration: J(y) = sum over the source cells of a Gauss rule
                         (g^3 points), the cells within c_near h_src of y integrated exactly instead
                         (the closed-form radial / Gauss angle rule of continuum_reference.py: the
                         near-singular quadrature of a boundary-element code).
 
 P_eps is the half-space profile (formulation 2.8), sd the source body's signed distance.
-The outer integral of both cell methods is the same: the expensive J is evaluated only at the
-outer body's nodes (as many points as collocation), R = J - P_eps(sd) is interpolated
-trilinearly inside each outer cell, and d~^4 = ((R + P_eps(sd))/|X|)^-1 ... is integrated by
-2^3 Gauss points per cell, graded geometrically (first panel d0, ratio q, n points) along an
-axis where the source body's face crosses or touches the cell (the eps-layer: "cut cells").
+The outer integral of the cell methods is the same for all: the expensive J is evaluated only at
+sample points of the outer body (method suffix /n its nodes, /c its cell centres, /g its cells'
+2x2x2 Gauss points), and inside each outer cell J at the quadrature points is rebuilt from a
+trilinear interpolation through the samples: J = R + P_eps(sd) with R = J_s - P_eps(sd_s)
+(default), or with --mult J = P_eps(sd) exp(R), R = log(J_s / P_eps(sd_s)) (scale-free where J
+is small, outside the source). d~^4 is integrated by 2 Gauss points per axis per cell, graded
+geometrically (first panel eps/50, ratio 4, 4 points per panel) along an axis where a face of
+the source crosses or touches the cell (the eps-layer: "cut cells").
 
 Cases: the unit cube against itself for every pair of resolutions, the translations
 0.0025..0.02, the ranking (cube of side 0.875, cube shifted by one spacing), the plate
-10 x 2 x 0.1 against itself. Reference values from continuum_reference.py.
+10 x 2 x 0.1 against itself. Reference values: continuum_reference.py --json (read with --ref).
 
-    OPENBLAS_NUM_THREADS=1 nice -n 10 studies/cell_quadrature.py [--suite self|shift|rank|plate|all]
-        [--cap PAIRS] [--csv FILE]
+The runs behind docs/formulation.md section 2.8 (docs/bench/cell_quadrature.csv):
+    export OPENBLAS_NUM_THREADS=1; cd studies
+    ./continuum_reference.py --json /tmp/cells/ref.json   # and --cases 0.0625 --json .../ref2.json
+    ./cell_quadrature.py --suite shift --methods colloc-c,colloc-n,split-n/n,split-c/c,near/c
+    ./cell_quadrature.py --suite rank  --methods colloc-c,colloc-n,split-n/n,split-c/c,near/c
+    ./cell_quadrature.py --suite self --ns 4,8,12,16,32,64 --cap 1.4e9 \
+        --methods colloc-c,colloc-n,split-n/n,split-c/c,near/c
+    ./cell_quadrature.py --suite plate --cap 2.1e9 --methods colloc-c,colloc-n,split-n/n,split-c/c,near/c,near/g
+    ./cell_quadrature.py --mult --suite rank --cap 3e9 --methods split-n/n,split-c/c,near/c,near/g
+    ./cell_quadrature.py --mult --suite shift --cap 3e9 --shifts 0,0.01,0.02 --methods near/g
+    ./cell_quadrature.py --mult --suite shift --methods near/c
+    ./cell_quadrature.py --mult --suite self --cap 1.6e9 --ns 4,8,16 --methods near/g
+    ./cell_quadrature.py --mult --suite plate --cap 1.6e9 --methods near/g
+Output: CSV rows case, hX, hY, method, rho, ref, err_pct, pairs (kernel evaluations of the pair
+sums), near_cells (exact near-cell or near-facet integrals), outer_points, cpu_s.
 """
 import argparse
 import csv
@@ -156,6 +174,85 @@ def J_near(Y, src, g=2, c_near=1.5, nu=20):
     return J
 
 
+def rect_integral(h, u1, u2, v1, v2, eps, rule):
+    """int_[u1,u2]x[v1,v2] (sqrt(u^2 + v^2 + h^2) + eps)^-3 du dv (foot of y at the origin),
+    by signed corner rectangles with the closed-form radial integral (continuum_reference)."""
+    from continuum_reference import wedge
+
+    def Gs(p, q):
+        ap, aq = np.abs(p), np.abs(q)
+        return np.sign(p) * np.sign(q) * (wedge(h, ap, aq, eps, rule) + wedge(h, aq, ap, eps, rule))
+
+    return Gs(u2, v2) - Gs(u1, v2) - Gs(u2, v1) + Gs(u1, v1)
+
+
+def J_boundary(Y, src, g=2, c_near=1.5, nu=20):
+    """Method (b) in boundary form: J(y) = (1/(3 eps)) sum over the source's boundary facets of
+    h_f int_facet (r + eps)^-3 dA (divergence theorem, h_f = n_f.(x - y)); Gauss g^2 per facet,
+    the facets within c_near h of y exact."""
+    xg, wg = np.polynomial.legendre.leggauss(g)
+    rule = Rule(nu)
+    h = src.h
+    J = np.zeros(len(Y))
+    for ax in range(3):
+        b1, b2 = [a for a in range(3) if a != ax]
+        for side in (0, 1):
+            c = src.hi[ax] if side else src.lo[ax]
+            hf = (c - Y[:, ax]) if side else (Y[:, ax] - c)
+            # Gauss points of every facet of this face
+            u = (src.lo[b1] + h * (np.arange(src.n[b1])[:, None] + 0.5 + 0.5 * xg[None, :])).ravel()
+            v = (src.lo[b2] + h * (np.arange(src.n[b2])[:, None] + 0.5 + 0.5 * xg[None, :])).ravel()
+            wu = np.tile(0.5 * h * wg, src.n[b1])
+            wv = np.tile(0.5 * h * wg, src.n[b2])
+            U, V = np.meshgrid(u, v, indexing="ij")
+            X = np.zeros((U.size, 3))
+            X[:, ax], X[:, b1], X[:, b2] = c, U.ravel(), V.ravel()
+            W = np.outer(wu, wv).ravel()
+            # (r + eps)^-3 = ((r + eps)^-4)^(3/4): use the 4th-power pair sum with exponent 3
+            J += hf * kernel_sum_p(Y, X, W, EPS, 3)
+            # near facets: exact minus their Gauss share
+            base = np.floor((Y[:, [b1, b2]] - src.lo[[b1, b2]]) / h).astype(int)
+            m = int(math.ceil(c_near)) + 1
+            for o1 in range(-m, m + 1):
+                for o2 in range(-m, m + 1):
+                    i1, i2 = base[:, 0] + o1, base[:, 1] + o2
+                    ok = (i1 >= 0) & (i1 < src.n[b1]) & (i2 >= 0) & (i2 < src.n[b2])
+                    l1 = src.lo[b1] + h * i1
+                    l2 = src.lo[b2] + h * i2
+                    du = np.maximum(0, np.maximum(l1 - Y[:, b1], Y[:, b1] - l1 - h))
+                    dv = np.maximum(0, np.maximum(l2 - Y[:, b2], Y[:, b2] - l2 - h))
+                    ok &= np.sqrt(du ** 2 + dv ** 2 + hf ** 2) < c_near * h
+                    ok &= hf != 0
+                    if not np.any(ok):
+                        continue
+                    y1, y2, hh = Y[ok, b1], Y[ok, b2], np.abs(hf[ok])
+                    ex = rect_integral(hh, l1[ok] - y1, l1[ok] + h - y1, l2[ok] - y2, l2[ok] + h - y2,
+                                       EPS, rule)
+                    ap = np.zeros(len(hh))
+                    for p in range(g):
+                        for q in range(g):
+                            r = np.sqrt((l1[ok] + 0.5 * h * (1 + xg[p]) - y1) ** 2
+                                        + (l2[ok] + 0.5 * h * (1 + xg[q]) - y2) ** 2 + hh ** 2)
+                            ap += 0.25 * h * h * wg[p] * wg[q] * (r + EPS) ** -3
+                    J[ok] += hf[ok] * (ex - ap)
+                    COUNT["near_cells"] += int(ok.sum())
+    return J / (3 * EPS)
+
+
+def kernel_sum_p(Y, X, V, a, p, budget=3_000_000):
+    """sum_i V_i (|y - x_i| + a)^-p for every y (all pairs, chunked)."""
+    out = np.empty(len(Y))
+    c = max(1, budget // max(1, len(X)))
+    for s in range(0, len(Y), c):
+        Yc = Y[s:s + c]
+        d2 = (Yc[:, 0, None] - X[None, :, 0]) ** 2
+        d2 += (Yc[:, 1, None] - X[None, :, 1]) ** 2
+        d2 += (Yc[:, 2, None] - X[None, :, 2]) ** 2
+        out[s:s + c] = ((np.sqrt(d2) + a) ** -p) @ V
+    COUNT["pairs"] += len(Y) * len(X)
+    return out
+
+
 def outer_rule_1d(lo, n, h, feats, d0, q, ng):
     """Per cell along one axis: (cell index, local coordinate in [0,1], weight); cells whose
     span (widened by h/2) holds a source face coordinate get the graded rule."""
@@ -186,7 +283,14 @@ def sample_points(grid, at):
     return np.stack(np.meshgrid(*ax, indexing="ij"), -1).reshape(-1, 3)
 
 
-def outer_mean4(outer, Rs, src_lo, src_hi, src_vol, at="n", d0=EPS / 50, q=4.0, ng=4):
+def layer(sd, b):
+    """The eps-layer of the profile, P_eps(sd) - P_b(sd) (b = 0: P_eps alone): what the samples
+    cannot resolve; it decays like pi (b - eps)/sd^2 away from the surface."""
+    return P(sd, EPS) - (P(sd, b) if b > 0 else 0.0)
+
+
+def outer_mean4(outer, Rs, src_lo, src_hi, src_vol, at="n", b=0.0, d0=EPS / 50, q=4.0, ng=4,
+                mult=False):
     """(1/|Y|) int_Y d~^4: R = J - P_eps(sd) given at the sample points (at = n/c/g), interpolated
     piecewise trilinearly (extrapolated beyond the outermost samples), P_eps(sd) exact at every
     quadrature point of the outer cells."""
@@ -215,7 +319,10 @@ def outer_mean4(outer, Rs, src_lo, src_hi, src_vol, at="n", d0=EPS / 50, q=4.0, 
                     * la[:, None, None] * lb[None, :, None] * lc[None, None, :])
         pts = np.stack(np.broadcast_arrays(Yx[sl, None, None], Yy[None, :, None],
                                            Yz[None, None, :]), -1).reshape(-1, 3)
-        J = val.ravel() + P(sd_box(pts, src_lo, src_hi), EPS)
+        if mult:  # J = P_eps(sd) exp(R): R = log(J / P_eps(sd)), scale-free outside the body
+            J = P(sd_box(pts, src_lo, src_hi), EPS) * np.exp(val.ravel())
+        else:
+            J = val.ravel() + layer(sd_box(pts, src_lo, src_hi), b)
         dt = (J / src_vol) ** -0.25 - EPS
         W = (wx[sl, None, None] * wy[None, :, None] * wz[None, None, :]).ravel()
         total += float(W @ dt ** 4)
@@ -238,12 +345,15 @@ def directed(method, src, outer, opt):
         X, V = src.centres() if inner.endswith("c") else src.nodes()
         a = opt.c_a * src.h
         Jn = kernel_sum(Y, X, V, a) + P(sd, EPS) - P(sd, a)
+    elif inner == "bnd":
+        Jn = J_boundary(Y, src, g=opt.g, c_near=opt.c_near, nu=opt.nu)
     elif inner == "near":
         Jn = J_near(Y, src, g=opt.g, c_near=opt.c_near, nu=opt.nu)
     else:
         raise ValueError(method)
-    Rn = Jn - P(sd, EPS)
-    return outer_mean4(outer, Rn, src.lo, src.hi, src.vol, at=at)
+    b = opt.c_b * outer.h
+    Rn = np.log(Jn / P(sd, EPS)) if opt.mult else Jn - layer(sd, b)
+    return outer_mean4(outer, Rn, src.lo, src.hi, src.vol, at=at, b=b, mult=opt.mult)
 
 
 def rho(method, X, Y, opt):
@@ -279,6 +389,10 @@ def main():
     ap.add_argument("--suite", default="all")
     ap.add_argument("--cap", type=float, default=4e8, help="largest pair count per direction")
     ap.add_argument("--c-a", dest="c_a", type=float, default=1.0, help="a = c_a h (split)")
+    ap.add_argument("--c-b", dest="c_b", type=float, default=0.0,
+                    help="outer layer P_eps - P_b, b = c_b h_outer (0: P_eps alone)")
+    ap.add_argument("--mult", action="store_true",
+                    help="interpolate log(J / P_eps(sd)) instead of J - P_eps(sd)")
     ap.add_argument("--g", type=int, default=2, help="far Gauss points per axis (near)")
     ap.add_argument("--c-near", dest="c_near", type=float, default=1.5)
     ap.add_argument("--nu", type=int, default=20, help="angle points of the exact cells")
@@ -286,6 +400,7 @@ def main():
     ap.add_argument("--ns", default="4,8,12,16,24,32,64", help="cube cells per side")
     ap.add_argument("--ref", default="/tmp/cells/ref.json,/tmp/cells/ref2.json",
                     help="continuum_reference.py --json outputs (comma-separated)")
+    ap.add_argument("--shifts", default="0,0.0025,0.005,0.01,0.02")
     ap.add_argument("--csv")
     opt = ap.parse_args()
     import json
@@ -309,7 +424,7 @@ def main():
                 run_case(w, "self", REF["self"], Grid(*unit, 1 / nx), Grid(*unit, 1 / ny), opt, methods)
     if opt.suite in ("shift", "all"):
         for n2 in (16, 12):
-            for s in (0.0, 0.0025, 0.005, 0.01, 0.02):
+            for s in [float(v) for v in opt.shifts.split(",")]:
                 Y = Grid([s, 0, 0], [1 + s, 1, 1], 1 / n2)
                 run_case(w, f"shift{s}", REF[s] if s else REF["self"], Grid(*unit, 1 / 16), Y, opt, methods)
     if opt.suite in ("rank", "all"):
