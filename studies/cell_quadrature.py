@@ -43,6 +43,10 @@ The runs behind docs/formulation.md section 2.8 (docs/bench/cell_quadrature.csv)
     ./cell_quadrature.py --mult --suite shift --methods near/c
     ./cell_quadrature.py --mult --suite self --cap 1.6e9 --ns 4,8,16 --methods near/g
     ./cell_quadrature.py --mult --suite plate --cap 1.6e9 --methods near/g
+    ./cell_quadrature.py --mult --g 3 --suite self --ns 8,16 --cap 3e9 --methods bnd/c,bnd/g
+    ./cell_quadrature.py --mult --g 3 --suite rank --cap 3e9 --methods bnd/g
+    ./cell_quadrature.py --mult --g 3 --suite shift --cap 3e9 --shifts 0,0.01,0.02 --methods bnd/g
+    ./cell_quadrature.py --mult --g 3 --suite plate --cap 2e7 --methods bnd/g
 Output: CSV rows case, hX, hY, method, rho, ref, err_pct, pairs (kernel evaluations of the pair
 sums), near_cells (exact near-cell or near-facet integrals), outer_points, cpu_s.
 """
