@@ -402,7 +402,8 @@ def main():
     ap.add_argument("--nu", type=int, default=20, help="angle points of the exact cells")
     ap.add_argument("--methods", default=",".join(METHODS))
     ap.add_argument("--ns", default="4,8,12,16,24,32,64", help="cube cells per side")
-    ap.add_argument("--ref", default="/tmp/cells/ref.json,/tmp/cells/ref2.json",
+    here = __import__("os").path.dirname(__import__("os").path.abspath(__file__))
+    ap.add_argument("--ref", default=here + "/../docs/bench/continuum_reference.json",
                     help="continuum_reference.py --json outputs (comma-separated)")
     ap.add_argument("--shifts", default="0,0.0025,0.005,0.01,0.02")
     ap.add_argument("--csv")
