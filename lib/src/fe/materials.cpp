@@ -50,6 +50,11 @@ EnergyDerivatives MooneyRivlin::evaluate(const Eigen::Matrix3d& F, const Eigen::
   return d;
 }
 
+double MooneyRivlin::W_JJJ(double J) const {
+  // W_JJ = 2c + 2(a + 2b)/J²  ⇒  W_JJJ = −4(a + 2b)/J³
+  return -4.0 * (a_ + 2.0 * b_) / (J * J * J);
+}
+
 TransverselyIsotropic::TransverselyIsotropic(double a, double b, double c, double d,
                                              const Eigen::Vector3d& f)
     : a_(a), b_(b), c_(c), d_(d) {
@@ -85,6 +90,11 @@ EnergyDerivatives TransverselyIsotropic::evaluate(const Eigen::Matrix3d& F,
     r.W_JJ = 2.0 * d_ + 2.0 * (a_ + 2.0 * b_ + c_) / (J * J);
   }
   return r;
+}
+
+double TransverselyIsotropic::W_JJJ(double J) const {
+  // W_JJ = 2d + 2(a + 2b + c)/J²  ⇒  W_JJJ = −4(a + 2b + c)/J³
+  return -4.0 * (a_ + 2.0 * b_ + c_) / (J * J * J);
 }
 
 double fiber_energy(double m, const Eigen::Matrix3d& F, const Eigen::Vector3d& a0) {

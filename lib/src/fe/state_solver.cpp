@@ -1,6 +1,7 @@
 #include "softhd/fe/state_solver.hpp"
 
 #include "softhd/error.hpp"
+#include "softhd/fe/second_order.hpp"
 #if defined(SOFTHD_WITH_MPI) && SOFTHD_WITH_MPI
 #include "softhd/fe/petsc_state.hpp"
 #endif
@@ -35,6 +36,7 @@ NewtonSummary StateSolver::solve(const Eigen::VectorXd& m) {
   if (m.size() != control_->size())
     throw InvalidArgument("state solver: the control has " + std::to_string(m.size()) +
                           " values, expected " + std::to_string(control_->size()));
+  have_adjoint_ = false;  // λ belongs to the previous state
   const NewtonSummary summary = newton_->solve(control_->to_quadrature(m), &state_);
   converged_ = summary.converged();
   return summary;
@@ -46,6 +48,7 @@ void StateSolver::set_state(const State& state) {
     throw InvalidArgument("state solver: set_state with a state of another problem");
   state_ = state;
   converged_ = false;  // the kept tangent is not this state's
+  have_adjoint_ = false;
 }
 
 GridSequencingReport StateSolver::grid_sequenced_start(const Body& body, const Eigen::VectorXd& m,
@@ -53,33 +56,68 @@ GridSequencingReport StateSolver::grid_sequenced_start(const Body& body, const E
   GridSequencingReport report;
   state_ = fe::grid_sequenced_start(body, *assembler_, m, options_, options, &report);
   converged_ = false;
+  have_adjoint_ = false;
   return report;
 }
 
 void StateSolver::reset() {
   newton_.emplace(*assembler_, options_);
   converged_ = false;
+  have_adjoint_ = false;
 }
 
 Eigen::VectorXd StateSolver::gradient(const Eigen::VectorXd& g) {
   if (!converged_) throw InvalidArgument("state solver: gradient() needs a converged solve");
-  const Eigen::VectorXd lambda = solve_adjoint(*assembler_, *newton_, g);
-  return control_gradient(*assembler_, *control_, state_.u, lambda);
+  lambda_ = solve_adjoint(*assembler_, *newton_, g);
+  have_adjoint_ = true;
+  return control_gradient(*assembler_, *control_, state_.u, lambda_);
 }
 
 int StateSolver::adjoint_factorizations() const {
   return newton_->last_tangent_solve().factorizations;
 }
 
-Eigen::VectorXd StateSolver::sensitivity(const Eigen::VectorXd&) {
-  throw InvalidArgument(
-      "state solver: Hessian-vector products are not available with the serial backend");
+void StateSolver::require_adjoint(const char* what) const {
+  if (!converged_ || !have_adjoint_)
+    throw InvalidArgument(std::string("state solver: ") + what +
+                          " needs a converged solve followed by gradient()");
 }
 
-Eigen::VectorXd StateSolver::hessian_product(const Eigen::VectorXd&, const Eigen::VectorXd&,
-                                             const Eigen::VectorXd&, HessianPart) {
-  throw InvalidArgument(
-      "state solver: Hessian-vector products are not available with the serial backend");
+Eigen::VectorXd StateSolver::solve_tangent(const Eigen::VectorXd& b) {
+  const DofMap& dofs = assembler_->dofs();
+  if (dofs.num_free == 0) return Eigen::VectorXd::Zero(dofs.num_dofs);
+  return dofs.expand(newton_->solve_converged_tangent(dofs.restrict(b)));
+}
+
+Eigen::VectorXd StateSolver::sensitivity(const Eigen::VectorXd& v) {
+  require_adjoint("sensitivity()");
+  if (v.size() != control_->size())
+    throw InvalidArgument("state solver: sensitivity() needs " + std::to_string(control_->size()) +
+                          " control values, got " + std::to_string(v.size()));
+  // K w = −(∂R/∂m) v
+  return solve_tangent(-control_force(*assembler_, *control_, state_.u, v));
+}
+
+Eigen::VectorXd StateSolver::hessian_product(const Eigen::VectorXd& v, const Eigen::VectorXd& w,
+                                             const Eigen::VectorXd& q, HessianPart part) {
+  require_adjoint("hessian_product()");
+  const DofMap& dofs = assembler_->dofs();
+  if (v.size() != control_->size() || w.size() != dofs.num_dofs || q.size() != dofs.num_dofs)
+    throw InvalidArgument("state solver: hessian_product() needs v with " +
+                          std::to_string(control_->size()) + " values and w, q with " +
+                          std::to_string(dofs.num_dofs));
+  const Assembler& A = *assembler_;
+  const Eigen::VectorXd w_free = dofs.expand(dofs.restrict(w));  // fixed entries ignored
+  // K μ = q − [∂²(λᵀR)/∂u² w + ∂²(λᵀR)/∂u∂m v]   (Gauss–Newton: K μ = q)
+  Eigen::VectorXd rhs = q;
+  if (part == HessianPart::full)
+    rhs -= adjoint_curvature(A, state_.u, w_free, lambda_) +
+           adjoint_mixed_um(A, *control_, lambda_, v);
+  const Eigen::VectorXd mu = solve_tangent(rhs);
+  // s = −(∂R/∂m)ᵀ μ − ∂²(λᵀR)/∂m∂u w, −(∂R/∂m)ᵀ μ = ∫ M_k (F a₀)·(∇μ a₀) dX (the gradient's map)
+  Eigen::VectorXd s = control_gradient(A, *control_, state_.u, mu);
+  if (part == HessianPart::full) s -= adjoint_mixed_mu(A, *control_, lambda_, w_free);
+  return s;
 }
 
 double StateSolver::energy() const {

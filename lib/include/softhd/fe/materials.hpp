@@ -21,6 +21,10 @@ class Material {
   /// the second derivatives.
   virtual EnergyDerivatives evaluate(const Eigen::Matrix3d& F, const Eigen::Matrix3d& H, double J,
                                      bool second) const = 0;
+  /// ∂³W/∂J³ at J > 0. Together with W_FF and W_HH independent of (F, H, J) (W quadratic in F
+  /// and in H, as in every softhd material) it is all the third derivative of W(F) needs: the
+  /// exact derivative of the tangent (fe/second_order.hpp, docs/formulation.md §4.4.1).
+  virtual double W_JJJ(double J) const = 0;
   /// The coefficient a of |F|²: the active tension must satisfy m < 2a (docs/formulation.md §3.3).
   virtual double a() const = 0;
   /// A stiffness scale (for tolerances), e.g. a + b + c.
@@ -34,6 +38,8 @@ class MooneyRivlin final : public Material {
   MooneyRivlin(double a, double b, double c);
   EnergyDerivatives evaluate(const Eigen::Matrix3d& F, const Eigen::Matrix3d& H, double J,
                              bool second) const override;
+  /// −4(a + 2b)/J³.
+  double W_JJJ(double J) const override;
   double a() const override { return a_; }
   double stiffness_scale() const override { return a_ + b_ + c_; }
 
@@ -49,6 +55,8 @@ class TransverselyIsotropic final : public Material {
   TransverselyIsotropic(double a, double b, double c, double d, const Eigen::Vector3d& f);
   EnergyDerivatives evaluate(const Eigen::Matrix3d& F, const Eigen::Matrix3d& H, double J,
                              bool second) const override;
+  /// −4(a + 2b + c)/J³.
+  double W_JJJ(double J) const override;
   double a() const override { return a_; }
   double stiffness_scale() const override { return a_ + b_ + c_ + d_; }
 

@@ -59,13 +59,19 @@ class StateSolver final : public StateEquation {
   void reset() override;
 
   /// State part of dJ/dm_k = ∫ M_k (F a₀)·(∇λ a₀) dX with K λ = g, g = ∂J/∂u (num_dofs).
-  /// Throws InvalidArgument if the last solve did not converge.
+  /// Keeps λ for sensitivity() and hessian_product() at this state (until the next solve,
+  /// set_state, grid_sequenced_start or reset). Throws InvalidArgument if the last solve did
+  /// not converge.
   Eigen::VectorXd gradient(const Eigen::VectorXd& g) override;
   /// Factorisations of the last tangent solve (the adjoint's after gradient()).
   int adjoint_factorizations() const override;
-  /// w = (du/dm) v (StateEquation::sensitivity).
+  /// w = (du/dm) v (StateEquation::sensitivity): K w = −(∂R/∂m) v with the converged tangent,
+  /// solved as the adjoint is (PCG with the kept factorisation).
   Eigen::VectorXd sensitivity(const Eigen::VectorXd& v) override;
-  /// The state's side of the reduced Hessian-vector product (StateEquation::hessian_product).
+  /// The state's side of the reduced Hessian-vector product (StateEquation::hessian_product):
+  /// K μ = q − [∂²(λᵀR)/∂u² w + ∂²(λᵀR)/∂u∂m v], s = −(∂R/∂m)ᵀ μ − ∂²(λᵀR)/∂m∂u w
+  /// (fe/second_order.hpp; the brackets dropped by HessianPart::gauss_newton). Entries of w
+  /// and q at fixed dofs are ignored.
   Eigen::VectorXd hessian_product(const Eigen::VectorXd& v, const Eigen::VectorXd& w,
                                   const Eigen::VectorXd& q, HessianPart part) override;
 
@@ -87,6 +93,14 @@ class StateSolver final : public StateEquation {
   std::optional<NewtonSolver> newton_;  // optional: reset() makes a new one
   State state_;
   bool converged_ = false;
+  /// The adjoint of the last gradient() at the converged state_ (valid if have_adjoint_).
+  Eigen::VectorXd lambda_;
+  bool have_adjoint_ = false;
+  /// Throws InvalidArgument unless a gradient() followed the last (converged) solve.
+  void require_adjoint(const char* what) const;
+  /// x (num_dofs, fixed entries zero) with K x = b on the free dofs, b = the free entries of
+  /// `b`, K the converged tangent (NewtonSolver::solve_converged_tangent).
+  Eigen::VectorXd solve_tangent(const Eigen::VectorXd& b);
 };
 
 }  // namespace softhd::fe
