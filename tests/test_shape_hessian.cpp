@@ -97,7 +97,7 @@ struct Problem {
     m0 = -0.15 * (1.0 + P.col(2).array() / 0.2).matrix();
   }
   Eigen::VectorXd direction(unsigned seed) const {
-    Eigen::VectorXd v = random_cloud(static_cast<int>(m0.size()), 1, seed).points().col(0);
+    Eigen::VectorXd v = random_cloud(static_cast<int>(m0.size()), 2, seed).points().col(0);
     return 0.2 * (v.array() - 0.5).matrix();
   }
   fe::Assembler A;
@@ -159,7 +159,7 @@ TEST_P(ShapeHessian, RejectedTrialReestablishesTheHessianPoint) {
   EXPECT_FALSE(st.reestablished);
   EXPECT_EQ(st.newton_iterations, 0);
   EXPECT_EQ(st.factorizations, 0);
-  EXPECT_EQ((Hv_again - Hv).norm(), 0.0);
+  EXPECT_LE((Hv_again - Hv).norm(), 1e-12 * Hv.norm());  // round-off
   // A trial point (rejected by the optimiser) moves the state; the product at m0 goes back.
   ASSERT_EQ(p.J->evaluate(p.m0 + 0.5 * v, true).status, EvaluationStatus::ok);
   const Eigen::VectorXd Hv_trial = p.J->hessian_product(p.m0 + 0.5 * v, v);
@@ -167,12 +167,14 @@ TEST_P(ShapeHessian, RejectedTrialReestablishesTheHessianPoint) {
   const Eigen::VectorXd Hv_back = p.J->hessian_product(p.m0, v, HessianPart::full, &st);
   EXPECT_TRUE(st.reestablished);
   EXPECT_EQ(st.newton_iterations, 0);
-  EXPECT_LE((Hv_back - Hv).norm(), 1e-12 * Hv.norm());
+  // The same state again; its adjoint from a new factorisation: equal to round-off (the
+  // trial's product differs by more than 1e-6).
+  EXPECT_LE((Hv_back - Hv).norm(), 1e-9 * Hv.norm());
   // A renewed solver (a checkpoint's reset) is noticed too.
   p.J->state_path().reset();
   const Eigen::VectorXd Hv_reset = p.J->hessian_product(p.m0, v, HessianPart::full, &st);
   EXPECT_TRUE(st.reestablished);
-  EXPECT_LE((Hv_reset - Hv).norm(), 1e-12 * Hv.norm());
+  EXPECT_LE((Hv_reset - Hv).norm(), 1e-9 * Hv.norm());
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -126,6 +126,11 @@ void TrackingRunOptions::validate() const {
     throw InvalidArgument("optimiser.hessian " + to_string(op.hessian) +
                           " is a setting of optimiser.algorithm newton (got " +
                           to_string(op.algorithm) + ")");
+  // The state's second-order side exists for the serial Newton (fe::StateSolver) only.
+  if (op.algorithm == Algorithm::newton && state.backend != fe::StateBackend::kCholmod)
+    throw InvalidArgument("state.backend " + fe::to_string(state.backend) +
+                          ": optimiser.algorithm newton needs the cholmod backend (its "
+                          "Hessian-vector product)");
   if (output.vtu_every < 0) throw InvalidArgument("output.vtu_every must be >= 0");
   if (!(memory_limit > 0.0)) throw InvalidArgument("memory_limit must be > 0");
   validate_levels(levels);
