@@ -58,7 +58,8 @@ class StatePath {
   StateSolve resolve(const Eigen::VectorXd& m, const fe::State& converged, fe::State* state);
   ///@{
   /// The state's side of the reduced Hessian-vector product at the last converged solve and
-  /// the adjoint made there (fe::StateEquation::sensitivity, ::hessian_product).
+  /// the adjoint made there: fe::StateEquation::sensitivity and
+  /// fe::StateEquation::hessian_product.
   Eigen::VectorXd sensitivity(const Eigen::VectorXd& v);
   Eigen::VectorXd hessian_product(const Eigen::VectorXd& v, const Eigen::VectorXd& w,
                                   const Eigen::VectorXd& q, HessianPart part);
