@@ -47,7 +47,10 @@ options:
   --max-iter N       iterations (default {max_iter})
   --max-seconds S    wall-clock limit (default none)
   --rel-tol R        stop when J changes by less than R relative (default {rel_tol})
-  --algorithm A      mma | ccsaq | lbfgs | slsqp (default {algorithm})
+  --algorithm A      mma | ccsaq | lbfgs | slsqp | newton (default {algorithm}; newton:
+                     trust-region Newton-CG with exact Hessian-vector products)
+  --hessian H        newton's Hessian-vector product: full | gauss_newton (default
+                     {hessian}; gauss_newton: its positive semi-definite part)
   --move-limit D     each round of 10 evaluations moves m by at most D times the
                      bound range (default {move_limit}; 0: no move limit)
   --particles P      nodes | quadrature | boundary: the moving cloud (default {particles};
@@ -183,6 +186,7 @@ std::string usage() {
       {"max_iter", std::to_string(d.optimiser.max_iterations)},
       {"rel_tol", number_text(d.optimiser.relative_change)},
       {"algorithm", to_string(d.optimiser.algorithm)},
+      {"hessian", to_string(d.optimiser.hessian)},
       {"move_limit", number_text(d.optimiser.move_limit)},
       {"particles", to_string(d.distance.particles)},
       {"volumes", to_string(d.distance.volumes)},
@@ -293,6 +297,9 @@ OptimiseArgs parse_optimise(Args& args) {
   o.optimiser.relative_change = args.number("--rel-tol", d.optimiser.relative_change);
   o.optimiser.algorithm =
       choice(args, "--algorithm", to_string(d.optimiser.algorithm), algorithm_from_string);
+  o.optimiser.hessian =
+      choice(args, "--hessian", to_string(d.optimiser.hessian),
+             [](const std::string& name) { return hessian_part_from_string(name, "hessian"); });
   o.optimiser.move_limit = args.number("--move-limit", d.optimiser.move_limit);
   parse_objective(args, d, o);
   o.threads = static_cast<int>(args.integer("--threads", d.threads, 0, kMaxThreads));

@@ -116,5 +116,77 @@ TEST(Interrupt, ATrackingRunStopsBetweenEvaluationsAndItsCheckpointResumesIt) {
   EXPECT_TRUE(resumed.control == full.control);
 }
 
+// The optimiser newton stops as MMA does: Ctrl-C (the installed check) between its evaluations
+// and Hessian-vector products, and an observer's StopRequest after an iteration.
+TEST(Interrupt, ANewtonRunStopsOnTheCheckAndOnAStopRequest) {
+  const fe::Assembler A = beam();
+  const fe::ControlSpace space(A.mesh(), A.geometry(), fe::ControlKind::kVertex);
+  const Eigen::VectorXd m_true = -0.3 * space.positions(A.mesh()).col(2) / 0.3;
+  fe::NewtonSolver newton(A);
+  fe::State st = fe::rest_state(A);
+  ASSERT_TRUE(newton.solve(space.to_quadrature(m_true), &st).converged());
+  const PointCloud target =
+      fe::deformed_cloud(A, st.u, fe::CloudPoints::kNodes, fe::CloudVolumes::kDeformed);
+  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(space.size(), -1.0);
+  const Eigen::VectorXd hi = Eigen::VectorXd::Zero(space.size());
+  const Eigen::VectorXd m0 = Eigen::VectorXd::Zero(space.size());
+  ShapeTrackingOptions to;
+  to.optimizer.algorithm = Algorithm::newton;
+  to.optimizer.max_iterations = 6;
+  ShapeObjectiveOptions so;
+  so.second_order = true;
+  int accepted = 0;
+  ShapeTrackingCallbacks cb;
+  cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd&) {
+    accepted = it.iteration;
+    EXPECT_GT(it.hessian_products, 0);
+    EXPECT_GT(it.trust_radius, 0.0);
+  };
+  {
+    CheckScope scope([&] { return accepted >= 2; });
+    ShapeObjective J(A, space, HausdorffTarget(target), so);
+    expect_error<Interrupted>([&] { track_shape(J, lo, hi, m0, st.u, to, cb); }, "interrupted");
+  }
+  EXPECT_EQ(accepted, 2);
+
+  // With a checkpoint (its Hessian-vector products logged): interrupted after iteration 3 and
+  // resumed, the uninterrupted run bit for bit.
+  const std::string dir = ::testing::TempDir() + "/interrupt_newton";
+  std::filesystem::create_directories(dir);
+  to.checkpoint_every = 2;
+  to.checkpoint = dir + "/uninterrupted.bin";
+  ShapeObjective J0(A, space, HausdorffTarget(target), so);
+  const ShapeTrackingSummary full = track_shape(J0, lo, hi, m0, st.u, to);
+  to.checkpoint = dir + "/interrupted.bin";
+  accepted = 0;
+  {
+    CheckScope scope([&] { return accepted >= 3; });
+    ShapeObjective J1(A, space, HausdorffTarget(target), so);
+    expect_error<Interrupted>([&] { track_shape(J1, lo, hi, m0, st.u, to, cb); },
+                              "after 3 iterations");
+  }
+  to.resume = true;
+  ShapeObjective J2(A, space, HausdorffTarget(target), so);
+  const ShapeTrackingSummary resumed = track_shape(J2, lo, hi, m0, st.u, to);
+  EXPECT_GT(resumed.replayed_evaluations, 0);
+  EXPECT_EQ(resumed.iterations, full.iterations);
+  EXPECT_EQ(resumed.J_final, full.J_final);
+  EXPECT_TRUE(resumed.control == full.control);
+  to.resume = false;
+  to.checkpoint.clear();
+
+  cb.on_iteration = [&](const TrackingIteration& it, const Eigen::VectorXd&) {
+    if (it.iteration == 1) throw StopRequest{};
+  };
+  ShapeObjective J(A, space, HausdorffTarget(target), so);
+  const ShapeTrackingSummary s = track_shape(J, lo, hi, m0, st.u, to, cb);
+  EXPECT_EQ(s.iterations, 1);
+  EXPECT_EQ(s.status, OptimizerStatus::stopped);
+  EXPECT_LT(s.rho_final, s.rho_start);
+  // Without the objective's second-order data newton is refused, naming the setting.
+  ShapeObjective plain(A, space, HausdorffTarget(target));
+  expect_error<InvalidArgument>([&] { track_shape(plain, lo, hi, m0, st.u, to); }, "second_order");
+}
+
 }  // namespace
 }  // namespace softhd::test

@@ -120,6 +120,32 @@ TEST_F(OptimiseCli, LowersTheDistanceAndWritesEveryFile) {
   EXPECT_TRUE(WIFEXITED(raw) && WEXITSTATUS(raw) == 0) << forward;
 }
 
+// --algorithm newton: the trust-region Newton–CG with the exact Hessian-vector product, or its
+// Gauss–Newton part, lowers ρ̃; history.csv gets its CG iterations, products and trust radius.
+TEST_F(OptimiseCli, NewtonLowersTheDistanceAndRecordsItsSteps) {
+  for (const char* part : {"full", "gauss_newton"}) {
+    std::string err;
+    ASSERT_EQ(run(scene() + " --out " + out() + " --max-iter 3 --quiet --algorithm newton " +
+                      "--hessian " + part,
+                  &err),
+              0)
+        << part << ": " << err;
+    const nlohmann::json s = summary();
+    EXPECT_LT(s["rho_final"].get<double>(), s["rho_start"].get<double>()) << part;
+    EXPECT_GE(s["iterations"].get<int>(), 1) << part;
+    std::ifstream h(fs::path(out()) / "history.csv");
+    std::string header, row;
+    std::getline(h, header);
+    EXPECT_NE(header.find(",level,cg_iterations,hessian_products,trust_radius"), std::string::npos)
+        << header;
+    ASSERT_TRUE(std::getline(h, row)) << part;
+    // The first iteration made products (the last three columns: CG, products, radius > 0).
+    const std::string tail = row.substr(row.find_last_of(',') + 1);
+    EXPECT_GT(std::stod(tail), 0.0) << row;
+    fs::remove_all(out());
+  }
+}
+
 std::string read_text(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
   std::stringstream s;
@@ -215,6 +241,21 @@ TEST_F(OptimiseCli, ContinuingAFinishedRunIsTheUninterruptedRun) {
   ASSERT_EQ(run(scene() + " --out " + ref.string() + " --max-iter 30" + common), 0);
   ASSERT_EQ(run(scene() + " --out " + out() + " --max-iter 12" + common), 0);
   ASSERT_EQ(run(scene() + " --out " + out() + " --max-iter 30 --resume" + common), 0);
+  EXPECT_EQ(history_without_timings(out()), history_without_timings(ref));
+  EXPECT_EQ(read_text(fs::path(out()) / "control.csv"), read_text(ref / "control.csv"));
+}
+
+// The same with --algorithm newton: its Hessian-vector products are in the checkpoint too, so a
+// run continued after its end (between two saves) is the uninterrupted one, bitwise.
+TEST_F(OptimiseCli, ContinuingAFinishedNewtonRunIsTheUninterruptedRun) {
+  const std::string common =
+      " --rel-tol 0 --threads 1 --quiet --algorithm newton --checkpoint-every 2";
+  const fs::path ref = dir_ / "ref";
+  ASSERT_EQ(run(scene() + " --out " + ref.string() + " --max-iter 6" + common), 0);
+  ASSERT_EQ(run(scene() + " --out " + out() + " --max-iter 3" + common), 0);
+  std::string err;
+  ASSERT_EQ(run(scene() + " --out " + out() + " --max-iter 6 --resume" + common, &err), 0) << err;
+  EXPECT_GT(summary()["replayed_evaluations"].get<int>(), 0);
   EXPECT_EQ(history_without_timings(out()), history_without_timings(ref));
   EXPECT_EQ(read_text(fs::path(out()) / "control.csv"), read_text(ref / "control.csv"));
 }
@@ -506,7 +547,11 @@ TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
   };
   expect_refused((dir_ / "missing.json").string(), "missing.json");
   expect_refused(scene() + " --algorithm gcmma", "unknown algorithm 'gcmma'");
-  expect_refused(scene() + " --algorithm newton", "newton is not available for shape tracking");
+  expect_refused(scene() + " --hessian gauss_newton",
+                 "--hessian gauss_newton is a setting of --algorithm newton");
+  expect_refused(scene() + " --algorithm newton --hessian x", "--hessian: unknown hessian 'x'");
+  expect_refused(scene() + " --algorithm newton --volumes deformed",
+                 "supports reference volumes only");
   expect_refused(scene() + " --method nearest", "--method: nearest has no gradient");
   expect_refused(scene() + " --method fast", "unknown method 'fast'");
   expect_refused(scene() + " --method tree --tol 2", "tolerance");

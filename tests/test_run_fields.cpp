@@ -55,9 +55,9 @@ TEST(RunFields, EveryFieldOfTheOptionsHasARow) {
   [[maybe_unused]] auto& [optimiser, distance, tikhonov, target, state, levels, pose, output,
                           threads, share, memory_limit] = o;
   EXPECT_EQ(fields_under("").size(), 11u);
-  [[maybe_unused]] auto& [algorithm, max_iterations, max_evaluations, max_seconds, relative_change,
-                          move_limit, initial_control] = o.optimiser;
-  EXPECT_EQ(fields_under("optimiser.").size(), 7u);
+  [[maybe_unused]] auto& [algorithm, hessian, max_iterations, max_evaluations, max_seconds,
+                          relative_change, move_limit, initial_control] = o.optimiser;
+  EXPECT_EQ(fields_under("optimiser.").size(), 8u);
   [[maybe_unused]] auto& [particles, volumes, params, method, tolerance, form] = o.distance;
   EXPECT_EQ(fields_under("distance.").size(), 6u);
   [[maybe_unused]] auto& [alpha, beta, gamma, epsilon] = o.distance.params;

@@ -301,7 +301,7 @@ def read_mesh(path, order=None, scale=1.0):
 
 
 def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=None,
-             algorithm=None, move_limit=None, particles=None, volumes=None, alpha=None,
+             algorithm=None, hessian=None, move_limit=None, particles=None, volumes=None, alpha=None,
              beta=None, gamma=None, eps=None, method=None, tol=None, tikhonov_mass=None,
              tikhonov_grad=None, coarse_levels=None, levels=None, refined_move_limit=None,
              coarse_iterations=None, switch_decrease=None, coarse_tol=None,
@@ -336,7 +336,8 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     the scene's control.initial; values outside the control bounds, and an empty array, raise
     InvalidArgument. pose_move: a scene target in the camera's frame only (InvalidArgument for a
     target in the body's frame), the pose's move limit as a fraction of the control's, in
-    (0, 1] (default 1).
+    (0, 1] (default 1). algorithm "newton" (trust-region Newton-CG) uses the exact Hessian-vector
+    product of J, or with hessian "gauss_newton" its positive semi-definite part (``--hessian``).
     """
     points = vols = file = None
     if isinstance(target, (str, bytes, _os.PathLike)):
@@ -346,7 +347,8 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     elif target is not None:
         points = _as_float64(target, "target")
     return _core.optimise(scene, points, vols, file, max_iter=max_iter, max_seconds=max_seconds,
-                          rel_tol=rel_tol, algorithm=algorithm, move_limit=move_limit,
+                          rel_tol=rel_tol, algorithm=algorithm, hessian=hessian,
+                          move_limit=move_limit,
                           particles=particles, volumes_kind=volumes, alpha=alpha, beta=beta,
                           gamma=gamma, eps=eps, method=method, tol=tol,
                           tikhonov_mass=tikhonov_mass, tikhonov_grad=tikhonov_grad,

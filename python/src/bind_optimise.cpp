@@ -80,6 +80,7 @@ py::dict optimise_defaults() {
   out["max_seconds"] = d.optimiser.max_seconds;
   out["rel_tol"] = d.optimiser.relative_change;
   out["algorithm"] = to_string(d.optimiser.algorithm);
+  out["hessian"] = to_string(d.optimiser.hessian);
   out["move_limit"] = d.optimiser.move_limit;
   out["particles"] = to_string(d.distance.particles);
   out["volumes"] = to_string(d.distance.volumes);
@@ -207,8 +208,8 @@ void bind_optimise(py::module_& m) {
       [](const PyScene& s, const std::optional<Array>& points, const std::optional<Array>& volumes,
          const std::optional<std::string>& file, std::optional<int> max_iter,
          std::optional<double> max_seconds, std::optional<double> rel_tol,
-         const std::optional<std::string>& algorithm, std::optional<double> move_limit,
-         const std::optional<std::string>& particles,
+         const std::optional<std::string>& algorithm, const std::optional<std::string>& hessian,
+         std::optional<double> move_limit, const std::optional<std::string>& particles,
          const std::optional<std::string>& volumes_kind, std::optional<double> alpha,
          std::optional<double> beta, std::optional<double> gamma, std::optional<double> eps,
          const std::optional<std::string>& method, std::optional<double> tol,
@@ -233,6 +234,7 @@ void bind_optimise(py::module_& m) {
         if (max_seconds) o.optimiser.max_seconds = *max_seconds;
         if (rel_tol) o.optimiser.relative_change = *rel_tol;
         if (algorithm) o.optimiser.algorithm = algorithm_from_string(*algorithm);
+        if (hessian) o.optimiser.hessian = hessian_part_from_string(*hessian, "hessian");
         if (move_limit) o.optimiser.move_limit = *move_limit;
         if (particles) o.distance.particles = particles_from_string(*particles);
         if (volumes_kind) o.distance.volumes = particle_volumes_from_string(*volumes_kind);
@@ -261,13 +263,13 @@ void bind_optimise(py::module_& m) {
       },
       py::arg("scene"), py::arg("points").noconvert(), py::arg("volumes").noconvert(),
       py::arg("file"), py::kw_only(), py::arg("max_iter"), py::arg("max_seconds"),
-      py::arg("rel_tol"), py::arg("algorithm"), py::arg("move_limit"), py::arg("particles"),
-      py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"), py::arg("gamma"), py::arg("eps"),
-      py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"), py::arg("tikhonov_grad"),
-      py::arg("coarse_levels"), py::arg("levels"), py::arg("refined_move_limit"),
-      py::arg("coarse_iterations"), py::arg("switch_decrease"), py::arg("coarse_tol"),
-      py::arg("distance"), py::arg("cap"), py::arg("cap_q"), py::arg("initial"),
-      py::arg("pose_move"), py::arg("callback"), py::arg("threads"));
+      py::arg("rel_tol"), py::arg("algorithm"), py::arg("hessian"), py::arg("move_limit"),
+      py::arg("particles"), py::arg("volumes_kind"), py::arg("alpha"), py::arg("beta"),
+      py::arg("gamma"), py::arg("eps"), py::arg("method"), py::arg("tol"), py::arg("tikhonov_mass"),
+      py::arg("tikhonov_grad"), py::arg("coarse_levels"), py::arg("levels"),
+      py::arg("refined_move_limit"), py::arg("coarse_iterations"), py::arg("switch_decrease"),
+      py::arg("coarse_tol"), py::arg("distance"), py::arg("cap"), py::arg("cap_q"),
+      py::arg("initial"), py::arg("pose_move"), py::arg("callback"), py::arg("threads"));
   m.def(
       "optimise_fields",
       [] {

@@ -206,7 +206,9 @@ def test_defaults_are_the_command_line_tools(cli_help):
     assert sorted(defaults) == sorted(keywords)
     text = " ".join(cli_help("optimise").split())
     flags = {"max_iter": "--max-iter N iterations", "rel_tol": "--rel-tol R stop when J changes "
-             "by less than R relative", "algorithm": "--algorithm A mma | ccsaq | lbfgs | slsqp",
+             "by less than R relative", "algorithm": "--algorithm A mma | ccsaq | lbfgs | "
+             "slsqp | newton", "hessian": "--hessian H newton's Hessian-vector product: full | "
+             "gauss_newton",
              "move_limit": "bound range", "particles": "--particles P nodes | quadrature | boundary: "
              "the moving cloud", "volumes": "--volumes V reference | deformed particle volumes",
              "method": "--method M exact | tree: the distance's pair sums",

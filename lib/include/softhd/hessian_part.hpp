@@ -4,6 +4,8 @@
 /// Gauss–Newton part. One name for the distance's product (docs/formulation.md §2.7), the state
 /// equation's (§4.4.1) and the objective's.
 
+#include <string>
+
 namespace softhd {
 
 /// The exact second derivative, or its Gauss–Newton part.
@@ -16,5 +18,11 @@ enum class HessianPart {
   /// the product is Sᵀ F_uu S (S = du/dm), positive semi-definite when F_uu is.
   gauss_newton,
 };
+
+/// "full" or "gauss_newton".
+std::string to_string(HessianPart part);
+/// The HessianPart named by to_string; throws InvalidArgument naming `what` for another name.
+HessianPart hessian_part_from_string(const std::string& name,
+                                     const std::string& what = "Hessian part");
 
 }  // namespace softhd

@@ -2,6 +2,8 @@
 
 #include "softhd/control/moving_cloud.hpp"
 
+#include <string>
+
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/cloud.hpp"
@@ -64,6 +66,31 @@ Eigen::VectorXd MovingCloud::pullback(const Eigen::VectorXd& u, const HausdorffR
                                        r.gradient_points, r.gradient_volumes);
   return fe::cloud_pullback(assembler_, u, cloud_points(particles_), cloud_volumes(volumes_),
                             r.gradient_points, r.gradient_volumes);
+}
+
+Eigen::MatrixXd MovingCloud::push_forward(const Eigen::VectorXd& w) const {
+  const fe::Mesh& mesh = assembler_.mesh();
+  const int dim = mesh.dim;
+  if (volumes_ != ParticleVolumes::reference)
+    throw InvalidArgument("volumes: the points' directions (push_forward) need reference volumes");
+  if (w.size() != mesh.num_nodes() * dim)
+    throw InvalidArgument("push_forward: w has " + std::to_string(w.size()) +
+                          " entries, expected " + std::to_string(mesh.num_nodes() * dim));
+  const Eigen::MatrixXd W = w.reshaped(dim, mesh.num_nodes()).transpose();  // nodes by dim
+  if (particles_ == Particles::nodes) return W;                             // x_i = X_i + u_i
+  if (particles_ == Particles::boundary) {  // x_k = X_{n_k} + u_{n_k}
+    Eigen::MatrixXd V(static_cast<Eigen::Index>(facets_.nodes.size()), dim);
+    for (Eigen::Index k = 0; k < V.rows(); ++k) V.row(k) = W.row(facets_.nodes[k]);
+    return V;
+  }
+  const fe::ReferenceGeometry& g = assembler_.geometry();  // x_q = Σ_a N_a(ξ_q) (X_a + u_a)
+  const int nq = g.points_per_element(), nen = mesh.nodes_per_element();
+  Eigen::MatrixXd V = Eigen::MatrixXd::Zero(mesh.num_elements() * nq, dim);
+  for (Eigen::Index e = 0; e < mesh.num_elements(); ++e)
+    for (int q = 0; q < nq; ++q)
+      for (int a = 0; a < nen; ++a)
+        V.row(e * nq + q) += g.shape_values()(q, a) * W.row(mesh.elements(e, a));
+  return V;
 }
 
 Eigen::Array<bool, Eigen::Dynamic, 1> MovingCloud::visible_from(

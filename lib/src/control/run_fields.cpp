@@ -35,6 +35,7 @@ void copy_form(const Options& from, Options& to, F field) {
 const std::vector<RunField>& tracking_run_fields() {
   static const std::vector<RunField> fields{
       {"optimiser.algorithm", "--algorithm", "algorithm", "", SOFTHD_COPY(optimiser.algorithm)},
+      {"optimiser.hessian", "--hessian", "hessian", "", SOFTHD_COPY(optimiser.hessian)},
       {"optimiser.max_iterations", "--max-iter", "max_iter", "",
        SOFTHD_COPY(optimiser.max_iterations)},
       {"optimiser.max_evaluations", "", "",

@@ -20,6 +20,9 @@ const char* kHistoryHeader =
     "iteration,evaluation,J,rho,A,B,rho_over_floor,projected_gradient_norm,newton_iterations,"
     "factorizations,seconds_state,seconds_distance,seconds_adjoint,seconds,level";
 
+// With the optimiser newton (an objective with the Hessian-vector product): its step.
+const char* kNewtonHeader = ",cg_iterations,hessian_products,trust_radius";
+
 // With a pose: the twist of the best pose so far (ω, t, log s of P, scan → body).
 const char* kPoseHeader = ",pose_w1,pose_w2,pose_w3,pose_t1,pose_t2,pose_t3,pose_log_s";
 
@@ -78,7 +81,7 @@ nlohmann::json matrix_json(const Eigen::MatrixXd& m) {
   return j;
 }
 
-std::string history_row(const TrackingIteration& it) {
+std::string history_row(const TrackingIteration& it, bool newton) {
   std::vector<double> v{double(it.iteration),
                         double(it.evaluation),
                         it.J,
@@ -94,6 +97,8 @@ std::string history_row(const TrackingIteration& it) {
                         it.seconds_adjoint,
                         it.seconds,
                         double(it.level)};
+  if (newton)
+    v.insert(v.end(), {double(it.cg_iterations), double(it.hessian_products), it.trust_radius});
   for (Eigen::Index k = 0; k < it.pose.size(); ++k) v.push_back(it.pose[k]);
   std::ostringstream s;
   s.precision(10);
@@ -131,7 +136,7 @@ void RunFiles::start(const ShapeTrackingSummary& start, const Eigen::VectorXd& m
 
 void RunFiles::iteration(const TrackingIteration& it, const Eigen::VectorXd& m,
                          const Eigen::VectorXd& u) {
-  rows_.push_back(history_row(it));
+  rows_.push_back(history_row(it, objective_.options().second_order));
   // A replayed iteration's VTU was written by the process that made it.
   if (vtu_every_ > 0 && it.iteration % vtu_every_ == 0) {
     if (it.replayed)
@@ -151,7 +156,7 @@ void RunFiles::iteration(const TrackingIteration& it, const Eigen::VectorXd& m,
 }
 
 void RunFiles::level_iteration(const TrackingIteration& it) {
-  rows_.push_back(history_row(it));
+  rows_.push_back(history_row(it, objective_.options().second_order));
   if (!it.replayed) write_history();
 }
 
@@ -198,7 +203,8 @@ void RunFiles::list_body(int iteration) {
 void RunFiles::write_history() const {
   if (!writes_) return;
   std::ostringstream h;
-  h << kHistoryHeader << (pose_variables(objective_) > 0 ? kPoseHeader : "") << '\n';
+  h << kHistoryHeader << (objective_.options().second_order ? kNewtonHeader : "")
+    << (pose_variables(objective_) > 0 ? kPoseHeader : "") << '\n';
   for (const std::string& r : rows_) h << r << '\n';
   write_file_atomically((dir_ / "history.csv").string(), h.str());
 }

@@ -18,8 +18,9 @@
 namespace softhd::detail {
 
 /// history.csv's row of an iteration: its numbers with 10 significant digits (%.10g), a ratio
-/// without a floor left empty.
-std::string history_row(const TrackingIteration& it);
+/// without a floor left empty; with `newton`, its CG iterations, Hessian-vector products and
+/// trust radius after them.
+std::string history_row(const TrackingIteration& it, bool newton = false);
 /// A matrix as JSON: rows of numbers (a vector: a flat list).
 nlohmann::json matrix_json(const Eigen::MatrixXd& m);
 

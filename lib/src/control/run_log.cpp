@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -139,6 +140,38 @@ LoggedEvaluation decode_evaluation(Decoder& d) {
   return ev;
 }
 
+// A Hessian-vector product: flags (bit 1: ok), seconds, x, v, H v, the failure.
+std::string encode_product(const LoggedEvaluation& ev) {
+  const ShapeEvaluation& r = ev.result;
+  Encoder e;
+  e.put<std::uint8_t>(r.status == EvaluationStatus::ok ? 2 : 0);
+  e.put<double>(ev.seconds);
+  e.put_vector(ev.x.data(), static_cast<std::uint64_t>(ev.x.size()));
+  e.put_vector(ev.direction.data(), static_cast<std::uint64_t>(ev.direction.size()));
+  e.put_vector(r.gradient.data(), static_cast<std::uint64_t>(r.gradient.size()));
+  e.put_string(r.failure);
+  return e.out;
+}
+
+LoggedEvaluation decode_product(Decoder& d) {
+  LoggedEvaluation ev;
+  ShapeEvaluation& r = ev.result;
+  const auto flags = d.get<std::uint8_t>();
+  if (flags != 0 && flags != 2) d.fail("unknown product flags");
+  r.status = flags & 2 ? EvaluationStatus::ok : EvaluationStatus::state_failed;
+  ev.seconds = d.get<double>();
+  ev.x = d.vector();
+  ev.direction = d.vector();
+  r.gradient = d.vector();
+  r.failure = d.string();
+  if (ev.x.size() == 0 || ev.direction.size() != ev.x.size() || !ev.x.allFinite() ||
+      !ev.direction.allFinite() || !std::isfinite(ev.seconds))
+    d.fail("a Hessian-vector product without a finite control and direction");
+  if (r.status == EvaluationStatus::ok && r.gradient.size() != ev.x.size())
+    d.fail("a Hessian-vector product of the wrong size");
+  return ev;
+}
+
 void encode_state(Encoder& e, const fe::State& state) {
   e.put_vector(state.u.data(), static_cast<std::uint64_t>(state.u.size()));
   e.put<std::uint64_t>(static_cast<std::uint64_t>(state.m_qp.rows()));
@@ -266,6 +299,8 @@ RunLog parse_run_log(const std::string& bytes, const std::string& source) {
       has_fingerprint = true;
     } else if (kind == 'E') {
       log.evaluations.push_back(decode_evaluation(d));
+    } else if (kind == 'P') {
+      log.evaluations.push_back(decode_product(d));
     } else {
       d.fail("unknown record kind");
     }
@@ -377,7 +412,10 @@ RunLogWriter::~RunLogWriter() {
 }
 
 void RunLogWriter::append(const LoggedEvaluation& evaluation) {
-  write_record('E', encode_evaluation(evaluation));
+  if (evaluation.direction.size() != 0)
+    write_record('P', encode_product(evaluation));
+  else
+    write_record('E', encode_evaluation(evaluation));
 }
 
 void RunLogWriter::write_states(const RunSnapshot& snapshot) {

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <optional>
 
@@ -108,7 +109,26 @@ struct ShapeObjective::Impl {
     f.camera_mask = cloud.visible_from(u, *camera);
     return f;
   }
-  ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient, const Eigen::VectorXd& xi);
+  /// The evaluation at m; with `converged` (a state converged for m) the solve starts there.
+  /// `remember`: the converged state joins the warm starts (not when re-establishing a point).
+  ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient, const Eigen::VectorXd& xi,
+                           const fe::State* converged = nullptr, bool remember = true);
+
+  /// A point of hessian_product (options.second_order): a control evaluated with the gradient,
+  /// its converged state and its distance result (with the second-order quantities).
+  struct HessianPoint {
+    Eigen::VectorXd m;
+    fe::State state;
+    HausdorffResult distance;
+    std::uint64_t generation = 0;  // path.generation() right after its adjoint
+    bool valid = false;
+  };
+  HessianPoint last_gradient;  // the last evaluation with the gradient
+  HessianPoint last_product;   // the point of the last product
+  /// The point m with its state and adjoint current in the solver (re-established if needed).
+  const HessianPoint& hessian_point(const Eigen::VectorXd& m, HessianProductStats* stats);
+  Eigen::VectorXd hessian_product(const Eigen::VectorXd& m, const Eigen::VectorXd& v,
+                                  HessianPart part, HessianProductStats* stats);
 };
 
 void ShapeObjectiveOptions::validate() const {
@@ -163,6 +183,17 @@ void ShapeObjectiveOptions::validate() const {
                           " (a camera selects the visible distance)");
   }
   newton.validate();
+  if (second_order && volumes != ParticleVolumes::reference)
+    throw InvalidArgument(
+        "volumes: the Hessian-vector product (second_order, for optimiser.algorithm newton) "
+        "supports "
+        "reference volumes only, got " +
+        to_string(volumes));
+  if (second_order && pose)
+    throw InvalidArgument(
+        "pose: the Hessian-vector product (second_order, for optimiser.algorithm newton) does not "
+        "support a "
+        "joint pose");
 }
 
 ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::ControlSpace& control,
@@ -242,7 +273,8 @@ ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient
 /// J = ρ̃(Q_ξ(X(u(m))), Y) + J_reg(m); with `gradient` the adjoint chain:
 ///   g_x' = ∂ρ̃/∂x' → (dJ/dξ, g_x = s R_ξᵀ g_x') → g_u = ∂X/∂uᵀ g_x → K λ = g_u → dJ/dm.
 ShapeEvaluation ShapeObjective::Impl::evaluate(const Eigen::VectorXd& m, bool gradient,
-                                               const Eigen::VectorXd& xi) {
+                                               const Eigen::VectorXd& xi,
+                                               const fe::State* converged, bool remember) {
   if (m.size() != control.size()) {
     throw InvalidArgument("control has " + std::to_string(m.size()) + " values, expected " +
                           std::to_string(control.size()));
@@ -251,7 +283,7 @@ ShapeEvaluation ShapeObjective::Impl::evaluate(const Eigen::VectorXd& m, bool gr
   // State: warm start from the kept state with the nearest control.
   auto t0 = std::chrono::steady_clock::now();
   fe::State state;
-  const StateSolve ss = path.solve(m, &state);
+  const StateSolve ss = converged ? path.resolve(m, *converged, &state) : path.solve(m, &state);
   ev.newton_iterations = ss.newton_iterations;
   ev.factorizations = ss.factorizations;
   ev.seconds_state = seconds_since(t0);
@@ -259,13 +291,14 @@ ShapeEvaluation ShapeObjective::Impl::evaluate(const Eigen::VectorXd& m, bool gr
     ev.failure = ss.summary.BriefReport();
     return ev;
   }
-  path.remember(m, state);
+  if (remember) path.remember(m, state);
 
   // Distance (and its gradient w.r.t. the moved points).
   t0 = std::chrono::steady_clock::now();
   HausdorffRequest req;
   req.form = form(state.u, camera_at(xi));  // this state's visible set, fixed in the gradient
   req.gradient_points = gradient;
+  req.hessian_points = gradient && options.second_order;
   req.gradient_volumes = gradient && options.volumes == ParticleVolumes::deformed;
   // Clamped nodes do not move: skip their position gradients. Their deformed volumes do
   // change with the neighbouring nodes, so with deformed volumes every node is needed; with a
@@ -291,9 +324,76 @@ ShapeEvaluation ShapeObjective::Impl::evaluate(const Eigen::VectorXd& m, bool gr
     const Eigen::VectorXd g = cloud.pullback(state.u, r);
     ev.gradient = reg_gradient + path.adjoint(g, &ev.factorizations);
     ev.seconds_adjoint = seconds_since(t0);
+    if (options.second_order) last_gradient = {m, state, std::move(r), path.generation(), true};
   }
   ev.status = EvaluationStatus::ok;
   return ev;
+}
+
+Eigen::VectorXd ShapeObjective::hessian_product(const Eigen::VectorXd& m, const Eigen::VectorXd& v,
+                                                HessianPart part, HessianProductStats* stats) {
+  return impl_->hessian_product(m, v, part, stats);
+}
+
+const ShapeObjective::Impl::HessianPoint& ShapeObjective::Impl::hessian_point(
+    const Eigen::VectorXd& m, HessianProductStats* stats) {
+  const auto same = [&m](const HessianPoint& p) {
+    return p.valid && p.m.size() == m.size() && p.m == m;
+  };
+  HessianPoint* kept = same(last_gradient)  ? &last_gradient
+                       : same(last_product) ? &last_product
+                                            : nullptr;
+  if (!kept || kept->generation != path.generation()) {  // make m's state current again
+    stats->reestablished = true;
+    // From m's converged state: the kept point's, else a warm start's for exactly m (a
+    // resumed run's first product), else (none) the nearest warm start.
+    const fe::State* converged = kept ? &kept->state : nullptr;
+    for (const WarmStart& w : path.warm_starts())
+      if (!converged && w.m.size() == m.size() && w.m == m) converged = &w.state;
+    const std::optional<fe::State> start =
+        converged ? std::optional<fe::State>(*converged) : std::nullopt;
+    const ShapeEvaluation ev = evaluate(m, true, Eigen::VectorXd(), start ? &*start : nullptr,
+                                        /*remember=*/false);
+    stats->newton_iterations = ev.newton_iterations;
+    stats->factorizations = ev.factorizations;
+    if (ev.status != EvaluationStatus::ok)
+      throw StateSolveError("hessian_product: the state solve at its control failed: " +
+                            ev.failure);
+    kept = &last_gradient;  // the evaluation's point
+  }
+  if (kept != &last_product) last_product = *kept;
+  return last_product;
+}
+
+/// H v = ∇²J_reg v + s (docs/formulation.md §4.4.1), F(u, m) = ρ̃(X(u)) + J_reg(m) having no
+/// m–u cross term and X(u) affine in u:
+///   w = (du/dm) v,  V = (∂X/∂u) w,  q = (∂X/∂u)ᵀ ∇²ρ̃ V,  s = the state's side of (v, w, q);
+/// J_reg is quadratic and homogeneous, so ∇²J_reg v is its gradient at v.
+Eigen::VectorXd ShapeObjective::Impl::hessian_product(const Eigen::VectorXd& m,
+                                                      const Eigen::VectorXd& v, HessianPart part,
+                                                      HessianProductStats* stats) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!options.second_order)
+    throw InvalidArgument(
+        "hessian_product needs ShapeObjectiveOptions::second_order (set when the objective is "
+        "made)");
+  for (const Eigen::VectorXd* x : {&m, &v})
+    if (x->size() != control.size() || !x->allFinite())
+      throw InvalidArgument("hessian_product: m and v must be finite with " +
+                            std::to_string(control.size()) + " values, got " +
+                            std::to_string(x->size()));
+  HessianProductStats local;
+  const HessianPoint& p = hessian_point(m, &local);
+  const Eigen::VectorXd w = path.sensitivity(v);
+  HausdorffResult q_points;  // ∇²ρ̃ V as a point gradient, for the pull-back
+  q_points.gradient_points = target.hessian_product(p.distance, cloud.push_forward(w), part);
+  const Eigen::VectorXd q = cloud.pullback(p.state.u, q_points);
+  Eigen::VectorXd Hv;
+  control.regularisation(v, options.tikhonov_mass, options.tikhonov_gradient, &Hv);
+  Hv += path.hessian_product(v, w, q, part);
+  local.seconds = seconds_since(t0);
+  if (stats) *stats = local;
+  return Hv;
 }
 
 }  // namespace softhd

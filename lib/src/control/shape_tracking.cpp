@@ -74,11 +74,7 @@ class Recorder {
   ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient, fe::State* best) {
     if (replaying()) {
       const LoggedEvaluation& e = log_.evaluations[next_];
-      if (e.x.size() != m.size() || std::memcmp(e.x.data(), m.data(), m.size() * 8) != 0 ||
-          e.gradient != gradient)
-        throw InvalidArgument("the checkpoint's evaluation " + std::to_string(next_ + 1) +
-                              " is at another control than the resumed run asks for (a "
-                              "different build or optimiser?); start afresh without resume");
+      if (e.direction.size() != 0 || !same_bits(e.x, m) || e.gradient != gradient) mismatch();
       ++next_;
       base_ = e.seconds;
       t_base_ = Clock::now();
@@ -87,7 +83,7 @@ class Recorder {
     restore(best);
     ++next_;
     const Eigen::Index np = pose_variables(objective_), nm = m.size() - np;
-    LoggedEvaluation e{m, gradient, objective_.evaluate(m.head(nm), gradient, m.tail(np)), 0.0};
+    LoggedEvaluation e{m, gradient, objective_.evaluate(m.head(nm), gradient, m.tail(np)), 0.0, {}};
     if (np > 0 && e.result.gradient.size() == nm) {
       e.result.gradient.conservativeResize(nm + np);
       e.result.gradient.tail(np) = e.result.pose_gradient;
@@ -96,6 +92,36 @@ class Recorder {
     e.seconds = seconds();
     if (writer_) writer_->append(e);
     return e.result;
+  }
+  /// newton's Hessian-vector product at x in the direction v: from the log, or made (and
+  /// logged). False if it failed (a failed state solve at x; *failure says why).
+  bool hessian_product(const Eigen::VectorXd& x, const Eigen::VectorXd& v, HessianPart part,
+                       fe::State* best, Eigen::VectorXd* Hv, HessianProductStats* stats,
+                       std::string* failure) {
+    if (replaying()) {
+      const LoggedEvaluation& e = log_.evaluations[next_];
+      if (e.direction.size() == 0 || !same_bits(e.x, x) || !same_bits(e.direction, v)) mismatch();
+      ++next_;
+      base_ = e.seconds;
+      t_base_ = Clock::now();
+      *Hv = e.result.gradient;
+      *failure = e.result.failure;
+      return e.result.status == EvaluationStatus::ok;
+    }
+    restore(best);
+    ++next_;
+    LoggedEvaluation e{x, false, ShapeEvaluation(), 0.0, v};
+    try {
+      e.result.gradient = objective_.hessian_product(x, v, part, stats);
+      e.result.status = EvaluationStatus::ok;
+    } catch (const StateSolveError& error) {
+      e.result.failure = error.what();  // status state_failed
+    }
+    e.seconds = seconds();
+    if (writer_) writer_->append(e);
+    *Hv = e.result.gradient;
+    *failure = e.result.failure;
+    return e.result.status == EvaluationStatus::ok;
   }
   /// After an accepted iteration on the checkpoint schedule: the warm-start states saved
   /// (when a checkpoint is written) and the solver renewed, unless still replaying.
@@ -130,6 +156,15 @@ class Recorder {
   }
 
  private:
+  static bool same_bits(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+    return a.size() == b.size() &&
+           std::memcmp(a.data(), b.data(), static_cast<std::size_t>(a.size()) * 8) == 0;
+  }
+  [[noreturn]] void mismatch() const {
+    throw InvalidArgument("the checkpoint's evaluation " + std::to_string(next_ + 1) +
+                          " is at another control than the resumed run asks for (a "
+                          "different build or optimiser?); start afresh without resume");
+  }
   using Clock = std::chrono::steady_clock;
   ShapeObjective& objective_;
   RunLog log_;
@@ -158,6 +193,9 @@ TrackingIteration record(const IterationRecord& rec, const ShapeEvaluation& last
   it.seconds_state = last.seconds_state;
   it.seconds_distance = last.seconds_distance;
   it.seconds_adjoint = last.seconds_adjoint;
+  it.cg_iterations = rec.cg_iterations;
+  it.hessian_products = rec.hessian_products;
+  it.trust_radius = rec.trust_radius;
   return it;
 }
 
@@ -203,8 +241,8 @@ void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimize
     s->shape_error_rms = rms;
   }
   s->seconds = recorder.seconds();
-  s->seconds_optimizer =
-      std::max(0.0, s->seconds - s->seconds_state - s->seconds_distance - s->seconds_adjoint);
+  s->seconds_optimizer = std::max(0.0, s->seconds - s->seconds_state - s->seconds_distance -
+                                           s->seconds_adjoint - s->seconds_hessian);
 }
 
 }  // namespace
@@ -255,6 +293,7 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
                    " target " + exact_text(o.target_value) + " penalty " +
                    exact_text(o.failure_penalty) + " move limit " + exact_text(o.move_limit) +
                    " round " + std::to_string(o.round_evaluations);
+  if (o.algorithm == Algorithm::newton) f["optimiser"] += " hessian " + to_string(options.hessian);
   return f;
 }
 
@@ -369,6 +408,10 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
                                  const ShapeTrackingOptions& options,
                                  const ShapeTrackingCallbacks& callbacks) {
   options.validate();
+  if (options.optimizer.algorithm == Algorithm::newton && !objective.options().second_order)
+    throw InvalidArgument(
+        "optimizer.algorithm newton needs the objective's Hessian-vector product "
+        "(ShapeObjectiveOptions::second_order)");
   const fe::Mesh& mesh = objective.assembler().mesh();
   if (map_displacement && map_displacement->size() != mesh.num_nodes() * mesh.dim)
     throw InvalidArgument("track_shape: the known map has the wrong number of entries");
@@ -425,6 +468,21 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     if (g) *g = last.gradient;
     return true;
   };
+  // newton: H v at the accepted iterate x (objective.hessian_product re-establishes its state
+  // after a rejected trial); a failed state solve there ends the run at the best point.
+  const BoundedHessVec hess_vec = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& v,
+                                      Eigen::VectorXd* Hv) {
+    check_interrupt("between Hessian-vector products");
+    const bool replayed = recorder.replaying();
+    HessianProductStats st;
+    std::string failure;
+    const bool ok = recorder.hessian_product(x, v, options.hessian, &best_state, Hv, &st, &failure);
+    s.seconds_hessian += st.seconds;
+    s.newton_iterations += st.newton_iterations;
+    s.factorizations += st.factorizations;
+    if (!ok && callbacks.on_failure && !replayed) callbacks.on_failure(failure);
+    return ok;
+  };
   int iterations = 0;  // accepted so far (for the message of an interrupt)
   const auto on_iteration = [&](const IterationRecord& rec, const Eigen::VectorXd& x) {
     iterations = rec.iteration;
@@ -449,7 +507,9 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
       run_optimizer_options(options, nm, np, recorder.logged_seconds());
   BoundedOptimizerSummary r;
   try {
-    r = minimise(f, x0, x_lower, x_upper, opt, on_iteration);
+    r = opt.algorithm == Algorithm::newton
+            ? minimise(f, hess_vec, x0, x_lower, x_upper, opt, on_iteration)
+            : minimise(f, x0, x_lower, x_upper, opt, on_iteration);
   } catch (const Interrupted& e) {
     // The checkpoint holds every evaluation finished and the states of the last save, as
     // when the process is killed: resuming it continues the uninterrupted run.

@@ -42,6 +42,7 @@ void StatePath::restore(const std::vector<WarmStart>& states) {
       throw InvalidArgument("warm starts: a state does not fit this problem");
   }
   cache_.assign(states.begin(), states.end());
+  ++generation_;
 }
 
 void StatePath::use_coarse_level(const fe::Assembler& coarse) {
@@ -50,6 +51,7 @@ void StatePath::use_coarse_level(const fe::Assembler& coarse) {
 }
 
 void StatePath::reset() {
+  ++generation_;
   solver_->reset();
   if (coarse_) coarse_newton_.emplace(*coarse_, newton_);
   coarse_active_ = true;
@@ -60,6 +62,22 @@ Eigen::VectorXd StatePath::adjoint(const Eigen::VectorXd& g, int* factorizations
   Eigen::VectorXd out = solver_->gradient(g);
   *factorizations += solver_->adjoint_factorizations();
   return out;
+}
+
+StateSolve StatePath::resolve(const Eigen::VectorXd& m, const fe::State& converged,
+                              fe::State* state) {
+  StateSolve out;
+  out.summary = solve_from(converged, m, state);
+  out.newton_iterations = out.summary.newton_iterations;
+  out.factorizations = out.summary.factorizations;
+  return out;
+}
+
+Eigen::VectorXd StatePath::sensitivity(const Eigen::VectorXd& v) { return solver_->sensitivity(v); }
+
+Eigen::VectorXd StatePath::hessian_product(const Eigen::VectorXd& v, const Eigen::VectorXd& w,
+                                           const Eigen::VectorXd& q, HessianPart part) {
+  return solver_->hessian_product(v, w, q, part);
 }
 
 Eigen::MatrixXd StatePath::coarse_control(const Eigen::VectorXd& m) const {
@@ -118,6 +136,7 @@ const WarmStart& StatePath::nearest(const Eigen::VectorXd& m) const {
 /// The fine solve to m from `start`; its end state (converged or not) in *state.
 fe::NewtonSummary StatePath::solve_from(const fe::State& start, const Eigen::VectorXd& m,
                                         fe::State* state) {
+  ++generation_;
   solver_->set_state(start);
   const fe::NewtonSummary s = solver_->solve(m);
   *state = solver_->state();

@@ -122,12 +122,15 @@ void TrackingRunOptions::validate() const {
         std::to_string(op.max_evaluations));
   if (distance.method == Method::nearest)
     throw InvalidArgument("distance.method: nearest has no gradient; expected exact or tree");
-  // The optimiser's newton needs a Hessian-vector product of J(m), which the tracking layer
-  // does not provide yet (the distance's exists, the state's second-order terms do not).
-  if (op.algorithm == Algorithm::newton)
-    throw InvalidArgument(
-        "optimiser.algorithm: newton is not available for shape tracking yet (it needs the "
-        "Hessian-vector product of J(m)); expected mma, ccsaq, lbfgs or slsqp");
+  if (op.hessian != HessianPart::full && op.algorithm != Algorithm::newton)
+    throw InvalidArgument("optimiser.hessian " + to_string(op.hessian) +
+                          " is a setting of optimiser.algorithm newton (got " +
+                          to_string(op.algorithm) + ")");
+  // The state's second-order side exists for the serial Newton (fe::StateSolver) only.
+  if (op.algorithm == Algorithm::newton && state.backend != fe::StateBackend::kCholmod)
+    throw InvalidArgument("state.backend " + fe::to_string(state.backend) +
+                          ": optimiser.algorithm newton needs the cholmod backend (its "
+                          "Hessian-vector product)");
   if (output.vtu_every < 0) throw InvalidArgument("output.vtu_every must be >= 0");
   if (!(memory_limit > 0.0)) throw InvalidArgument("memory_limit must be > 0");
   validate_levels(levels);
@@ -161,6 +164,7 @@ ShapeObjectiveOptions TrackingRunOptions::objective() const {
   o.volumes = distance.volumes;
   o.tikhonov_mass = tikhonov.mass;
   o.tikhonov_gradient = tikhonov.gradient;
+  o.second_order = optimiser.algorithm == Algorithm::newton;  // MMA's evaluations pay nothing
   return o;
 }
 
@@ -177,6 +181,7 @@ ShapeTrackingOptions TrackingRunOptions::tracking() const {
   o.max_seconds = optimiser.max_seconds;
   o.relative_change = optimiser.relative_change;
   o.move_limit = optimiser.move_limit;
+  t.hessian = optimiser.hessian;
   t.checkpoint_every = output.checkpoint_every;
   t.pose_bounds.move = pose.move;
   if (!output.folder.empty()) t.checkpoint = (fs::path(output.folder) / "checkpoint.bin").string();

@@ -51,6 +51,11 @@ class MovingCloud {
   /// and, with deformed volumes, its volumes (r.gradient_volumes). Throws InternalError if a
   /// gradient it needs was not computed.
   Eigen::VectorXd pullback(const Eigen::VectorXd& u, const HausdorffResult& r) const;
+  /// The points' directions V = (∂X/∂u) w (N by dim) for a displacement direction w (num_dofs
+  /// entries), the transpose of pullback's position part: X(u) is affine in u, so for nodes
+  /// V_i = w_i, for quadrature points V_q = Σ_a N_a(ξ_q) w_a, for boundary nodes V_k = w_{n_k}.
+  /// Throws InvalidArgument for deformed volumes (they move with u too) or a w of the wrong size.
+  Eigen::MatrixXd push_forward(const Eigen::VectorXd& w) const;
   /// The points with a free dof (the others never move: their gradients can be skipped);
   /// empty for quadrature points.
   const Eigen::Array<bool, Eigen::Dynamic, 1>& free_points() const { return free_points_; }

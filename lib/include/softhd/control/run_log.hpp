@@ -14,7 +14,8 @@
 ///
 /// Files: 8 magic bytes ("SHDLOG01", "SHDSTA01"), then records [kind u8][payload length
 /// u64][payload][FNV-1a 64 of kind, length and payload], little-endian doubles stored
-/// bitwise. Log kinds: 'H' run id and fingerprint (first, once), 'E' one evaluation; the
+/// bitwise. Log kinds: 'H' run id and fingerprint (first, once), 'E' one evaluation, 'P' one
+/// Hessian-vector product (optimiser newton: x, the direction v, H v, or its failure); the
 /// states file holds one 'S' record (run id, counts, states). A torn last log record (a
 /// run killed while writing it) is dropped; anything else malformed is refused.
 
@@ -38,17 +39,20 @@ std::string content_hash(const void* data, std::size_t bytes);
 /// Exact text of a double (hex float), for fingerprints.
 std::string exact_text(double value);
 
-/// One evaluation as the optimiser saw it.
+/// One evaluation as the optimiser saw it, or (with a direction) one Hessian-vector product.
 struct LoggedEvaluation {
   Eigen::VectorXd x;       ///< the control the optimiser asked about
   bool gradient = false;   ///< the optimiser asked for the gradient
-  ShapeEvaluation result;  ///< what the objective returned
+  ShapeEvaluation result;  ///< what the objective returned (a product: H v in gradient)
   double seconds = 0.0;    ///< the run's wall time (over all resumes) when it ended
+  /// Empty: an evaluation. Else a Hessian-vector product at x in this direction v: its result
+  /// holds status (ok, or state_failed with the failure), H v as `gradient`, nothing else.
+  Eigen::VectorXd direction;
 };
 
 /// The objective's warm-start states after a given number of evaluations.
 struct RunSnapshot {
-  std::int64_t evaluations = 0;   ///< evaluations logged before it
+  std::int64_t evaluations = 0;   ///< evaluations (and Hessian-vector products) logged before it
   std::int64_t iterations = 0;    ///< accepted iterations by then
   std::vector<WarmStart> states;  ///< StatePath::warm_starts(), most recent first
   fe::State best;  ///< the state of the best control so far (the final solve starts there)

@@ -69,6 +69,10 @@ struct ShapeObjectiveOptions {
   /// With a pose: rigid (ξ = (ω, v), 6 variables) or similarity (ξ = (ω, v, σ), 7, σ = log of
   /// the scale change). Default rigid.
   scan::PoseKind pose_kind = scan::PoseKind::rigid;
+  /// Keep what ShapeObjective::hessian_product needs at each evaluation with the gradient (the
+  /// distance's second-order quantities, HausdorffRequest::hessian_points). False (default):
+  /// evaluations pay nothing for it. Needs reference volumes and no pose.
+  bool second_order = false;
 
   /// Throws InvalidArgument naming the first invalid field (the distance's parameters and
   /// form, and the Newton options included). The visible mask's size is checked against the
@@ -104,6 +108,16 @@ struct ShapeEvaluation {
   std::string failure;  ///< for people: Newton's one-line report of a failed state solve
 };
 
+/// What one ShapeObjective::hessian_product cost.
+struct HessianProductStats {
+  /// The point's state, distance and adjoint were made again first (evaluations moved the
+  /// state since, or m was not kept); the two below are that evaluation's.
+  bool reestablished = false;
+  int newton_iterations = 0;  ///< of the re-establishing solve (0 normally)
+  int factorizations = 0;     ///< of the re-establishing solve and adjoint
+  double seconds = 0.0;       ///< wall time of the product (re-establishing included)
+};
+
 /// J(m) and dJ/dm for one body, control space and target, as a composition: the state path
 /// m ↦ u(m) (StatePath), the moving cloud u ↦ X(u) (MovingCloud), optionally the pose map
 /// X ↦ Q_ξ(X) (scan::PoseMap), the distance form against the target (its trees built once),
@@ -131,6 +145,20 @@ class ShapeObjective {
   /// or ξ of the wrong size or not finite.
   ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient,
                            const Eigen::VectorXd& xi = Eigen::VectorXd());
+
+  /// H v, the reduced Hessian of J(m) (docs/formulation.md §4.4.1) at the control m applied to
+  /// v (one value per control each):
+  ///   w = (du/dm) v, V = (∂X/∂u) w, q = (∂X/∂u)ᵀ ∇²ρ̃ V (the distance's product of `part`),
+  ///   s = the state's side for (v, w, q, part), H v = ∇²J_reg v + s.
+  /// m is normally the control of the last evaluate(m, gradient = true) or of the last product
+  /// (both are kept): if evaluations moved the state since (a rejected trial), m's state,
+  /// distance and adjoint are re-established first from its kept converged state (0 Newton
+  /// iterations); another m is evaluated first (from the nearest warm start). Needs
+  /// options().second_order; throws InvalidArgument without it or for an m or v of the wrong
+  /// size or not finite, and StateSolveError if the state solve at m fails.
+  Eigen::VectorXd hessian_product(const Eigen::VectorXd& m, const Eigen::VectorXd& v,
+                                  HessianPart part = HessianPart::full,
+                                  HessianProductStats* stats = nullptr);
 
   /// The states solved so far: warm starts, two-level starts, solver resets.
   StatePath& state_path();

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,6 +35,13 @@ struct TrackingIteration {
   double projected_gradient_norm = 0.0;  ///< in the optimiser's scaled variables
   int newton_iterations = 0;             ///< of this evaluation's state solve
   int factorizations = 0;                ///< numeric factorisations (state solve and adjoint)
+  ///@{
+  /// newton (IterationRecord): CG iterations of the accepted step, Hessian-vector products
+  /// since the previous iteration, and the trust radius after it (scaled variables); 0, 0, NaN
+  /// for the other algorithms.
+  int cg_iterations = 0, hessian_products = 0;
+  double trust_radius = std::numeric_limits<double>::quiet_NaN();
+  ///@}
   ///@{
   /// Wall time (seconds) of this evaluation's state solve, distance and adjoint.
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
@@ -69,6 +77,9 @@ struct PoseBounds {
 /// Settings of track_shape(); defaults per field.
 struct ShapeTrackingOptions {
   BoundedOptimizerOptions optimizer;  ///< algorithm, stopping, move limit
+  /// Algorithm::newton: the part of ShapeObjective::hessian_product it uses (the objective
+  /// must have ShapeObjectiveOptions::second_order).
+  HessianPart hessian = HessianPart::full;
   /// The self floor ρ̃(Ω_d, Ω_d) costs M² pairs: skipped (nullopt) above this many, e.g. for a
   /// 1e6-point scan (1e12 pairs, ~20 minutes on 2 cores). The default costs ~15 s.
   double self_floor_max_pairs = 1e10;
@@ -129,7 +140,10 @@ struct ShapeTrackingSummary {
   /// Total wall time (seconds) of the state solves, distances and adjoints.
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
   ///@}
-  double seconds_optimizer = 0.0;  ///< the rest: NLopt, records, callbacks
+  /// newton: total wall time (seconds) of the Hessian-vector products (re-established states
+  /// included); 0 for the other algorithms.
+  double seconds_hessian = 0.0;
+  double seconds_optimizer = 0.0;  ///< the rest: the optimiser, records, callbacks
   int newton_iterations = 0;       ///< over all state solves of this run
   int factorizations = 0;          ///< numeric factorisations (state solves and adjoints)
   Eigen::VectorXd control;         ///< the best m found

@@ -8,6 +8,7 @@
 /// tangent. Second-order solves (incremental state and adjoint) belong here too.
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <deque>
 #include <memory>
 #include <optional>
@@ -51,6 +52,21 @@ class StatePath {
   /// The state part of dJ/dm for g = ∂J/∂u at the last converged solve (fe::StateEquation::
   /// gradient); adds the adjoint's factorisations to *factorizations.
   Eigen::VectorXd adjoint(const Eigen::VectorXd& g, int* factorizations);
+  /// The solve at m from `converged`, a state already converged for m (0 Newton iterations,
+  /// or 1 at most): puts the solver back at an earlier point (e.g. the Hessian's, after a
+  /// rejected trial moved it) without adding a warm start.
+  StateSolve resolve(const Eigen::VectorXd& m, const fe::State& converged, fe::State* state);
+  ///@{
+  /// The state's side of the reduced Hessian-vector product at the last converged solve and
+  /// the adjoint made there: fe::StateEquation::sensitivity and
+  /// fe::StateEquation::hessian_product.
+  Eigen::VectorXd sensitivity(const Eigen::VectorXd& v);
+  Eigen::VectorXd hessian_product(const Eigen::VectorXd& v, const Eigen::VectorXd& w,
+                                  const Eigen::VectorXd& q, HessianPart part);
+  ///@}
+  /// Changes at every solve, reset and restore: a caller that keeps what goes with the
+  /// solver's current state (the Hessian point's adjoint) tells whether it still holds.
+  std::uint64_t generation() const { return generation_; }
 
   /// The warm-start states, most recent first (the rest state last until it is pushed out).
   const std::deque<WarmStart>& warm_starts() const { return cache_; }
@@ -93,6 +109,7 @@ class StatePath {
   std::optional<fe::NewtonSolver> coarse_newton_;
   bool coarse_active_ = true;           // false after a small step, until a hard fine solve
   std::deque<WarmStart> coarse_cache_;  // coarse equilibria by control, most recent first
+  std::uint64_t generation_ = 0;        // see generation()
 };
 
 }  // namespace softhd

@@ -47,7 +47,10 @@ struct TrackingRunOptions {
   /// The optimiser (BoundedOptimizerOptions) and its start.
   struct Optimiser {
     Algorithm algorithm = Algorithm::mma;  ///< mma
-    int max_iterations = 200;              ///< accepted iterations, over all resumes (200)
+    /// newton: the Hessian-vector product's part (ShapeObjective::hessian_product): the exact
+    /// reduced Hessian (full, the default) or its positive semi-definite Gauss–Newton part.
+    HessianPart hessian = HessianPart::full;
+    int max_iterations = 200;  ///< accepted iterations, over all resumes (200)
     int max_evaluations = 0;   ///< objective evaluations; 0 (default): 5 × max_iterations + 20
     double max_seconds = 0.0;  ///< wall-clock limit over all resumes; 0 (default): none
     double relative_change = 1e-6;  ///< stop when J changes by ≤ this relative, 3 times in a row
