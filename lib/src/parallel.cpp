@@ -35,6 +35,14 @@ int max_threads() {
 #endif
 }
 
+int thread_id() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
 int resolve_threads(int threads) {
   check_threads(threads);
 #ifdef _OPENMP

@@ -26,6 +26,8 @@ int max_threads();
 /// The threads of a loop asked for `threads` (a `threads` option): `threads` if > 0, else
 /// max_threads(); 1 without OpenMP. Throws InvalidArgument as check_threads.
 int resolve_threads(int threads);
+/// The calling thread's number in the current OpenMP team (0 outside one, or without OpenMP).
+int thread_id();
 /// Makes an OpenBLAS (if that is the BLAS loaded) single-threaded. CHOLMOD's supernodes
 /// on softhd's meshes are too small for BLAS threads to pay (bench_state solvers:
 /// factorisation 0.17 s with 1 and 0.16 s with 2 OpenBLAS threads on the torsion mesh),

@@ -9,21 +9,9 @@
 #include "softhd/error.hpp"
 #include "softhd/parallel.hpp"
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 namespace softhd::fe {
 
 namespace {
-
-int thread_id() {
-#ifdef _OPENMP
-  return omp_get_thread_num();
-#else
-  return 0;
-#endif
-}
 
 // Elements per parallel pass: the element results of one pass are buffered (about
 // kPassBytes of them), then added to R and K serially in element order (bounded memory,

@@ -8,21 +8,9 @@
 #include "softhd/error.hpp"
 #include "softhd/parallel.hpp"
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
 namespace softhd::fe {
 
 namespace {
-
-int thread_id() {
-#ifdef _OPENMP
-  return omp_get_thread_num();
-#else
-  return 0;
-#endif
-}
 
 // Elements per pass of an assembled vector: their element vectors are buffered, then added
 // serially in element order (bounded memory, deterministic for any thread count).
