@@ -1,9 +1,9 @@
 // bench_control (issue 6): run time against error for the whole optimisation.
 // Bending (arc target) and torsion (manufactured target, data/targets/) at two and three
 // mesh resolutions with the exact functional, and the tree method with τ ∈ {1e-2, 1e-6}
-// inside the loop on the second (the default tolerance and a tight one). Each run: time per iteration split into
-// state solve, functional value+gradient, adjoint and the rest (optimiser, records); the
-// iteration and time at which ρ̃ first fell to 2, 1.5, 1.25 × the matched floor; the
+// inside the loop on the second (the default tolerance and a tight one). Each run: time per
+// iteration split into state solve, functional value+gradient, adjoint and the rest (optimiser,
+// records); the iteration and time at which ρ̃ first fell to 2, 1.5, 1.25 × the matched floor; the
 // final true shape error; for torsion also ‖m − m*‖/‖m*‖ at the control vertices.
 //
 //   bench_control [--quick] [--csv FILE] [--scenes bending,torsion] [--max-iter N]

@@ -66,18 +66,35 @@ fe::Assembler beam() {
                        {{"x0", {}}});
 }
 
-TEST(Interrupt, ATrackingRunStopsBetweenEvaluationsAndItsCheckpointResumesIt) {
-  const fe::Assembler A = beam();
-  const fe::ControlSpace space(A.mesh(), A.geometry(), fe::ControlKind::kVertex);
+// The state of the beam under m(X) = -X3 / 0.3 (a known control through the thickness).
+fe::State known_state(const fe::Assembler& A, const fe::ControlSpace& space) {
   const Eigen::VectorXd m_true = -0.3 * space.positions(A.mesh()).col(2) / 0.3;
   fe::NewtonSolver newton(A);
   fe::State st = fe::rest_state(A);
-  ASSERT_TRUE(newton.solve(space.to_quadrature(m_true), &st).converged());
-  const PointCloud target =
+  EXPECT_TRUE(newton.solve(space.to_quadrature(m_true), &st).converged());
+  return st;
+}
+
+// The beam's tracking problem: the target is the known state's nodes (st.u is the map of the
+// matched floor), the bounds [-1, 0], the start 0.
+struct BeamProblem {
+  fe::Assembler A = beam();
+  fe::ControlSpace space{A.mesh(), A.geometry(), fe::ControlKind::kVertex};
+  fe::State st = known_state(A, space);
+  PointCloud target =
       fe::deformed_cloud(A, st.u, fe::CloudPoints::kNodes, fe::CloudVolumes::kDeformed);
-  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(space.size(), -1.0);
-  const Eigen::VectorXd hi = Eigen::VectorXd::Zero(space.size());
-  const Eigen::VectorXd m0 = Eigen::VectorXd::Zero(space.size());
+  Eigen::VectorXd lo = Eigen::VectorXd::Constant(space.size(), -1.0);
+  Eigen::VectorXd hi = Eigen::VectorXd::Zero(space.size());
+  Eigen::VectorXd m0 = Eigen::VectorXd::Zero(space.size());
+};
+
+TEST(Interrupt, ATrackingRunStopsBetweenEvaluationsAndItsCheckpointResumesIt) {
+  const BeamProblem p;
+  const fe::Assembler& A = p.A;
+  const fe::ControlSpace& space = p.space;
+  const fe::State& st = p.st;
+  const PointCloud& target = p.target;
+  const Eigen::VectorXd &lo = p.lo, &hi = p.hi, &m0 = p.m0;
   const std::string dir = ::testing::TempDir() + "/interrupt_tracking";
   std::filesystem::create_directories(dir);
   ShapeTrackingOptions to;
@@ -119,17 +136,12 @@ TEST(Interrupt, ATrackingRunStopsBetweenEvaluationsAndItsCheckpointResumesIt) {
 // The optimiser newton stops as MMA does: Ctrl-C (the installed check) between its evaluations
 // and Hessian-vector products, and an observer's StopRequest after an iteration.
 TEST(Interrupt, ANewtonRunStopsOnTheCheckAndOnAStopRequest) {
-  const fe::Assembler A = beam();
-  const fe::ControlSpace space(A.mesh(), A.geometry(), fe::ControlKind::kVertex);
-  const Eigen::VectorXd m_true = -0.3 * space.positions(A.mesh()).col(2) / 0.3;
-  fe::NewtonSolver newton(A);
-  fe::State st = fe::rest_state(A);
-  ASSERT_TRUE(newton.solve(space.to_quadrature(m_true), &st).converged());
-  const PointCloud target =
-      fe::deformed_cloud(A, st.u, fe::CloudPoints::kNodes, fe::CloudVolumes::kDeformed);
-  const Eigen::VectorXd lo = Eigen::VectorXd::Constant(space.size(), -1.0);
-  const Eigen::VectorXd hi = Eigen::VectorXd::Zero(space.size());
-  const Eigen::VectorXd m0 = Eigen::VectorXd::Zero(space.size());
+  const BeamProblem p;
+  const fe::Assembler& A = p.A;
+  const fe::ControlSpace& space = p.space;
+  const fe::State& st = p.st;
+  const PointCloud& target = p.target;
+  const Eigen::VectorXd &lo = p.lo, &hi = p.hi, &m0 = p.m0;
   ShapeTrackingOptions to;
   to.optimizer.algorithm = Algorithm::newton;
   to.optimizer.max_iterations = 6;
