@@ -77,7 +77,8 @@ fe::State known_state(const fe::Assembler& A, const fe::ControlSpace& space) {
 
 // The beam's tracking problem: the target is the known state's nodes (st.u is the map of the
 // matched floor), the bounds [-1, 0], the start 0.
-struct BeamProblem {
+class InterruptTracking : public ::testing::Test {
+ protected:
   fe::Assembler A = beam();
   fe::ControlSpace space{A.mesh(), A.geometry(), fe::ControlKind::kVertex};
   fe::State st = known_state(A, space);
@@ -88,13 +89,7 @@ struct BeamProblem {
   Eigen::VectorXd m0 = Eigen::VectorXd::Zero(space.size());
 };
 
-TEST(Interrupt, ATrackingRunStopsBetweenEvaluationsAndItsCheckpointResumesIt) {
-  const BeamProblem p;
-  const fe::Assembler& A = p.A;
-  const fe::ControlSpace& space = p.space;
-  const fe::State& st = p.st;
-  const PointCloud& target = p.target;
-  const Eigen::VectorXd &lo = p.lo, &hi = p.hi, &m0 = p.m0;
+TEST_F(InterruptTracking, ATrackingRunStopsBetweenEvaluationsAndItsCheckpointResumesIt) {
   const std::string dir = ::testing::TempDir() + "/interrupt_tracking";
   std::filesystem::create_directories(dir);
   ShapeTrackingOptions to;
@@ -135,13 +130,7 @@ TEST(Interrupt, ATrackingRunStopsBetweenEvaluationsAndItsCheckpointResumesIt) {
 
 // The optimiser newton stops as MMA does: Ctrl-C (the installed check) between its evaluations
 // and Hessian-vector products, and an observer's StopRequest after an iteration.
-TEST(Interrupt, ANewtonRunStopsOnTheCheckAndOnAStopRequest) {
-  const BeamProblem p;
-  const fe::Assembler& A = p.A;
-  const fe::ControlSpace& space = p.space;
-  const fe::State& st = p.st;
-  const PointCloud& target = p.target;
-  const Eigen::VectorXd &lo = p.lo, &hi = p.hi, &m0 = p.m0;
+TEST_F(InterruptTracking, ANewtonRunStopsOnTheCheckAndOnAStopRequest) {
   ShapeTrackingOptions to;
   to.optimizer.algorithm = Algorithm::newton;
   to.optimizer.max_iterations = 6;
