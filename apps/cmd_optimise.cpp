@@ -52,7 +52,9 @@ options:
   --hessian H        newton's Hessian-vector product: full | gauss_newton (default
                      {hessian}; gauss_newton: its positive semi-definite part)
   --move-limit D     each round of 10 evaluations moves m by at most D times the
-                     bound range (default {move_limit}; 0: no move limit)
+                     bound range (default {move_limit}; 0: no move limit); newton: its
+                     trust radius is at most D times the bound range, root-mean-square
+                     over the controls
   --particles P      nodes | quadrature | boundary: the moving cloud (default {particles};
                      boundary, 3D: the boundary nodes with their facet areas, which a
                      target block's "surface": true selects)

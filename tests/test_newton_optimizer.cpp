@@ -152,6 +152,36 @@ TEST(NewtonOptimizer, BoundedRosenbrockConvergesQuadratically) {
   EXPECT_GT(s.hessian_products, 0);
 }
 
+// A move limit bounds the trust radius: Δ ≤ move_limit ‖(u − l)/s‖₂ in z = x/s (s_k the least
+// power of 2 ≥ max(|l_k|, |u_k|): 2, or 1 on the cut pairs' y) after every iteration, the run
+// still converges to the minimiser, and without the limit the radius grows beyond it (the bound
+// acts).
+TEST(NewtonOptimizer, MoveLimitBoundsTheTrustRadius) {
+  Eigen::VectorXd x0, expected;
+  Rosenbrock r = rosenbrock_problem(100, &x0, &expected);
+  Eigen::VectorXd s(x0.size());
+  for (Eigen::Index k = 0; k < s.size(); ++k) {
+    s[k] = 1.0;
+    while (s[k] < std::max(std::fabs(r.lower[k]), std::fabs(r.upper[k]))) s[k] *= 2.0;
+  }
+  BoundedOptimizerOptions o = newton_options();
+  o.move_limit = 0.02;
+  const double radius_max = o.move_limit * (r.upper - r.lower).cwiseQuotient(s).norm();
+  const BoundedOptimizerSummary bounded =
+      minimise(r.objective(), r.hessian(), x0, r.lower, r.upper, o);
+  ASSERT_TRUE(bounded.converged()) << bounded.termination;
+  EXPECT_LE((bounded.x - expected).cwiseAbs().maxCoeff(), 1e-8);
+  ASSERT_FALSE(bounded.history.empty());
+  for (const IterationRecord& rec : bounded.history)
+    EXPECT_LE(rec.trust_radius, radius_max * (1 + 1e-12)) << "iteration " << rec.iteration;
+  const BoundedOptimizerSummary free =
+      minimise(r.objective(), r.hessian(), x0, r.lower, r.upper, newton_options());
+  ASSERT_TRUE(free.converged()) << free.termination;
+  double largest = 0.0;
+  for (const IterationRecord& rec : free.history) largest = std::max(largest, rec.trust_radius);
+  EXPECT_GT(largest, 2 * radius_max);
+}
+
 // f = ½ (x − c)ᵀ A (x − c), A the 1-D Laplacian + I (an M-matrix), on [0, 1]: the bounded
 // minimiser by projected Gauss–Seidel (which converges for M-matrices), an independent solve.
 TEST(NewtonOptimizer, BoundedConvexQuadraticInFewIterations) {
@@ -323,7 +353,7 @@ TEST(NewtonOptimizer, RejectsMissingProductAndInvalidOptions) {
   o.trust_region.cg_iterations = 0;
   test::expect_error<InvalidArgument>([&] { o.validate(); }, "trust_region.cg_iterations");
   o = newton_options();
-  o.trust_region.cauchy_step = 0;
+  o.trust_region.cauchy_step = -1;
   test::expect_error<InvalidArgument>([&] { o.validate(); }, "trust_region.cauchy_step");
   o = newton_options();
   o.trust_region.initial_radius = -1;

@@ -71,8 +71,8 @@ void TrustRegionOptions::validate() const {
   const auto finite_at_least = [](double v, double low) { return std::isfinite(v) && v >= low; };
   if (!finite_at_least(initial_radius, 0.0))
     throw InvalidArgument("optimizer: trust_region.initial_radius must be finite and >= 0");
-  if (!(finite_at_least(cauchy_step, 0.0) && cauchy_step > 0.0))
-    throw InvalidArgument("optimizer: trust_region.cauchy_step must be finite and > 0");
+  if (!finite_at_least(cauchy_step, 0.0))
+    throw InvalidArgument("optimizer: trust_region.cauchy_step must be finite and >= 0");
   if (!finite_at_least(value_scale, 0.0))
     throw InvalidArgument("optimizer: trust_region.value_scale must be finite and >= 0");
   if (cg_iterations < 1)

@@ -7,6 +7,7 @@
 #include <ROL_StatusTest.hpp>
 #include <ROL_StdVector.hpp>
 #include <ROL_TypeB_LinMoreAlgorithm.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -218,8 +219,20 @@ void Run::record(const ROL::TypeB::AlgorithmState<double>& state) {
     stop = Stop::iterations;
 }
 
+/// The largest trust radius (scaled variables): the move limit's counterpart,
+/// Δ_max = move_limit ‖z_hi − z_lo‖₂ (a Cauchy or CG step of root-mean-square at most
+/// move_limit × the bound range); ∞ (ROL's default) without a move limit.
+double max_radius(const BoundedOptimizerOptions& o, const Eigen::VectorXd& zlo,
+                  const Eigen::VectorXd& zhi) {
+  if (!(o.move_limit > 0.0)) return std::numeric_limits<double>::infinity();
+  return o.move_limit * (zhi - zlo).norm();
+}
+
 /// Lin–Moré's parameters from ours; ROL's defaults otherwise (ROL_TypeB_LinMoreAlgorithm_Def).
-ROL::ParameterList lin_more_parameters(const TrustRegionOptions& t) {
+/// Δ₀ = trust_region.initial_radius, or min(‖∇f̃(z₀)‖, Δ_max) where it is 0 (ROL starts from
+/// ‖∇f̃(z₀)‖ and caps only later radii); α₀ = trust_region.cauchy_step, or Δ₀/‖∇f̃(z₀)‖.
+ROL::ParameterList lin_more_parameters(const TrustRegionOptions& t, double gradient_norm,
+                                       double radius_max) {
   ROL::ParameterList list;
   list.sublist("General").set("Output Level", 0);
   ROL::ParameterList& krylov = list.sublist("General").sublist("Krylov");
@@ -227,10 +240,17 @@ ROL::ParameterList lin_more_parameters(const TrustRegionOptions& t) {
   krylov.set("Absolute Tolerance", t.cg_absolute_tolerance);
   krylov.set("Relative Tolerance", t.cg_relative_tolerance);
   ROL::ParameterList& tr = list.sublist("Step").sublist("Trust Region");
-  tr.set("Initial Radius", t.initial_radius > 0.0 ? t.initial_radius : -1.0);  // ≤ 0: ‖g‖
+  const double radius =
+      t.initial_radius > 0.0 ? t.initial_radius : std::min(gradient_norm, radius_max);
+  tr.set("Initial Radius", radius);
+  if (std::isfinite(radius_max)) tr.set("Maximum Radius", radius_max);
   ROL::ParameterList& lm = tr.sublist("Lin-More");
   lm.set("Relative Tolerance Exponent", 2.0);  // CG tolerance ∝ ‖g_free‖²: quadratic
-  lm.sublist("Cauchy Point").set("Initial Step Size", t.cauchy_step);
+  // α₀ = Δ₀/‖∇f̃(z₀)‖ unless given: the first Cauchy trial lands on the radius.
+  const double alpha = t.cauchy_step > 0.0                   ? t.cauchy_step
+                       : gradient_norm > 0.0 && radius > 0.0 ? radius / gradient_norm
+                                                             : 1.0;
+  lm.sublist("Cauchy Point").set("Initial Step Size", alpha);
   return list;
 }
 
@@ -281,7 +301,9 @@ class RolBackend : public detail::OptimizerBackend {
           "optimizer: algorithm newton needs a Hessian-vector product (hess_vec is empty)");
     Run run(p);
     if (start(&run)) {
-      ROL::ParameterList list = lin_more_parameters(p.options.trust_region);
+      const double radius_max = max_radius(p.options, run.zlo, run.zhi);
+      ROL::ParameterList list =
+          lin_more_parameters(p.options.trust_region, run.gz_eval.norm(), radius_max);
       LinMore algorithm(list);
       run.algorithm = &algorithm;
       algorithm.setStatusTest(ROL::makePtr<RunStatus>(run), false);  // ours alone

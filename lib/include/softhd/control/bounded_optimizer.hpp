@@ -46,9 +46,13 @@ using BoundedHessVec =
 /// with that iteration's trust_radius and cauchy_step and the run's value_scale (all in its
 /// IterationRecord and summary) continues as the uninterrupted run did.
 struct TrustRegionOptions {
-  double initial_radius = 0.0;  ///< Δ₀ (scaled variables); 0 = ‖∇f̃(z₀)‖, ROL's default
-  double cauchy_step = 1.0;     ///< α₀ of the Cauchy-point search (ROL's default 1)
-  double value_scale = 0.0;     ///< f̃ = f / value_scale; 0 = |f(x₀)| (1 if f(x₀) = 0)
+  /// Δ₀ (scaled variables); 0 = min(‖∇f̃(z₀)‖, Δ_max), Δ_max the move limit's bound
+  /// (BoundedOptimizerOptions::move_limit; without one, ‖∇f̃(z₀)‖, ROL's default).
+  double initial_radius = 0.0;
+  /// α₀ of the Cauchy-point search; 0 = Δ₀/‖∇f̃(z₀)‖, the step along the gradient that reaches
+  /// the initial radius (ROL's default, 1, can cost several products to reduce or extend)
+  double cauchy_step = 0.0;
+  double value_scale = 0.0;  ///< f̃ = f / value_scale; 0 = |f(x₀)| (1 if f(x₀) = 0)
   /// Truncated CG: at most this many iterations per step (over all faces of the box) ...
   int cg_iterations = 50;
   /// ... until the free part of the model gradient is ≤ min(cg_absolute_tolerance,
@@ -84,7 +88,11 @@ struct BoundedOptimizerOptions {
   /// the best point reaches a side of its box that is not a bound (the next round is
   /// centred there), so MMA does not spend evaluations on the box's own optimum. Keeps MMA's first
   /// steps (which may span half the bounds) from asking the state solver for huge deformations. 0 =
-  /// one NLopt run on the whole box.
+  /// one NLopt run on the whole box. For newton the trust radius is bounded instead:
+  /// Δ ≤ Δ_max = move_limit ‖(u − l)/s‖₂ in the scaled variables z = x/s (0: no bound, ROL's
+  /// default). Lin–Moré bounds the Cauchy step and each subspace (CG) step of an iteration by
+  /// Δ, so a step's root-mean-square over the variables is of the order of move_limit × their
+  /// bound range.
   double move_limit = 0.0;
   int round_evaluations = 10;  ///< evaluations per round when move_limit > 0
   /// Per variable: a factor in (0, 1] on the move limit (the box's half-width is

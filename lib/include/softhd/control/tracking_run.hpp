@@ -54,7 +54,9 @@ struct TrackingRunOptions {
     int max_evaluations = 0;   ///< objective evaluations; 0 (default): 5 × max_iterations + 20
     double max_seconds = 0.0;  ///< wall-clock limit over all resumes; 0 (default): none
     double relative_change = 1e-6;  ///< stop when J changes by ≤ this relative, 3 times in a row
-    double move_limit = 0.1;  ///< rounds of ≤ 10 evaluations move m by ≤ this × bound range (0.1)
+    /// Rounds of ≤ 10 evaluations move m by ≤ this × bound range; newton: the trust radius is
+    /// ≤ this × the bound range, root-mean-square over the controls (0.1)
+    double move_limit = 0.1;
     /// The starting control (one value per control, each within the scene's control bounds;
     /// TrackingRun refuses any other), e.g. an earlier run's: a staged run (docs/formulation.md
     /// §8.10). None (default): the scene's control.initial everywhere; an empty vector is
