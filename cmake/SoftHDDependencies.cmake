@@ -124,6 +124,10 @@ function(softhd_target_defaults target)
   if(SOFTHD_FUZZ)
     # Coverage instrumentation for libFuzzer everywhere; only fuzz targets link its main.
     target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link)
+    if(SOFTHD_FUZZ_IGNORELIST)  # the files left uninstrumented (clang's src: patterns)
+      target_compile_options(${target} PRIVATE
+        -fsanitize-coverage-ignorelist=${SOFTHD_FUZZ_IGNORELIST})
+    endif()
   endif()
 endfunction()
 

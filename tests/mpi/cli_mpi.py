@@ -154,6 +154,13 @@ if one.returncode == 0 and two.returncode == 0:
         check(len(ca) == len(cb) and worst_r <= 1e-10,
               "optimise: resumed control differs by %g relative" % worst_r)
         print("optimise: resumed after 2 iterations, control within %.3e" % worst_r)
+        # The checkpoint's fingerprint records the backend (tests/test_run_fields.cpp checks
+        # every other field without PETSc): the serial backend does not resume the PETSc run.
+        other = run(MPI + opt + ["--max-iter", "5", "--out", outs["resumed"], "--resume"])
+        check(other.returncode != 0 and other.stderr.count("state differs (checkpoint "
+                                                           "petsc-mumps, now (absent))") == 1,
+              "optimise: a cholmod resume of the petsc-mumps run was not refused naming the "
+              "state: %s" % other.stderr)
 bad = run(MPI + opt + ["--out", outs["petsc"], "--state-backend", "mumps"])
 check(bad.returncode != 0, "unknown backend: exit status 0 under mpiexec")
 check(bad.stderr.count("--state-backend: unknown state backend 'mumps'") == 1,

@@ -281,15 +281,9 @@ struct TrackingRun::Impl {
     const bool writer = world_rank() == 0;
     if (writer) lock.emplace(dir.string());  // one run per folder
     to.write_checkpoint = writer;
-    to.fingerprint["scene"] = file_hash(scene.source);
-    // Another backend or partition gives other round-off: a resume must keep both (the keys
-    // are absent for the serial default, so older checkpoints stay valid).
+    add_run_keys(to);
     const int ranks = options.share ? options.share->size() : 1;
-    if (options.state.backend != fe::StateBackend::kCholmod)
-      to.fingerprint["state"] = to_string(options.state.backend);
-    if (ranks > 1) to.fingerprint["ranks"] = std::to_string(ranks);
     if (options.levels.count > 1) {
-      to.fingerprint["levels"] = std::to_string(options.levels.count);
       if (!options.output.resume) {  // a fresh run: no finer level's checkpoint of an earlier run
         fs::remove(to.checkpoint, ec);
         for (const auto& p : levels) fs::remove(level_checkpoint(p->level), ec);
@@ -302,6 +296,37 @@ struct TrackingRun::Impl {
     if (options.output.resume) read_run_log(first);  // a malformed one refused before output
     files.emplace(dir, *objective, control, options.output.vtu_every, writer,
                   summary_entries(ranks));
+  }
+
+  /// The fingerprint's entries of the run as a whole (track_shape adds the problem's): the
+  /// scene file's content hash, and the state backend, the ranks and the levels where they
+  /// differ from the serial single-level default.
+  void add_run_keys(ShapeTrackingOptions& to) const {
+    to.fingerprint["scene"] = file_hash(scene.source);
+    // Another backend or partition gives other round-off: a resume must keep both (the keys
+    // are absent for the serial default, so older checkpoints stay valid).
+    const int ranks = options.share ? options.share->size() : 1;
+    if (options.state.backend != fe::StateBackend::kCholmod)
+      to.fingerprint["state"] = to_string(options.state.backend);
+    if (ranks > 1) to.fingerprint["ranks"] = std::to_string(ranks);
+    if (options.levels.count > 1) to.fingerprint["levels"] = std::to_string(options.levels.count);
+  }
+
+  /// Coarse level k's options from the user's mesh's `fine` (before its refined move limit):
+  /// its iterations, its move limit (refined_move_limit when started from a coarser level), its
+  /// fingerprint's "level"; the time limit and the checkpoint's file are run_coarse_levels'.
+  ShapeTrackingOptions level_options(std::size_t k, const ShapeTrackingOptions& fine) const {
+    ShapeTrackingOptions to = fine;
+    // A level's iterations: coarse_iterations, and never more than the run's own limit.
+    const int iterations =
+        std::min(options.levels.coarse_iterations, options.optimiser.max_iterations);
+    to.optimizer.max_iterations = iterations;
+    to.optimizer.max_evaluations = 5 * iterations + 20;
+    if (k > 0) to.optimizer.move_limit = options.levels.refined_move_limit;  // from a coarser level
+    to.fingerprint["level"] = std::to_string(levels[k]->level) + ", at most " +
+                              std::to_string(iterations) + " iterations, switch " +
+                              exact_text(options.levels.switch_decrease);
+    return to;
   }
 
   /// The checkpoint of coarse level `level` in the run's folder.
@@ -365,17 +390,9 @@ Eigen::VectorXd TrackingRun::Impl::run_coarse_levels(const ShapeTrackingOptions&
     const Eigen::VectorXd lower = p.control->constant(p.scene.body.control_lower);
     const Eigen::VectorXd upper = p.control->constant(p.scene.body.control_upper);
     if (k == 0) m = p.control->constant(p.scene.body.control_initial);
-    ShapeTrackingOptions to = fine;
-    // A level's iterations: coarse_iterations, and never more than the run's own limit.
-    const int iterations =
-        std::min(options.levels.coarse_iterations, options.optimiser.max_iterations);
-    to.optimizer.max_iterations = iterations;
-    to.optimizer.max_evaluations = 5 * iterations + 20;
-    if (k > 0) to.optimizer.move_limit = options.levels.refined_move_limit;  // from a coarser level
+    ShapeTrackingOptions to = level_options(k, fine);
     if (options.optimiser.max_seconds > 0.0)
       to.optimizer.max_seconds = std::max(1e-9, options.optimiser.max_seconds - seconds);
-    to.fingerprint["level"] = std::to_string(p.level) + ", at most " + std::to_string(iterations) +
-                              " iterations, switch " + exact_text(options.levels.switch_decrease);
     if (!to.checkpoint.empty()) {
       to.checkpoint = level_checkpoint(p.level);
       to.resume = options.output.resume && fs::exists(to.checkpoint);
@@ -537,6 +554,29 @@ TrackingRunSummary TrackingRun::run(const TrackingRunCallbacks& callbacks) {
   if (d.files) d.files->finish(s, d.target.cloud);
   d.lock.reset();
   return s;
+}
+
+std::vector<RunFingerprint> TrackingRun::fingerprints() const {
+  const Impl& d = *impl_;
+  ShapeTrackingOptions to = d.options.tracking();
+  d.add_run_keys(to);
+  std::vector<RunFingerprint> out;
+  for (std::size_t k = 0; k < d.levels.size(); ++k) {
+    const detail::CoarseProblem& p = *d.levels[k];
+    const fe::Body& body = p.scene.body;
+    out.push_back(run_fingerprint(*p.objective, p.control->constant(body.control_lower),
+                                  p.control->constant(body.control_upper),
+                                  p.control->constant(body.control_initial),
+                                  d.level_options(k, to)));
+  }
+  if (!d.levels.empty()) to.optimizer.move_limit = d.options.levels.refined_move_limit;
+  const fe::Body& body = d.scene.body;
+  const Eigen::VectorXd m0 = d.levels.empty() && d.options.optimiser.initial_control
+                                 ? *d.options.optimiser.initial_control
+                                 : d.control.constant(body.control_initial);
+  out.push_back(run_fingerprint(*d.objective, d.control.constant(body.control_lower),
+                                d.control.constant(body.control_upper), m0, to));
+  return out;
 }
 
 TrackingRunSummary run_tracking(const Scene& scene, const TrackingRunOptions& options,

@@ -21,6 +21,10 @@ struct RunField {
   const char* why_not;  ///< why a front end has no name for it ("" when both have one)
   /// Copies this field (alone) of `from` into `to`.
   void (*copy)(const TrackingRunOptions& from, TrackingRunOptions& to);
+  /// Why the field leaves the checkpoint's fingerprint (TrackingRun::fingerprints) alone: it
+  /// does not change the run's path (a limit, an output setting). nullptr: the fingerprint
+  /// records it, and a resume with another value is refused (tests/test_run_fields.cpp).
+  const char* fingerprint_free = nullptr;
 };
 
 /// Every field of TrackingRunOptions, in declaration order; a field that is itself a struct

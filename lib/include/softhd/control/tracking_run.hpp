@@ -249,6 +249,12 @@ class TrackingRun {
   /// Interrupted, the callbacks' exceptions), ResourceError for a folder in use, FileError.
   TrackingRunSummary run(const TrackingRunCallbacks& callbacks = {});
 
+  /// The fingerprints of the checkpoints run() keeps (a resume of another run is refused),
+  /// without running: one per level, the coarsest first, the user's mesh's last (one for a
+  /// single-level run). A level after the first starts from the control the level before it
+  /// ends with; its fingerprint here has the scene's start (control.initial) in its place.
+  std::vector<RunFingerprint> fingerprints() const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
