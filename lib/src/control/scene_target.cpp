@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "../common/decimal.hpp"
 #include "../common/keys.hpp"
 #include "softhd/control/pose_file.hpp"
 #include "softhd/control/shape_objective.hpp"
@@ -28,6 +29,7 @@ namespace softhd {
 namespace {
 
 namespace fs = std::filesystem;
+using detail::decimal;
 
 // Counts of the arc target's sampling grid: integers from 1 to 1e6, and a grid whose
 // estimated memory (about 100 bytes a point with the distance's trees) fits the limit.
@@ -262,13 +264,6 @@ struct FrameKeys {
   std::optional<scan::Pose> pose;
   std::string description;
 };
-
-// A number as a decimal (10 significant digits) for a message.
-std::string decimal(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.10g", v);
-  return text;
-}
 
 // A rigid start pose has scale 1; a similarity's lies within the pose bounds (PoseBounds).
 void check_start_scale(const Scene& scene, const scan::Pose& pose, scan::PoseKind kind,

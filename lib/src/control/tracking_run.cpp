@@ -10,6 +10,7 @@
 #include <sstream>
 #include <system_error>
 
+#include "../common/decimal.hpp"
 #include "multilevel.hpp"
 #include "run_files.hpp"
 #include "softhd/control/run_log.hpp"
@@ -22,6 +23,7 @@
 namespace softhd {
 
 namespace fs = std::filesystem;
+using detail::decimal;
 
 namespace {
 
@@ -35,13 +37,6 @@ std::string file_hash(const std::string& path) {
   s << in.rdbuf();
   const std::string bytes = s.str();
   return content_hash(bytes.data(), bytes.size());
-}
-
-// A number as a decimal (10 significant digits) for a message.
-std::string decimal(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.10g", v);
-  return text;
 }
 
 // The options checked against the scene and the target: optimiser.initial_control's length and

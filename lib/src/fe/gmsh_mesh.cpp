@@ -331,7 +331,7 @@ std::map<std::string, std::vector<int>> boundary_sets(const io::MshFile& f, int 
   return out;
 }
 
-using WithinRadius = softhd::detail::WithinRadius<size_t>;
+using NodesWithinRadius = softhd::detail::WithinRadius<size_t>;
 
 std::string point(const Eigen::VectorXd& x) {  // "(x, y, z)", 6 significant digits
   std::ostringstream s;
@@ -352,7 +352,7 @@ void check_conforming(const io::MshFile& f, const NodeTable& t, const Mesh& m) {
   const softhd::detail::MatrixRowsTree<> tree(static_cast<int>(X.cols()), rows,
                                               nanoflann::KDTreeSingleIndexAdaptorParams(16));
   std::vector<size_t> found;
-  WithinRadius within{tol * tol, &found};
+  NodesWithinRadius within{tol * tol, &found};
   std::map<std::pair<int, int>, Eigen::Index> pairs;  // regions (a ≤ b) -> coincident pairs
   std::pair<Eigen::Index, Eigen::Index> first{-1, -1};
   std::vector<int> region(static_cast<size_t>(N), 0);  // of an element using the node

@@ -16,7 +16,7 @@ namespace {
 using Centres = softhd::detail::MatrixRows;
 using CentreTree = softhd::detail::MatrixRowsTree<>;
 
-using WithinRadius = softhd::detail::WithinRadius<int>;
+using CellsWithinRadius = softhd::detail::WithinRadius<int>;
 
 constexpr double kTol = 1e-10;  // relative to the mesh's size (X) or the cell (ξ)
 
@@ -105,7 +105,7 @@ int PointLocator::locate(const Eigen::VectorXd& X, Eigen::VectorXd* xi) const {
   if (!tree_) return fe::locate(mesh, X, xi);
   if (X.size() != mesh.dim || !X.allFinite()) return -1;
   std::vector<int> candidates;
-  WithinRadius within{tree_->radius * tree_->radius, &candidates};
+  CellsWithinRadius within{tree_->radius * tree_->radius, &candidates};
   tree_->index.radiusSearchCustomCallback(X.data(), within);
   std::sort(candidates.begin(), candidates.end());  // the lowest element wins on shared faces
   xi->resize(mesh.dim);
