@@ -756,7 +756,18 @@ TEST_F(OptimiseCli, CameraFrameTargetRefinesThePoseWithTheControl) {
            {"align", "affine", "target.align must be \"rigid\" or \"similarity\""},
            {"pose", "bad_pose.txt", "not a scaled rotation"},
            {"pose", "tiny_pose.txt", "tiny_pose.txt' has scale 1e-100, but a rigid pose"},
-           {"pose", "no_such_pose.txt", "cannot open the pose file"}}) {
+           {"pose", "no_such_pose.txt", "cannot open the pose file"},
+           {"pose_uncertainty",
+            {{"degrees", -1}, {"length", 0.01}},
+            "target.pose_uncertainty.degrees must be a number > 0, got -1"},
+           {"pose_uncertainty",
+            {{"degrees", 1}, {"length", "NaN"}},
+            "target.pose_uncertainty.length must be a number > 0, got \"NaN\""},
+           // a valid uncertainty bounds the pose by projection: refused with the joint method
+           {"pose_uncertainty",
+            {{"degrees", 1}, {"length", 0.01}},
+            "target.pose_uncertainty bounds the pose found by projection: give --pose-method "
+            "projection"}}) {
     nlohmann::json t = seen;
     t[key] = value;
     EXPECT_EQ(run(scene_with("bad.json", t), &err), 2) << key;

@@ -115,11 +115,23 @@ struct ShapeObjective::Impl {
     st.size = pose_size;
     st.first_step = 1e-3;    // from the last evaluation's optimum: a small first step
     st.max_backtracks = 20;  // a step 2^-20 of BFGS's that does not decrease ρ̃: at its minimum
+    if (options.pose_bound) st.feasible = [this](const scan::Pose& Q) { return bounded(Q); };
     const scan::LocalPoseResult r = scan::minimise_pose(rho, pose->at(warm_twist), st);
     *iterations = r.iterations;
     return pose->twist_of(r.pose);
   }
 
+  /// The pose of Q's twist ξ = twist_of(Q) with |ω| and |v| cut to options.pose_bound (each
+  /// ball's nearest point: ω ← ω min(1, a/|ω|), v ← v min(1, b/|v|)).
+  scan::Pose bounded(const scan::Pose& Q) const {
+    Eigen::VectorXd xi = pose->twist_of(Q);
+    const double w = xi.head<3>().norm(), v = xi.segment<3>(3).norm();
+    const PoseBound& b = *options.pose_bound;
+    if (w <= b.rotation && v <= b.translation) return Q;
+    if (w > b.rotation) xi.head<3>() *= b.rotation / w;
+    if (v > b.translation) xi.segment<3>(3) *= b.translation / v;
+    return pose->at(xi);
+  }
   /// ξ checked (size, finite); empty means 0 (and stays empty without a pose).
   Eigen::VectorXd checked_twist(const Eigen::VectorXd& xi) const {
     if (pose) return pose->checked(xi);
@@ -178,6 +190,15 @@ void ShapeObjectiveOptions::validate() const {
   if (!(pose_tolerance > 0.0 && pose_tolerance < 1.0))
     throw InvalidArgument("pose_tolerance must be in (0, 1) (a fraction of L)");
   if (pose_iterations < 1) throw InvalidArgument("pose_iterations must be >= 1");
+  if (pose_bound) {
+    if (pose_method != PoseMethod::projection)
+      throw InvalidArgument(
+          "pose_bound bounds the pose found by projection (pose.method projection)");
+    if (!(pose_bound->rotation > 0.0 && std::isfinite(pose_bound->rotation)))
+      throw InvalidArgument("pose_bound.rotation must be finite and > 0 (radians)");
+    if (!(pose_bound->translation > 0.0 && std::isfinite(pose_bound->translation)))
+      throw InvalidArgument("pose_bound.translation must be finite and > 0 (a length)");
+  }
   if (pose && pose_method == PoseMethod::projection && pose_kind != scan::PoseKind::rigid)
     throw InvalidArgument(
         "pose.method projection finds a rigid pose; the target's \"align\" is similarity (use "

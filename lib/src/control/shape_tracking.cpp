@@ -290,6 +290,9 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
       f["pose"] += " method " + to_string(so.pose_method) + " tolerance " +
                    exact_text(so.pose_tolerance) + " iterations " +
                    std::to_string(so.pose_iterations);
+    if (so.pose_bound)
+      f["pose"] += " bound " + exact_text(so.pose_bound->rotation) + " " +
+                   exact_text(so.pose_bound->translation);
   }
   f["checkpoint"] = "every " + std::to_string(options.checkpoint_every) + " iterations";
   const BoundedOptimizerOptions& o = options.optimizer;

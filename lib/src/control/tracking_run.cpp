@@ -73,6 +73,10 @@ void check_against_scene(const Scene& scene, const fe::ControlSpace& control,
     throw InvalidArgument(
         "pose.method finds the pose of a target in the camera's frame; this target is in the "
         "body's frame (it has no pose)");
+  if (target.pose_uncertainty && o.pose.method != PoseMethod::projection)
+    throw InvalidArgument(
+        "target.pose_uncertainty bounds the pose found by projection: give pose.method "
+        "projection");
   if (o.pose.method == PoseMethod::projection && o.pose.move != 1.0)
     throw InvalidArgument(
         "pose.move is the joint pose's move limit; with pose.method projection the optimiser "

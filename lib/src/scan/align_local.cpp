@@ -54,6 +54,16 @@ Pose step_pose(const Pose& Q, Eigen::VectorXd* u, const Eigen::Vector3d& c,
   return clamp_scale(twist_step(Q, unscale(*u, st.size), c), st);
 }
 
+/// The scaled step u = (L ω, v, L σ) of the twist about c that takes Q to `to` (PoseMap::twist_of).
+Eigen::VectorXd twist_to(const Pose& Q, const Pose& to, const Eigen::Vector3d& c,
+                         const LocalSettings& st) {
+  const PoseMap step(Q, c, st.similarity ? PoseKind::similarity : PoseKind::rigid);
+  Eigen::VectorXd u = step.twist_of(to);
+  u.head<3>() *= st.size;
+  if (u.size() == 7) u[6] *= st.size;
+  return u;
+}
+
 }  // namespace
 
 LocalResult minimise_pose(const PoseObjective& objective, const Pose& start,
@@ -70,6 +80,7 @@ namespace softhd::scan {
 using detail::clamp_scale;
 using detail::scale_gradient;
 using detail::step_pose;
+using detail::twist_to;
 
 double pose_distance(const HausdorffTarget& scan, const PointCloud& body, const DistanceForm& form,
                      const Pose& Q, Eigen::VectorXd* gradient, Eigen::Vector3d* centre) {
@@ -128,10 +139,15 @@ LocalPoseResult minimise_pose(const PoseFunction& objective, const Pose& start,
     for (int k = 0; k < st.max_backtracks && !accepted; ++k, alpha *= 0.5) {
       s = alpha * p;
       trial = step_pose(out.pose, &s, c, st);
+      if (st.feasible) {  // the step taken: the twist from the current pose to the feasible one
+        trial = st.feasible(trial);
+        s = twist_to(out.pose, trial, c, st);
+      }
       ++out.evaluations;
       g_new.resize(n);
       f_new = objective(trial, &g_new, &c_new);
-      accepted = std::isfinite(f_new) && f_new <= f + 1e-4 * g.dot(s);
+      const double slope_s = g.dot(s);  // < 0 unless the projection turned the step
+      accepted = std::isfinite(f_new) && slope_s < 0.0 && f_new <= f + 1e-4 * slope_s;
       if (accepted) break;
     }
     if (!accepted) {  // no decrease left at double precision

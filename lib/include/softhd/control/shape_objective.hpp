@@ -50,6 +50,14 @@ std::string to_string(PoseMethod method);
 /// The PoseMethod named "joint" or "projection"; throws InvalidArgument naming `pose.method`.
 PoseMethod pose_method_from_string(const std::string& name);
 
+/// A bound on the projection's twist ξ = (ω, v) from the start pose (docs/formulation.md
+/// §8.11): |ω| ≤ rotation (radians), |v| ≤ translation (a length: the displacement of the body's
+/// centre in the scan's frame) — a calibrated camera's uncertainty.
+struct PoseBound {
+  double rotation = 0.0;     ///< radians, > 0
+  double translation = 0.0;  ///< a length, > 0
+};
+
 /// Settings of the objective J(m) (docs/formulation.md §4.2, §4.3); defaults per field.
 struct ShapeObjectiveOptions {
   HausdorffOptions hausdorff;                            ///< α, β, γ, ε, method, threads
@@ -92,6 +100,8 @@ struct ShapeObjectiveOptions {
   double pose_tolerance = 1e-10;
   /// ... or after this many BFGS iterations (100).
   int pose_iterations = 100;
+  /// projection: the inner minimisation keeps ξ within this bound (none: unbounded).
+  std::optional<PoseBound> pose_bound;
   /// Keep what ShapeObjective::hessian_product needs at each evaluation with the gradient (the
   /// distance's second-order quantities, HausdorffRequest::hessian_points). False (default):
   /// evaluations pay nothing for it. Needs reference volumes and no pose.

@@ -116,6 +116,10 @@ struct LocalPoseSettings {
   double log_scale_max = 0.0;     ///< see log_scale_min
   double first_step = 0.05;       ///< the first step moves no point more than this × size
   int max_backtracks = 40;        ///< halvings of a step before "no decrease left"
+  /// If set: the nearest feasible pose to a trial pose (a projection onto a convex set of
+  /// poses, e.g. a bound on the twist from a calibrated pose); every trial is replaced by it and
+  /// the step taken is the twist from the current pose to it. The start must be feasible.
+  std::function<Pose(const Pose&)> feasible;
 };
 
 /// What minimise_pose found.
