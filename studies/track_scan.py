@@ -30,6 +30,11 @@ the same run against the clean, complete target in the body's frame).
    the initial control and its far bound (ladder_align), the lowest rho kept, with that control
    as the start; --hold-first: the first stage with pose_move 0.001 (the pose nearly held while
    the control bends; --hold-all: every stage so); --distance visible: the joint runs' distance (the camera the pose's).
+   --start perturbed: a calibrated camera's pose (the true one rotated by 3 degrees about a
+   random axis through the body's centre and moved by 0.02 L; also the crop's pose);
+   --pose-method projection: the pose found inside every evaluation (docs/formulation.md
+   §8.11, with the table of --start perturbed against joint); --pose-uncertainty A F: the
+   target's "pose_uncertainty" (A degrees, F x L), a bound on the projection's pose.
 4. The same run against the clean, complete target in the body's frame (the scene's own),
    and the node errors of both against the true deformed nodes.
 
@@ -219,6 +224,9 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         j["mesh"]["file"] = os.path.join(ROOT, "data/meshes/finger.msh")
         j["target"] = {"kind": "cloud", "file": scan_file, "frame": "camera", "pose": pose_file,
                        "distance": a.distance, "surface": True, "cap": cap}
+        if a.pose_uncertainty:
+            j["target"]["pose_uncertainty"] = {"degrees": a.pose_uncertainty[0],
+                                               "length": a.pose_uncertainty[1] * L}
         path = os.path.join(out, "joint_scene.json")
         with open(path, "w") as f:
             json.dump(j, f, indent=1)
@@ -280,6 +288,11 @@ def main():
     ap.add_argument("--method", choices=["exact", "tree"], default=None,
                     help="--joint: the distance's pair sums (softhd.optimise's method; default "
                          "tree)")
+    ap.add_argument("--pose-uncertainty", type=float, nargs=2, default=None,
+                    metavar=("DEGREES", "FRACTION"),
+                    help="--joint: the start pose's uncertainty (the target's pose_uncertainty: "
+                         "degrees, and a length as a fraction of L); with --pose-method "
+                         "projection")
     ap.add_argument("--pose-method", choices=["joint", "projection"], default=None,
                     help="--joint: how the pose is refined (softhd.optimise's pose_method; "
                          "default joint)")
