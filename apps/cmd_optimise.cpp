@@ -131,12 +131,16 @@ scene targets ("target" in the scene file):
           value, fixed or F x the Q-quantile of the scan's d~ to the body at rest
       "cap_q": Q   the cap's sharpness (default 4)
   a cloud target may be in the camera's frame (docs/formulation.md section 8.10):
-      "frame": "camera"   the pose (scan -> body) is refined jointly with the control
-          (then no "camera": the visible distance's camera is the pose's; no clean.crop)
+      "frame": "camera"   the pose (scan -> body) is refined with the control (then no
+          "camera": the visible distance's camera is the pose's; no clean.crop)
       "align": "rigid" | "similarity"   what the pose may change (default rigid)
       "pose": FILE   the start pose (softhd align's pose.txt); default: align at rest
-      --pose-move F   the pose's move limit as a fraction of the control's, in (0, 1]
-          (default {pose_move}; a target in the camera's frame only)
+      --pose-method joint|projection   how the pose is refined (default {pose_method}):
+          joint: its six variables join the optimiser's; projection: every evaluation
+          fits the pose to the scan on its state (from the last one's pose) and the
+          optimiser moves the control alone (rigid poses only)
+      --pose-move F   the joint pose's move limit as a fraction of the control's, in
+          (0, 1] (default {pose_move})
       the final pose is printed and written to summary.json ("pose") and history.csv
 
 writes: history.csv, control.csv (readable by 'softhd forward --control'),
@@ -207,6 +211,7 @@ std::string usage() {
       {"coarse_iterations", std::to_string(d.levels.coarse_iterations)},
       {"switch_decrease", number_text(d.levels.switch_decrease)},
       {"pose_move", number_text(d.pose.move)},
+      {"pose_method", to_string(d.pose.method)},
       {"coarse_tol", number_text(d.levels.coarse_tolerance)},
       {"refined_move_limit", number_text(d.levels.refined_move_limit)},
       {"max_memory", number_text(d.memory_limit / (1u << 30))},
@@ -327,6 +332,7 @@ OptimiseArgs parse_optimise(Args& args) {
   o.levels.coarse_tolerance = args.number("--coarse-tol", d.levels.coarse_tolerance);
   o.levels.refined_move_limit = args.number("--refined-move-limit", d.levels.refined_move_limit);
   o.pose.move = args.number("--pose-move", d.pose.move);
+  o.pose.method = choice(args, "--pose-method", to_string(d.pose.method), pose_method_from_string);
   const double gib = args.number("--max-memory", d.memory_limit / (1u << 30));
   if (!(gib > 0.0 && gib <= 1e6)) throw UsageError("--max-memory: expected GiB in (0, 1e6]");
   o.memory_limit = gib * (1u << 30);

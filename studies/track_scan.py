@@ -4,8 +4,8 @@ the same run against the clean, complete target in the body's frame).
 
     PYTHONPATH=build/python /usr/bin/python3 studies/track_scan.py [--seed S] [--view full|half]
         [--max-iter N] [--rounds K] [--out DIR] [--clean-rms R]
-        [--joint [--staged] [--start align|true] [--cap-stages K] [--first-eps F]
-                 [--algorithm A]]
+        [--joint [--staged] [--start align|ladder|true|perturbed] [--cap-stages K]
+                 [--first-eps F] [--algorithm A] [--pose-method joint|projection]]
 
 1. The view. The finger of data/scenes/finger.json, deformed by m*(X) = -1.5 X3 on a 2x finer
    mesh (data/targets/finger_target.ply), is seen by a synthetic depth camera
@@ -30,6 +30,11 @@ the same run against the clean, complete target in the body's frame).
    the initial control and its far bound (ladder_align), the lowest rho kept, with that control
    as the start; --hold-first: the first stage with pose_move 0.001 (the pose nearly held while
    the control bends; --hold-all: every stage so); --distance visible: the joint runs' distance (the camera the pose's).
+   --start perturbed: a calibrated camera's pose (the true one rotated by 3 degrees about a
+   random axis through the body's centre and moved by 0.02 L; also the crop's pose);
+   --pose-method projection: the pose found inside every evaluation (docs/formulation.md
+   §8.11, with the table of --start perturbed against joint); --pose-uncertainty A F: the
+   target's "pose_uncertainty" (A degrees, F x L), a bound on the projection's pose.
 4. The same run against the clean, complete target in the body's frame (the scene's own),
    and the node errors of both against the true deformed nodes.
 
@@ -143,6 +148,24 @@ def ladder_align(scene, scan, P_true, log, fractions=(0.0, 0.125, 0.25, 0.5, 1.0
     return best
 
 
+def perturbed_pose(P_true, scan, L, seed):
+    """A calibrated camera's pose: the true pose P (scan -> body) followed by a rotation of 3
+    degrees about a random axis through the body's centre and a shift of 0.02 L in a random
+    direction (numpy's default_rng(1000 + seed))."""
+    rng = np.random.default_rng(1000 + seed)
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    shift = rng.normal(size=3)
+    shift *= 0.02 * L / np.linalg.norm(shift)
+    th = np.radians(3.0)
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    R = np.eye(3) + np.sin(th) * K + (1 - np.cos(th)) * K @ K
+    c = P_true[:3, :3] @ scan.mean(0) + P_true[:3, 3]  # the body's centre (body frame)
+    E = np.eye(4)
+    E[:3, :3], E[:3, 3] = R, c - R @ c + shift
+    return E @ P_true
+
+
 def joint_run(scene, scan, areas, P_true, L, a, log):
     """align at rest, the crop with that pose, then one optimise with the pose refined jointly
     (a scene target in the camera's frame); returns the displacements and the scan moved by the
@@ -151,6 +174,12 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
     initial = None
     if a.start == "ladder":
         pose, initial = ladder_align(scene, scan, P_true, log)
+    elif a.start == "perturbed":  # a calibrated camera's pose: also the crop's
+        pose = {"matrix": perturbed_pose(P_true, scan, L, a.seed), "status": "given",
+                "overlap": float("nan")}
+        off = rotation_error(pose["matrix"][:3, :3], P_true)
+        log(f"joint: starting from a calibrated camera's pose: the true one rotated by 3 deg "
+            f"about a random axis and moved by 0.02 L ({off:.3f} deg)")
     else:
         pose = softhd.align(nodes, scan, distance="scan_to_body")
     log(f"joint: align {pose['status']}, rotation error "
@@ -195,13 +224,18 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         j["mesh"]["file"] = os.path.join(ROOT, "data/meshes/finger.msh")
         j["target"] = {"kind": "cloud", "file": scan_file, "frame": "camera", "pose": pose_file,
                        "distance": a.distance, "surface": True, "cap": cap}
+        if a.pose_uncertainty:
+            j["target"]["pose_uncertainty"] = {"degrees": a.pose_uncertainty[0],
+                                               "length": a.pose_uncertainty[1] * L}
         path = os.path.join(out, "joint_scene.json")
         with open(path, "w") as f:
             json.dump(j, f, indent=1)
         eps = a.first_eps * L if stage == 1 and a.first_eps else None
         move = 1e-3 if a.hold_all or (stage == 1 and a.hold_first) else a.pose_move
         r = softhd.optimise(softhd.Scene.load(path), max_iter=a.max_iter, algorithm=a.algorithm,
-                            initial=initial, eps=eps, pose_move=move)
+                            initial=initial, eps=eps, pose_move=move, pose_method=a.pose_method,
+                            method=a.method)
+        a.seconds += r.seconds
         P = r.pose
         centre = scan.mean(0)  # the pose's error where the body is (the camera is 3 L away)
         shift = np.linalg.norm((P[:3, :3] - P_true[:3, :3]) @ centre + P[:3, 3] - P_true[:3, 3])
@@ -216,6 +250,7 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         d = softhd.distance(nodes + r.displacements, moved, distance="scan_to_body", fields=True)
         cap = a.cap_factor * float(np.quantile(d.field_target, 0.9))
         initial = r.control
+    a.final_pose = (rotation_error(P[:3, :3], P_true), shift / L)
     return r.displacements, (scan @ P[:3, :3].T + P[:3, 3], areas)
 
 
@@ -246,9 +281,21 @@ def main():
     ap.add_argument("--pose-move", type=float, default=None,
                     help="--joint: the pose's move limit as a fraction of the control's")
     ap.add_argument("--algorithm", default=None, help="--joint: the optimiser (default mma)")
-    ap.add_argument("--start", choices=["align", "ladder", "true"], default="align",
+    ap.add_argument("--start", choices=["align", "ladder", "true", "perturbed"], default="align",
                     help="--joint: the start pose: align's at rest, ladder_align's (against bodies "
-                         "under uniform controls), or (a diagnostic) the true one")
+                         "under uniform controls), (a diagnostic) the true one, or a calibrated "
+                         "camera's (the true one off by 3 deg about a random axis and 0.02 L)")
+    ap.add_argument("--method", choices=["exact", "tree"], default=None,
+                    help="--joint: the distance's pair sums (softhd.optimise's method; default "
+                         "tree)")
+    ap.add_argument("--pose-uncertainty", type=float, nargs=2, default=None,
+                    metavar=("DEGREES", "FRACTION"),
+                    help="--joint: the start pose's uncertainty (the target's pose_uncertainty: "
+                         "degrees, and a length as a fraction of L); with --pose-method "
+                         "projection")
+    ap.add_argument("--pose-method", choices=["joint", "projection"], default=None,
+                    help="--joint: how the pose is refined (softhd.optimise's pose_method; "
+                         "default joint)")
     ap.add_argument("--clean-rms", type=float, default=None,
                     help="the clean run's node error rms from an earlier run (skips that run; it "
                          "does not depend on the seed or the view)")
@@ -287,6 +334,7 @@ def main():
     areas = softhd.area_weights(scan, "delaunay")
     u = np.zeros_like(nodes)
     a.truth = truth
+    a.seconds = 0.0
     if a.joint:
         u, target = joint_run(scene, scan, areas, P_true, L, a, log)
     for k in range(1, 0 if a.joint else a.rounds + 1):
@@ -324,6 +372,13 @@ def main():
     log(f"clean, complete, body frame  {c_max:10.4g} {c_rms:10.4g}")
     log(f"one {a.view} view, camera frame {s_max:10.4g} {s_rms:10.4g}   {s_rms / c_rms:.2f}")
     log(f"(L = {L:.4g}; at rest: rms {node_errors(nodes, 0 * u, truth)[1]:.4g})")
+    if a.joint:
+        log(f"RESULT seed {a.seed} view {a.view} start {a.start} method "
+            f"{a.pose_method or 'joint'} pose_move {a.pose_move} hold "
+            f"{'all' if a.hold_all else 'first' if a.hold_first else 'none'}: node rms "
+            f"{s_rms:.4g} ({s_rms / L * 100:.3g} % L, {s_rms / c_rms:.2f}x clean), pose "
+            f"{a.final_pose[0]:.3f} deg {a.final_pose[1] * 100:.3g} % L, optimise "
+            f"{a.seconds:.1f} s")
 
 
 if __name__ == "__main__":

@@ -565,6 +565,9 @@ TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
   expect_refused(scene() + " --pose-move 0", "--pose-move must be in (0, 1]");
   expect_refused(scene() + " --pose-move 0.5",
                  "--pose-move moves the pose of a target in the camera");
+  expect_refused(scene() + " --pose-method projection",
+                 "--pose-method finds the pose of a target in the camera");
+  expect_refused(scene() + " --pose-method both", "--pose-method: unknown");
   // Every bad value names its flag first, also where the objective's or the optimiser's own
   // check refuses it.
   for (const auto& [args, start] : std::vector<std::pair<std::string, std::string>>{
@@ -710,6 +713,19 @@ TEST_F(OptimiseCli, CameraFrameTargetRefinesThePoseWithTheControl) {
             std::string::npos)
       << header;
   EXPECT_TRUE(fs::exists(fs::path(out2) / "target_aligned.ply"));
+  // --pose-method projection: every evaluation fits the pose on its state; the target is the
+  // rest body moved, so the pose is recovered where the control is still at rest.
+  const std::string out3 = (dir_ / "projection").string();
+  ASSERT_EQ(run(joint + " --out " + out3 + " --max-iter 2 --pose-method projection", &err), 0)
+      << err;
+  const nlohmann::json sum3 = nlohmann::json::parse(std::ifstream(fs::path(out3) / "summary.json"));
+  EXPECT_EQ(sum3["pose_method"], "projection");
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) M(r, c) = sum3["pose"]["matrix"][r][c].get<double>();
+  EXPECT_LT(softhd::scan::rotation_angle_between(softhd::scan::Pose::from_matrix(M).R, truth.R),
+            1e-6);
+  EXPECT_EQ(run(joint + " --pose-method projection --pose-move 0.5", &err), 2);
+  EXPECT_NE(err.find("--pose-move is the joint pose's move limit"), std::string::npos) << err;
 
   // --pose-move F: the pose's move limit is F times the control's, so with 0.05 the first
   // iteration moves the pose (its twist, rotation and translation) less than with the default 1.
@@ -740,7 +756,18 @@ TEST_F(OptimiseCli, CameraFrameTargetRefinesThePoseWithTheControl) {
            {"align", "affine", "target.align must be \"rigid\" or \"similarity\""},
            {"pose", "bad_pose.txt", "not a scaled rotation"},
            {"pose", "tiny_pose.txt", "tiny_pose.txt' has scale 1e-100, but a rigid pose"},
-           {"pose", "no_such_pose.txt", "cannot open the pose file"}}) {
+           {"pose", "no_such_pose.txt", "cannot open the pose file"},
+           {"pose_uncertainty",
+            {{"degrees", -1}, {"length", 0.01}},
+            "target.pose_uncertainty.degrees must be a number > 0, got -1"},
+           {"pose_uncertainty",
+            {{"degrees", 1}, {"length", "NaN"}},
+            "target.pose_uncertainty.length must be a number > 0, got \"NaN\""},
+           // a valid uncertainty bounds the pose by projection: refused with the joint method
+           {"pose_uncertainty",
+            {{"degrees", 1}, {"length", 0.01}},
+            "target.pose_uncertainty bounds the pose found by projection: give --pose-method "
+            "projection"}}) {
     nlohmann::json t = seen;
     t[key] = value;
     EXPECT_EQ(run(scene_with("bad.json", t), &err), 2) << key;

@@ -135,6 +135,21 @@ TEST(PoseMap, AtIsTheTwistAboutTheCentreAfterTheStart) {
   EXPECT_LT((map.at(Eigen::VectorXd()).matrix() - q0.matrix()).norm(), 1e-15);  // ξ = 0: Q₀
 }
 
+// twist_of is at's inverse: ξ → at(ξ) → twist_of gives ξ back (to rounding), rigid and similarity.
+TEST(PoseMap, TwistOfInvertsAt) {
+  const Pose q0 =
+      Pose::from_twist((Eigen::Matrix<double, 7, 1>() << 0.3, -0.2, 0.9, 1, 2, 3, 0.1).finished());
+  const Eigen::Vector3d c(0.5, -1.0, 2.0);
+  const Eigen::VectorXd xi =
+      (Eigen::VectorXd(7) << 0.2, 0.1, -0.4, 0.3, -0.2, 0.5, -0.3).finished();
+  const PoseMap similarity(q0, c, PoseKind::similarity);
+  EXPECT_LT((similarity.twist_of(similarity.at(xi)) - xi).norm(), 1e-14);
+  const PoseMap rigid(q0, c, PoseKind::rigid);
+  const Eigen::VectorXd xr = xi.head(6);
+  EXPECT_LT((rigid.twist_of(rigid.at(xr)) - xr).norm(), 1e-14);
+  EXPECT_LT(rigid.twist_of(q0).norm(), 1e-15);  // the start: ξ = 0
+}
+
 // f(x') = Σ_i ½|x'_i − a_i|² at x' = Q_ξ(x): the twist gradient and the pull-back against
 // central differences (second order: the error falls 100x when h falls 10x), rigid and similarity.
 TEST(PoseMap, TwistGradientAndPullbackMatchCentralDifferences) {

@@ -81,8 +81,8 @@ TEST(RunFields, EveryFieldOfTheOptionsHasARow) {
   [[maybe_unused]] auto& [count, coarse_iterations, switch_decrease, coarse_tolerance,
                           refined_move_limit] = o.levels;
   EXPECT_EQ(fields_under("levels.").size(), 5u);
-  [[maybe_unused]] auto& [move] = o.pose;
-  EXPECT_EQ(fields_under("pose.").size(), 1u);
+  [[maybe_unused]] auto& [pose_method, move] = o.pose;
+  EXPECT_EQ(fields_under("pose.").size(), 2u);
   [[maybe_unused]] auto& [folder, resume, checkpoint_every, vtu_every] = o.output;
   EXPECT_EQ(fields_under("output.").size(), 4u);
   // No path twice, and the groups by the names the header gives them.
@@ -382,6 +382,7 @@ std::map<std::string, Variant> variants() {
       {"levels.switch_decrease", {l, [](O& o) { o.levels.switch_decrease = 0.05; }}},
       {"levels.coarse_tolerance", {l, [](O& o) { o.levels.coarse_tolerance = 0.1; }}},
       {"levels.refined_move_limit", {l, [](O& o) { o.levels.refined_move_limit = 0.05; }}},
+      {"pose.method", {Group::pose, [](O& o) { o.pose.method = softhd::PoseMethod::projection; }}},
       {"pose.move", {Group::pose, [](O& o) { o.pose.move = 0.5; }}},
       {"output.folder", {s, [](O& o) { o.output.folder = "elsewhere"; }}},
       // (resume needs a folder, itself free)

@@ -54,10 +54,12 @@ struct Outcome {
 Outcome run(const std::string& checkpoint, bool resume, int max_iterations, int crash_after,
             const fe::Assembler& A, const fe::ControlSpace& space, const PointCloud& target,
             double max_seconds = 0.0, int checkpoint_every = 1,
-            const std::optional<scan::Pose>& pose = std::nullopt) {
+            const std::optional<scan::Pose>& pose = std::nullopt,
+            PoseMethod method = PoseMethod::joint) {
   ShapeObjectiveOptions o;
   o.hausdorff.threads = 1;
-  o.pose = pose;  // a target in the camera's frame: the pose joins the control
+  o.pose = pose;  // a target in the camera's frame: the pose joins the control, or is projected
+  o.pose_method = method;
   ShapeObjective J(A, space, HausdorffTarget(target, o.hausdorff), o);
   ShapeTrackingOptions to;
   to.optimizer.max_iterations = max_iterations;
@@ -216,6 +218,36 @@ TEST_F(ResumeIsTheSameRun, WithAJointPose) {
   expect_same_run(reference.summary, r.summary);
   expect_error<InvalidArgument>([&] { run(log, true, 16, 0, A, space, seen, 0.0, 2, truth); },
                                 "pose differs");
+}
+
+// The pose by projection (docs/formulation.md §8.11): the warm start of each inner minimisation
+// is the last accepted iterate's pose, part of the run's state. States saved every 2
+// iterations, a crash after 3: the resumed run replays to the save and makes the third
+// iteration again from the second's pose, bitwise the uninterrupted run (pose included);
+// another method is another run.
+TEST_F(ResumeIsTheSameRun, WithAPoseByProjection) {
+  Eigen::Matrix<double, 7, 1> g, off;
+  g << 0.4, -0.3, 0.2, 1.0, 0.5, -2.0, 0.0;
+  off << 0.06, -0.05, 0.06, 0.05, 0.0, -0.05, 0.0;
+  const scan::Pose G = scan::Pose::from_twist(g), truth = G.inverse();
+  const scan::Pose start = scan::compose(truth, scan::Pose::from_twist(off));
+  const PointCloud seen = G.apply(target, false);
+  const std::string ref_log = temp_path("proj_ref.bin"), log = temp_path("proj.bin");
+  const PoseMethod p = PoseMethod::projection;
+  const Outcome reference = run(ref_log, false, 8, 0, A, space, seen, 0.0, 2, start, p);
+  ASSERT_GE(reference.summary.iterations, 6) << reference.summary.termination;
+  ASSERT_TRUE(reference.summary.pose);
+  ASSERT_EQ(reference.summary.pose_twist.size(), 6);
+  ASSERT_EQ(reference.summary.history.back().pose.size(), 7);
+  ASSERT_TRUE(run(log, false, 8, 3, A, space, seen, 0.0, 2, start, p).interrupted);
+  EXPECT_EQ(read_run_log(log).snapshot.iterations, 2);
+  const Outcome r = run(log, true, 8, 0, A, space, seen, 0.0, 2, start, p);
+  ASSERT_FALSE(r.interrupted);
+  EXPECT_GT(r.summary.replayed_evaluations, 0);
+  expect_same_run(reference.summary, r.summary);
+  expect_error<InvalidArgument>(
+      [&] { run(log, true, 8, 0, A, space, seen, 0.0, 2, start, PoseMethod::joint); },
+      "pose differs");
 }
 
 TEST_F(ResumeIsTheSameRun, ACheckpointOfAnotherProblemIsRefused) {

@@ -150,6 +150,40 @@ TEST(ScanScene, CameraFrameKeys) {
   refuses(R"("frame": "camera", "align": "similarity", "pose": "scan_scene_tiny_pose.txt")",
           "scan_scene_tiny_pose.txt' has scale 1e-100, outside the similarity's scale bounds "
           "[0.5, 2]");
+  // "pose_uncertainty" of the pose file: the projection's bound (degrees to radians); bad values
+  // refused naming the key, a pose file with a non-rotation block naming the file.
+  const softhd::Scene calibrated =
+      scene_with(head + R"("frame": "camera", "pose": "scan_scene_pose.txt",
+                 "pose_uncertainty": {"degrees": 2, "length": 0.5}})");
+  const SceneTarget ct = scene_target(calibrated, calibrated.body.make_mesh());
+  ASSERT_TRUE(ct.pose_uncertainty);
+  EXPECT_DOUBLE_EQ(ct.pose_uncertainty->rotation, 2 * M_PI / 180);
+  EXPECT_EQ(ct.pose_uncertainty->translation, 0.5);
+  ShapeObjectiveOptions co;
+  apply_target_settings(ct, &co);
+  ASSERT_TRUE(co.pose_bound);
+  EXPECT_EQ(co.pose_bound->translation, 0.5);
+  const std::string pose = R"("frame": "camera", "pose": "scan_scene_pose.txt", )";
+  refuses(pose + R"("pose_uncertainty": {"degrees": -1, "length": 0.5})",
+          "target.pose_uncertainty.degrees must be a number > 0, got -1");
+  refuses(pose + R"("pose_uncertainty": {"degrees": "NaN", "length": 0.5})",
+          "target.pose_uncertainty.degrees must be a number > 0, got \"NaN\"");
+  refuses(pose + R"("pose_uncertainty": {"degrees": 1, "length": 0})",
+          "target.pose_uncertainty.length must be a number > 0, got 0");
+  refuses(pose + R"("pose_uncertainty": {"degrees": 1})",
+          "target.pose_uncertainty.length must be a number > 0, got null");
+  refuses(pose + R"("pose_uncertainty": {"degrees": 1, "length": 1, "scale": 1})",
+          "unknown key 'scale'");
+  refuses(pose + R"("pose_uncertainty": [1, 1])", "target.pose_uncertainty must be {");
+  refuses(R"("frame": "camera", "pose_uncertainty": {"degrees": 1, "length": 1})",
+          "target.pose_uncertainty is the uncertainty of target.pose");
+  refuses(R"("pose_uncertainty": {"degrees": 1, "length": 1})",
+          "target.pose_uncertainty is for a cloud in the camera's frame");
+  std::ofstream(testing::TempDir() + "/scan_scene_shear_pose.txt")
+      << "1 0.3 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  refuses(R"("frame": "camera", "pose": "scan_scene_shear_pose.txt",
+             "pose_uncertainty": {"degrees": 1, "length": 1})",
+          "scan_scene_shear_pose.txt: pose matrix: the 3x3 block is not a scaled rotation");
   const softhd::Scene arc = softhd::parse_scene(R"({
     "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [2, 1, 0.2], "cells": [2, 1, 1], "order": 1 },
     "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },

@@ -305,8 +305,8 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
              beta=None, gamma=None, eps=None, method=None, tol=None, tikhonov_mass=None,
              tikhonov_grad=None, coarse_levels=None, levels=None, refined_move_limit=None,
              coarse_iterations=None, switch_decrease=None, coarse_tol=None,
-             distance=None, cap=None, cap_q=None, initial=None, pose_move=None, callback=None,
-             threads=0):
+             distance=None, cap=None, cap_q=None, initial=None, pose_move=None, pose_method=None,
+             callback=None, threads=0):
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
     target: the run ``softhd optimise`` makes (the library's TrackingRun), with its options and
     its defaults for every option left None (:func:`optimise_defaults` lists them, e.g. method
@@ -334,9 +334,12 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     an exception raised by the callback ends the run and propagates. initial: the starting
     control (one value per control, e.g. an earlier result's ``control``; levels 1 only); None:
     the scene's control.initial; values outside the control bounds, and an empty array, raise
-    InvalidArgument. pose_move: a scene target in the camera's frame only (InvalidArgument for a
-    target in the body's frame), the pose's move limit as a fraction of the control's, in
-    (0, 1] (default 1). algorithm "newton" (trust-region Newton-CG) uses the exact Hessian-vector
+    InvalidArgument. pose_method, pose_move: a scene target in the camera's frame only
+    (InvalidArgument for a target in the body's frame): pose_method "joint" (default: the pose's
+    six variables join the optimiser's) or "projection" (every evaluation fits the rigid pose to
+    the scan on its state, from the last evaluation's pose, and the optimiser moves the control
+    alone; the result's ``pose`` is the final fit); pose_move, the joint pose's move limit as a
+    fraction of the control's, in (0, 1] (default 1). algorithm "newton" (trust-region Newton-CG) uses the exact Hessian-vector
     product of J, or with hessian "gauss_newton" its positive semi-definite part (``--hessian``).
     """
     points = vols = file = None
@@ -359,7 +362,8 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
                           coarse_tol=coarse_tol, distance=distance,
                           cap=cap, cap_q=cap_q,
                           initial=None if initial is None else _as_float64(initial, "initial"),
-                          pose_move=pose_move, callback=callback, threads=threads)
+                          pose_move=pose_move, pose_method=pose_method, callback=callback,
+                          threads=threads)
 
 
 def optimise_defaults():

@@ -77,6 +77,7 @@ py::dict optimise_defaults() {
   out["max_iter"] = d.optimiser.max_iterations;
   out["initial"] = py::none();  // the scene's control.initial
   out["pose_move"] = d.pose.move;
+  out["pose_method"] = to_string(d.pose.method);
   out["max_seconds"] = d.optimiser.max_seconds;
   out["rel_tol"] = d.optimiser.relative_change;
   out["algorithm"] = to_string(d.optimiser.algorithm);
@@ -219,10 +220,18 @@ void bind_optimise(py::module_& m) {
          std::optional<double> switch_decrease, std::optional<double> coarse_tol,
          const std::optional<std::string>& distance, std::optional<double> cap,
          std::optional<double> cap_q, const std::optional<Eigen::VectorXd>& initial,
-         std::optional<double> pose_move, const py::object& callback, int threads) {
+         std::optional<double> pose_move, const std::optional<std::string>& pose_method,
+         const py::object& callback, int threads) {
         TrackingRunOptions o;
         if (initial) o.optimiser.initial_control = *initial;
         if (pose_move) o.pose.move = *pose_move;
+        if (pose_method) {
+          try {
+            o.pose.method = pose_method_from_string(*pose_method);
+          } catch (const InvalidArgument& e) {  // named by its keyword
+            throw InvalidArgument(name_fields(e.what(), FrontEnd::python));
+          }
+        }
         if (distance || cap || cap_q) {  // the form as a whole (TrackingRunOptions::distance)
           TargetDistance form;
           if (distance) form.sides = sides_from_string(*distance);
@@ -269,7 +278,8 @@ void bind_optimise(py::module_& m) {
       py::arg("tikhonov_grad"), py::arg("coarse_levels"), py::arg("levels"),
       py::arg("refined_move_limit"), py::arg("coarse_iterations"), py::arg("switch_decrease"),
       py::arg("coarse_tol"), py::arg("distance"), py::arg("cap"), py::arg("cap_q"),
-      py::arg("initial"), py::arg("pose_move"), py::arg("callback"), py::arg("threads"));
+      py::arg("initial"), py::arg("pose_move"), py::arg("pose_method"), py::arg("callback"),
+      py::arg("threads"));
   m.def(
       "optimise_fields",
       [] {

@@ -219,7 +219,8 @@ def test_defaults_are_the_command_line_tools(cli_help):
              "refined_move_limit": "the move limit of each level started from a coarser "
              "level's control", "coarse_iterations": "--coarse-iterations K",
              "switch_decrease": "--switch-decrease S", "coarse_tol": "--coarse-tol T",
-             "pose_move": "as a fraction of the control's, in (0, 1]"}
+             "pose_move": "as a fraction of the control's, in (0, 1]",
+             "pose_method": "--pose-method joint|projection how the pose is refined"}
     for name, before in flags.items():
         m = re.search(re.escape(before) + r" \(default ([^;,:)]+)", text)
         assert m, name
@@ -281,6 +282,14 @@ def test_camera_frame_target_returns_the_pose(scene_file, tmp_path):
         return np.linalg.norm(P - truth @ off)
 
     assert first_step(pose_move=0.05) < 0.5 * first_step()
+    # pose_method "projection": every evaluation fits the pose on its state; the body at rest
+    # is an exact moved copy of the target, so the first evaluation recovers the pose.
+    r = softhd.optimise(softhd.Scene.load(scene_file(spec, "camera.json")), max_iter=1,
+                        pose_method="projection")
+    assert angle(r.pose) < 1e-6
+    with pytest.raises(softhd.InvalidArgument, match="unknown pose_method 'both'"):
+        softhd.optimise(softhd.Scene.load(scene_file(spec, "camera.json")), max_iter=1,
+                        pose_method="both")
     assert softhd.optimise(scene, max_iter=1).pose is None
     bad = dict(spec, target=dict(spec["target"], frame="world"))
     with pytest.raises(softhd.InvalidArgument, match='target.frame must be "body" or "camera"'):
@@ -312,3 +321,5 @@ def test_initial_control_starts_there(scene_file):
         softhd.optimise(scene, max_iter=1, pose_move=0.5)
     with pytest.raises(softhd.InvalidArgument, match=r"pose_move must be in \(0, 1\]"):
         softhd.optimise(scene, max_iter=1, pose_move=0.0)
+    with pytest.raises(softhd.InvalidArgument, match="pose_method finds the pose of a target"):
+        softhd.optimise(scene, max_iter=1, pose_method="projection")

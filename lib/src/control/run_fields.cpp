@@ -86,6 +86,7 @@ const std::vector<RunField>& tracking_run_fields() {
        SOFTHD_COPY(levels.coarse_tolerance)},
       {"levels.refined_move_limit", "--refined-move-limit", "refined_move_limit", "",
        SOFTHD_COPY(levels.refined_move_limit)},
+      {"pose.method", "--pose-method", "pose_method", "", SOFTHD_COPY(pose.method)},
       {"pose.move", "--pose-move", "pose_move", "", SOFTHD_COPY(pose.move)},
       {"output.folder", "--out", "", kNoFiles, SOFTHD_COPY(output.folder), "where the files go"},
       {"output.resume", "--resume", "", kNoFiles, SOFTHD_COPY(output.resume),

@@ -204,7 +204,7 @@ void RunFiles::write_history() const {
   if (!writes_) return;
   std::ostringstream h;
   h << kHistoryHeader << (objective_.options().second_order ? kNewtonHeader : "")
-    << (pose_variables(objective_) > 0 ? kPoseHeader : "") << '\n';
+    << (objective_.pose() ? kPoseHeader : "") << '\n';
   for (const std::string& r : rows_) h << r << '\n';
   write_file_atomically((dir_ / "history.csv").string(), h.str());
 }

@@ -101,8 +101,11 @@ std::string encode_fingerprint(const RunFingerprint& f) {
 std::string encode_evaluation(const LoggedEvaluation& ev) {
   const ShapeEvaluation& r = ev.result;
   Encoder e;
-  // Bit 1: the evaluation's status is ok (else state_failed).
-  e.put<std::uint8_t>((ev.gradient ? 1 : 0) | (r.status == EvaluationStatus::ok ? 2 : 0));
+  // Bit 1: the evaluation's status is ok (else state_failed); bit 2: a pose twist and the
+  // inner iterations follow the failure (a camera-frame target's evaluation).
+  const bool pose = r.pose_twist.size() != 0;
+  e.put<std::uint8_t>((ev.gradient ? 1 : 0) | (r.status == EvaluationStatus::ok ? 2 : 0) |
+                      (pose ? 4 : 0));
   e.put<double>(ev.seconds);
   e.put<std::int32_t>(r.newton_iterations);
   e.put<std::int32_t>(r.factorizations);
@@ -112,6 +115,10 @@ std::string encode_evaluation(const LoggedEvaluation& ev) {
   e.put_vector(ev.x.data(), static_cast<std::uint64_t>(ev.x.size()));
   e.put_vector(r.gradient.data(), static_cast<std::uint64_t>(r.gradient.size()));
   e.put_string(r.failure);
+  if (pose) {
+    e.put_vector(r.pose_twist.data(), static_cast<std::uint64_t>(r.pose_twist.size()));
+    e.put<std::int32_t>(r.pose_iterations);
+  }
   return e.out;
 }
 
@@ -119,7 +126,7 @@ LoggedEvaluation decode_evaluation(Decoder& d) {
   LoggedEvaluation ev;
   ShapeEvaluation& r = ev.result;
   const auto flags = d.get<std::uint8_t>();
-  if (flags > 3) d.fail("unknown evaluation flags");
+  if (flags > 7) d.fail("unknown evaluation flags");
   ev.gradient = flags & 1;
   r.status = flags & 2 ? EvaluationStatus::ok : EvaluationStatus::state_failed;
   ev.seconds = d.get<double>();
@@ -131,6 +138,13 @@ LoggedEvaluation decode_evaluation(Decoder& d) {
   ev.x = d.vector();
   r.gradient = d.vector();
   r.failure = d.string();
+  if (flags & 4) {
+    r.pose_twist = d.vector();
+    r.pose_iterations = d.get<std::int32_t>();
+    if (!r.pose_twist.allFinite() || r.pose_iterations < 0 ||
+        (r.pose_twist.size() != 6 && r.pose_twist.size() != 7))
+      d.fail("an evaluation's pose twist is not 6 or 7 finite values");
+  }
   if (!ev.x.allFinite() || !std::isfinite(ev.seconds) || r.newton_iterations < 0 ||
       r.factorizations < 0)
     d.fail("an evaluation holds non-finite or negative values");

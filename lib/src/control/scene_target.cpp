@@ -262,6 +262,7 @@ struct FrameKeys {
   TargetFrame frame = TargetFrame::body;
   scan::PoseKind align = scan::PoseKind::rigid;
   std::optional<scan::Pose> pose;
+  std::optional<PoseBound> uncertainty;
   std::string description;
 };
 
@@ -281,6 +282,24 @@ void check_start_scale(const Scene& scene, const scan::Pose& pose, scan::PoseKin
                         decimal(bounds.scale_min) + ", " + decimal(bounds.scale_max) + "]");
 }
 
+// "pose_uncertainty": {"degrees": A, "length": D}, both finite and > 0, as a PoseBound.
+PoseBound read_uncertainty(const Scene& scene, const nlohmann::json& t) {
+  const nlohmann::json& u = t["pose_uncertainty"];
+  const std::string key = scene.source + ": target.pose_uncertainty";
+  if (!u.is_object())
+    throw InvalidArgument(key + " must be {\"degrees\": A, \"length\": D}, got " + u.dump());
+  io::check_keys(u, "scene " + scene.source, "target.pose_uncertainty", {"degrees", "length"});
+  double value[2] = {0.0, 0.0};
+  const char* names[2] = {"degrees", "length"};
+  for (int k = 0; k < 2; ++k) {
+    const nlohmann::json& v = u.contains(names[k]) ? u[names[k]] : nlohmann::json();
+    if (!v.is_number() || !std::isfinite(v.get<double>()) || !(v.get<double>() > 0.0))
+      throw InvalidArgument(key + "." + names[k] + " must be a number > 0, got " + v.dump());
+    value[k] = v.get<double>();
+  }
+  return PoseBound{value[0] * M_PI / 180.0, value[1]};
+}
+
 FrameKeys read_frame_keys(const Scene& scene, const nlohmann::json& t) {
   FrameKeys keys;
   FrameKeys* target = &keys;
@@ -293,7 +312,7 @@ FrameKeys read_frame_keys(const Scene& scene, const nlohmann::json& t) {
     target->frame = name == "camera" ? TargetFrame::camera : TargetFrame::body;
   }
   const bool camera = target->frame == TargetFrame::camera;
-  for (const char* key : {"align", "pose"})
+  for (const char* key : {"align", "pose", "pose_uncertainty"})
     if (t.contains(key) && !camera)
       throw InvalidArgument(scene.source + ": target." + key +
                             " is for a cloud in the camera's frame (give \"frame\": \"camera\")");
@@ -328,7 +347,12 @@ FrameKeys read_frame_keys(const Scene& scene, const nlohmann::json& t) {
     target->pose = read_pose(f.string());
     check_start_scale(scene, *target->pose, target->align, f.string());
     target->description += "; camera frame, start pose " + f.string();
+    if (t.contains("pose_uncertainty")) target->uncertainty = read_uncertainty(scene, t);
   } else {
+    if (t.contains("pose_uncertainty"))
+      throw InvalidArgument(scene.source +
+                            ": target.pose_uncertainty is the uncertainty of target.pose (give "
+                            "\"pose\": FILE)");
     target->description += "; camera frame, start pose by align";
   }
   return keys;
@@ -369,6 +393,7 @@ void apply_target_settings(const SceneTarget& target, ShapeObjectiveOptions* opt
     options->camera = target.camera;
   }
   if (target.frame == TargetFrame::camera) options->pose_kind = target.align;
+  options->pose_bound = target.pose_uncertainty;
 }
 
 DistanceForm target_form(const TargetDistance& distance, const ShapeObjective& objective) {
@@ -413,7 +438,7 @@ SceneTarget scene_target(const Scene& scene, const fe::Mesh& mesh, double memory
     if (kind == "cloud")
       io::check_keys(t, where, "target",
                      {"kind", "file", "solved_on", "clean", "weights", "distance", "cap", "cap_q",
-                      "surface", "camera", "frame", "align", "pose"});
+                      "surface", "camera", "frame", "align", "pose", "pose_uncertainty"});
     // The frame's keys before the scan is read and cleaned.
     const FrameKeys frame = kind == "cloud" ? read_frame_keys(scene, t) : FrameKeys{};
     SceneTarget st = kind == "arc" ? arc_target(scene, mesh, t, memory_limit)
@@ -421,6 +446,7 @@ SceneTarget scene_target(const Scene& scene, const fe::Mesh& mesh, double memory
     st.frame = frame.frame;
     st.align = frame.align;
     st.pose = frame.pose;
+    st.pose_uncertainty = frame.uncertainty;
     st.description += frame.description;
     st.distance = target_distance(scene, t, st.frame == TargetFrame::camera);
     read_view_keys(scene, t, &st);

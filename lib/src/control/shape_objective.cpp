@@ -10,12 +10,14 @@
 #include "softhd/error.hpp"
 #include "softhd/fe/geometry.hpp"
 #include "softhd/fe/state_solver.hpp"
+#include "softhd/scan/align.hpp"
 
 namespace softhd {
 
 namespace {
 constexpr EnumNames<EvaluationStatus, 2> kEvaluationStatus{
     {{EvaluationStatus::ok, "ok"}, {EvaluationStatus::state_failed, "state_failed"}}};
+constexpr auto kPoseMethods = enum_sequence<PoseMethod::projection>({"joint", "projection"});
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -56,6 +58,10 @@ void check_same_distance(const HausdorffOptions& mine, const HausdorffOptions& t
 }  // namespace
 
 std::string to_string(EvaluationStatus s) { return enum_name(kEvaluationStatus, s); }
+std::string to_string(PoseMethod method) { return enum_name(kPoseMethods, method); }
+PoseMethod pose_method_from_string(const std::string& name) {
+  return enum_from_name(kPoseMethods, name, "pose.method");
+}
 
 struct ShapeObjective::Impl {
   Impl(const fe::Assembler& a, const fe::ControlSpace& c, HausdorffTarget t,
@@ -74,6 +80,12 @@ struct ShapeObjective::Impl {
       const Eigen::Vector3d centre =
           scan::apply_points(start_inverse, mean.transpose()).row(0).transpose();
       pose.emplace(start_inverse, centre, options.pose_kind);
+      if (options.pose_method == PoseMethod::projection) {
+        const PointCloud rest = cloud.at(path.last_state().u);
+        pose_size =
+            (rest.points().colwise().maxCoeff() - rest.points().colwise().minCoeff()).norm();
+        warm_twist = Eigen::VectorXd::Zero(pose->variables());
+      }
     }
   }
 
@@ -84,7 +96,42 @@ struct ShapeObjective::Impl {
   MovingCloud cloud;
   StatePath path;
   std::optional<scan::PoseMap> pose;  // with a pose (docs/formulation.md §8.10)
+  Eigen::VectorXd warm_twist;         // projection: the next inner minimisation's start (§8.11)
+  double pose_size = 0.0;             // projection: L of the rest moving cloud
 
+  bool projecting() const { return pose && options.pose_method == PoseMethod::projection; }
+  /// The projection's inner minimisation (docs/formulation.md §8.11): the twist
+  ///   ξ* = argmin_ξ ρ̃(Q_ξ(X(u)), Y)   (the form f, its visible set held fixed)
+  /// by scan::minimise_pose on the pose Q = Q_ξ, from Q_{warm_twist}; *iterations its BFGS's.
+  Eigen::VectorXd project(const Eigen::VectorXd& u, const DistanceForm& f, int* iterations) const {
+    const PointCloud X = cloud.at(u);
+    const scan::PoseFunction rho = [&](const scan::Pose& Q, Eigen::VectorXd* g,
+                                       Eigen::Vector3d* c) {
+      return scan::pose_distance(target, X, f, Q, g, c);
+    };
+    scan::LocalPoseSettings st;
+    st.max_iterations = options.pose_iterations;
+    st.step_tolerance = options.pose_tolerance;
+    st.size = pose_size;
+    st.first_step = 1e-3;    // from the last evaluation's optimum: a small first step
+    st.max_backtracks = 20;  // a step 2^-20 of BFGS's that does not decrease ρ̃: at its minimum
+    if (options.pose_bound) st.feasible = [this](const scan::Pose& Q) { return bounded(Q); };
+    const scan::LocalPoseResult r = scan::minimise_pose(rho, pose->at(warm_twist), st);
+    *iterations = r.iterations;
+    return pose->twist_of(r.pose);
+  }
+
+  /// The pose of Q's twist ξ = twist_of(Q) with |ω| and |v| cut to options.pose_bound (each
+  /// ball's nearest point: ω ← ω min(1, a/|ω|), v ← v min(1, b/|v|)).
+  scan::Pose bounded(const scan::Pose& Q) const {
+    Eigen::VectorXd xi = pose->twist_of(Q);
+    const double w = xi.head<3>().norm(), v = xi.segment<3>(3).norm();
+    const PoseBound& b = *options.pose_bound;
+    if (w <= b.rotation && v <= b.translation) return Q;
+    if (w > b.rotation) xi.head<3>() *= b.rotation / w;
+    if (v > b.translation) xi.segment<3>(3) *= b.translation / v;
+    return pose->at(xi);
+  }
   /// ξ checked (size, finite); empty means 0 (and stays empty without a pose).
   Eigen::VectorXd checked_twist(const Eigen::VectorXd& xi) const {
     if (pose) return pose->checked(xi);
@@ -140,6 +187,22 @@ void ShapeObjectiveOptions::validate() const {
   if (warm_start_states < 1) throw InvalidArgument("warm_start_states must be >= 1");
   if (coarse_correction_iterations < 0)
     throw InvalidArgument("coarse_correction_iterations must be >= 0");
+  if (!(pose_tolerance > 0.0 && pose_tolerance < 1.0))
+    throw InvalidArgument("pose_tolerance must be in (0, 1) (a fraction of L)");
+  if (pose_iterations < 1) throw InvalidArgument("pose_iterations must be >= 1");
+  if (pose_bound) {
+    if (pose_method != PoseMethod::projection)
+      throw InvalidArgument(
+          "pose_bound bounds the pose found by projection (pose.method projection)");
+    if (!(pose_bound->rotation > 0.0 && std::isfinite(pose_bound->rotation)))
+      throw InvalidArgument("pose_bound.rotation must be finite and > 0 (radians)");
+    if (!(pose_bound->translation > 0.0 && std::isfinite(pose_bound->translation)))
+      throw InvalidArgument("pose_bound.translation must be finite and > 0 (a length)");
+  }
+  if (pose && pose_method == PoseMethod::projection && pose_kind != scan::PoseKind::rigid)
+    throw InvalidArgument(
+        "pose.method projection finds a rigid pose; the target's \"align\" is similarity (use "
+        "pose.method joint)");
   if (pose) {
     if (camera)
       throw InvalidArgument("camera: with a pose the camera is the pose's (leave camera empty)");
@@ -192,8 +255,7 @@ void ShapeObjectiveOptions::validate() const {
   if (second_order && pose)
     throw InvalidArgument(
         "pose: the Hessian-vector product (second_order, for optimiser.algorithm newton) does not "
-        "support a "
-        "joint pose");
+        "support a target in the camera's frame (a pose, joint or by projection)");
 }
 
 ShapeObjective::ShapeObjective(const fe::Assembler& assembler, const fe::ControlSpace& control,
@@ -228,6 +290,13 @@ StatePath& ShapeObjective::state_path() { return impl_->path; }
 const StatePath& ShapeObjective::state_path() const { return impl_->path; }
 const MovingCloud& ShapeObjective::moving_cloud() const { return impl_->cloud; }
 const scan::PoseMap* ShapeObjective::pose() const { return impl_->pose ? &*impl_->pose : nullptr; }
+const Eigen::VectorXd& ShapeObjective::pose_warm_start() const { return impl_->warm_twist; }
+void ShapeObjective::set_pose_warm_start(const Eigen::VectorXd& xi) {
+  if (!impl_->projecting())
+    throw InvalidArgument("set_pose_warm_start: the objective has no pose by projection");
+  if (xi.size() == 0) throw InvalidArgument("set_pose_warm_start: an empty twist");
+  impl_->warm_twist = impl_->pose->checked(xi);
+}
 const HausdorffTarget& ShapeObjective::target() const { return impl_->target; }
 const ShapeObjectiveOptions& ShapeObjective::options() const { return impl_->options; }
 const fe::Assembler& ShapeObjective::assembler() const { return impl_->assembler; }
@@ -267,13 +336,18 @@ PointCloud target_frame_cloud(const ShapeObjective& objective, const Eigen::Vect
 
 ShapeEvaluation ShapeObjective::evaluate(const Eigen::VectorXd& m, bool gradient,
                                          const Eigen::VectorXd& xi) {
+  if (impl_->projecting() && xi.size() != 0)
+    throw InvalidArgument("pose twist has " + std::to_string(xi.size()) +
+                          " values, expected 0 (the projection finds it)");
   return impl_->evaluate(m, gradient, impl_->checked_twist(xi));
 }
 
 /// J = ρ̃(Q_ξ(X(u(m))), Y) + J_reg(m); with `gradient` the adjoint chain:
 ///   g_x' = ∂ρ̃/∂x' → (dJ/dξ, g_x = s R_ξᵀ g_x') → g_u = ∂X/∂uᵀ g_x → K λ = g_u → dJ/dm.
+/// Projection: ξ = ξ*(u) of the inner minimisation, and the same chain gives
+///   dJ/dm = ∂J/∂m at (m, ξ*) (the envelope theorem: ∂ρ̃/∂ξ = 0 there), no dJ/dξ.
 ShapeEvaluation ShapeObjective::Impl::evaluate(const Eigen::VectorXd& m, bool gradient,
-                                               const Eigen::VectorXd& xi,
+                                               const Eigen::VectorXd& xi_in,
                                                const fe::State* converged, bool remember) {
   if (m.size() != control.size()) {
     throw InvalidArgument("control has " + std::to_string(m.size()) + " values, expected " +
@@ -296,7 +370,11 @@ ShapeEvaluation ShapeObjective::Impl::evaluate(const Eigen::VectorXd& m, bool gr
   // Distance (and its gradient w.r.t. the moved points).
   t0 = std::chrono::steady_clock::now();
   HausdorffRequest req;
-  req.form = form(state.u, camera_at(xi));  // this state's visible set, fixed in the gradient
+  Eigen::VectorXd xi = xi_in;
+  // This state's visible set, fixed in the gradient (projection: from the warm start's camera,
+  // fixed in the inner minimisation too).
+  req.form = form(state.u, camera_at(projecting() ? warm_twist : xi));
+  if (projecting()) xi = project(state.u, req.form, &ev.pose_iterations);
   req.gradient_points = gradient;
   req.hessian_points = gradient && options.second_order;
   req.gradient_volumes = gradient && options.volumes == ParticleVolumes::deformed;
@@ -318,7 +396,7 @@ ShapeEvaluation ShapeObjective::Impl::evaluate(const Eigen::VectorXd& m, bool gr
   if (gradient) {
     t0 = std::chrono::steady_clock::now();
     if (pose) {
-      ev.pose_gradient = pose->twist_gradient(x.points(), r.gradient_points, xi);
+      if (!projecting()) ev.pose_gradient = pose->twist_gradient(x.points(), r.gradient_points, xi);
       r.gradient_points = pose->pullback(r.gradient_points, xi);
     }
     const Eigen::VectorXd g = cloud.pullback(state.u, r);
@@ -326,6 +404,7 @@ ShapeEvaluation ShapeObjective::Impl::evaluate(const Eigen::VectorXd& m, bool gr
     ev.seconds_adjoint = seconds_since(t0);
     if (options.second_order) last_gradient = {m, state, std::move(r), path.generation(), true};
   }
+  if (pose) ev.pose_twist = xi;
   ev.status = EvaluationStatus::ok;
   return ev;
 }

@@ -221,9 +221,9 @@ void finish(ShapeObjective& objective, Recorder& recorder, const BoundedOptimize
   if (final_eval.status != EvaluationStatus::ok)
     throw StateSolveError("the state solve at the best control failed: " + final_eval.failure);
   s->control = m;
-  if (np > 0) {
-    s->pose_twist = xi;
-    s->pose = pose_at(objective, xi);
+  if (objective.pose()) {  // joint: the optimiser's ξ; projection: the final evaluation's
+    s->pose_twist = final_eval.pose_twist;
+    s->pose = pose_at(objective, s->pose_twist);
   }
   s->displacement = objective.state_path().last_state().u;
   s->rho_final = final_eval.rho;
@@ -286,6 +286,13 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
                 exact_text(b.rotation) + " " + exact_text(b.translation) + " " +
                 exact_text(b.scale_min) + " " + exact_text(b.scale_max);
     if (b.move != 1.0) f["pose"] += " move " + exact_text(b.move);
+    if (so.pose_method != PoseMethod::joint)  // (older checkpoints: joint, not recorded)
+      f["pose"] += " method " + to_string(so.pose_method) + " tolerance " +
+                   exact_text(so.pose_tolerance) + " iterations " +
+                   std::to_string(so.pose_iterations);
+    if (so.pose_bound)
+      f["pose"] += " bound " + exact_text(so.pose_bound->rotation) + " " +
+                   exact_text(so.pose_bound->translation);
   }
   f["checkpoint"] = "every " + std::to_string(options.checkpoint_every) + " iterations";
   const BoundedOptimizerOptions& o = options.optimizer;
@@ -442,6 +449,11 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   if (start.status != EvaluationStatus::ok)
     throw StateSolveError("the state solve at the starting control failed: " + start.failure);
   s.rho_start = start.rho;
+  // The projection's inner minimisations start from the pose of the best control so far: the
+  // start's, then each accepted iterate's (set in on_iteration, replayed ones too, so a resumed
+  // run has the uninterrupted run's; docs/formulation.md §8.11).
+  const bool projection = objective.pose() && np == 0;
+  if (projection) objective.set_pose_warm_start(start.pose_twist);
   s.control = m0;  // the best so far
   if (callbacks.on_start) callbacks.on_start(s);
 
@@ -491,7 +503,9 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
     TrackingIteration it = record(rec, last, floor);
     it.seconds = recorder.seconds();
     it.replayed = last_replayed;
-    if (np > 0) it.pose = pose_at(objective, x.tail(np)).twist();
+    if (objective.pose())  // the iterate's pose: joint x's ξ, projection its evaluation's
+      it.pose = pose_at(objective, np > 0 ? Eigen::VectorXd(x.tail(np)) : last.pose_twist).twist();
+    if (projection && last.pose_twist.size() != 0) objective.set_pose_warm_start(last.pose_twist);
     s.history.push_back(it);
     bool stop = false;
     try {

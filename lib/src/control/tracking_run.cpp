@@ -41,7 +41,7 @@ std::string file_hash(const std::string& path) {
 
 // The options checked against the scene and the target: optimiser.initial_control's length and
 // bounds (those of track_shape: control.lower/upper where a control acts, 0 elsewhere),
-// pose.move (a camera-frame target's only).
+// pose.move and pose.method (a camera-frame target's only; pose.move the joint pose's).
 void check_against_scene(const Scene& scene, const fe::ControlSpace& control,
                          const SceneTarget& target, const TrackingRunOptions& o) {
   if (o.optimiser.initial_control) {
@@ -64,6 +64,18 @@ void check_against_scene(const Scene& scene, const fe::ControlSpace& control,
     throw InvalidArgument(
         "pose.move moves the pose of a target in the camera's frame; this target is in the "
         "body's frame (it has no pose)");
+  if (o.pose.method != PoseMethod::joint && target.frame != TargetFrame::camera)
+    throw InvalidArgument(
+        "pose.method finds the pose of a target in the camera's frame; this target is in the "
+        "body's frame (it has no pose)");
+  if (target.pose_uncertainty && o.pose.method != PoseMethod::projection)
+    throw InvalidArgument(
+        "target.pose_uncertainty bounds the pose found by projection: give pose.method "
+        "projection");
+  if (o.pose.method == PoseMethod::projection && o.pose.move != 1.0)
+    throw InvalidArgument(
+        "pose.move is the joint pose's move limit; with pose.method projection the optimiser "
+        "has no pose variables (leave pose.move at 1)");
 }
 
 void validate_levels(const TrackingRunOptions::Levels& levels) {
@@ -160,6 +172,7 @@ ShapeObjectiveOptions TrackingRunOptions::objective() const {
   o.tikhonov_mass = tikhonov.mass;
   o.tikhonov_gradient = tikhonov.gradient;
   o.second_order = optimiser.algorithm == Algorithm::newton;  // MMA's evaluations pay nothing
+  o.pose_method = pose.method;
   return o;
 }
 
@@ -256,6 +269,7 @@ struct TrackingRun::Impl {
     if (const std::optional<scan::Pose>& p = objective->options().pose) {
       sum["frame"] = "camera";
       sum["align"] = scan::to_string(objective->options().pose_kind);
+      sum["pose_method"] = to_string(objective->options().pose_method);
       sum["pose_start"] = {{"matrix", detail::matrix_json(p->matrix())},
                            {"twist", detail::matrix_json(p->twist())}};
     }

@@ -21,15 +21,12 @@ class PoseObjective {
  public:
   PoseObjective(const Eigen::MatrixXd& body, const Eigen::VectorXd& body_volumes,
                 const PointCloud& scan, const HausdorffOptions& distance, DistanceForm form);
-  /// ρ̃ at Q and, if `gradient` is not null, ∂ρ̃/∂δ of the twist δ = (ω, v, σ) about the
-  /// centroid c of Q(body) (6 entries for a rigid motion, 7 with σ):
-  ///   ∂/∂v = Σ g_i, ∂/∂ω = Σ (x_i − c) × g_i, ∂/∂σ = Σ (x_i − c)·g_i, g_i = ∂ρ̃/∂x_i.
+  /// ρ̃ at Q and its twist gradient (scan::pose_distance).
   double value(const Pose& Q, Eigen::VectorXd* gradient, Eigen::Vector3d* centre) const;
   const HausdorffTarget& target() const { return target_; }
 
  private:
-  Eigen::MatrixXd body_;
-  Eigen::VectorXd volumes_;
+  PointCloud body_;
   HausdorffTarget target_;
   DistanceForm form_;
 };
@@ -38,26 +35,10 @@ class PoseObjective {
 /// applied after Q.
 Pose twist_step(const Pose& Q, const Eigen::VectorXd& delta, const Eigen::Vector3d& centre);
 
-/// Settings of one local minimisation.
-struct LocalSettings {
-  int max_iterations = 200;
-  double step_tolerance = 1e-10;  ///< stop when the step moves no point more than this × size
-  double size = 1.0;              ///< the body's size L (scales ω and σ into lengths)
-  bool similarity = false;
-  double log_scale_min = 0.0;  ///< bounds on log s of Q (the inverse pose)
-  double log_scale_max = 0.0;
-};
+using LocalSettings = LocalPoseSettings;
+using LocalResult = LocalPoseResult;
 
-struct LocalResult {
-  Pose pose;
-  double rho = 0.0;
-  int iterations = 0;
-  int evaluations = 0;  ///< of the objective (each with its gradient)
-  bool converged = false;
-};
-
-/// BFGS on the twist (ω L, v, σ L) with an Armijo backtracking line search, re-based at each
-/// accepted pose; the scale clamped to its bounds.
+/// scan::minimise_pose on a PoseObjective.
 LocalResult minimise_pose(const PoseObjective& objective, const Pose& start,
                           const LocalSettings& settings);
 

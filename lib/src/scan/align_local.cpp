@@ -13,22 +13,11 @@ namespace softhd::scan::detail {
 PoseObjective::PoseObjective(const Eigen::MatrixXd& body, const Eigen::VectorXd& body_volumes,
                              const PointCloud& scan, const HausdorffOptions& distance,
                              DistanceForm form)
-    : body_(body), volumes_(body_volumes), target_(scan, distance), form_(std::move(form)) {}
+    : body_(body, body_volumes), target_(scan, distance), form_(std::move(form)) {}
 
 double PoseObjective::value(const Pose& Q, Eigen::VectorXd* gradient,
                             Eigen::Vector3d* centre) const {
-  const PointCloud moved(apply_points(Q, body_), volumes_);
-  HausdorffRequest request;
-  request.form = form_;
-  request.gradient_points = gradient != nullptr;
-  const HausdorffResult r = target_.evaluate(moved, request);
-  if (gradient == nullptr) return r.rho;
-  // The twist about the centroid c of the moved points, at δ = 0 (PoseMap::twist_gradient).
-  const Eigen::Vector3d c = moved.points().colwise().mean().transpose();
-  const PoseMap step(Q, c, gradient->size() == 7 ? PoseKind::similarity : PoseKind::rigid);
-  *gradient = step.twist_gradient(moved.points(), r.gradient_points, Eigen::VectorXd());
-  *centre = c;
-  return r.rho;
+  return pose_distance(target_, body_, form_, Q, gradient, centre);
 }
 
 Pose twist_step(const Pose& Q, const Eigen::VectorXd& delta, const Eigen::Vector3d& centre) {
@@ -65,20 +54,63 @@ Pose step_pose(const Pose& Q, Eigen::VectorXd* u, const Eigen::Vector3d& c,
   return clamp_scale(twist_step(Q, unscale(*u, st.size), c), st);
 }
 
+/// The scaled step u = (L ω, v, L σ) of the twist about c that takes Q to `to` (PoseMap::twist_of).
+Eigen::VectorXd twist_to(const Pose& Q, const Pose& to, const Eigen::Vector3d& c,
+                         const LocalSettings& st) {
+  const PoseMap step(Q, c, st.similarity ? PoseKind::similarity : PoseKind::rigid);
+  Eigen::VectorXd u = step.twist_of(to);
+  u.head<3>() *= st.size;
+  if (u.size() == 7) u[6] *= st.size;
+  return u;
+}
+
 }  // namespace
 
 LocalResult minimise_pose(const PoseObjective& objective, const Pose& start,
                           const LocalSettings& st) {
+  return scan::minimise_pose([&objective](const Pose& Q, Eigen::VectorXd* g,
+                                          Eigen::Vector3d* c) { return objective.value(Q, g, c); },
+                             start, st);
+}
+
+}  // namespace softhd::scan::detail
+
+namespace softhd::scan {
+
+using detail::clamp_scale;
+using detail::scale_gradient;
+using detail::step_pose;
+using detail::twist_to;
+
+double pose_distance(const HausdorffTarget& scan, const PointCloud& body, const DistanceForm& form,
+                     const Pose& Q, Eigen::VectorXd* gradient, Eigen::Vector3d* centre) {
+  const PointCloud moved(apply_points(Q, body.points()), body.volumes());
+  HausdorffRequest request;
+  request.form = form;
+  request.gradient_points = gradient != nullptr;
+  const HausdorffResult r = scan.evaluate(moved, request);
+  if (gradient == nullptr) return r.rho;
+  // The twist about the centroid c of the moved points, at δ = 0 (PoseMap::twist_gradient).
+  const Eigen::Vector3d c = moved.points().colwise().mean().transpose();
+  const PoseMap step(Q, c, gradient->size() == 7 ? PoseKind::similarity : PoseKind::rigid);
+  *gradient = step.twist_gradient(moved.points(), r.gradient_points, Eigen::VectorXd());
+  *centre = c;
+  return r.rho;
+}
+
+LocalPoseResult minimise_pose(const PoseFunction& objective, const Pose& start,
+                              const LocalPoseSettings& st) {
   const int n = st.similarity ? 7 : 6;
   const double L = st.size;
-  LocalResult out;
+  LocalPoseResult out;
   out.pose = clamp_scale(start, st);
   Eigen::VectorXd g(n), g_new(n);
   Eigen::Vector3d c, c_new;
-  double f = objective.value(out.pose, &g, &c);
+  double f = objective(out.pose, &g, &c);
   g = scale_gradient(g, L);
-  // Inverse-Hessian estimate in u; the first step moves points by about L/20 at most.
-  Eigen::MatrixXd H = Eigen::MatrixXd::Identity(n, n) * (0.05 * L / std::max(g.norm(), 1e-300));
+  // Inverse-Hessian estimate in u; the first step moves points by about first_step × L at most.
+  const double first = st.first_step * L;
+  Eigen::MatrixXd H = Eigen::MatrixXd::Identity(n, n) * (first / std::max(g.norm(), 1e-300));
   bool fresh = true;
   for (out.iterations = 0; out.iterations < st.max_iterations; ++out.iterations) {
     Eigen::VectorXd p = -H * g;
@@ -94,7 +126,7 @@ LocalResult minimise_pose(const PoseObjective& objective, const Pose& start,
         out.converged = g.allFinite();
         break;
       }
-      H = Eigen::MatrixXd::Identity(n, n) * (0.05 * L / std::max(g.norm(), 1e-300));
+      H = Eigen::MatrixXd::Identity(n, n) * (first / std::max(g.norm(), 1e-300));
       fresh = true;
       --out.iterations;
       continue;
@@ -104,13 +136,18 @@ LocalResult minimise_pose(const PoseObjective& objective, const Pose& start,
     Pose trial;
     Eigen::VectorXd s;
     bool accepted = false;
-    for (int k = 0; k < 40 && !accepted; ++k, alpha *= 0.5) {
+    for (int k = 0; k < st.max_backtracks && !accepted; ++k, alpha *= 0.5) {
       s = alpha * p;
       trial = step_pose(out.pose, &s, c, st);
+      if (st.feasible) {  // the step taken: the twist from the current pose to the feasible one
+        trial = st.feasible(trial);
+        s = twist_to(out.pose, trial, c, st);
+      }
       ++out.evaluations;
       g_new.resize(n);
-      f_new = objective.value(trial, &g_new, &c_new);
-      accepted = std::isfinite(f_new) && f_new <= f + 1e-4 * g.dot(s);
+      f_new = objective(trial, &g_new, &c_new);
+      const double slope_s = g.dot(s);  // < 0 unless the projection turned the step
+      accepted = std::isfinite(f_new) && slope_s < 0.0 && f_new <= f + 1e-4 * slope_s;
       if (accepted) break;
     }
     if (!accepted) {  // no decrease left at double precision
@@ -141,4 +178,4 @@ LocalResult minimise_pose(const PoseObjective& objective, const Pose& start,
   return out;
 }
 
-}  // namespace softhd::scan::detail
+}  // namespace softhd::scan

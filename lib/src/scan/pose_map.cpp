@@ -46,6 +46,17 @@ Pose PoseMap::at(const Eigen::VectorXd& xi_in) const {
   return q;
 }
 
+Eigen::VectorXd PoseMap::twist_of(const Pose& Q) const {
+  // The inverse of at: E = R R₀ᵀ, ω = log E, σ = log(s/s₀), v = t − c − e^σ E (t₀ − c).
+  Eigen::VectorXd xi = Eigen::VectorXd::Zero(variables());
+  const Eigen::Matrix3d E = Q.R * start_.R.transpose();
+  xi.head<3>() = rotation_log(E);
+  const double es = kind_ == PoseKind::similarity ? Q.s / start_.s : 1.0;
+  if (kind_ == PoseKind::similarity) xi[6] = std::log(es);
+  xi.segment<3>(3) = Q.t - centre_ - es * (E * (start_.t - centre_));
+  return xi;
+}
+
 PointCloud PoseMap::apply(const PointCloud& cloud, const Eigen::VectorXd& xi) const {
   return PointCloud(apply_points(at(xi), cloud.points()), cloud.volumes());
 }

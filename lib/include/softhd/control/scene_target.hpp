@@ -31,6 +31,8 @@
 ///     "pose": FILE                     camera frame only: the start pose (a pose file of
 ///         `softhd align`, scan → body, relative to the scene file); without it the start is
 ///         scan::align against the body at rest
+///     "pose_uncertainty": {"degrees": A, "length": D}   with "pose": its uncertainty, a bound
+///         on the pose found by projection (|ω| ≤ A degrees, |v| ≤ D, §8.11)
 /// With "frame": "camera" the camera of the visible distance is the pose's (no "camera" key), and
 /// "clean.crop" is refused (the body's box is in the body's frame).
 
@@ -76,6 +78,8 @@ struct SceneTarget {
   TargetFrame frame = TargetFrame::body;                 ///< "frame"
   scan::PoseKind align = scan::PoseKind::rigid;          ///< "align" (camera frame)
   std::optional<scan::Pose> pose = std::nullopt;         ///< "pose": the start (camera frame)
+  /// "pose_uncertainty": {"degrees", "length"} of "pose" (the projection's PoseBound).
+  std::optional<PoseBound> pose_uncertainty = std::nullopt;
 };
 
 /// The objective settings a target asks for: surface → particles boundary with deformed

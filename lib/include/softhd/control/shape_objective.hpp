@@ -35,6 +35,29 @@
 
 namespace softhd {
 
+/// How the pose of a target in the camera's frame is found (docs/formulation.md §8.10, §8.11).
+enum class PoseMethod {
+  /// The twist ξ joins the optimiser's variables: J(m, ξ), evaluate(m, gradient, ξ) returns
+  /// dJ/dξ beside dJ/dm.
+  joint,
+  /// Variable projection: J(m) = min over ξ of ρ̃(Q_ξ(X(u(m))), Y) + J_reg(m); each evaluation
+  /// minimises over ξ on its state (warm-started from the last evaluation's ξ), and dJ/dm is
+  /// the adjoint at the optimal ξ (the envelope theorem).
+  projection,
+};
+/// "joint" or "projection".
+std::string to_string(PoseMethod method);
+/// The PoseMethod named "joint" or "projection"; throws InvalidArgument naming `pose.method`.
+PoseMethod pose_method_from_string(const std::string& name);
+
+/// A bound on the projection's twist ξ = (ω, v) from the start pose (docs/formulation.md
+/// §8.11): |ω| ≤ rotation (radians), |v| ≤ translation (a length: the displacement of the body's
+/// centre in the scan's frame) — a calibrated camera's uncertainty.
+struct PoseBound {
+  double rotation = 0.0;     ///< radians, > 0
+  double translation = 0.0;  ///< a length, > 0
+};
+
 /// Settings of the objective J(m) (docs/formulation.md §4.2, §4.3); defaults per field.
 struct ShapeObjectiveOptions {
   HausdorffOptions hausdorff;                            ///< α, β, γ, ε, method, threads
@@ -69,6 +92,16 @@ struct ShapeObjectiveOptions {
   /// With a pose: rigid (ξ = (ω, v), 6 variables) or similarity (ξ = (ω, v, σ), 7, σ = log of
   /// the scale change). Default rigid.
   scan::PoseKind pose_kind = scan::PoseKind::rigid;
+  /// With a pose: joint (default) or projection (docs/formulation.md §8.11).
+  PoseMethod pose_method = PoseMethod::joint;
+  /// projection: the inner minimisation over ξ (scan::minimise_pose) stops when a step moves no
+  /// point more than this × L (L the rest moving cloud's bounding-box diagonal; 1e-10), or when
+  /// no step decreases ρ̃ at double precision, ...
+  double pose_tolerance = 1e-10;
+  /// ... or after this many BFGS iterations (100).
+  int pose_iterations = 100;
+  /// projection: the inner minimisation keeps ξ within this bound (none: unbounded).
+  std::optional<PoseBound> pose_bound;
   /// Keep what ShapeObjective::hessian_product needs at each evaluation with the gradient (the
   /// distance's second-order quantities, HausdorffRequest::hessian_points). False (default):
   /// evaluations pay nothing for it. Needs reference volumes and no pose.
@@ -98,9 +131,13 @@ struct ShapeEvaluation {
   ///@}
   double regularisation = 0.0;    ///< the Tikhonov terms of J
   Eigen::VectorXd gradient;       ///< dJ/dm (if requested and ok)
-  Eigen::VectorXd pose_gradient;  ///< dJ/dξ (with a pose, if requested and ok; else empty)
-  int newton_iterations = 0;      ///< Newton iterations of the state solve
-  int factorizations = 0;         ///< numeric factorisations of the state solve and the adjoint
+  Eigen::VectorXd pose_gradient;  ///< dJ/dξ (joint pose, if requested and ok; else empty)
+  /// With a pose (if ok): the twist ξ the evaluation was made at — the given one (joint), or
+  /// the inner minimisation's (projection); else empty.
+  Eigen::VectorXd pose_twist;
+  int pose_iterations = 0;    ///< projection: the inner minimisation's BFGS iterations
+  int newton_iterations = 0;  ///< Newton iterations of the state solve
+  int factorizations = 0;     ///< numeric factorisations of the state solve and the adjoint
   ///@{
   /// Wall time (seconds) of the state solve, the distance and the adjoint.
   double seconds_state = 0.0, seconds_distance = 0.0, seconds_adjoint = 0.0;
@@ -139,10 +176,11 @@ class ShapeObjective {
                  const fe::StateSolverFactory& make_solver);
   ~ShapeObjective();
 
-  /// J(m) and, with `gradient`, dJ/dm; with a pose, at the twist ξ (pose()->variables()
-  /// entries; empty: 0), and dJ/dξ too (exact, docs/formulation.md §8.10). Never throws for
-  /// a failed state solve (the evaluation's status says so). Throws InvalidArgument for an m
-  /// or ξ of the wrong size or not finite.
+  /// J(m) and, with `gradient`, dJ/dm; with a joint pose, at the twist ξ (pose()->variables()
+  /// entries; empty: 0), and dJ/dξ too (exact, docs/formulation.md §8.10); with the projection,
+  /// at the ξ that minimises ρ̃ on m's state from pose_warm_start() (ξ must be empty; §8.11). Never
+  /// throws for a failed state solve (the evaluation's status says so). Throws InvalidArgument for
+  /// an m or ξ of the wrong size or not finite.
   ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient,
                            const Eigen::VectorXd& xi = Eigen::VectorXd());
 
@@ -159,6 +197,15 @@ class ShapeObjective {
   Eigen::VectorXd hessian_product(const Eigen::VectorXd& m, const Eigen::VectorXd& v,
                                   HessianPart part = HessianPart::full,
                                   HessianProductStats* stats = nullptr);
+
+  /// Projection (options().pose_method): the twist every inner minimisation starts from, 0 (the
+  /// start pose) until set; empty otherwise. evaluate() does not change it: track_shape sets it
+  /// to the pose of the start, then of each accepted iterate (replayed ones too), so the
+  /// evaluations of one optimiser round share their start (docs/formulation.md §8.11).
+  const Eigen::VectorXd& pose_warm_start() const;
+  /// Sets pose_warm_start(). Throws InvalidArgument without the projection or for a ξ of the
+  /// wrong size or not finite.
+  void set_pose_warm_start(const Eigen::VectorXd& xi);
 
   /// The states solved so far: warm starts, two-level starts, solver resets.
   StatePath& state_path();
@@ -196,9 +243,12 @@ class ShapeObjective {
   std::unique_ptr<Impl> impl_;
 };
 
-/// The number of pose variables: 0 without a pose, else pose()->variables() (6 or 7).
+/// The number of pose variables the optimiser carries: pose()->variables() (6 or 7) for a joint
+/// pose, 0 without a pose or with the projection (which finds ξ inside each evaluation).
 inline int pose_variables(const ShapeObjective& objective) {
-  return objective.pose() ? objective.pose()->variables() : 0;
+  return objective.pose() && objective.options().pose_method == PoseMethod::joint
+             ? objective.pose()->variables()
+             : 0;
 }
 /// The pose P_ξ (scan → body) at the twist ξ (empty: 0): pose()->at(ξ).inverse(), the identity
 /// without a pose.

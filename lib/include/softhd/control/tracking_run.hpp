@@ -128,9 +128,15 @@ struct TrackingRunOptions {
     /// (docs/formulation.md §4.8).
     double refined_move_limit = 0.02;
   };
-  /// A target in the camera's frame (docs/formulation.md §8.10): its pose, refined jointly.
+  /// A target in the camera's frame (docs/formulation.md §8.10, §8.11): how its pose is
+  /// refined from the start pose (the target's "pose" file, else `align` at rest).
   struct Pose {
-    /// The pose's move limit as a fraction of the control's, in (0, 1] (PoseBounds::move; 1).
+    /// joint (default): the pose's twist joins the optimiser's variables; projection: each
+    /// evaluation minimises the distance over the pose on its state and the optimiser sees
+    /// the control alone (ShapeObjectiveOptions::pose_method).
+    PoseMethod method = PoseMethod::joint;
+    /// The pose's move limit as a fraction of the control's, in (0, 1] (PoseBounds::move; 1;
+    /// joint only).
     double move = 1.0;
   };
   /// The run's files.

@@ -7,6 +7,8 @@
 /// subsampled clouds with a larger ε, its poses ranked by a coverage score that tells a
 /// flipped one-sided view from the true one (CandidateScore).
 
+#include <Eigen/Core>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -90,6 +92,50 @@ double body_size(const PointCloud& body);
 /// centred points' covariance has rank ≥ 2: its second eigenvalue above 1e-12 times its
 /// largest): a point, coincident or collinear points fix no pose (docs/formulation.md §8.5).
 void check_fixes_pose(const PointCloud& cloud, const std::string& what);
+
+/// ρ̃(Q(body), scan) in `form` (the body moved into the scan's frame by Q = P⁻¹, its volumes
+/// unchanged) and, when `gradient` is not null, ∂ρ̃/∂δ of the twist δ = (ω, v[, σ]) about the
+/// centroid c of Q(body), at δ = 0 (PoseMap::twist_gradient; 6 entries, or 7 if *gradient has
+/// 7 on entry), with c in *centre: the objective of align()'s local refinement
+/// (docs/formulation.md §8.5) and of the pose by variable projection (§8.11).
+double pose_distance(const HausdorffTarget& scan, const PointCloud& body, const DistanceForm& form,
+                     const Pose& Q, Eigen::VectorXd* gradient, Eigen::Vector3d* centre);
+
+/// A pose objective for minimise_pose: its value at Q (body → scan frame) and, when `gradient`
+/// is not null, the twist gradient about *centre (as pose_distance).
+using PoseFunction =
+    std::function<double(const Pose& Q, Eigen::VectorXd* gradient, Eigen::Vector3d* centre)>;
+
+/// Settings of minimise_pose (docs/formulation.md §8.5).
+struct LocalPoseSettings {
+  int max_iterations = 200;       ///< BFGS iterations
+  double step_tolerance = 1e-10;  ///< stop when a step moves no point more than this × size
+  double size = 1.0;              ///< the body's size L (scales ω and σ into lengths)
+  bool similarity = false;        ///< the twist has σ (a scale) too
+  double log_scale_min = 0.0;     ///< similarity: bounds on log s of Q (the inverse pose)
+  double log_scale_max = 0.0;     ///< see log_scale_min
+  double first_step = 0.05;       ///< the first step moves no point more than this × size
+  int max_backtracks = 40;        ///< halvings of a step before "no decrease left"
+  /// If set: the nearest feasible pose to a trial pose (a projection onto a convex set of
+  /// poses, e.g. a bound on the twist from a calibrated pose); every trial is replaced by it and
+  /// the step taken is the twist from the current pose to it. The start must be feasible.
+  std::function<Pose(const Pose&)> feasible;
+};
+
+/// What minimise_pose found.
+struct LocalPoseResult {
+  Pose pose;               ///< the last accepted pose Q
+  double rho = 0.0;        ///< the objective there
+  int iterations = 0;      ///< accepted BFGS iterations
+  int evaluations = 0;     ///< of the objective after the first (each with its gradient)
+  bool converged = false;  ///< stopped by the step tolerance or no decrease left
+};
+
+/// BFGS on the twist u = (L ω, v, L σ) about the moved cloud's centroid, re-based at each
+/// accepted pose, with an Armijo backtracking line search; the scale clamped to its bounds
+/// (docs/formulation.md §8.5, "The minimiser").
+LocalPoseResult minimise_pose(const PoseFunction& objective, const Pose& start,
+                              const LocalPoseSettings& settings);
 
 /// The pose that takes `scan` (camera frame) onto `body` (body frame). Throws InvalidArgument
 /// for invalid options, non-3D clouds or a body or scan that fixes no pose (check_fixes_pose).

@@ -44,6 +44,9 @@ class PoseMap {
   Eigen::VectorXd checked(const Eigen::VectorXd& xi) const;
   /// Q_ξ: R = E R₀, s = e^σ s₀, t = c + e^σ E (t₀ − c) + v with E = exp([ω]×).
   Pose at(const Eigen::VectorXd& xi) const;
+  /// The twist ξ with at(ξ) = Q, the inverse of at: E = R R₀ᵀ, ω = log E, σ = log(s/s₀)
+  /// (similarity; rigid: ignored), v = t − c − e^σ E (t₀ − c).
+  Eigen::VectorXd twist_of(const Pose& Q) const;
   /// The cloud moved by Q_ξ: points Q_ξ(x_i), volumes unchanged (ρ̃ uses V_i/|X|).
   PointCloud apply(const PointCloud& cloud, const Eigen::VectorXd& xi) const;
 
