@@ -144,12 +144,52 @@ TEST(NewtonOptimizer, BoundedRosenbrockConvergesQuadratically) {
     }
   }
   EXPECT_GE(quadratic_steps, 2);
+  int cg = 0;
   for (const IterationRecord& rec : s.history) {
     EXPECT_GT(rec.trust_radius, 0.0);
     EXPECT_GT(rec.cauchy_step, 0.0);
-    EXPECT_GE(rec.hessian_products, rec.cg_iterations);
+    cg += rec.cg_iterations;
   }
   EXPECT_GT(s.hessian_products, 0);
+  // Each CG iteration asks for a product, computed or answered from the span.
+  EXPECT_GE(s.hessian_products + s.hessian_products_reused, cg);
+}
+
+// The products at one point span at most n dimensions, and each further one asked for there is
+// answered from them (ProductSpan). In one dimension every vector is a multiple of the first:
+// on f(x) = x⁴ − 3x² + x (f'' = 12x² − 6, negative curvature near 0) from x = 0.2, started with
+// a radius far too large (rejected steps, each a new Cauchy search and CG at the same point),
+// every accepted iteration has computed exactly one product, and the run ends at a minimiser
+// (f' = 0, f'' > 0). Without the span, a step's Cauchy search, CG iteration and projected
+// search ask for at least 3: the reused products show they were asked.
+TEST(NewtonOptimizer, ProductsInTheSpanOfThoseAtThePointAreNotRecomputed) {
+  const BoundedObjective f = [](const Eigen::VectorXd& x, double& v, Eigen::VectorXd* g) {
+    const double t = x[0];
+    v = t * t * t * t - 3 * t * t + t;
+    if (g) *g = Eigen::VectorXd::Constant(1, 4 * t * t * t - 6 * t + 1);
+    return true;
+  };
+  const BoundedHessVec h = [](const Eigen::VectorXd& x, const Eigen::VectorXd& v,
+                              Eigen::VectorXd* hv) {
+    *hv = (12 * x[0] * x[0] - 6) * v;
+    return true;
+  };
+  BoundedOptimizerOptions o = newton_options();
+  o.trust_region.initial_radius = 10.0;
+  const BoundedOptimizerSummary s =
+      minimise(f, h, Eigen::VectorXd::Constant(1, 0.2), Eigen::VectorXd::Constant(1, -3.0),
+               Eigen::VectorXd::Constant(1, 3.0), o);
+  ASSERT_EQ(s.status, OptimizerStatus::gradient_tolerance) << s.termination;
+  const double t = s.x[0];
+  EXPECT_LE(std::fabs(4 * t * t * t - 6 * t + 1), 1e-8);
+  EXPECT_GT(12 * t * t - 6, 0.0);
+  int rejected = 0;
+  for (std::size_t k = 0; k < s.history.size(); ++k) {
+    EXPECT_EQ(s.history[k].hessian_products, 1) << "iteration " << k + 1;
+    rejected += s.history[k].evaluation - (k ? s.history[k - 1].evaluation : 1) - 1;
+  }
+  EXPECT_GT(rejected, 0) << "no rejected step: the start radius did not test the span";
+  EXPECT_GE(s.hessian_products_reused, 2 * s.iterations) << "the bound above could not fail";
 }
 
 // A move limit bounds the trust radius: Δ ≤ move_limit ‖(u − l)/s‖₂ in z = x/s (s_k the least

@@ -63,6 +63,62 @@ double power_of_two_above(double v) {
   return std::ldexp(1.0, m == 0.5 ? e - 1 : e);
 }
 
+/// The products already computed at one point z, kept as an orthonormal basis Q of the
+/// vectors multiplied and HQ = ∇²f̃ Q (docs/formulation.md §4.5.1). ROL asks for many
+/// products at the same z whose vectors lie in the span of earlier ones: the Cauchy search's
+/// steps along one projected gradient, the projected search's step (a combination of the CG
+/// directions), and after a rejected step the next trial's Cauchy steps and first CG direction
+/// (g + αHg, in the span of g and Hg). For v with ‖v − QQᵀv‖ ≤ kSpan ‖v‖ the product is
+/// HQ (Qᵀv), by linearity, without a product.
+class ProductSpan {
+ public:
+  /// The relative distance from the span below which v counts as in it (round-off of the
+  /// projected steps P(z + s) − z, about ε |z| / |s| per component, stays far below).
+  static constexpr double kSpan = 1e-10;
+  /// A vector joins the basis only if at least this part of it is new: the basis vector
+  /// (v − QQᵀv) / ‖v − QQᵀv‖ amplifies the product's round-off by at most its inverse.
+  static constexpr double kNew = 1e-3;
+
+  /// Forget the products (a new point z).
+  void reset(const Eigen::Ref<const Eigen::VectorXd>& z) {
+    z_ = z;
+    q_.resize(z.size(), 0);
+    hq_.resize(z.size(), 0);
+  }
+  bool at(const Eigen::Ref<const Eigen::VectorXd>& z) const {
+    return z_.size() == z.size() && z_ == z;
+  }
+  /// HQ Qᵀv into hv if v lies in the span; false otherwise.
+  bool apply(const Eigen::VectorXd& v, Eigen::Ref<Eigen::VectorXd> hv) const {
+    if (q_.cols() == 0) return false;
+    const Eigen::VectorXd c = q_.transpose() * v;
+    if ((v - q_ * c).norm() > kSpan * v.norm()) return false;
+    hv = hq_ * c;
+    return true;
+  }
+  /// Adds the computed product hv = H v: q = r / ‖r‖, Hq = (hv − HQ Qᵀv) / ‖r‖ with
+  /// r = v − QQᵀv (twice projected, for an orthonormal Q).
+  void add(const Eigen::VectorXd& v, const Eigen::VectorXd& hv) {
+    Eigen::VectorXd c = Eigen::VectorXd::Zero(q_.cols()), r = v;
+    for (int pass = 0; pass < 2; ++pass) {
+      const Eigen::VectorXd d = q_.transpose() * r;
+      r -= q_ * d;
+      c += d;
+    }
+    const double rn = r.norm();
+    if (!(rn >= kNew * v.norm()) || rn == 0.0) return;
+    const Eigen::Index k = q_.cols();
+    q_.conservativeResize(Eigen::NoChange, k + 1);
+    hq_.conservativeResize(Eigen::NoChange, k + 1);
+    q_.col(k) = r / rn;
+    hq_.col(k) = (hv - hq_.leftCols(k) * c) / rn;
+  }
+
+ private:
+  Eigen::VectorXd z_;
+  Eigen::MatrixXd q_, hq_;
+};
+
 // Why the run stopped, when we stopped it (ROL itself only stops through our status test).
 using detail::Stop;
 
@@ -87,6 +143,7 @@ struct Run {
   int small_changes = 0;   // consecutive iterations with a relative change below tolerance
   Stop stop = Stop::none;
   const LinMore* algorithm = nullptr;
+  ProductSpan span;  // the products at the current iterate
 
   double seconds() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -109,9 +166,20 @@ struct Run {
     gz_eval = scale.cwiseProduct(g) / fscale;
   }
 
-  /// ∇²f̃ v in z: s ∘ H (s ∘ v) / fscale, H at x = s ∘ z.
+  /// ∇²f̃ v in z: s ∘ H (s ∘ v) / fscale, H at x = s ∘ z; from the span of the products
+  /// already computed at z where v lies in it (ProductSpan), else computed and counted.
   void hess_vec(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::VectorXd& v,
                 Eigen::Ref<Eigen::VectorXd> hv) {
+    if (!span.at(z)) span.reset(z);
+    if (span.apply(v, hv)) {
+      ++summary.hessian_products_reused;
+      return;
+    }
+    compute_hess_vec(z, v, hv);
+    span.add(v, hv);
+  }
+  void compute_hess_vec(const Eigen::Ref<const Eigen::VectorXd>& z, const Eigen::VectorXd& v,
+                        Eigen::Ref<Eigen::VectorXd> hv) {
     ++summary.hessian_products;
     ++products_since;
     Eigen::VectorXd h;

@@ -164,7 +164,11 @@ struct BoundedOptimizerSummary {
   int iterations = 0;          ///< accepted iterations
   int evaluations = 0;         ///< objective evaluations, including the start
   int failed_evaluations = 0;  ///< evaluations that returned false (rejected points)
-  int hessian_products = 0;    ///< newton: Hessian-vector products
+  int hessian_products = 0;    ///< newton: Hessian-vector products (computed)
+  /// newton: products ROL asked for whose vector lay in the span of those already computed at
+  /// the same point, answered from them by linearity (docs/formulation.md §4.5.1), not counted
+  /// in hessian_products.
+  int hessian_products_reused = 0;
   /// The f scale of the records' gradients: |f(x₀)| (1 if 0), or trust_region.value_scale.
   double value_scale = 1.0;
   double seconds = 0.0;                  ///< wall time of minimise()
