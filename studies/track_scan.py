@@ -148,16 +148,17 @@ def ladder_align(scene, scan, P_true, log, fractions=(0.0, 0.125, 0.25, 0.5, 1.0
     return best
 
 
-def perturbed_pose(P_true, scan, L, seed):
-    """A calibrated camera's pose: the true pose P (scan -> body) followed by a rotation of 3
-    degrees about a random axis through the body's centre and a shift of 0.02 L in a random
-    direction (numpy's default_rng(1000 + seed))."""
+def perturbed_pose(P_true, scan, L, seed, degrees=3.0, fraction=0.02):
+    """A calibrated camera's pose: the true pose P (scan -> body) followed by a rotation of
+    `degrees` (3) about a random axis through the body's centre and a shift of `fraction` (0.02)
+    L in a random direction (numpy's default_rng(1000 + seed): the same axis and direction
+    whatever the sizes)."""
     rng = np.random.default_rng(1000 + seed)
     axis = rng.normal(size=3)
     axis /= np.linalg.norm(axis)
     shift = rng.normal(size=3)
-    shift *= 0.02 * L / np.linalg.norm(shift)
-    th = np.radians(3.0)
+    shift *= fraction * L / np.linalg.norm(shift)
+    th = np.radians(degrees)
     K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
     R = np.eye(3) + np.sin(th) * K + (1 - np.cos(th)) * K @ K
     c = P_true[:3, :3] @ scan.mean(0) + P_true[:3, 3]  # the body's centre (body frame)
@@ -175,11 +176,12 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
     if a.start == "ladder":
         pose, initial = ladder_align(scene, scan, P_true, log)
     elif a.start == "perturbed":  # a calibrated camera's pose: also the crop's
-        pose = {"matrix": perturbed_pose(P_true, scan, L, a.seed), "status": "given",
+        deg, frac = a.perturb
+        pose = {"matrix": perturbed_pose(P_true, scan, L, a.seed, deg, frac), "status": "given",
                 "overlap": float("nan")}
         off = rotation_error(pose["matrix"][:3, :3], P_true)
-        log(f"joint: starting from a calibrated camera's pose: the true one rotated by 3 deg "
-            f"about a random axis and moved by 0.02 L ({off:.3f} deg)")
+        log(f"joint: starting from a calibrated camera's pose: the true one rotated by {deg:g} deg "
+            f"about a random axis and moved by {frac:g} L ({off:.3f} deg)")
     else:
         pose = softhd.align(nodes, scan, distance="scan_to_body")
     log(f"joint: align {pose['status']}, rotation error "
@@ -288,6 +290,10 @@ def main():
     ap.add_argument("--method", choices=["exact", "tree"], default=None,
                     help="--joint: the distance's pair sums (softhd.optimise's method; default "
                          "tree)")
+    ap.add_argument("--perturb", type=float, nargs=2, default=(3.0, 0.02),
+                    metavar=("DEGREES", "FRACTION"),
+                    help="--start perturbed: the calibrated camera's error, a rotation in degrees "
+                         "and a shift as a fraction of L (default 3 0.02)")
     ap.add_argument("--pose-uncertainty", type=float, nargs=2, default=None,
                     metavar=("DEGREES", "FRACTION"),
                     help="--joint: the start pose's uncertainty (the target's pose_uncertainty: "
