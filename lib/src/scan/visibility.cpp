@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "../common/surface_bvh.hpp"
 #include "softhd/error.hpp"
 #include "softhd/parallel.hpp"
 
@@ -17,73 +18,9 @@ namespace softhd::scan {
 
 namespace {
 
-// A node of the hierarchy: a box around triangles order[begin, end) (a leaf) or around its
-// children left and left + 1.
-struct BvhNode {
-  Eigen::Vector3d lo, hi;
-  int left = -1;  // −1: leaf
-  int begin = 0, end = 0;
-};
-
-constexpr int kLeafSize = 4;
-constexpr int kMaxDepth = 64;  // median splits: depth ≤ log2(T) + 1, far below
-
-struct Bvh {
-  std::vector<BvhNode> nodes;
-  std::vector<int> order;  // triangle ids, grouped by leaf
-};
-
-// Median split along the widest axis of the triangles' centroids; ties broken by triangle id,
-// so the hierarchy (and every result) is deterministic.
-void build_node(const Eigen::MatrixXd& lo, const Eigen::MatrixXd& hi, const Eigen::MatrixXd& mid,
-                Bvh* bvh, int node, int begin, int end) {
-  BvhNode& n = bvh->nodes[node];
-  n.begin = begin;
-  n.end = end;
-  n.lo = lo.row(bvh->order[begin]).transpose();
-  n.hi = hi.row(bvh->order[begin]).transpose();
-  Eigen::Vector3d cmin = mid.row(bvh->order[begin]).transpose(), cmax = cmin;
-  for (int i = begin + 1; i < end; ++i) {
-    const int t = bvh->order[i];
-    n.lo = n.lo.cwiseMin(lo.row(t).transpose());
-    n.hi = n.hi.cwiseMax(hi.row(t).transpose());
-    cmin = cmin.cwiseMin(mid.row(t).transpose());
-    cmax = cmax.cwiseMax(mid.row(t).transpose());
-  }
-  if (end - begin <= kLeafSize) return;
-  int axis = 0;
-  (cmax - cmin).maxCoeff(&axis);
-  const int m = begin + (end - begin) / 2;
-  std::nth_element(bvh->order.begin() + begin, bvh->order.begin() + m, bvh->order.begin() + end,
-                   [&](int a, int b) {
-                     return mid(a, axis) != mid(b, axis) ? mid(a, axis) < mid(b, axis) : a < b;
-                   });
-  const int left = static_cast<int>(bvh->nodes.size());
-  bvh->nodes.emplace_back();
-  bvh->nodes.emplace_back();
-  bvh->nodes[node].left = left;  // `n` may dangle after the emplace
-  build_node(lo, hi, mid, bvh, left, begin, m);
-  build_node(lo, hi, mid, bvh, left + 1, m, end);
-}
-
-Bvh build_bvh(const TriangleSurface& s) {
-  const Eigen::Index T = s.triangles.rows();
-  Eigen::MatrixXd lo(T, 3), hi(T, 3), mid(T, 3);
-  for (Eigen::Index t = 0; t < T; ++t) {
-    const Eigen::Vector3d a = s.points.row(s.triangles(t, 0)), b = s.points.row(s.triangles(t, 1)),
-                          c = s.points.row(s.triangles(t, 2));
-    lo.row(t) = a.cwiseMin(b).cwiseMin(c).transpose();
-    hi.row(t) = a.cwiseMax(b).cwiseMax(c).transpose();
-    mid.row(t) = ((a + b + c) / 3.0).transpose();
-  }
-  Bvh bvh;
-  bvh.order.resize(static_cast<size_t>(T));
-  std::iota(bvh.order.begin(), bvh.order.end(), 0);
-  bvh.nodes.reserve(static_cast<size_t>(2 * T / kLeafSize + 2));
-  bvh.nodes.emplace_back();
-  if (T > 0) build_node(lo, hi, mid, &bvh, 0, 0, static_cast<int>(T));
-  return bvh;
-}
+using detail::build_bvh;
+using detail::Bvh;
+using detail::BvhNode;
 
 // Whether the segment o + t d, t in [0, t_max], meets the box [lo, hi] (slab test; inv_d =
 // 1/d; a slab parallel to the segment is met iff o lies in it).
@@ -186,7 +123,7 @@ Eigen::Array<bool, Eigen::Dynamic, 1> visible_points(const TriangleSurface& s,
     }
     const double t_max = 1.0 - slack / length;
     const Eigen::Vector3d inv_d = d.cwiseInverse();
-    std::array<int, kMaxDepth> stack;
+    std::array<int, detail::kBvhMaxDepth> stack;
     int top = 0;
     stack[top++] = 0;
     bool hidden = false;
