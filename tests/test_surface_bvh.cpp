@@ -209,7 +209,7 @@ TEST(SurfaceBvh, ClosestPointEqualsBruteForce) {
     const SurfaceDistance sd(s);
     const Eigen::Vector3d lo = s.points.colwise().minCoeff(), hi = s.points.colwise().maxCoeff();
     const Eigen::Vector3d pad = 0.5 * (hi - lo);
-    const Eigen::MatrixXd y = random_points(1500, lo - pad, hi + pad, seed++);
+    const Eigen::MatrixXd y = random_points(1000, lo - pad, hi + pad, seed++);
     const std::vector<SignedDistance> q = sd.at_rows(y);
     for (Eigen::Index i = 0; i < y.rows(); ++i) {
       const Eigen::Vector3d yi = y.row(i).transpose(), c = ref_closest(s, yi);
@@ -235,7 +235,7 @@ TEST(SurfaceBvh, RadiusQueryEqualsBruteForce) {
   for (const TriangleSurface& s : surfaces()) {
     const SurfaceDistance sd(s);
     const Eigen::Vector3d lo = s.points.colwise().minCoeff(), hi = s.points.colwise().maxCoeff();
-    const Eigen::MatrixXd y = random_points(300, lo.array() - 0.3, hi.array() + 0.3, seed++);
+    const Eigen::MatrixXd y = random_points(200, lo.array() - 0.3, hi.array() + 0.3, seed++);
     for (double r : {0.0, 0.05, 0.2, 0.6}) {
       std::vector<int> start, tri;
       sd.within_rows(y, r, &start, &tri);
