@@ -502,6 +502,14 @@ TEST(SurfaceBvh, RejectsSurfacesThatAreNotClosedOrOriented) {
   expect_error<InvalidArgument>([&] { SurfaceDistance{outside}; }, "outside 0..7");
   const SurfaceDistance sd(cube);
   expect_error<InvalidArgument>([&] { sd.within(Eigen::Vector3d::Zero(), -1.0); }, "r must be");
+  const Eigen::Vector3d nan(0.0, NAN, 0.0);
+  expect_error<InvalidArgument>([&] { sd.at(nan); }, "y is not finite");
+  expect_error<InvalidArgument>([&] { sd.at_rows(nan.transpose()); }, "a row of y is not finite");
+  expect_error<InvalidArgument>([&] { sd.within(nan, 1.0); }, "y is not finite");
+  SignedDistance foreign = sd.at(Eigen::Vector3d(0.2, 0.3, 0.4));
+  foreign.closest.triangle = 12;
+  expect_error<InvalidArgument>([&] { sd.pullback({foreign}, Eigen::VectorXd::Ones(1)); },
+                                "query 0 names no triangle");
   expect_error<InvalidArgument>(
       [&] { sd.pullback({sd.at(Eigen::Vector3d(0.2, 0.3, 0.4))}, Eigen::VectorXd::Zero(2)); },
       "w has 2 entries for 1 queries");

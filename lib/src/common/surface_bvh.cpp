@@ -261,6 +261,11 @@ Eigen::Vector3d SurfaceDistance::pseudo_normal(int t, const TrianglePoint& p) co
 }
 
 SignedDistance SurfaceDistance::at(const Eigen::Vector3d& y) const {
+  if (!y.allFinite()) throw InvalidArgument("SurfaceDistance::at: y is not finite");
+  return unchecked_at(y);
+}
+
+SignedDistance SurfaceDistance::unchecked_at(const Eigen::Vector3d& y) const {
   SignedDistance q;
   q.closest = closest_point(s_, bvh_, y);
   const Eigen::Vector3d r = y - q.closest.point,
@@ -279,11 +284,13 @@ SignedDistance SurfaceDistance::at(const Eigen::Vector3d& y) const {
 
 std::vector<SignedDistance> SurfaceDistance::at_rows(const Eigen::MatrixXd& y, int threads) const {
   if (y.cols() != 3) throw InvalidArgument("SurfaceDistance::at_rows: y must be Q by 3");
+  if (!y.allFinite()) throw InvalidArgument("SurfaceDistance::at_rows: a row of y is not finite");
   const Eigen::Index Q = y.rows();
   std::vector<SignedDistance> q(static_cast<size_t>(Q));
   const int nt = resolve_threads(threads);
 #pragma omp parallel for schedule(dynamic, 64) num_threads(nt) if (Q > 256)
-  for (Eigen::Index k = 0; k < Q; ++k) q[static_cast<size_t>(k)] = at(Eigen::Vector3d(y.row(k)));
+  for (Eigen::Index k = 0; k < Q; ++k)
+    q[static_cast<size_t>(k)] = unchecked_at(Eigen::Vector3d(y.row(k)));
   return q;
 }
 
@@ -295,7 +302,9 @@ Eigen::MatrixXd SurfaceDistance::pullback(const std::vector<SignedDistance>& q,
   Eigen::MatrixXd g = Eigen::MatrixXd::Zero(s_.points.rows(), 3);
   for (size_t k = 0; k < q.size(); ++k) {
     const SurfacePoint& c = q[k].closest;
-    if (c.triangle < 0) throw InvalidArgument("SurfaceDistance::pullback: an empty query");
+    if (c.triangle < 0 || c.triangle >= s_.triangles.rows())
+      throw InvalidArgument("SurfaceDistance::pullback: query " + std::to_string(k) +
+                            " names no triangle of this surface");
     for (int a = 0; a < 3; ++a)  // ∂sd/∂x_a = −λ_a n̂
       if (c.where.lambda[a] != 0.0)
         g.row(s_.triangles(c.triangle, a)) -=
@@ -306,6 +315,11 @@ Eigen::MatrixXd SurfaceDistance::pullback(const std::vector<SignedDistance>& q,
 
 std::vector<int> SurfaceDistance::within(const Eigen::Vector3d& y, double r) const {
   if (!(r >= 0.0)) throw InvalidArgument("SurfaceDistance::within: r must be >= 0");
+  if (!y.allFinite()) throw InvalidArgument("SurfaceDistance::within: y is not finite");
+  return unchecked_within(y, r);
+}
+
+std::vector<int> SurfaceDistance::unchecked_within(const Eigen::Vector3d& y, double r) const {
   std::vector<int> found;
   for_each_within(s_, bvh_, y, r, [&](int t, double) { found.push_back(t); });
   std::sort(found.begin(), found.end());
@@ -315,13 +329,15 @@ std::vector<int> SurfaceDistance::within(const Eigen::Vector3d& y, double r) con
 void SurfaceDistance::within_rows(const Eigen::MatrixXd& y, double r, std::vector<int>* start,
                                   std::vector<int>* triangles, int threads) const {
   if (y.cols() != 3) throw InvalidArgument("SurfaceDistance::within_rows: y must be Q by 3");
-  if (!(r >= 0.0)) throw InvalidArgument("SurfaceDistance::within: r must be >= 0");
+  if (!y.allFinite())
+    throw InvalidArgument("SurfaceDistance::within_rows: a row of y is not finite");
+  if (!(r >= 0.0)) throw InvalidArgument("SurfaceDistance::within_rows: r must be >= 0");
   const Eigen::Index Q = y.rows();
   std::vector<std::vector<int>> lists(static_cast<size_t>(Q));
   const int nt = resolve_threads(threads);
 #pragma omp parallel for schedule(dynamic, 64) num_threads(nt) if (Q > 256)
   for (Eigen::Index k = 0; k < Q; ++k)
-    lists[static_cast<size_t>(k)] = within(Eigen::Vector3d(y.row(k)), r);
+    lists[static_cast<size_t>(k)] = unchecked_within(Eigen::Vector3d(y.row(k)), r);
   start->assign(static_cast<size_t>(Q) + 1, 0);
   for (size_t k = 0; k < lists.size(); ++k)
     (*start)[k + 1] = (*start)[k] + static_cast<int>(lists[k].size());

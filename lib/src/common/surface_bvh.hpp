@@ -152,7 +152,7 @@ class SurfaceDistance {
   const TriangleSurface& surface() const { return s_; }
   const Bvh& bvh() const { return bvh_; }
 
-  /// The signed distance at y.
+  /// The signed distance at y (InvalidArgument unless y is finite).
   SignedDistance at(const Eigen::Vector3d& y) const;
   /// At every row of y (Q by 3), over `threads` OpenMP threads (0: max_threads()); each
   /// query is independent, so the results do not depend on the threads.
@@ -175,6 +175,9 @@ class SurfaceDistance {
   Eigen::Vector3d pseudo_normal(int t, const TrianglePoint& p) const;
 
  private:
+  SignedDistance unchecked_at(const Eigen::Vector3d& y) const;                  // y finite
+  std::vector<int> unchecked_within(const Eigen::Vector3d& y, double r) const;  // y finite, r ≥ 0
+
   TriangleSurface s_;
   Bvh bvh_;
   Eigen::MatrixXd face_normal_;    // T by 3, unit
