@@ -307,36 +307,57 @@ TEST(SurfaceBvh, LPrismSignFollowsMembership) {
   EXPECT_GT(notch, 200);
 }
 
-// A sharp tetrahedron (dihedral angles down to a few degrees at its spike): outside an edge or
-// vertex there, y − c can make an obtuse angle with an incident face's normal, so the sign
-// needs the feature's pseudo-normal. Convex: inside, sd = max over faces of n·(y − a); the
-// sign is membership (every n·(y − a) < 0); outside, |sd| is the distance to all triangles.
-TEST(SurfaceBvh, SharpTetrahedronSignAndDistance) {
+// A sharp tetrahedron (dihedral angles down to a few degrees at its spike, vertex 3) whose
+// edge 0–1 is cut into m pieces: its two faces become fans of m triangles, so the spike's
+// vertex has m triangles on one face and one on each other. Outside an edge or vertex there,
+// y − c can make an obtuse angle with an incident face's normal (the sign needs the feature's
+// pseudo-normal) and with a plain mean of the incident triangles' normals (it needs the
+// angle weights).
+TriangleSurface sharp_tetrahedron(int m) {
+  const Eigen::Vector3d v[4] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.2, 0.25, 6}};
   TriangleSurface s;
-  s.points.resize(4, 3);
-  s.points << 0, 0, 0, 1, 0, 0, 0, 1, 0, 0.2, 0.25, 6;
-  s.triangles.resize(4, 3);
-  s.triangles << 0, 2, 1, 0, 1, 3, 1, 2, 3, 2, 0, 3;
-  ASSERT_GT(six_volume(s), 0.0);
-  const SurfaceDistance sd(s);
-  const Eigen::MatrixXd y =
-      random_points(4000, Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(1.5, 1.5, 6.8), 71);
-  int inside = 0;
-  for (Eigen::Index i = 0; i < y.rows(); ++i) {
-    const Eigen::Vector3d yi = y.row(i).transpose();
-    double plane = -INFINITY;
-    for (Eigen::Index t = 0; t < 4; ++t) {
-      const Eigen::Vector3d n =
-          (vertex(s, t, 1) - vertex(s, t, 0)).cross(vertex(s, t, 2) - vertex(s, t, 0)).normalized();
-      plane = std::max(plane, n.dot(yi - vertex(s, t, 0)));
-    }
-    const double got = sd.at(yi).sd;
-    ASSERT_EQ(got < 0.0, plane < 0.0) << yi.transpose() << " sd " << got;
-    ASSERT_NEAR(got, plane < 0.0 ? plane : (yi - ref_closest(s, yi)).norm(), 1e-14)
-        << yi.transpose();
-    inside += plane < 0.0;
+  s.points.resize(m + 3, 3);  // p_0 = v0, ..., p_m = v1, then v2 (m + 1), v3 (m + 2)
+  for (int i = 0; i <= m; ++i) s.points.row(i) = (v[0] + (v[1] - v[0]) * i / m).transpose();
+  s.points.row(m + 1) = v[2].transpose();
+  s.points.row(m + 2) = v[3].transpose();
+  s.triangles.resize(2 * m + 2, 3);
+  for (int i = 0; i < m; ++i) {
+    s.triangles.row(2 * i) << i, m + 1, i + 1;      // the face (0, 2, 1)
+    s.triangles.row(2 * i + 1) << i, i + 1, m + 2;  // the face (0, 1, 3)
   }
-  EXPECT_GT(inside, 30);
+  s.triangles.row(2 * m) << m, m + 1, m + 2;      // (1, 2, 3)
+  s.triangles.row(2 * m + 1) << m + 1, 0, m + 2;  // (2, 0, 3)
+  return s;
+}
+
+// Convex: inside, sd = max over the four faces of n·(y − a); the sign is membership (every
+// n·(y − a) < 0); outside, |sd| is the distance to all triangles.
+TEST(SurfaceBvh, SharpTetrahedronSignAndDistance) {
+  for (int m : {1, 12}) {
+    const TriangleSurface s = sharp_tetrahedron(m);
+    ASSERT_GT(six_volume(s), 0.0);
+    const SurfaceDistance sd(s);
+    const Eigen::MatrixXd y =
+        random_points(3000, Eigen::Vector3d(-0.5, -0.5, -0.5), Eigen::Vector3d(1.5, 1.5, 6.8), 71);
+    const Eigen::Index faces[4] = {0, 1, 2 * m, 2 * m + 1};  // a triangle of each face
+    int inside = 0;
+    for (Eigen::Index i = 0; i < y.rows(); ++i) {
+      const Eigen::Vector3d yi = y.row(i).transpose();
+      double plane = -INFINITY;
+      for (Eigen::Index t : faces) {
+        const Eigen::Vector3d n = (vertex(s, t, 1) - vertex(s, t, 0))
+                                      .cross(vertex(s, t, 2) - vertex(s, t, 0))
+                                      .normalized();
+        plane = std::max(plane, n.dot(yi - vertex(s, t, 0)));
+      }
+      const double got = sd.at(yi).sd;
+      ASSERT_EQ(got < 0.0, plane < 0.0) << "m " << m << ", y " << yi.transpose() << ", sd " << got;
+      ASSERT_NEAR(got, plane < 0.0 ? plane : (yi - ref_closest(s, yi)).norm(), 1e-14)
+          << "m " << m << ", y " << yi.transpose();
+      inside += plane < 0.0;
+    }
+    EXPECT_GT(inside, 20);
+  }
 }
 
 // An inscribed polyhedron P of the sphere |x| = R (vertices on it) holds the ball of radius
