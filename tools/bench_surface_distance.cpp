@@ -86,8 +86,12 @@ int main(int argc, char** argv) {
   std::string scene = std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/bending.json";
   int points = 100000, brute_n = 2000, threads = 2, repeats = 5;
   double radius = -1.0;
-  for (int i = 1; i + 1 < argc; i += 2) {
+  for (int i = 1; i < argc; i += 2) {
     const std::string a = argv[i];
+    if (i + 1 >= argc) {
+      std::fprintf(stderr, "%s needs a value\n", a.c_str());
+      return 2;
+    }
     if (a == "--scene")
       scene = argv[i + 1];
     else if (a == "--points")
@@ -98,10 +102,16 @@ int main(int argc, char** argv) {
       radius = std::stod(argv[i + 1]);
     else if (a == "--threads")
       threads = std::stoi(argv[i + 1]);
+    else if (a == "--repeats")
+      repeats = std::stoi(argv[i + 1]);
     else {
       std::fprintf(stderr, "unknown option %s\n", a.c_str());
       return 2;
     }
+  }
+  if (points < 1 || brute_n < 1 || threads < 1 || repeats < 1) {
+    std::fprintf(stderr, "--points, --brute, --threads and --repeats must be >= 1\n");
+    return 2;
   }
   const softhd::Scene sc = softhd::load_scene(scene);
   const softhd::fe::Mesh mesh = sc.body.make_mesh();

@@ -232,13 +232,15 @@ SurfaceDistance::SurfaceDistance(TriangleSurface s) : s_(std::move(s)) {
   for (size_t i = 0; i < h.size();) {
     size_t j = i + 1;
     while (j < h.size() && h[j].lo == h[i].lo && h[j].hi == h[i].hi) ++j;
-    const std::string edge = "(" + std::to_string(h[i].lo) + ", " + std::to_string(h[i].hi) + ")";
+    auto edge = [&] {
+      return "(" + std::to_string(h[i].lo) + ", " + std::to_string(h[i].hi) + ")";
+    };
     if (j - i != 2)
-      throw InvalidArgument("SurfaceDistance: the surface is not closed: the edge " + edge +
+      throw InvalidArgument("SurfaceDistance: the surface is not closed: the edge " + edge() +
                             " belongs to " + std::to_string(j - i) + " triangle(s), not 2");
     if (h[i].forward == h[i + 1].forward)
       throw InvalidArgument("SurfaceDistance: the surface is not consistently oriented: the edge " +
-                            edge + " runs the same way in triangles " + std::to_string(h[i].t) +
+                            edge() + " runs the same way in triangles " + std::to_string(h[i].t) +
                             " and " + std::to_string(h[i + 1].t));
     const Eigen::Vector3d n = unit_or_zero(face_normal(h[i].t) + face_normal(h[i + 1].t));
     edge_normal_.row(3 * h[i].t + h[i].k) = n.transpose();
