@@ -127,6 +127,16 @@ class ResumeIsTheSameRun : public ::testing::Test {
   const fe::Assembler A = beam();
   const fe::ControlSpace space{A.mesh(), A.geometry(), fe::ControlKind::kVertex};
   const PointCloud target = bent_target(A, space);
+  // The target seen by a camera: moved by G; the start pose the truth G⁻¹ off by a twist of
+  // 0.06 rad and 0.05.
+  const scan::Pose G = scan::Pose::from_twist(
+      (Eigen::Matrix<double, 7, 1>() << 0.4, -0.3, 0.2, 1.0, 0.5, -2.0, 0.0).finished());
+  const scan::Pose truth = G.inverse();
+  const scan::Pose start = scan::compose(
+      truth,
+      scan::Pose::from_twist(
+          (Eigen::Matrix<double, 7, 1>() << 0.06, -0.05, 0.06, 0.05, 0.0, -0.05, 0.0).finished()));
+  const PointCloud seen = G.apply(target, false);
 };
 
 TEST_F(ResumeIsTheSameRun, AfterSimulatedCrashes) {
@@ -198,12 +208,6 @@ TEST_F(ResumeIsTheSameRun, WallClockLimitIsATotal) {
 // docs/formulation.md §8.10; the pose's recovery is tested on a rest target in
 // test_optimise_cli.)
 TEST_F(ResumeIsTheSameRun, WithAJointPose) {
-  Eigen::Matrix<double, 7, 1> g, off;
-  g << 0.4, -0.3, 0.2, 1.0, 0.5, -2.0, 0.0;
-  off << 0.06, -0.05, 0.06, 0.05, 0.0, -0.05, 0.0;
-  const scan::Pose G = scan::Pose::from_twist(g), truth = G.inverse();
-  const scan::Pose start = scan::compose(truth, scan::Pose::from_twist(off));
-  const PointCloud seen = G.apply(target, false);
   const std::string ref_log = temp_path("pose_ref.bin"), log = temp_path("pose.bin");
   const Outcome reference = run(ref_log, false, 16, 0, A, space, seen, 0.0, 2, start);
   ASSERT_GE(reference.summary.iterations, 12) << reference.summary.termination;
@@ -226,12 +230,6 @@ TEST_F(ResumeIsTheSameRun, WithAJointPose) {
 // iteration again from the second's pose, bitwise the uninterrupted run (pose included);
 // another method is another run.
 TEST_F(ResumeIsTheSameRun, WithAPoseByProjection) {
-  Eigen::Matrix<double, 7, 1> g, off;
-  g << 0.4, -0.3, 0.2, 1.0, 0.5, -2.0, 0.0;
-  off << 0.06, -0.05, 0.06, 0.05, 0.0, -0.05, 0.0;
-  const scan::Pose G = scan::Pose::from_twist(g), truth = G.inverse();
-  const scan::Pose start = scan::compose(truth, scan::Pose::from_twist(off));
-  const PointCloud seen = G.apply(target, false);
   const std::string ref_log = temp_path("proj_ref.bin"), log = temp_path("proj.bin");
   const PoseMethod p = PoseMethod::projection;
   const Outcome reference = run(ref_log, false, 8, 0, A, space, seen, 0.0, 2, start, p);

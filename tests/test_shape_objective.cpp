@@ -425,12 +425,17 @@ void control_and_direction(const fe::Assembler& A, const fe::ControlSpace& space
 // A target that is the body's own moving cloud at m, rigidly moved by G: the inner minimisation
 // recovers G⁻¹ from a start 0.08 rad and 0.06 off. The symmetric ρ̃ between a cloud and a copy
 // moved by δ is even in δ (ρ̃(T_δ X, X) = ρ̃(X, T_δ⁻¹ X)), so δ = 0 is stationary.
-TEST(PoseProjection, RecoversTheMotionOfAnExactlyMovedCopyOfTheBody) {
+// The bent 3D strip at a control m0 (and a direction dm), seen by a camera moved by G.
+class PoseProjection : public ::testing::Test {
+ protected:
+  void SetUp() override { control_and_direction(A, space, &m0, &dm); }
   const fe::Assembler A = strip(3);
-  const fe::ControlSpace space(A.mesh(), A.geometry(), fe::ControlKind::kVertex);
-  Eigen::VectorXd m0, dm;
-  control_and_direction(A, space, &m0, &dm);
+  const fe::ControlSpace space{A.mesh(), A.geometry(), fe::ControlKind::kVertex};
   const scan::Pose G = camera_motion();
+  Eigen::VectorXd m0, dm;
+};
+
+TEST_F(PoseProjection, RecoversTheMotionOfAnExactlyMovedCopyOfTheBody) {
   const ShapeObjectiveOptions o = projection_options(perturbed(G), 1e-13);
   ShapeObjectiveOptions in_body = o;  // the body's moving cloud at m0, in its own frame
   in_body.pose.reset();
@@ -460,12 +465,7 @@ TEST(PoseProjection, RecoversTheMotionOfAnExactlyMovedCopyOfTheBody) {
 // gradient (the adjoint at ξ*(m)) against central differences of f. Their difference falls as
 // h² (the central difference's remainder f‴h²/6; observed order in [1.9, 2.1]). At ξ* the joint
 // objective's dJ/dξ is (near) zero: the inner optimality the envelope theorem needs.
-TEST(PoseProjection, EnvelopeGradientMatchesCentralDifferences) {
-  const fe::Assembler A = strip(3);
-  const fe::ControlSpace space(A.mesh(), A.geometry(), fe::ControlKind::kVertex);
-  Eigen::VectorXd m0, dm;
-  control_and_direction(A, space, &m0, &dm);
-  const scan::Pose G = camera_motion();
+TEST_F(PoseProjection, EnvelopeGradientMatchesCentralDifferences) {
   const ShapeObjectiveOptions o = projection_options(perturbed(G), 1e-13);
   const PointCloud Y = G.apply(bent_target(), false);
   ShapeObjective J(A, space, HausdorffTarget(Y, o.hausdorff), o);
@@ -503,10 +503,7 @@ TEST(PoseProjection, EnvelopeGradientMatchesCentralDifferences) {
   EXPECT_LT((at_optimum.gradient - e0.gradient).norm(), 1e-12 * e0.gradient.norm());
 }
 
-TEST(PoseProjection, RefusesATwistASimilarityAndABadTolerance) {
-  const fe::Assembler A = strip(3);
-  const fe::ControlSpace space(A.mesh(), A.geometry(), fe::ControlKind::kVertex);
-  const scan::Pose G = camera_motion();
+TEST_F(PoseProjection, RefusesATwistASimilarityAndABadTolerance) {
   ShapeObjectiveOptions o = projection_options(perturbed(G), 1e-10);
   ShapeObjective J(A, space, HausdorffTarget(G.apply(bent_target(), false), o.hausdorff), o);
   expect_error<InvalidArgument>(
@@ -528,12 +525,7 @@ TEST(PoseProjection, RefusesATwistASimilarityAndABadTolerance) {
 // truth lies within gives the truth back as unbounded. (With the bound active the projected
 // BFGS stops short of the constrained minimum and the envelope gradient is not exact there:
 // §8.11 has the measurement.)
-TEST(PoseProjection, TheUncertaintyBoundsTheTwist) {
-  const fe::Assembler A = strip(3);
-  const fe::ControlSpace space(A.mesh(), A.geometry(), fe::ControlKind::kVertex);
-  Eigen::VectorXd m0, dm;
-  control_and_direction(A, space, &m0, &dm);
-  const scan::Pose G = camera_motion();
+TEST_F(PoseProjection, TheUncertaintyBoundsTheTwist) {
   ShapeObjectiveOptions o = projection_options(perturbed(G), 1e-13);
   ShapeObjectiveOptions in_body = o;
   in_body.pose.reset();
