@@ -313,9 +313,9 @@ double far_value(const Triangle& t, const Radial& k, const double* y, double h, 
     for (int q = 0; q < kFarPoints; ++q) {
       const double dx = t.qx[q] - y[0], dy = t.qy[q] - y[1], dz = t.qz[q] - y[2];
       const double r = std::sqrt(dx * dx + dy * dy + dz * dz), W = 1.0 + r * inv_eps;
-      const double wr3 = t.wq[q] / (r * r * r);
-      s += wr3 * (3.0 * W * W - 3.0 * W + 1.0) / (W * W * W);
-      c += wr3;
+      const double W3 = W * W * W, wi = t.wq[q] / (r * r * r * W3);  // one division
+      s += wi * (3.0 * W * W - 3.0 * W + 1.0);
+      c += wi * W3;
     }
     *omega = h * c;
     return -h * s * inv_eps / 3.0;
