@@ -389,12 +389,29 @@ void near_moments(const Triangle& t, const Radial& k, const Rules& rule, const E
 // ∫_t k λ_a dA by the 16-point rule.
 void far_moments(const Triangle& t, const Radial& k, const double* y, double c[3]) {
   const FarRule& rule = far_rule();
-  c[0] = c[1] = c[2] = 0.0;
-  for (int q = 0; q < kFarPoints; ++q) {
-    const double dx = t.qx[q] - y[0], dy = t.qy[q] - y[1], dz = t.qz[q] - y[2];
-    const double kw = t.wq[q] * k.kernel(std::sqrt(dx * dx + dy * dy + dz * dz));
-    for (int a = 0; a < 3; ++a) c[a] += kw * rule.lam[q][a];
+  double c0 = 0.0, c1 = 0.0, c2 = 0.0;
+  if (k.four) {
+#pragma omp simd reduction(+ : c0, c1, c2)
+    for (int q = 0; q < kFarPoints; ++q) {
+      const double dx = t.qx[q] - y[0], dy = t.qy[q] - y[1], dz = t.qz[q] - y[2];
+      const double u = 1.0 / (std::sqrt(dx * dx + dy * dy + dz * dz) + k.eps);
+      const double kw = t.wq[q] * (u * u) * (u * u);
+      c0 += kw * rule.lam[q][0];
+      c1 += kw * rule.lam[q][1];
+      c2 += kw * rule.lam[q][2];
+    }
+  } else {
+    for (int q = 0; q < kFarPoints; ++q) {
+      const double dx = t.qx[q] - y[0], dy = t.qy[q] - y[1], dz = t.qz[q] - y[2];
+      const double kw = t.wq[q] * k.kernel(std::sqrt(dx * dx + dy * dy + dz * dz));
+      c0 += kw * rule.lam[q][0];
+      c1 += kw * rule.lam[q][1];
+      c2 += kw * rule.lam[q][2];
+    }
   }
+  c[0] = c0;
+  c[1] = c1;
+  c[2] = c2;
 }
 
 bool is_near(const Triangle& t, const double* y) {
