@@ -420,6 +420,11 @@ TEST(BodyIntegral, RejectsBadInput) {
   bad = s;
   bad.triangles(3, 0) = 99;
   EXPECT_THROW(BodyIntegral(bad, {}), softhd::InvalidArgument);
+  bad = s;  // one triangle flipped
+  std::swap(bad.triangles(5, 1), bad.triangles(5, 2));
+  EXPECT_THROW(BodyIntegral(bad, {}), softhd::InvalidArgument);
+  bad.triangles = s.triangles.topRows(11);  // an open surface
+  EXPECT_THROW(BodyIntegral(bad, {}), softhd::InvalidArgument);
 }
 
 }  // namespace

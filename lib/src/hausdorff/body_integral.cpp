@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "../common/decimal.hpp"
 #include "softhd/error.hpp"
@@ -481,6 +482,30 @@ Triangle make_triangle(const double v[3][3], double near_ratio, double* area2) {
   return t;
 }
 
+// Throws InvalidArgument unless the triangles (3 corners each) close up with one orientation:
+// every directed edge (a, b) as often as (b, a) (the divergence theorem, and the far solid
+// angles' winding number, need a closed, consistently oriented surface).
+void check_closed(const std::vector<int>& corners) {
+  std::vector<std::pair<int, int>> edges;
+  edges.reserve(corners.size());
+  for (std::size_t t = 0; t < corners.size(); t += 3)
+    for (int e = 0; e < 3; ++e) edges.emplace_back(corners[t + e], corners[t + (e + 1) % 3]);
+  std::sort(edges.begin(), edges.end());
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    const auto back = std::equal_range(edges.begin(), edges.end(),
+                                       std::make_pair(edges[i].second, edges[i].first));
+    if (static_cast<std::size_t>(back.second - back.first) != j - i)
+      throw InvalidArgument("body integral: the surface is not closed and consistently oriented: " +
+                            std::to_string(j - i) + " edge(s) from point " +
+                            std::to_string(edges[i].first) + " to " +
+                            std::to_string(edges[i].second) + ", " +
+                            std::to_string(back.second - back.first) + " back");
+    i = j;
+  }
+}
+
 }  // namespace
 
 double radial_g(double r, double epsilon, double alpha) {
@@ -513,6 +538,7 @@ BodyIntegral::BodyIntegral(const TriangleSurface& surface, const BodyIntegralOpt
     if (!(area2 > 0.0))
       throw InvalidArgument("body integral: triangle " + std::to_string(t) + " has zero area");
   }
+  check_closed(corners_);
   gauss_legendre(options.angle_points, &rule_x_, &rule_w_);
 }
 

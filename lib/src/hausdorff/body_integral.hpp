@@ -62,7 +62,8 @@ double radial_g(double r, double epsilon, double alpha);
 class BodyIntegral {
  public:
   /// Copies the surface's geometry. Throws InvalidArgument for an invalid option (naming it),
-  /// a triangle index out of range or a triangle of zero area.
+  /// a triangle index out of range, a triangle of zero area, or a surface that is not closed
+  /// and consistently oriented (a directed edge without as many reverse ones).
   BodyIntegral(const TriangleSurface& surface, const BodyIntegralOptions& options);
 
   /// J(y_k) for the rows y_k of `points` (M by 3) into `value` (M); with `grad` non-null also
