@@ -52,6 +52,51 @@ const FarRule& far_rule() {
   return rule;
 }
 
+// Radon's symmetric 7-point rule (degree 5; fe/quadrature.cpp's table), for the triangles
+// beyond kCoarseRatio × near_ratio radii: the centroid 9/40, the orbits (a, a, 1 − 2a) with
+// a = (6 ∓ √15)/21, weights (155 ∓ √15)/1200; padded to 8 lanes (the centroid, weight 0).
+constexpr int kCoarsePoints = 8;
+constexpr double kCoarseRatio = 4.0;
+
+struct CoarseRule {
+  double lam[kCoarsePoints][3];
+  double w[kCoarsePoints];
+  CoarseRule() {
+    const double s15 = std::sqrt(15.0);
+    const double a[2] = {(6.0 - s15) / 21.0, (6.0 + s15) / 21.0};
+    const double wa[2] = {(155.0 - s15) / 1200.0, (155.0 + s15) / 1200.0};
+    for (int q : {0, 7}) {
+      lam[q][0] = lam[q][1] = lam[q][2] = 1.0 / 3.0;
+      w[q] = q == 0 ? 9.0 / 40.0 : 0.0;
+    }
+    for (int o = 0; o < 2; ++o)
+      for (int v = 0; v < 3; ++v) {
+        double* L = lam[1 + 3 * o + v];
+        L[0] = L[1] = L[2] = a[o];
+        L[v] = 1.0 - 2.0 * a[o];
+        w[1 + 3 * o + v] = wa[o];
+      }
+  }
+};
+
+const CoarseRule& coarse_rule() {
+  static const CoarseRule rule;
+  return rule;
+}
+
+// The points of a far rule on one triangle, by coordinate, weights times the area.
+struct FarPoints {
+  const double *x, *y, *z, *w;
+  const double (*lam)[3];
+  int n;
+};
+
+// The 16-point rule within (kCoarseRatio · near_ratio · R_t)² = t.far2 of y, else the 7-point.
+FarPoints far_points(const Triangle& t, double d2) {
+  if (d2 < t.far2) return {t.qx, t.qy, t.qz, t.wq, far_rule().lam, kFarPoints};
+  return {t.cx, t.cy, t.cz, t.cw, coarse_rule().lam, kCoarsePoints};
+}
+
 // Gauss–Legendre nodes and weights on [0, 1] (Newton on P_n from the Chebyshev guesses).
 void gauss_legendre(int n, std::vector<double>* x, std::vector<double>* w) {
   x->assign(n, 0.0);
@@ -300,21 +345,21 @@ double solid_angle(const Triangle& t, const double* y) {
   return 2.0 * std::atan2(dot(a, bc), den);
 }
 
-// A far triangle's share of J by the 16-point rule, h_t Σ_q W_q G(r_q)/r_q³, in two parts
+// A far triangle's share of J by its far rule, h_t Σ_q W_q G(r_q)/r_q³, in two parts
 // (α ≥ 3.5): with G = G∞ − r³ H, the tail −h_t Σ_q W_q H(r_q) and the point-charge part G∞ ω_t,
 // ω_t = h_t ∫_t r^−3 dA the triangle's signed solid angle, of which only the rule's estimate
 // h_t Σ_q W_q r_q^−3 is returned (in *omega): evaluate replaces the far triangles' sum of them
 // by its exact value. (Over a closed surface seen from outside the terms G∞ ω_t cancel to a J
 // smaller by up to 1/(εJ); the rule's error on them would not.) α < 3.5: the plain sum, *omega 0.
-double far_value(const Triangle& t, const Radial& k, const double* y, double h, double* omega) {
+double far_value(const FarPoints& t, const Radial& k, const double* y, double h, double* omega) {
   double s = 0.0, c = 0.0;
   if (k.four) {  // H(r) = (3W² − 3W + 1)/(3ε W³ r³), W = 1 + r/ε
     const double inv_eps = 1.0 / k.eps;
 #pragma omp simd reduction(+ : s, c)
-    for (int q = 0; q < kFarPoints; ++q) {
-      const double dx = t.qx[q] - y[0], dy = t.qy[q] - y[1], dz = t.qz[q] - y[2];
+    for (int q = 0; q < t.n; ++q) {
+      const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
       const double r = std::sqrt(dx * dx + dy * dy + dz * dz), W = 1.0 + r * inv_eps;
-      const double W3 = W * W * W, wi = t.wq[q] / (r * r * r * W3);  // one division
+      const double W3 = W * W * W, wi = t.w[q] / (r * r * r * W3);  // one division
       s += wi * (3.0 * W * W - 3.0 * W + 1.0);
       c += wi * W3;
     }
@@ -322,11 +367,11 @@ double far_value(const Triangle& t, const Radial& k, const double* y, double h, 
     return -h * s * inv_eps / 3.0;
   }
   const bool coulomb = k.alpha >= Radial::kCoulomb;
-  for (int q = 0; q < kFarPoints; ++q) {
-    const double dx = t.qx[q] - y[0], dy = t.qy[q] - y[1], dz = t.qz[q] - y[2];
+  for (int q = 0; q < t.n; ++q) {
+    const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
     const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
-    s += t.wq[q] * (coulomb ? k.tail_over_r3(r) : k.g_over_r3(r));
-    if (coulomb) c += t.wq[q] / (r * r * r);
+    s += t.w[q] * (coulomb ? k.tail_over_r3(r) : k.g_over_r3(r));
+    if (coulomb) c += t.w[q] / (r * r * r);
   }
   *omega = h * c;
   return coulomb ? -h * s : h * s;
@@ -349,21 +394,21 @@ bool on_triangle(const Triangle& t, const EdgeFrame& f) {
   return std::abs(f.h) <= tol && f.pe[0] >= -tol && f.pe[1] >= -tol && f.pe[2] >= -tol;
 }
 
-// B = ∫_t k dA by the 16-point rule.
-double far_kernel(const Triangle& t, const Radial& k, const double* y) {
+// B = ∫_t k dA by the far rule.
+double far_kernel(const FarPoints& t, const Radial& k, const double* y) {
   double s = 0.0;
   if (k.four) {
 #pragma omp simd reduction(+ : s)
-    for (int q = 0; q < kFarPoints; ++q) {
-      const double dx = t.qx[q] - y[0], dy = t.qy[q] - y[1], dz = t.qz[q] - y[2];
+    for (int q = 0; q < t.n; ++q) {
+      const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
       const double u = 1.0 / (std::sqrt(dx * dx + dy * dy + dz * dz) + k.eps);
-      s += t.wq[q] * (u * u) * (u * u);
+      s += t.w[q] * (u * u) * (u * u);
     }
     return s;
   }
-  for (int q = 0; q < kFarPoints; ++q) {
-    const double dx = t.qx[q] - y[0], dy = t.qy[q] - y[1], dz = t.qz[q] - y[2];
-    s += t.wq[q] * k.kernel(std::sqrt(dx * dx + dy * dy + dz * dz));
+  for (int q = 0; q < t.n; ++q) {
+    const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
+    s += t.w[q] * k.kernel(std::sqrt(dx * dx + dy * dy + dz * dz));
   }
   return s;
 }
@@ -387,27 +432,26 @@ void near_moments(const Triangle& t, const Radial& k, const Rules& rule, const E
   }
 }
 
-// ∫_t k λ_a dA by the 16-point rule.
-void far_moments(const Triangle& t, const Radial& k, const double* y, double c[3]) {
-  const FarRule& rule = far_rule();
+// ∫_t k λ_a dA by the far rule.
+void far_moments(const FarPoints& t, const Radial& k, const double* y, double c[3]) {
   double c0 = 0.0, c1 = 0.0, c2 = 0.0;
   if (k.four) {
 #pragma omp simd reduction(+ : c0, c1, c2)
-    for (int q = 0; q < kFarPoints; ++q) {
-      const double dx = t.qx[q] - y[0], dy = t.qy[q] - y[1], dz = t.qz[q] - y[2];
+    for (int q = 0; q < t.n; ++q) {
+      const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
       const double u = 1.0 / (std::sqrt(dx * dx + dy * dy + dz * dz) + k.eps);
-      const double kw = t.wq[q] * (u * u) * (u * u);
-      c0 += kw * rule.lam[q][0];
-      c1 += kw * rule.lam[q][1];
-      c2 += kw * rule.lam[q][2];
+      const double kw = t.w[q] * (u * u) * (u * u);
+      c0 += kw * t.lam[q][0];
+      c1 += kw * t.lam[q][1];
+      c2 += kw * t.lam[q][2];
     }
   } else {
-    for (int q = 0; q < kFarPoints; ++q) {
-      const double dx = t.qx[q] - y[0], dy = t.qy[q] - y[1], dz = t.qz[q] - y[2];
-      const double kw = t.wq[q] * k.kernel(std::sqrt(dx * dx + dy * dy + dz * dz));
-      c0 += kw * rule.lam[q][0];
-      c1 += kw * rule.lam[q][1];
-      c2 += kw * rule.lam[q][2];
+    for (int q = 0; q < t.n; ++q) {
+      const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
+      const double kw = t.w[q] * k.kernel(std::sqrt(dx * dx + dy * dy + dz * dz));
+      c0 += kw * t.lam[q][0];
+      c1 += kw * t.lam[q][1];
+      c2 += kw * t.lam[q][2];
     }
   }
   c[0] = c0;
@@ -415,9 +459,10 @@ void far_moments(const Triangle& t, const Radial& k, const double* y, double c[3
   c[2] = c2;
 }
 
-bool is_near(const Triangle& t, const double* y) {
+// |y − c_t|²: near below t.near2 (the polar rule), the 16-point rule below t.far2.
+double distance2(const Triangle& t, const double* y) {
   const double dx = y[0] - t.c[0], dy = y[1] - t.c[1], dz = y[2] - t.c[2];
-  return dx * dx + dy * dy + dz * dz < t.near2;
+  return dx * dx + dy * dy + dz * dz;
 }
 
 void validate(const BodyIntegralOptions& o) {
@@ -464,6 +509,7 @@ Triangle make_triangle(const double v[3][3], double near_ratio, double* area2) {
     radius2 = std::max(radius2, dot(g, g));
   }
   t.near2 = near_ratio * near_ratio * radius2;
+  t.far2 = kCoarseRatio * kCoarseRatio * t.near2;
   for (int a = 0; a < 3; ++a) {  // ∇λ_a = n × (v_{a+2} − v_{a+1}) / (2 area)
     const double* p = v[(a + 1) % 3];
     const double* q = v[(a + 2) % 3];
@@ -478,6 +524,14 @@ Triangle make_triangle(const double v[3][3], double near_ratio, double* area2) {
     for (int i = 0; i < 3; ++i)
       coord[i][q] = lam[0] * v[0][i] + lam[1] * v[1][i] + lam[2] * v[2][i];
     t.wq[q] = 0.5 * *area2 * rule.w[q];
+  }
+  const CoarseRule& coarse = coarse_rule();
+  double* ccoord[3] = {t.cx, t.cy, t.cz};
+  for (int q = 0; q < kCoarsePoints; ++q) {
+    const double* lam = coarse.lam[q];
+    for (int i = 0; i < 3; ++i)
+      ccoord[i][q] = lam[0] * v[0][i] + lam[1] * v[1][i] + lam[2] * v[2][i];
+    t.cw[q] = 0.5 * *area2 * coarse.w[q];
   }
   return t;
 }
@@ -563,7 +617,8 @@ void BodyIntegral::evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* valu
     bool on_surface = false;
     for (const Triangle& t : triangles_) {
       double b = 0.0;
-      if (is_near(t, y)) {
+      const double d2 = distance2(t, y);
+      if (d2 < t.near2) {
         const EdgeFrame f = edge_frame(t, y);
         double a;
         near_pair(t, k, rule, f, true, want_b, &a, &b);
@@ -575,10 +630,11 @@ void BodyIntegral::evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* valu
       } else {
         const double h =
             t.n[0] * (t.v[0][0] - y[0]) + t.n[1] * (t.v[0][1] - y[1]) + t.n[2] * (t.v[0][2] - y[2]);
+        const FarPoints p = far_points(t, d2);
         double omega;
-        J += far_value(t, k, y, h, &omega);
+        J += far_value(p, k, y, h, &omega);
         far_omega += omega;
-        if (want_b) b = far_kernel(t, k, y);
+        if (want_b) b = far_kernel(p, k, y);
       }
       if (want_b)
         for (int i = 0; i < 3; ++i) g[i] -= b * t.n[i];  // −n_t ∫_t k dA
@@ -614,10 +670,11 @@ Eigen::MatrixXd BodyIntegral::surface_vjp(const Eigen::MatrixXd& points,
       for (std::size_t t = 0; t < count; ++t) {
         const Triangle& tri = triangles_[t];
         double ct[3];
-        if (is_near(tri, y))
+        const double d2 = distance2(tri, y);
+        if (d2 < tri.near2)
           near_moments(tri, k, rule, edge_frame(tri, y), y, ct);
         else
-          far_moments(tri, k, y, ct);
+          far_moments(far_points(tri, d2), k, y, ct);
         for (int a = 0; a < 3; ++a) c[3 * t + a] += wj * ct[a];
       }
     }

@@ -20,12 +20,12 @@
 // triangle's plane: the radial integral in closed form, the angle over each edge's wedge by
 // composite Gauss–Legendre in u (tan θ = sinh u); the first moment of the kernel, which the
 // hat functions need, as a line integral over the edges (∫_t k (x − p) dA = ∮ K₁(r) ν dl,
-// K₁(r) = ∫₀^r s k(s) ds). The other triangles by Dunavant's symmetric 16-point rule (degree 8);
-// for α ≥ 3.5 its point-charge part G∞/r³ (G∞ = G(∞)) is summed exactly instead: the far
-// triangles' solid angles are 4π × the winding number minus the near ones' (exact), which
-// needs a closed surface — seen from outside, those terms cancel to a J smaller than them by
-// up to 1/(εJ).
-// All pairs: O(points × triangles), no tree yet.
+// K₁(r) = ∫₀^r s k(s) ds). The other triangles by Dunavant's symmetric 16-point rule (degree 8), or
+// beyond 4 · near_ratio · R_t Radon's 7-point rule (degree 5); for α ≥ 3.5 its point-charge part
+// G∞/r³ (G∞ = G(∞)) is summed exactly instead: the far triangles' solid angles are 4π × the winding
+// number minus the near ones' (exact), which needs a closed surface — seen from outside, those
+// terms cancel to a J smaller than them by up to 1/(εJ). All pairs: O(points × triangles), no tree
+// yet.
 
 #include <Eigen/Core>
 #include <vector>
@@ -40,8 +40,8 @@ struct BodyIntegralOptions {
   double epsilon = 1e-3;  ///< ε > 0 of the kernel (r + ε)^−α
   double alpha = 4.0;     ///< α > 0 of the kernel
   /// A triangle is near y (the polar rule) when |y − c_t| < near_ratio · R_t; ≥ 1. The
-  /// far rule's relative error of J, measured against the box code on 250 points around the
-  /// unit cube (faces of 4² to 16² squares): 2e-8 at 3, 1.4e-9 at 4, 1.2e-11 at 6
+  /// far rules' largest relative error of J, measured against the box code on 250 points
+  /// around the unit cube (faces of 4² to 16² squares): 2.4e-8 at 3, 1.4e-9 at 4, 3.8e-11 at 6
   /// (docs/formulation.md §2.8).
   double near_ratio = 4.0;
   /// Gauss–Legendre points per panel of the angle and edge rules (2 to 64). 12 keeps the
@@ -86,6 +86,10 @@ class BodyIntegral {
     // far loops).
     alignas(64) double qx[16];
     double qy[16], qz[16], wq[16];
+    // The same for the 7-point rule beyond far2, padded to 8 lanes.
+    alignas(64) double cx[8];
+    double cy[8], cz[8], cw[8];
+    double far2;        // (4 · near_ratio · R_t)²
     double tau[3][3];   // unit edge directions, edge e from v_e to v_{e+1}
     double nu[3][3];    // in-plane outward edge normals, τ_e × n
     double len[3];      // edge lengths
