@@ -607,8 +607,8 @@ void BodyIntegral::evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* valu
   const bool want_b = grad != nullptr;
   const int threads = resolve_threads(options_.threads);
   const bool coulomb = k.alpha >= Radial::kCoulomb;
-  // Runs points × triangles times: the near/far switch, then 16 kernel evaluations (far) or
-  // 3 edges × panels × angle_points (near).
+  // Runs points × triangles times: the near/far switch, then 16 or 8 kernel evaluations (far)
+  // or 3 edges × panels × angle_points (near).
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (Eigen::Index j = 0; j < m; ++j) {
     const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
