@@ -1,0 +1,266 @@
+// The boundary form's inner integral J(y) (hausdorff/body_integral.hpp) measured
+// (docs/formulation.md §2.8):
+//   bench_body_integral accuracy FILE   largest relative error around the unit cube against the
+//                                       box code's values in FILE (x y z J per line, made by
+//                                       studies/cell_reference_points.py), per near ratio
+//   bench_body_integral plate           the near ratio's error and time at a fifth of the
+//                                       bending plate's nodes
+//   bench_body_integral cost [THREADS]  J, its gradient and the surface product at the bending
+//                                       plate's nodes against the collocated rho~ (exact)
+#include <Eigen/Core>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "hausdorff/body_integral.hpp"
+#include "softhd/control/scene.hpp"
+#include "softhd/fe/boundary.hpp"
+#include "softhd/fe/geometry.hpp"
+#include "softhd/hausdorff.hpp"
+
+using namespace softhd;
+
+using detail::BodyIntegral;
+using detail::BodyIntegralOptions;
+
+TriangleSurface box_surface(int n);  // below
+
+static double now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+TriangleSurface box_surface(int n) {
+  // unit cube, each face n x n squares of 2 triangles (copy of the test's helper, condensed)
+  std::vector<Eigen::Vector3d> pts;
+  std::vector<Eigen::Vector3i> tris;
+  std::vector<int> idx((n + 1) * (n + 1) * (n + 1), -1);
+  auto point = [&](int i, int j, int k) {
+    int key = (i * (n + 1) + j) * (n + 1) + k;
+    if (idx[key] < 0) {
+      idx[key] = pts.size();
+      pts.emplace_back(i / double(n), j / double(n), k / double(n));
+    }
+    return idx[key];
+  };
+  for (int ax = 0; ax < 3; ++ax)
+    for (int side = 0; side < 2; ++side)
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          int q[4];
+          const int di[4] = {0, 1, 1, 0}, dj[4] = {0, 0, 1, 1};
+          for (int c = 0; c < 4; ++c) {
+            int ijk[3];
+            ijk[ax] = side * n;
+            ijk[(ax + 1) % 3] = i + di[c];
+            ijk[(ax + 2) % 3] = j + dj[c];
+            q[c] = point(ijk[0], ijk[1], ijk[2]);
+          }
+          if (side) {
+            tris.emplace_back(q[0], q[1], q[2]);
+            tris.emplace_back(q[0], q[2], q[3]);
+          } else {
+            tris.emplace_back(q[0], q[2], q[1]);
+            tris.emplace_back(q[0], q[3], q[2]);
+          }
+        }
+  TriangleSurface s;
+  s.points.resize(pts.size(), 3);
+  for (size_t i = 0; i < pts.size(); ++i) s.points.row(i) = pts[i];
+  s.triangles.resize(tris.size(), 3);
+  for (size_t t = 0; t < tris.size(); ++t) s.triangles.row(t) = tris[t];
+  return s;
+}
+
+void accuracy(const char* file) {
+  std::ifstream in(file);
+  std::vector<double> v;
+  double x;
+  while (in >> x) v.push_back(x);
+  const int m = v.size() / 4;
+  Eigen::MatrixXd y(m, 3);
+  Eigen::VectorXd ref(m);
+  for (int k = 0; k < m; ++k) {
+    y.row(k) << v[4 * k], v[4 * k + 1], v[4 * k + 2];
+    ref[k] = v[4 * k + 3];
+  }
+  std::printf("# accuracy vs J_box (%d points: 150 in [-0.3,1.3]^3, 100 within 3 eps of a face)\n",
+              m);
+  std::printf("mesh n  near_ratio  angle_pts  max_rel_err  near_pairs_frac  seconds\n");
+  for (int n : {4, 8, 16}) {
+    const TriangleSurface s = box_surface(n);
+    for (double ratio : {2.0, 3.0, 4.0, 6.0, 8.0, 12.0, 16.0})
+      for (int ap : {16}) {
+        BodyIntegralOptions o;
+        o.near_ratio = ratio;
+        o.angle_points = ap;
+        o.threads = 1;
+        BodyIntegral b(s, o);
+        Eigen::VectorXd J;
+        double t0 = now();
+        b.evaluate(y, &J);
+        double t1 = now();
+        double err = ((J - ref).array() / ref.array()).abs().maxCoeff();
+        // fraction of near pairs
+        long near = 0;
+        for (int k = 0; k < m; ++k)
+          for (int t = 0; t < s.triangles.rows(); ++t) {
+            Eigen::Vector3d c = Eigen::Vector3d::Zero();
+            double R2 = 0;
+            for (int a = 0; a < 3; ++a) c += s.points.row(s.triangles(t, a)).transpose() / 3.0;
+            for (int a = 0; a < 3; ++a)
+              R2 = std::max(R2, (s.points.row(s.triangles(t, a)).transpose() - c).squaredNorm());
+            if ((y.row(k).transpose() - c).squaredNorm() < ratio * ratio * R2) ++near;
+          }
+        std::printf("%2d  %5.1f  %3d  %.3e  %.4f  %.3f\n", n, ratio, ap, err,
+                    double(near) / (double(m) * s.triangles.rows()), t1 - t0);
+      }
+  }
+  std::printf(
+      "# angle points, polar rule only (mesh n = 4, near_ratio = 16: all pairs near but the outer "
+      "corner ones)\n");
+  for (int ap : {4, 6, 8, 10, 12, 16, 20}) {
+    BodyIntegralOptions o;
+    o.angle_points = ap;
+    o.near_ratio = 30;
+    o.threads = 1;
+    BodyIntegral b(box_surface(4), o);
+    Eigen::VectorXd J;
+    b.evaluate(y, &J);
+    std::printf("angle_points %2d  max_rel_err %.3e\n", ap,
+                ((J - ref).array() / ref.array()).abs().maxCoeff());
+  }
+  std::printf("# angle points (mesh n = 8, near_ratio = 8)\n");
+  for (int ap : {4, 6, 8, 10, 12, 16, 20, 24, 32}) {
+    BodyIntegralOptions o;
+    o.angle_points = ap;
+    o.near_ratio = 8;
+    o.threads = 1;
+    BodyIntegral b(box_surface(8), o);
+    Eigen::VectorXd J;
+    double t0 = now();
+    b.evaluate(y, &J);
+    double t1 = now();
+    std::printf("angle_points %2d  max_rel_err %.3e  %.3f s\n", ap,
+                ((J - ref).array() / ref.array()).abs().maxCoeff(), t1 - t0);
+  }
+}
+
+void cost(const char* scene_path, int threads) {
+  Scene sc = load_scene(scene_path);
+  fe::Mesh mesh = sc.body.make_mesh();
+  fe::ReferenceGeometry geo(mesh);
+  Eigen::VectorXd vol = fe::lumped_volumes(mesh, geo);
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(mesh.num_nodes() * 3);
+  TriangleSurface surf = fe::boundary_surface(mesh, u);
+  const Eigen::MatrixXd& X = mesh.nodes;
+  std::printf("# cost: %s, %ld nodes, %ld boundary points, %ld boundary triangles, threads %d\n",
+              scene_path, (long)X.rows(), (long)surf.points.rows(), (long)surf.triangles.rows(),
+              threads);
+  PointCloud cloud(X, vol);
+  HausdorffOptions ho;
+  ho.method = Method::exact;
+  ho.threads = threads;
+  BodyIntegralOptions o;
+  o.threads = threads;
+  BodyIntegral b(surf, o);
+  Eigen::VectorXd J, w = Eigen::VectorXd::Ones(X.rows());
+  Eigen::MatrixXd G;
+  HausdorffRequest req;
+  req.gradient_points = true;
+  for (int rep = 0; rep < 2; ++rep) {
+    double t0 = now();
+    HausdorffResult r = hausdorff(cloud, cloud, ho, {});
+    double t1 = now();
+    hausdorff(cloud, cloud, ho, req);
+    double t2 = now();
+    b.evaluate(X, &J);
+    double t3 = now();
+    b.evaluate(X, &J, &G);
+    double t4 = now();
+    Eigen::MatrixXd V = b.surface_vjp(X, w);
+    double t5 = now();
+    std::printf(
+        "rep %d: collocation exact (%ld^2 pairs, both directions): value %.3f s, value+grad %.3f s "
+        "| "
+        "J at the nodes %.3f s (%.0f evals/s), J+grad_y %.3f s, surface vjp %.3f s | rho %.6f, "
+        "mean J %.3f\n",
+        rep, (long)X.rows(), t1 - t0, t2 - t1, t3 - t2, X.rows() / (t3 - t2), t4 - t3, t5 - t4,
+        r.rho, J.mean());
+  }
+  // near fraction
+  long near = 0;
+  for (int k = 0; k < X.rows(); ++k)
+    for (int t = 0; t < surf.triangles.rows(); ++t) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      double R2 = 0;
+      for (int a = 0; a < 3; ++a) c += surf.points.row(surf.triangles(t, a)).transpose() / 3.0;
+      for (int a = 0; a < 3; ++a)
+        R2 = std::max(R2, (surf.points.row(surf.triangles(t, a)).transpose() - c).squaredNorm());
+      if ((X.row(k).transpose() - c).squaredNorm() < 16 * R2) ++near;
+    }
+  {
+    BodyIntegralOptions of;
+    of.threads = threads;
+    of.near_ratio = 1.0;
+    BodyIntegral bf(surf, of);
+    double t0 = now();
+    bf.evaluate(X, &J);
+    std::printf("near_ratio 1 (almost all far): J at the nodes %.3f s\n", now() - t0);
+  }
+  std::printf("near pairs: %ld of %ld (%.4f)\n", near, (long)(X.rows() * surf.triangles.rows()),
+              double(near) / (X.rows() * surf.triangles.rows()));
+}
+
+int main(int argc, char** argv) {
+  std::string what = argc > 1 ? argv[1] : "";
+  if (what != "accuracy" && what != "plate" && what != "cost") {
+    std::fprintf(stderr, "usage: bench_body_integral accuracy FILE | plate | cost [THREADS]\n");
+    return 2;
+  }
+  if (what == "accuracy") {
+    if (argc < 3) {
+      std::fprintf(stderr, "bench_body_integral accuracy FILE: FILE is missing\n");
+      return 2;
+    }
+    accuracy(argv[2]);
+  }
+  if (what == "plate") {
+    Scene sc = load_scene(SOFTHD_SOURCE_DIR "/data/scenes/bending.json");
+    fe::Mesh mesh = sc.body.make_mesh();
+    TriangleSurface surf = fe::boundary_surface(mesh, Eigen::VectorXd::Zero(mesh.num_nodes() * 3));
+    Eigen::MatrixXd X(mesh.nodes.rows() / 5, 3);
+    for (int i = 0; i < X.rows(); ++i) X.row(i) = mesh.nodes.row(5 * i);
+    Eigen::VectorXd Jref;
+    {
+      BodyIntegralOptions o;
+      o.near_ratio = 24;
+      o.angle_points = 20;
+      o.threads = 1;
+      BodyIntegral(surf, o).evaluate(X, &Jref);
+    }
+    for (int rep = 0; rep < 3; ++rep)
+      for (double ratio : {3.0, 4.0, 6.0, 8.0})
+        for (int ap : {12}) {
+          BodyIntegralOptions o;
+          o.near_ratio = ratio;
+          o.angle_points = ap;
+          o.threads = 1;
+          BodyIntegral b(surf, o);
+          Eigen::VectorXd J;
+          double t0 = now();
+          b.evaluate(X, &J);
+          double t1 = now();
+          std::printf(
+              "plate, %ld of the nodes: near_ratio %4.1f angle_points %2d: %.3f s (%.0f evals/s), "
+              "max rel err vs (24, 20) %.2e\n",
+              (long)X.rows(), ratio, ap, t1 - t0, X.rows() / (t1 - t0),
+              ((J - Jref).array() / Jref.array()).abs().maxCoeff());
+        }
+  }
+  if (what == "cost") {
+    const int threads = argc > 2 ? std::atoi(argv[2]) : 1;
+    cost(SOFTHD_SOURCE_DIR "/data/scenes/bending.json", threads);
+  }
+}
