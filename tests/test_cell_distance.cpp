@@ -48,23 +48,24 @@ double collocation(int nx, int ny) {
 }
 
 // The self distance converges as the cells are refined, whether the two grids match or not
-// (measured −0.080 % at 4 × 4, −0.046 % at 6 × 6, −0.063 % at 4 × 6), where collocation on the
-// same nodes is off by −98 % (4 × 4) or +100 % and more (differing grids).
+// (measured +0.0069 % at 3 × 3, +0.0055 % at 4 × 4, +0.0062 % at 3 × 4), where collocation on the
+// same nodes is off by −98 % (4 × 4) or more than +50 % (differing grids).
 TEST(CellDistance, SelfConvergesToTheContinuum) {
-  const double e4 = rho(unit(4), unit(4)) / kSelf - 1, e6 = rho(unit(6), unit(6)) / kSelf - 1;
-  const double e46 = rho(unit(4), unit(6)) / kSelf - 1;
-  std::printf("self: 4x4 %+.4f %%, 6x6 %+.4f %%, 4x6 %+.4f %%\n", 100 * e4, 100 * e6, 100 * e46);
-  EXPECT_LT(std::abs(e4), 1.0e-3);
-  EXPECT_LT(std::abs(e6), 0.6e-3);
-  EXPECT_LT(std::abs(e46), 0.8e-3);
-  EXPECT_LT(std::abs(e6), std::abs(e4));  // falls with h
+  const double e3 = rho(unit(3), unit(3)) / kSelf - 1, e4 = rho(unit(4), unit(4)) / kSelf - 1;
+  const double e34 = rho(unit(3), unit(4)) / kSelf - 1;
+  std::printf("self: 3x3 %+.4f %%, 4x4 %+.4f %%, 3x4 %+.4f %%\n", 100 * e3, 100 * e4, 100 * e34);
+  EXPECT_LT(std::abs(e3), 0.9e-4);
+  EXPECT_LT(std::abs(e4), 0.7e-4);
+  EXPECT_LT(std::abs(e34), 0.8e-4);
+  EXPECT_LT(std::abs(e4), std::abs(e3));  // falls with h
   EXPECT_LT(collocation(4, 4) / kSelf - 1, -0.9);
-  EXPECT_GT(collocation(4, 6) / kSelf - 1, 0.5);
+  EXPECT_GT(collocation(3, 4) / kSelf - 1, 0.5);
 }
 
-// A translation by 0.01 (a tenth of a cell at n = 4) is seen: Δρ̃ = +0.00222 against the
-// continuum's +0.00237 (measured: ρ̃ −0.199 %, Δρ̃ −6.4 %); the cube of side 0.875 at 6 × 6
-// +0.73 %; the three shapes ranked as the continuum ranks them.
+// A translation by 0.01 (a tenth of a cell at n = 4) is seen: Δρ̃ = +0.00219 against the
+// continuum's +0.00237 (measured: ρ̃ −0.143 %, Δρ̃ −7.9 %: f's structure at the scale of the
+// 0.01 slab near the source's edges, unresolved until h ≲ 0.01); the cube of side 0.875 at
+// 6 × 6 +0.89 %; the three shapes ranked as the continuum ranks them.
 TEST(CellDistance, TranslationAndSmallerCube) {
   const double self = rho(unit(4), unit(4));
   const double shifted = rho(unit(4), hex_cube({0.01, 0, 0}, 1.0, 4));
@@ -72,9 +73,9 @@ TEST(CellDistance, TranslationAndSmallerCube) {
   std::printf("shift 0.01 at 4x4 %+.4f %% (delta %+.2f %%), side 0.875 at 6x6 %+.4f %%\n",
               100 * (shifted / kShift01 - 1), 100 * ((shifted - self) / (kShift01 - kSelf) - 1),
               100 * (smaller / kSide875 - 1));
-  EXPECT_LT(std::abs(shifted / kShift01 - 1), 2.5e-3);
-  EXPECT_LT(std::abs((shifted - self) / (kShift01 - kSelf) - 1), 0.08);
-  EXPECT_LT(std::abs(smaller / kSide875 - 1), 0.92e-2);
+  EXPECT_LT(std::abs(shifted / kShift01 - 1), 1.8e-3);
+  EXPECT_LT(std::abs((shifted - self) / (kShift01 - kSelf) - 1), 0.1);
+  EXPECT_LT(std::abs(smaller / kSide875 - 1), 1.12e-2);
   EXPECT_LT(self, shifted);
   EXPECT_LT(shifted, smaller);
 }
@@ -82,7 +83,7 @@ TEST(CellDistance, TranslationAndSmallerCube) {
 // A common rigid motion of both bodies moves nothing but rounding: the rule is built in the
 // cells' reference coordinates, J and sd are invariant.
 TEST(CellDistance, InvariantUnderARigidMotion) {
-  const HexCells x = unit(4), y = hex_cube({0.01, 0.005, 0}, 1.0, 4);
+  const HexCells x = unit(3), y = hex_cube({0.01, 0.005, 0}, 1.0, 4);
   const Eigen::Matrix3d r = (Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()) *
                              Eigen::AngleAxisd(-0.4, Eigen::Vector3d::UnitZ()))
                                 .toRotationMatrix();

@@ -2,12 +2,17 @@
 // docs/formulation.md §2.8 (studies/continuum_reference.py) and against today's collocation
 // (method exact: the nodes with lumped volumes, and the cell centres), on unit cubes of n³
 // hexahedra (ε = 1e-3, α = β = 4, γ = 2):
-//   bench_cell_distance [THREADS]   one table: case, n_X × n_Y, ρ̃ and relative error of each,
-//                                   seconds of the cell value and of nodal collocation
+//   bench_cell_distance [THREADS [flat|graded [T0 TP [NMAX]]]]   one table: case, n_X × n_Y, ρ̃ and
+//   relative error of each,
+//                                   seconds of the cell value and of nodal collocation;
+//                                   flat: the near cells' tangential axes by Gauss only; T0, TP:
+//                                   their graded rule's first panel (× ε) and points per panel;
+//                                   NMAX: the largest n
 #include <Eigen/Geometry>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 
 #include "hausdorff/cell_distance.hpp"
 #include "softhd/hausdorff.hpp"
@@ -54,6 +59,10 @@ int main(int argc, char** argv) {
   const int pairs[][2] = {{4, 4}, {6, 6}, {8, 8}, {6, 8}, {12, 12}, {12, 16}, {16, 16}};
   detail::CellDistanceOptions o;
   o.threads = threads;
+  o.grade_tangential = !(argc > 2 && std::string(argv[2]) == "flat");
+  if (argc > 3) o.tangential_first_panel = std::atof(argv[3]);
+  if (argc > 4) o.tangential_panel_points = std::atoi(argv[4]);
+  const int max_n = argc > 5 ? std::atoi(argv[5]) : 16;
   HausdorffOptions ho;
   ho.method = Method::exact;
   ho.threads = threads;
@@ -61,6 +70,7 @@ int main(int argc, char** argv) {
               "err", "colloc-n", "err", "colloc-c", "err", "t_cell", "t_coll", "near_pts");
   for (const Case& c : cases)
     for (const auto& p : pairs) {
+      if (p[1] > max_n) continue;
       const HexCells x = detail::hex_cube(Eigen::Vector3d::Zero(), 1.0, p[0]);
       const HexCells y = detail::hex_cube(c.lo, c.side, p[1]);
       const double t0 = now();

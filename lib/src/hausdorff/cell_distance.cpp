@@ -143,6 +143,9 @@ struct Rule {
   std::vector<double> tx, tw;  // tangential Gauss
   std::vector<double> px, pw;  // per panel, and along a line without a crossing
   double eps, d0, q, volume;   // ε, first panel (physical), ratio, |Ω_X|
+  bool grade_tangential;
+  double d0t;                  // the tangential rule's first panel (physical)
+  std::vector<double> qx, qw;  // its points per panel
 };
 
 // f(ξ) trilinear through the samples at ξ_k = ±1/√3 (sample g = i + 2j + 4k).
@@ -163,25 +166,41 @@ double interpolate(const double f[8], const double xi[3]) {
 double near_cell(const Cell& c, const double f[8], const SurfaceDistance& s, const Rule& r,
                  long* points) {
   // The axis along which sd changes most between opposite face centres (ties: the first).
-  double change[3];
+  double change[3], ends[3][2], length[3];
   for (int k = 0; k < 3; ++k) {
     double xi[3] = {0, 0, 0}, x0[3], x1[3];
     xi[k] = -1.0;
     map_point(c, xi, x0, nullptr);
     xi[k] = 1.0;
     map_point(c, xi, x1, nullptr);
-    change[k] = std::abs(signed_distance(s, x1) - signed_distance(s, x0));
+    ends[k][0] = signed_distance(s, x0), ends[k][1] = signed_distance(s, x1);
+    change[k] = std::abs(ends[k][1] - ends[k][0]);
+    length[k] = std::sqrt((x1[0] - x0[0]) * (x1[0] - x0[0]) + (x1[1] - x0[1]) * (x1[1] - x0[1]) +
+                          (x1[2] - x0[2]) * (x1[2] - x0[2]));
   }
   const double top = std::max({change[0], change[1], change[2]});
   int axis = 0;
   while (change[axis] < top * (1.0 - 1e-9)) ++axis;
   const int b = (axis + 1) % 3, e = (axis + 2) % 3;
+  // The tangential rules: Gauss, or graded towards the crossing of the cell's centre line along
+  // that axis (an edge or corner of the source in the cell) when r.grade_tangential.
+  std::vector<double> bx = r.tx, bw = r.tw, ex = r.tx, ew = r.tw;
+  for (int k : {b, e}) {
+    if (!r.grade_tangential) break;
+    double xi[3] = {0, 0, 0};
+    const double root = crossing(c, s, xi, k, ends[k][0], ends[k][1]);
+    if (std::abs(root) > 2.0) continue;
+    std::vector<double>& gx = k == b ? bx : ex;
+    std::vector<double>& gw = k == b ? bw : ew;
+    gx.clear(), gw.clear();
+    graded_line(root, 2.0 * r.d0t / length[k], r.q, r.qx, r.qw, &gx, &gw);
+  }
   double sum = 0.0;
   std::vector<double> lx, lw;
-  for (std::size_t i = 0; i < r.tx.size(); ++i)
-    for (std::size_t j = 0; j < r.tx.size(); ++j) {
+  for (std::size_t i = 0; i < bx.size(); ++i)
+    for (std::size_t j = 0; j < ex.size(); ++j) {
       double xi[3], x0[3], x1[3];
-      xi[b] = r.tx[i], xi[e] = r.tx[j];
+      xi[b] = bx[i], xi[e] = ex[j];
       xi[axis] = -1.0;
       map_point(c, xi, x0, nullptr);
       xi[axis] = 1.0;
@@ -203,7 +222,7 @@ double near_cell(const Cell& c, const double f[8], const SurfaceDistance& s, con
         map_point(c, xi, x, &det);
         const double j_y =
             halfspace_profile(signed_distance(s, x), r.eps) * std::exp(interpolate(f, xi));
-        sum += r.tw[i] * r.tw[j] * lw[k] * det * field4(j_y, r.volume, r.eps);
+        sum += bw[i] * ew[j] * lw[k] * det * field4(j_y, r.volume, r.eps);
       }
       *points += static_cast<long>(lx.size());
     }
@@ -237,6 +256,10 @@ void CellDistanceOptions::validate() const {
   if (panel_points < 1 || panel_points > 64) bad("panel_points (1 to 64)");
   if (!(first_panel > 0.0) || !std::isfinite(first_panel)) bad("first_panel (> 0)");
   if (!(grading > 1.0) || !std::isfinite(grading)) bad("grading (> 1)");
+  if (!(tangential_first_panel > 0.0) || !std::isfinite(tangential_first_panel))
+    bad("tangential_first_panel (> 0)");
+  if (tangential_panel_points < 1 || tangential_panel_points > 64)
+    bad("tangential_panel_points (1 to 64)");
   if (!(near_factor >= 0.0) || !std::isfinite(near_factor)) bad("near_factor (>= 0)");
   check_threads(threads);
 }
@@ -354,6 +377,9 @@ OuterMean directed_outer_mean(const HexCells& outer, const BodyIntegral& source_
   rule.d0 = options.first_panel * options.epsilon;
   rule.q = options.grading;
   rule.volume = source_volume;
+  rule.grade_tangential = options.grade_tangential;
+  rule.d0t = options.tangential_first_panel * options.epsilon;
+  gauss_legendre(options.tangential_panel_points, &rule.qx, &rule.qw);
 
   std::vector<double> part(cells, 0.0);
   std::vector<long> near(cells, 0), points(cells, 0);

@@ -47,7 +47,13 @@ struct CellDistanceOptions {
   /// A cell is near (the graded rule) when |sd| at its centre ≤ near_factor × its diameter
   /// (≥ 0).
   double near_factor = 1.0;
-  int threads = 0;  ///< OpenMP threads (0: softhd's default)
+  /// Near cells: grade the two tangential axes too where the cell's centre line along one
+  /// crosses sd = 0 within half a cell (an edge or corner of the source in the cell); false:
+  /// tangential_points Gauss points on them always.
+  bool grade_tangential = true;
+  double tangential_first_panel = 1.0;  ///< their first panel, × ε (> 0)
+  int tangential_panel_points = 3;      ///< their Gauss points per panel (1 to 64)
+  int threads = 0;                      ///< OpenMP threads (0: softhd's default)
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
 };
