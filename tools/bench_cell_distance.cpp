@@ -2,10 +2,12 @@
 // docs/formulation.md §2.8 (studies/continuum_reference.py) and against today's collocation
 // (method exact: the nodes with lumped volumes, and the cell centres), on unit cubes of n³
 // hexahedra (ε = 1e-3, α = β = 4, γ = 2):
-//   bench_cell_distance [THREADS [flat|graded [T0 TP [NMAX]]]]   one table: case, n_X × n_Y, ρ̃ and
-//   relative error of each,
+//   bench_cell_distance [THREADS [flat|graded|exact|hybrid [T0 TP [NMAX]]]]   one table: case, n_X
+//   × n_Y, ρ̃ and relative error of each,
 //                                   seconds of the cell value and of nodal collocation;
-//                                   flat: the near cells' tangential axes by Gauss only; T0, TP:
+//                                   flat: the near cells' tangential axes by Gauss only;
+//                                   exact: J itself at the near cells' points (diagnostics);
+//                                   hybrid: the difference model where |g| ≤ P/2; T0, TP:
 //                                   their graded rule's first panel (× ε) and points per panel;
 //                                   NMAX: the largest n
 #include <Eigen/Geometry>
@@ -60,6 +62,8 @@ int main(int argc, char** argv) {
   detail::CellDistanceOptions o;
   o.threads = threads;
   o.grade_tangential = !(argc > 2 && std::string(argv[2]) == "flat");
+  o.exact_near = argc > 2 && std::string(argv[2]) == "exact";
+  o.hybrid = argc > 2 && std::string(argv[2]) == "hybrid";
   if (argc > 3) o.tangential_first_panel = std::atof(argv[3]);
   if (argc > 4) o.tangential_panel_points = std::atoi(argv[4]);
   const int max_n = argc > 5 ? std::atoi(argv[5]) : 16;

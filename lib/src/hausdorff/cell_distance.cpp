@@ -144,8 +144,10 @@ struct Rule {
   std::vector<double> px, pw;  // per panel, and along a line without a crossing
   double eps, d0, q, volume;   // ε, first panel (physical), ratio, |Ω_X|
   bool grade_tangential;
-  double d0t;                  // the tangential rule's first panel (physical)
-  std::vector<double> qx, qw;  // its points per panel
+  double d0t;                           // the tangential rule's first panel (physical)
+  std::vector<double> qx, qw;           // its points per panel
+  const BodyIntegral* exact = nullptr;  // diagnostics: J itself at every near point
+  bool hybrid = false;
 };
 
 // f(ξ) trilinear through the samples at ξ_k = ±1/√3 (sample g = i + 2j + 4k).
@@ -162,9 +164,21 @@ double interpolate(const double f[8], const double xi[3]) {
   return v;
 }
 
+// J at a point of a near cell from the profile P = P_ε(sd) there: the factor, P · exp(f); with
+// `hybrid` the difference, P + g, where it changes P by at most half (just outside the source J
+// = P − M with M, the mass the half-space has and the source lacks, smooth across the surface,
+// where f = log(1 − M/P) has a kink), else the factor.
+double model_j(double p, const double f[8], const double g[8], const double xi[3], bool hybrid) {
+  if (hybrid) {
+    const double d = interpolate(g, xi);
+    if (std::abs(d) <= 0.5 * p) return p + d;
+  }
+  return p * std::exp(interpolate(f, xi));
+}
+
 // ∫_cell d̃^4 by the graded rule (J = P_ε(sd) exp(f)); counts its points.
-double near_cell(const Cell& c, const double f[8], const SurfaceDistance& s, const Rule& r,
-                 long* points) {
+double near_cell(const Cell& c, const double f[8], const double g[8], const SurfaceDistance& s,
+                 const Rule& r, long* points) {
   // The axis along which sd changes most between opposite face centres (ties: the first).
   double change[3], ends[3][2], length[3];
   for (int k = 0; k < 3; ++k) {
@@ -220,8 +234,14 @@ double near_cell(const Cell& c, const double f[8], const SurfaceDistance& s, con
         xi[axis] = lx[k];
         double x[3], det;
         map_point(c, xi, x, &det);
-        const double j_y =
-            halfspace_profile(signed_distance(s, x), r.eps) * std::exp(interpolate(f, xi));
+        double j_y;
+        if (r.exact) {
+          Eigen::VectorXd v;
+          r.exact->evaluate(Eigen::RowVector3d(x[0], x[1], x[2]), &v);
+          j_y = v[0];
+        } else {
+          j_y = model_j(halfspace_profile(signed_distance(s, x), r.eps), f, g, xi, r.hybrid);
+        }
         sum += bw[i] * ew[j] * lw[k] * det * field4(j_y, r.volume, r.eps);
       }
       *points += static_cast<long>(lx.size());
@@ -379,6 +399,8 @@ OuterMean directed_outer_mean(const HexCells& outer, const BodyIntegral& source_
   rule.volume = source_volume;
   rule.grade_tangential = options.grade_tangential;
   rule.d0t = options.tangential_first_panel * options.epsilon;
+  if (options.exact_near) rule.exact = &source_j;
+  rule.hybrid = options.hybrid;
   gauss_legendre(options.tangential_panel_points, &rule.qx, &rule.qw);
 
   std::vector<double> part(cells, 0.0);
@@ -401,11 +423,14 @@ OuterMean directed_outer_mean(const HexCells& outer, const BodyIntegral& source_
         part[c] += weight[8 * c + q] * field4(j_s[8 * c + q], source_volume, options.epsilon);
       continue;
     }
-    double f[8];  // f_s = log(J_s / P_ε(sd_s))
-    for (int q = 0; q < 8; ++q)
-      f[q] = std::log(j_s[8 * c + q] / halfspace_profile(sd_s[8 * c + q].sd, options.epsilon));
+    double f[8], g[8];  // f_s = log(J_s / P_ε(sd_s)), g_s = J_s − P_ε(sd_s)
+    for (int q = 0; q < 8; ++q) {
+      const double p = halfspace_profile(sd_s[8 * c + q].sd, options.epsilon);
+      f[q] = std::log(j_s[8 * c + q] / p);
+      g[q] = j_s[8 * c + q] - p;
+    }
     near[c] = 1;
-    part[c] = near_cell(cell, f, source_sd, rule, &points[c]);
+    part[c] = near_cell(cell, f, g, source_sd, rule, &points[c]);
   }
   OuterMean out;
   double sum = 0.0;

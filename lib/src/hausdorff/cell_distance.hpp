@@ -53,7 +53,13 @@ struct CellDistanceOptions {
   bool grade_tangential = true;
   double tangential_first_panel = 1.0;  ///< their first panel, × ε (> 0)
   int tangential_panel_points = 3;      ///< their Gauss points per panel (1 to 64)
-  int threads = 0;                      ///< OpenMP threads (0: softhd's default)
+  /// Diagnostics: J by BodyIntegral at every quadrature point of the near cells instead of the
+  /// interpolated factor (slow; isolates the interpolation's error from the rule's).
+  bool exact_near = false;
+  /// Near cells: J = P_ε(sd) + g (g = J − P_ε(sd) interpolated from the samples) where |g| ≤
+  /// P_ε(sd)/2, the factor elsewhere; false: the factor everywhere.
+  bool hybrid = false;
+  int threads = 0;  ///< OpenMP threads (0: softhd's default)
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
 };
