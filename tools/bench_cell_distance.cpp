@@ -2,14 +2,14 @@
 // docs/formulation.md §2.8 (studies/continuum_reference.py) and against today's collocation
 // (method exact: the nodes with lumped volumes, and the cell centres), on unit cubes of n³
 // hexahedra (ε = 1e-3, α = β = 4, γ = 2):
-//   bench_cell_distance [THREADS [flat|graded|exact|hybrid [T0 TP [NMAX]]]]   one table: case, n_X
-//   × n_Y, ρ̃ and relative error of each,
+//   bench_cell_distance [THREADS [flat|graded|exact|hybrid [T0 TP [NMAX [SPLIT]]]]]   one table:
+//   case, n_X × n_Y, ρ̃ and relative error of each,
 //                                   seconds of the cell value and of nodal collocation;
 //                                   flat: the near cells' tangential axes by Gauss only;
 //                                   exact: J itself at the near cells' points (diagnostics);
 //                                   hybrid: the difference model where |g| ≤ P/2; T0, TP:
 //                                   their graded rule's first panel (× ε) and points per panel;
-//                                   NMAX: the largest n
+//                                   NMAX: the largest n; SPLIT: refine_crossed
 #include <Eigen/Geometry>
 #include <chrono>
 #include <cstdio>
@@ -67,6 +67,7 @@ int main(int argc, char** argv) {
   if (argc > 3) o.tangential_first_panel = std::atof(argv[3]);
   if (argc > 4) o.tangential_panel_points = std::atoi(argv[4]);
   const int max_n = argc > 5 ? std::atoi(argv[5]) : 16;
+  if (argc > 6) o.refine_crossed = std::atoi(argv[6]);
   HausdorffOptions ho;
   ho.method = Method::exact;
   ho.threads = threads;

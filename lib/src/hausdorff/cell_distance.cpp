@@ -280,6 +280,7 @@ void CellDistanceOptions::validate() const {
     bad("tangential_first_panel (> 0)");
   if (tangential_panel_points < 1 || tangential_panel_points > 64)
     bad("tangential_panel_points (1 to 64)");
+  if (refine_crossed < 0 || refine_crossed > 4) bad("refine_crossed (0 to 4)");
   if (!(near_factor >= 0.0) || !std::isfinite(near_factor)) bad("near_factor (>= 0)");
   check_threads(threads);
 }
@@ -365,31 +366,115 @@ double enclosed_volume(const TriangleSurface& s) {
   return v / 6.0;
 }
 
+namespace {
+
+// The source a directed mean integrates against.
+struct Source {
+  const BodyIntegral& j;
+  const SurfaceDistance& sd;
+};
+
+// The 8 children of a cell (ξ_k ∈ [−1, 0] or [0, 1]): a trilinear map restricted to a sub-box is
+// trilinear again.
+void split_cell(const Cell& c, std::vector<Cell>* out) {
+  for (int child = 0; child < 8; ++child) {
+    Cell k;
+    for (int i = 0; i < 8; ++i) {
+      double xi[3];
+      for (int a = 0; a < 3; ++a) xi[a] = (((child >> a) & 1) ? 0.5 : -0.5) + 0.5 * kSign[i][a];
+      map_point(c, xi, k.p[i], nullptr);
+    }
+    out->push_back(k);
+  }
+}
+
+// Whether sd changes sign over the cell's corners and samples (the surface crosses it).
+bool crossed(const Cell& c, const SurfaceDistance& s, const std::vector<SignedDistance>& sd_s,
+             std::size_t first) {
+  int neg = 0, pos = 0;
+  for (int i = 0; i < 8; ++i) {
+    const double v = signed_distance(s, c.p[i]);
+    const double w = sd_s[first + i].sd;
+    neg += (v <= 0) + (w <= 0);
+    pos += (v >= 0) + (w >= 0);
+  }
+  return neg > 0 && pos > 0;
+}
+
+// Σ over the cells of ∫_cell d̃^4 (the rule of the header); the near cells the surface crosses
+// are split into 8 children with samples of their own while level < refine_crossed.
+double sum_cells(const std::vector<Cell>& cells, const Source& src, const Rule& rule,
+                 const CellDistanceOptions& o, int level, OuterMean* out) {
+  const std::size_t n = cells.size();
+  const double g = 1.0 / std::sqrt(3.0);
+  Eigen::MatrixXd samples(8 * n, 3);  // every cell's 2×2×2 Gauss points, weights det J
+  Eigen::VectorXd weight(8 * n);
+  for (std::size_t c = 0; c < n; ++c)
+    for (int q = 0; q < 8; ++q) {
+      const double xi[3] = {(q & 1) ? g : -g, (q & 2) ? g : -g, (q & 4) ? g : -g};
+      double x[3], det;
+      map_point(cells[c], xi, x, &det);
+      samples.row(8 * c + q) << x[0], x[1], x[2];
+      weight[8 * c + q] = det;
+    }
+  Eigen::VectorXd j_s;
+  src.j.evaluate(samples, &j_s);
+  const int threads = resolve_threads(o.threads);
+  const std::vector<SignedDistance> sd_s = src.sd.at_rows(samples, threads);
+  std::vector<double> part(n, 0.0);
+  std::vector<long> near(n, 0), points(n, 0);
+  std::vector<char> split(n, 0);
+#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
+  for (std::size_t c = 0; c < n; ++c) {
+    const Cell& cell = cells[c];
+    double centre[3];
+    const double zero[3] = {0, 0, 0};
+    map_point(cell, zero, centre, nullptr);
+    double diameter = 0.0;  // the longest body diagonal
+    for (int i = 0; i < 4; ++i) {
+      double d2 = 0.0;
+      for (int d = 0; d < 3; ++d)
+        d2 += std::pow(cell.p[i][d] - cell.p[(i < 2 ? i + 6 : i + 2)][d], 2);
+      diameter = std::max(diameter, std::sqrt(d2));
+    }
+    if (std::abs(signed_distance(src.sd, centre)) > o.near_factor * diameter) {
+      for (int q = 0; q < 8; ++q)
+        part[c] += weight[8 * c + q] * field4(j_s[8 * c + q], rule.volume, o.epsilon);
+      continue;
+    }
+    if (level < o.refine_crossed && crossed(cell, src.sd, sd_s, 8 * c)) {
+      split[c] = 1;
+      continue;
+    }
+    double f[8], gd[8];  // f_s = log(J_s / P_ε(sd_s)), g_s = J_s − P_ε(sd_s)
+    for (int q = 0; q < 8; ++q) {
+      const double p = halfspace_profile(sd_s[8 * c + q].sd, o.epsilon);
+      f[q] = std::log(j_s[8 * c + q] / p);
+      gd[q] = j_s[8 * c + q] - p;
+    }
+    near[c] = 1;
+    part[c] = near_cell(cell, f, gd, src.sd, rule, &points[c]);
+  }
+  double sum = 0.0;
+  std::vector<Cell> children;
+  for (std::size_t c = 0; c < n; ++c) {
+    sum += part[c];
+    out->near_cells += near[c];
+    out->near_points += points[c];
+    if (split[c]) split_cell(cells[c], &children);
+  }
+  if (level == 0) out->volume = weight.sum();
+  if (!children.empty()) sum += sum_cells(children, src, rule, o, level + 1, out);
+  return sum;
+}
+
+}  // namespace
+
 OuterMean directed_outer_mean(const HexCells& outer, const BodyIntegral& source_j,
                               const SurfaceDistance& source_sd, double source_volume,
                               const CellDistanceOptions& options) {
   options.validate();
   check_cells(outer);
-  const Eigen::Index cells = outer.cells.rows();
-  const double g = 1.0 / std::sqrt(3.0);
-  // The samples: every cell's 2×2×2 Gauss points (weight 1 each, times det J).
-  Eigen::MatrixXd samples(8 * cells, 3);
-  Eigen::VectorXd weight(8 * cells);
-  for (Eigen::Index c = 0; c < cells; ++c) {
-    const Cell cell = cell_of(outer, c);
-    for (int q = 0; q < 8; ++q) {
-      const double xi[3] = {(q & 1) ? g : -g, (q & 2) ? g : -g, (q & 4) ? g : -g};
-      double x[3], det;
-      map_point(cell, xi, x, &det);
-      samples.row(8 * c + q) << x[0], x[1], x[2];
-      weight[8 * c + q] = det;
-    }
-  }
-  Eigen::VectorXd j_s;
-  source_j.evaluate(samples, &j_s);
-  const int threads = resolve_threads(options.threads);
-  const std::vector<SignedDistance> sd_s = source_sd.at_rows(samples, threads);
-
   Rule rule;
   gauss_legendre(options.tangential_points, &rule.tx, &rule.tw);
   gauss_legendre(options.panel_points, &rule.px, &rule.pw);
@@ -402,44 +487,10 @@ OuterMean directed_outer_mean(const HexCells& outer, const BodyIntegral& source_
   if (options.exact_near) rule.exact = &source_j;
   rule.hybrid = options.hybrid;
   gauss_legendre(options.tangential_panel_points, &rule.qx, &rule.qw);
-
-  std::vector<double> part(cells, 0.0);
-  std::vector<long> near(cells, 0), points(cells, 0);
-#pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
-  for (Eigen::Index c = 0; c < cells; ++c) {
-    const Cell cell = cell_of(outer, c);
-    double centre[3];
-    const double zero[3] = {0, 0, 0};
-    map_point(cell, zero, centre, nullptr);
-    double diameter = 0.0;  // the longest body diagonal
-    for (int i = 0; i < 4; ++i) {
-      double d2 = 0.0;
-      for (int d = 0; d < 3; ++d)
-        d2 += std::pow(cell.p[i][d] - cell.p[(i < 2 ? i + 6 : i + 2)][d], 2);
-      diameter = std::max(diameter, std::sqrt(d2));
-    }
-    if (std::abs(signed_distance(source_sd, centre)) > options.near_factor * diameter) {
-      for (int q = 0; q < 8; ++q)
-        part[c] += weight[8 * c + q] * field4(j_s[8 * c + q], source_volume, options.epsilon);
-      continue;
-    }
-    double f[8], g[8];  // f_s = log(J_s / P_ε(sd_s)), g_s = J_s − P_ε(sd_s)
-    for (int q = 0; q < 8; ++q) {
-      const double p = halfspace_profile(sd_s[8 * c + q].sd, options.epsilon);
-      f[q] = std::log(j_s[8 * c + q] / p);
-      g[q] = j_s[8 * c + q] - p;
-    }
-    near[c] = 1;
-    part[c] = near_cell(cell, f, g, source_sd, rule, &points[c]);
-  }
+  std::vector<Cell> cells;
+  for (Eigen::Index c = 0; c < outer.cells.rows(); ++c) cells.push_back(cell_of(outer, c));
   OuterMean out;
-  double sum = 0.0;
-  for (Eigen::Index c = 0; c < cells; ++c) {
-    sum += part[c];
-    out.near_cells += near[c];
-    out.near_points += points[c];
-  }
-  out.volume = weight.sum();
+  const double sum = sum_cells(cells, Source{source_j, source_sd}, rule, options, 0, &out);
   out.mean = sum / out.volume;
   return out;
 }

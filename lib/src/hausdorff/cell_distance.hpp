@@ -59,6 +59,9 @@ struct CellDistanceOptions {
   /// Near cells: J = P_ε(sd) + g (g = J − P_ε(sd) interpolated from the samples) where |g| ≤
   /// P_ε(sd)/2, the factor elsewhere; false: the factor everywhere.
   bool hybrid = false;
+  /// Near cells whose corners and samples lie on both sides of the surface are split into 8
+  /// children with samples of their own, this many times (0 to 4).
+  int refine_crossed = 0;
   int threads = 0;  ///< OpenMP threads (0: softhd's default)
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
