@@ -14,8 +14,11 @@
 // above its diameter: the 2×2×2 Gauss rule (weights w_q det J) with J_s. Otherwise
 // J(y) = P_ε(sd(y)) · exp(f(y)), f trilinear in reference coordinates through the 8 samples
 // (extrapolated beyond them), sd exact at every point; tensor Gauss in the two reference axes
-// least aligned with sd's change over the cell, and along the most aligned one, per tangential
-// point, panels graded geometrically towards where sd crosses 0 on that line.
+// least aligned with sd's change over the cell (graded too where the cell's centre line along
+// one crosses sd = 0: the source's edges and corners), and along the most aligned one, per
+// tangential point, panels graded geometrically towards where sd crosses 0 on that line.
+// What limits the accuracy is f's interpolation where the surface crosses a cell (measured in
+// docs/formulation.md §2.8); refine_crossed splits those cells.
 
 #include <Eigen/Core>
 
