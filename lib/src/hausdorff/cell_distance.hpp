@@ -1,0 +1,105 @@
+#pragma once
+// The directed outer mean over the outer body's cells, and the cell-integrated ρ̃ (internal, not
+// an option of the distance yet; docs/formulation.md §2.8, "The outer mean in C++"), for
+// α = β = 4, γ = 2 (the paper's), value only:
+//
+//     A^β = (1/|Ω_Y|) ∫_Ω_Y d̃_X(y)^β dy,   d̃_X(y) = (J_X(y)/|Ω_X|)^(−1/α) − ε,
+//     ρ̃ = ((A^γ + B^γ)/2)^(1/γ)   (B likewise, the bodies exchanged),
+//
+// J_X(y) = ∫_Ω_X (|y − x| + ε)^−α dx by BodyIntegral from X's boundary triangles, sd_X(y) the
+// signed distance to them (SurfaceDistance), |Ω_X| by the divergence theorem on them.
+//
+// Per outer cell (trilinear hexahedron): J at its 2×2×2 Gauss points (the samples s), and the
+// factor f_s = log(J_s / P_ε(sd_s)), P_ε the half-space profile. A cell with |sd| at its centre
+// above its diameter: the 2×2×2 Gauss rule (weights w_q det J) with J_s. Otherwise
+// J(y) = P_ε(sd(y)) · exp(f(y)), f trilinear in reference coordinates through the 8 samples
+// (extrapolated beyond them), sd exact at every point; tensor Gauss in the two reference axes
+// least aligned with sd's change over the cell (graded too where the cell's centre line along
+// one crosses sd = 0: the source's edges and corners), and along the most aligned one, per
+// tangential point, panels graded geometrically towards where sd crosses 0 on that line.
+// What limits the accuracy is f's interpolation where the surface crosses a cell (measured in
+// docs/formulation.md §2.8); refine_crossed splits those cells.
+
+#include <Eigen/Core>
+
+#include "softhd/triangle_surface.hpp"
+
+namespace softhd::detail {
+
+class BodyIntegral;
+class SurfaceDistance;
+
+/// A body meshed by trilinear hexahedra (plain data; the FE is not needed). The cells' corners in
+/// Gmsh's order: reference coordinates 0 (−,−,−), 1 (+,−,−), 2 (+,+,−), 3 (−,+,−), 4 (−,−,+),
+/// 5 (+,−,+), 6 (+,+,+), 7 (−,+,+); positive Jacobians.
+struct HexCells {
+  Eigen::MatrixXd nodes;                        ///< N by 3 (current configuration)
+  Eigen::Matrix<int, Eigen::Dynamic, 8> cells;  ///< C by 8 node ids
+};
+
+/// The cube [lo, lo + side]³ meshed by n³ hexahedra (tests and measurements).
+HexCells hex_cube(const Eigen::Vector3d& lo, double side, int n);
+
+/// The outer rule's parameters (defaults: the study's, docs/formulation.md §2.8).
+struct CellDistanceOptions {
+  double epsilon = 1e-3;      ///< ε > 0 of the kernel (r + ε)^−4
+  int tangential_points = 4;  ///< Gauss points per tangential axis of a near cell (1 to 64)
+  double first_panel = 0.02;  ///< the graded rule's first panel, × ε (physical length; > 0)
+  double grading = 4.0;       ///< the panels' ratio (> 1)
+  int panel_points = 4;       ///< Gauss points per panel, and along a line without a crossing
+  /// A cell is near (the graded rule) when |sd| at its centre ≤ near_factor × its diameter
+  /// (≥ 0).
+  double near_factor = 1.0;
+  /// Near cells: grade the two tangential axes too where the cell's centre line along one
+  /// crosses sd = 0 within half a cell (an edge or corner of the source in the cell); false:
+  /// tangential_points Gauss points on them always.
+  bool grade_tangential = true;
+  double tangential_first_panel = 1.0;  ///< their first panel, × ε (> 0)
+  int tangential_panel_points = 3;      ///< their Gauss points per panel (1 to 64)
+  /// Diagnostics: J by BodyIntegral at every quadrature point of the near cells instead of the
+  /// interpolated factor (slow; isolates the interpolation's error from the rule's).
+  bool exact_near = false;
+  /// Near cells: J = P_ε(sd) + g (g = J − P_ε(sd) interpolated from the samples) where |g| ≤
+  /// P_ε(sd)/2, the factor elsewhere; false: the factor everywhere.
+  bool hybrid = false;
+  /// Near cells whose corners and samples lie on both sides of the surface are split into 8
+  /// children with samples of their own, this many times (0 to 4).
+  int refine_crossed = 0;
+  int threads = 0;  ///< OpenMP threads (0: softhd's default)
+  /// Throws InvalidArgument naming the first invalid field.
+  void validate() const;
+};
+
+/// The faces of a hexahedral mesh that belong to one cell only, as outward triangles (two per
+/// quadrilateral face), over the nodes they use. InvalidArgument for a node id out of range.
+TriangleSurface hex_boundary(const HexCells& body);
+
+/// The volume a closed outward triangle surface bounds: Σ_t a·(b × c)/6.
+double enclosed_volume(const TriangleSurface& surface);
+
+/// The directed mean and what it cost.
+struct OuterMean {
+  double mean = 0.0;     ///< (1/|Ω_Y|) ∫_Ω_Y d̃_X^4
+  double volume = 0.0;   ///< |Ω_Y| (the 2×2×2 rule, exact for trilinear cells)
+  long near_cells = 0;   ///< cells integrated by the graded rule
+  long near_points = 0;  ///< their quadrature points (one signed distance each)
+};
+
+/// A^4 of the outer cells against the source (its J, its signed distance, |Ω_X|).
+OuterMean directed_outer_mean(const HexCells& outer, const BodyIntegral& source_j,
+                              const SurfaceDistance& source_sd, double source_volume,
+                              const CellDistanceOptions& options);
+
+/// ρ̃ of two hexahedral bodies (α = β = 4, γ = 2), and its two directed means.
+struct CellRho {
+  double rho = 0.0;
+  OuterMean a;  ///< over Y's cells, against X
+  OuterMean b;  ///< over X's cells, against Y
+};
+CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions& options);
+
+/// The half-space profile J of (r + ε)^−4 at signed distance sd (negative inside, depth
+/// d = −sd): 4π/(3ε) − π/(d + ε) + πε/(3(d + ε)²) inside, π/(D + ε) − πε/(3(D + ε)²) outside.
+double halfspace_profile(double sd, double epsilon);
+
+}  // namespace softhd::detail
