@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "hausdorff/body_integral.hpp"
+#include "hausdorff/cell_distance.hpp"
 #include "softhd/control/scene.hpp"
 #include "softhd/fe/boundary.hpp"
 #include "softhd/fe/geometry.hpp"
@@ -25,52 +26,14 @@ using namespace softhd;
 using detail::BodyIntegral;
 using detail::BodyIntegralOptions;
 
-TriangleSurface box_surface(int n);  // below
-
 static double now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+// The unit cube, each face n × n squares of two triangles (the cell distance's hexahedral
+// cube's boundary).
 TriangleSurface box_surface(int n) {
-  // unit cube, each face n x n squares of 2 triangles (copy of the test's helper, condensed)
-  std::vector<Eigen::Vector3d> pts;
-  std::vector<Eigen::Vector3i> tris;
-  std::vector<int> idx((n + 1) * (n + 1) * (n + 1), -1);
-  auto point = [&](int i, int j, int k) {
-    int key = (i * (n + 1) + j) * (n + 1) + k;
-    if (idx[key] < 0) {
-      idx[key] = pts.size();
-      pts.emplace_back(i / double(n), j / double(n), k / double(n));
-    }
-    return idx[key];
-  };
-  for (int ax = 0; ax < 3; ++ax)
-    for (int side = 0; side < 2; ++side)
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-          int q[4];
-          const int di[4] = {0, 1, 1, 0}, dj[4] = {0, 0, 1, 1};
-          for (int c = 0; c < 4; ++c) {
-            int ijk[3];
-            ijk[ax] = side * n;
-            ijk[(ax + 1) % 3] = i + di[c];
-            ijk[(ax + 2) % 3] = j + dj[c];
-            q[c] = point(ijk[0], ijk[1], ijk[2]);
-          }
-          if (side) {
-            tris.emplace_back(q[0], q[1], q[2]);
-            tris.emplace_back(q[0], q[2], q[3]);
-          } else {
-            tris.emplace_back(q[0], q[2], q[1]);
-            tris.emplace_back(q[0], q[3], q[2]);
-          }
-        }
-  TriangleSurface s;
-  s.points.resize(pts.size(), 3);
-  for (size_t i = 0; i < pts.size(); ++i) s.points.row(i) = pts[i];
-  s.triangles.resize(tris.size(), 3);
-  for (size_t t = 0; t < tris.size(); ++t) s.triangles.row(t) = tris[t];
-  return s;
+  return detail::hex_boundary(detail::hex_cube(Eigen::Vector3d::Zero(), 1.0, n));
 }
 
 void accuracy(const char* file) {

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "../common/decimal.hpp"
+#include "../common/gauss_legendre.hpp"
 #include "softhd/error.hpp"
 #include "softhd/parallel.hpp"
 
@@ -95,30 +96,6 @@ struct FarPoints {
 FarPoints far_points(const Triangle& t, double d2) {
   if (d2 < t.far2) return {t.qx, t.qy, t.qz, t.wq, far_rule().lam, kFarPoints};
   return {t.cx, t.cy, t.cz, t.cw, coarse_rule().lam, kCoarsePoints};
-}
-
-// Gauss–Legendre nodes and weights on [0, 1] (Newton on P_n from the Chebyshev guesses).
-void gauss_legendre(int n, std::vector<double>* x, std::vector<double>* w) {
-  x->assign(n, 0.0);
-  w->assign(n, 0.0);
-  const double pi = 3.14159265358979323846;
-  for (int i = 0; i < n; ++i) {
-    double z = std::cos(pi * (i + 0.75) / (n + 0.5)), dp = 1.0;
-    for (int it = 0; it < 100; ++it) {
-      double p0 = 1.0, p1 = z;  // P_0, P_1; then P_k by (k+1)P_{k+1} = (2k+1) z P_k − k P_{k−1}
-      for (int k = 1; k < n; ++k) {
-        const double p2 = ((2.0 * k + 1.0) * z * p1 - k * p0) / (k + 1.0);
-        p0 = p1;
-        p1 = p2;
-      }
-      dp = n * (z * p1 - p0) / (z * z - 1.0);  // P_n'(z)
-      const double dz = p1 / dp;
-      z -= dz;
-      if (std::abs(dz) < 1e-16) break;
-    }
-    (*x)[i] = 0.5 * (1.0 - z);
-    (*w)[i] = 1.0 / ((1.0 - z * z) * dp * dp);  // 2/((1 − z²) P_n'²) on [−1, 1], halved
-  }
 }
 
 // d_m(z) = ε^−(m+1) ∫_ε^{ε(1+z)} w^m dw: log(1 + z) for m = −1, else ((1 + z)^{m+1} − 1)/(m+1)
@@ -593,7 +570,7 @@ BodyIntegral::BodyIntegral(const TriangleSurface& surface, const BodyIntegralOpt
       throw InvalidArgument("body integral: triangle " + std::to_string(t) + " has zero area");
   }
   check_closed(corners_);
-  gauss_legendre(options.angle_points, &rule_x_, &rule_w_);
+  gauss_legendre_unit(options.angle_points, &rule_x_, &rule_w_);
 }
 
 void BodyIntegral::evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* value,

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "../common/gauss_legendre.hpp"
 #include "../common/surface_bvh.hpp"
 #include "body_integral.hpp"
 #include "softhd/error.hpp"
@@ -17,29 +18,6 @@ namespace softhd::detail {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// Gauss–Legendre on [−1, 1] (Newton on P_n from Chebyshev starting values).
-void gauss_legendre(int n, std::vector<double>* x, std::vector<double>* w) {
-  x->assign(n, 0.0);
-  w->assign(n, 0.0);
-  for (int i = 0; i < n; ++i) {
-    double z = std::cos(kPi * (i + 0.75) / (n + 0.5)), dp = 1.0;
-    for (int it = 0; it < 100; ++it) {
-      double p0 = 1.0, p1 = z;
-      for (int k = 2; k <= n; ++k) {
-        const double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
-        p0 = p1;
-        p1 = p2;
-      }
-      dp = n * (z * p1 - p0) / (z * z - 1.0);  // P_n'(z)
-      const double dz = p1 / dp;
-      z -= dz;
-      if (std::abs(dz) < 1e-16) break;
-    }
-    (*x)[n - 1 - i] = z;
-    (*w)[n - 1 - i] = 2.0 / ((1.0 - z * z) * dp * dp);
-  }
-}
 
 // The corners' reference signs (Gmsh's order).
 constexpr int kSign[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
