@@ -6,11 +6,14 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include "expect_error.hpp"
 #include "softhd/control/scene.hpp"
 #include "softhd/control/scene_target.hpp"
 #include "softhd/control/targets.hpp"
+#include "softhd/io/cloud_io.hpp"
 #include "softhd/samplers.hpp"
 
 namespace softhd::test {
@@ -105,6 +108,59 @@ TEST(SceneTarget, ArcOfATranslatedSceneIsTheTranslatedArc) {
   EXPECT_LT((b.cloud.volumes() - a.cloud.volumes()).cwiseAbs().maxCoeff(), 1e-16);
   ASSERT_TRUE(a.map_displacement && b.map_displacement);
   EXPECT_LT((*b.map_displacement - *a.map_displacement).cwiseAbs().maxCoeff(), 1e-14);
+}
+
+// The target as a body with cells (the cell-integrated distance): an arc's sampling grid as
+// hexahedra whose nodes T maps, so each sample, T at a cell's centre, lies within the
+// second-order gap |T(c) − mean of T at the corners| ≤ (h₁² + h₃²)/(2R) of its cell's centroid.
+TEST(SceneTarget, AnArcHasTheCellsOfItsSamplingGrid) {
+  const softhd::Scene s = softhd::parse_scene(R"({
+    "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [4, 1, 0.2], "cells": [4, 1, 1], "order": 1 },
+    "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
+    "fibers": [1, 0, 0], "clamp": ["x0"],
+    "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
+    "target": { "kind": "arc", "angle": 1.5, "cells": [8, 2, 2] } })",
+                                              "plate.json");
+  const SceneTarget t = scene_target(s, s.body.make_mesh());
+  ASSERT_TRUE(t.cells.has_value());
+  ASSERT_EQ(t.cells->num_elements(), t.cloud.size());
+  const double R = 4.0 / 1.5, h1 = 0.5, h3 = 0.1, gap = (h1 * h1 + h3 * h3) / (2 * R);
+  for (Eigen::Index j = 0; j < t.cloud.size(); ++j) {  // every sample near one cell's centroid
+    double nearest = 1e300;
+    for (Eigen::Index e = 0; e < t.cells->num_elements(); ++e) {
+      Eigen::RowVector3d c = Eigen::RowVector3d::Zero();
+      for (int a = 0; a < 8; ++a) c += t.cells->nodes.row(t.cells->elements(e, a)) / 8.0;
+      nearest = std::min(nearest, (c - t.cloud.points().row(j)).norm());
+    }
+    EXPECT_LT(nearest, gap) << "sample " << j;
+  }
+}
+
+// A solved_on target's cells are its source mesh at the file's nodes.
+TEST(SceneTarget, ASolvedOnTargetHasItsSourceMeshAtTheFilesNodes) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(::testing::TempDir()) / "softhd_solved_on_cells";
+  fs::create_directories(dir);
+  const std::string scene = R"({
+    "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [2, 1, 1], "cells": [2, 1, 1], "order": 1 },
+    "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
+    "fibers": [1, 0, 0], "clamp": ["x0"],
+    "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 },
+    "target": { "kind": "cloud", "file": "target.ply", "solved_on": "fine.json" } })";
+  std::string fine = scene;
+  fine.replace(fine.find("[2, 1, 1], \"order"), 9, "[4, 2, 2]");
+  std::ofstream(dir / "scene.json") << scene;
+  std::ofstream(dir / "fine.json") << fine;
+  const fe::Mesh source = load_scene((dir / "fine.json").string()).body.make_mesh();
+  const Eigen::MatrixXd moved =
+      source.nodes * 1.1 + Eigen::MatrixXd::Constant(source.num_nodes(), 3, 0.3);
+  write_cloud((dir / "target.ply").string(), PointCloud(moved));
+  const softhd::Scene s = load_scene((dir / "scene.json").string());
+  const SceneTarget t = scene_target(s, s.body.make_mesh());
+  ASSERT_TRUE(t.cells.has_value());
+  EXPECT_EQ(t.cells->elements, source.elements);
+  EXPECT_LT((t.cells->nodes - moved).cwiseAbs().maxCoeff(), 1e-6);  // the PLY's float32
+  fs::remove_all(dir);
 }
 
 // "surface" and "camera" in a target block (docs/guide.md): read into the SceneTarget and

@@ -72,7 +72,13 @@ SceneTarget arc_target(const Scene& scene, const fe::Mesh& mesh, const nlohmann:
   std::ostringstream d;
   d << "arc of " << T.angle * 180.0 / M_PI << " degrees, " << counts[0] << "x" << counts[1] << "x"
     << counts[2] << " cell-centred grid";
-  return {T.apply(grid), T.displacement(mesh), d.str(), {}};
+  SceneTarget target{T.apply(grid), T.displacement(mesh), d.str(), {}};
+  // Its cells: the grid's hexahedra (the samples are their centres), nodes mapped by T.
+  fe::Mesh cells = fe::make_box_mesh(scene.body.lower, scene.body.upper, counts, 1);
+  for (Eigen::Index i = 0; i < cells.num_nodes(); ++i)
+    cells.nodes.row(i) = T(cells.nodes.row(i).transpose()).transpose();
+  target.cells = std::move(cells);
+  return target;
 }
 
 // A number at key `key` of `o` (the block `path` of the target), or InvalidArgument.
@@ -174,10 +180,13 @@ SceneTarget cloud_target(const Scene& scene, const fe::Mesh& mesh, const nlohman
     throw InvalidArgument(scene.source + ": target.solved_on must be a scene path string");
   const fs::path source = (dir / t["solved_on"].get<std::string>()).lexically_normal();
   const NodalMap T(load_scene(source.string(), memory_limit).body.make_mesh(), cloud);
-  return {cloud,
-          T.displacement(mesh),
-          "cloud file " + f.string() + " (deformed nodes of " + source.string() + ")",
-          {}};
+  SceneTarget target{cloud,
+                     T.displacement(mesh),
+                     "cloud file " + f.string() + " (deformed nodes of " + source.string() + ")",
+                     {}};
+  target.cells = T.source();  // its cells at the file's nodes
+  target.cells->nodes = cloud.points();
+  return target;
 }
 
 // A number at key `key` of the target block, finite (and > 0 if `positive`).

@@ -80,6 +80,11 @@ struct SceneTarget {
   std::optional<scan::Pose> pose = std::nullopt;         ///< "pose": the start (camera frame)
   /// "pose_uncertainty": {"degrees", "length"} of "pose" (the projection's PoseBound).
   std::optional<PoseBound> pose_uncertainty = std::nullopt;
+  /// The target as a body with cells, its nodes where the target is (the cell-integrated
+  /// distance, docs/formulation.md §2.8): an arc's sampling grid as hexahedra whose nodes T
+  /// maps (the samples are their centres), a solved_on target's source mesh with the file's
+  /// nodes. Empty for a cloud that is only points.
+  std::optional<fe::Mesh> cells = std::nullopt;
 };
 
 /// The objective settings a target asks for: surface → particles boundary with deformed
