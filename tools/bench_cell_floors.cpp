@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: bench_cell_floors SCENE [THREADS]\n");
     return 2;
   }
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // each line as it is printed (long runs)
   try {
     const Scene scene = load_scene(argv[1]);
     const fe::Mesh mesh = scene.body.make_mesh();
