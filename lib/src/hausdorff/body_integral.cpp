@@ -629,13 +629,12 @@ struct Budget {
 // The probe's opening ratio (a guess only: its results are not used unless the check passes).
 constexpr double kProbeTheta = 0.25;
 
-// One point's sums by the tree: a cluster enters by its expansions when they are valid (ρ < R,
-// ε ≤ kTreeX (R − ρ)) and their remainder bounds per unit area fit the budget; a leaf that does
-// not, triangle by triangle.
+// One point's sums by the tree (tris: the triangles in the tree's order): a cluster enters by its
+// expansions when they are valid (ρ < R, ε ≤ kTreeX (R − ρ)) and their remainder bounds per unit
+// area fit the budget; a leaf that does not, triangle by triangle.
 PointSums traverse(const std::vector<BodyIntegral::Cluster>& clusters,
-                   const std::vector<int>& order, const std::vector<Triangle>& tris,
-                   const Radial& k, const Rules& rule, const double* y, bool want_b,
-                   const Budget& budget) {
+                   const std::vector<Triangle>& tris, const Radial& k, const Rules& rule,
+                   const double* y, bool want_b, const Budget& budget) {
   const TreeConstants& tc = tree_constants();
   PointSums s;
   int stack[2 * kBvhMaxDepth + 2];
@@ -664,8 +663,7 @@ PointSums traverse(const std::vector<BodyIntegral::Cluster>& clusters,
       stack[top++] = c.left;
       continue;
     }
-    for (int j = c.begin; j < c.end; ++j)
-      direct_triangle(tris[order[j]], k, rule, y, want_b, true, &s);
+    for (int j = c.begin; j < c.end; ++j) direct_triangle(tris[j], k, rule, y, want_b, true, &s);
   }
   return s;
 }
@@ -747,7 +745,7 @@ void traverse_vjp(const std::vector<BodyIntegral::Cluster>& clusters, const std:
       continue;
     }
     for (int j = c.begin; j < c.end; ++j) {
-      const Triangle& tri = tris[order[j]];
+      const Triangle& tri = tris[j];
       double ct[3];
       const double d2 = distance2(tri, y);
       if (d2 < tri.near2)
@@ -904,6 +902,7 @@ BodyIntegral::BodyIntegral(const TriangleSurface& surface, const BodyIntegralOpt
     for (const BvhNode& node : bvh.nodes)
       clusters_.push_back(make_cluster(triangles_, order_, node));
     total_area_ = clusters_[0].area;
+    for (int t : order_) ordered_.push_back(triangles_[t]);
   }
 }
 
@@ -961,7 +960,7 @@ void BodyIntegral::evaluate_tree(const Eigen::MatrixXd& points, Eigen::VectorXd*
       PointSums s;
       double J = 0.0;
       if (j_guess <= 0.0) {  // a block's first point: a probe's lower bounds as the guesses
-        s = traverse(clusters_, order_, triangles_, k, rule, y, want_b,
+        s = traverse(clusters_, ordered_, k, rule, y, want_b,
                      Budget{0.0, 3.0 / area, 0.0, kProbeTheta});
         j_guess = s.J + k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface) -
                   s.err_j - (s.on_surface ? k.g_inf * s.err_omega : 0.0);
@@ -976,7 +975,7 @@ void BodyIntegral::evaluate_tree(const Eigen::MatrixXd& points, Eigen::VectorXd*
         const Budget budget =
             exact ? Budget{0.0, 0.0, 0.0}
                   : Budget{share * tau * j_guess / area, omega / area, 0.5 * tau * s_guess / area};
-        s = traverse(clusters_, order_, triangles_, k, rule, y, want_b, budget);
+        s = traverse(clusters_, ordered_, k, rule, y, want_b, budget);
         surface = s.on_surface;
         J = s.J + k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface);
         const double err = s.err_j + (s.on_surface ? k.g_inf * s.err_omega : 0.0);
@@ -1069,12 +1068,12 @@ Eigen::MatrixXd BodyIntegral::surface_vjp_tree(const Eigen::MatrixXd& points,
         if (wj == 0.0) continue;
         const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
         if (s_guess <= 0.0) {  // a block's first point: a probe's lower bound as the guess
-          traverse_vjp(clusters_, order_, triangles_, k, rule, y, wj, 0.0, kProbeTheta, &pt);
+          traverse_vjp(clusters_, order_, ordered_, k, rule, y, wj, 0.0, kProbeTheta, &pt);
           s_guess = pt.S - pt.err;
         }
         for (int attempt = 0; attempt < 3; ++attempt) {
           const bool exact = attempt == 2 || s_guess <= 0.0;
-          traverse_vjp(clusters_, order_, triangles_, k, rule, y, wj,
+          traverse_vjp(clusters_, order_, ordered_, k, rule, y, wj,
                        exact ? 0.0 : 0.5 * tau * s_guess / total_area_, 0.0, &pt);
           if (exact || pt.err <= tau * (pt.S - pt.err)) break;
           s_guess = pt.S - pt.err;
@@ -1103,7 +1102,7 @@ Eigen::MatrixXd BodyIntegral::surface_vjp_tree(const Eigen::MatrixXd& points,
     if (!any) continue;
     const Cluster& cl = clusters_[id];
     for (int j = cl.begin; j < cl.end; ++j)
-      push_local(triangles_[order_[j]], cl.p, local.data(), &sum[3 * order_[j]]);
+      push_local(ordered_[j], cl.p, local.data(), &sum[3 * order_[j]]);
   }
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(point_count_, 3);
   for (std::size_t t = 0; t < count; ++t)

@@ -140,6 +140,7 @@ class BodyIntegral {
   std::vector<double> rule_x_, rule_w_;  // Gauss–Legendre on [0, 1]
   std::vector<Cluster> clusters_;        // the tree (tolerance > 0), clusters_[0] the root
   std::vector<int> order_;               // triangle ids grouped by leaf
+  std::vector<Triangle> ordered_;        // triangles_[order_[j]] (contiguous leaves)
   double total_area_ = 0.0;
 
   void evaluate_tree(const Eigen::MatrixXd& points, Eigen::VectorXd* value,
