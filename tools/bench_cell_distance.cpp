@@ -17,7 +17,7 @@
 //                                   so with J's near_ratio NR, 2, and angle_points AP, 8)
 //                                   and of collocation at the nodes (lumped volumes; method
 //                                   exact, tree at TOL and at its default), REPS repeats
-//                                   interleaved
+//                                   interleaved (REPS < 0: the last cell configuration alone)
 #include <Eigen/Geometry>
 #include <chrono>
 #include <cstdio>
@@ -98,7 +98,7 @@ static int plate(int threads, int argc, char** argv) {
   }
   const HexCells x = plate_cells(std::atoi(argv[3]), std::atoi(argv[4]), std::atoi(argv[5]));
   const HexCells y = plate_cells(std::atoi(argv[6]), std::atoi(argv[7]), std::atoi(argv[8]));
-  const int reps = argc > 9 ? std::atoi(argv[9]) : 1;
+  int reps = argc > 9 ? std::atoi(argv[9]) : 1;
   const double tol = argc > 10 ? std::atof(argv[10]) : 1e-2;
   detail::CellDistanceOptions all, tree, loose;
   all.threads = tree.threads = loose.threads = threads;
@@ -116,6 +116,15 @@ static int plate(int threads, int argc, char** argv) {
       "the collocation tree's tolerance %.0e (and the tree's default %.0e)\n",
       (long)x.cells.rows(), (long)x.nodes.rows(), (long)y.cells.rows(), (long)y.nodes.rows(),
       threads, tol, hd.tolerance);
+  if (reps < 0) {  // the last configuration alone (profiles)
+    for (int rep = 0; rep < -reps; ++rep) {
+      const double t0 = now();
+      const detail::CellRho r = detail::cell_rho(x, y, loose);
+      std::printf("rep %d: cells, J tree, near_ratio %.1f, angle_points %d: rho %.9f %.3f s\n", rep,
+                  loose.j_near_ratio, loose.j_angle_points, r.rho, now() - t0);
+    }
+    return 0;
+  }
   for (int rep = 0; rep < reps; ++rep) {
     const double t0 = now();
     const detail::CellRho r0 = detail::cell_rho(x, y, all);
