@@ -618,6 +618,32 @@ TEST(BodyIntegral, ThreadsGiveTheSameNumbers) {
             1e-12 * b2.surface_vjp(y, w).norm());
 }
 
+TEST(BodyIntegral, TreeGivesTheSameNumbersOnAnyThreads) {
+  // The tree's budgets chain within fixed blocks of 64 points: values and y-gradients are the
+  // same bits for any thread count; the surface product as the all-pairs one.
+  const TriangleSurface s =
+      box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, 1.0, 0.25), 6);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.2, 1.2);
+  Eigen::MatrixXd y(130, 3);  // three blocks
+  for (Eigen::Index i = 0; i < y.rows(); ++i) y.row(i) << 3.0 * u(rng), u(rng), 0.25 * u(rng);
+  const Eigen::VectorXd w = Eigen::VectorXd::LinSpaced(130, -1.0, 2.0);
+  BodyIntegralOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  one.tolerance = two.tolerance = 1e-2;
+  Eigen::VectorXd j1, j2;
+  Eigen::MatrixXd g1, g2;
+  BodyIntegral(s, one).evaluate(y, &j1, &g1);
+  BodyIntegral(s, two).evaluate(y, &j2, &g2);
+  EXPECT_EQ(j1, j2);
+  EXPECT_EQ(g1, g2);
+  const BodyIntegral b2(s, two);
+  EXPECT_EQ(b2.surface_vjp(y, w), b2.surface_vjp(y, w));
+  EXPECT_LT((BodyIntegral(s, one).surface_vjp(y, w) - b2.surface_vjp(y, w)).norm(),
+            1e-12 * b2.surface_vjp(y, w).norm());
+}
+
 TEST(BodyIntegral, RejectsBadInput) {
   const TriangleSurface s = box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 1);
   BodyIntegralOptions o;
