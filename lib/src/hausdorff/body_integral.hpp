@@ -62,8 +62,10 @@ struct BodyIntegralOptions {
   /// τ ∈ [0, 1): 0 sums every triangle (the rules above); > 0 (α = 4 only) takes far clusters
   /// of triangles by their expansions, with |J̃ − J| ≤ τ J and, with the gradient,
   /// ‖g̃ − g‖ ≤ τ ∫_∂Ω (|y − x| + ε)^−4 dA (the sum of the terms' norms, as the tree method's
-  /// gradient bound), J and g the all-pairs values; proved bounds, checked per point (a point
-  /// whose check fails is redone with the budget its own value gives, then over all pairs).
+  /// gradient bound), J and g exact over the triangles a cluster replaces (the rules above
+  /// elsewhere; against the all-pairs values the far rules' own error, ≤ ~1e-9 of J at
+  /// near_ratio 4, comes on top); proved bounds, checked per point (a point whose check fails
+  /// is redone with the budget its own value gives, then over all pairs).
   /// surface_vjp: Σ_{t, a} |error of Σ_k w_k ∫_t k λ_a dA| ≤ τ Σ_k |w_k| ∫_∂Ω k(|y_k − x|) dA.
   double tolerance = 0.0;
   int threads = 0;  ///< OpenMP threads (0: softhd's default, see parallel.hpp)
