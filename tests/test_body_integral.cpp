@@ -371,6 +371,202 @@ TEST(BodyIntegral, SurfaceVjpTaylor) {
   }
 }
 
+// A lower bound of S = ∫_∂Ω (|y − x| + ε)^−4 dA (ε = 1e-3): Σ A_u (|y − c_u| + R_u + ε)^−4 over
+// the 8² similar subtriangles u of each triangle (c_u the centroid, R_u its largest distance to
+// a corner: every point of u is within |y − c_u| + R_u of y).
+double kernel_area_lower(const TriangleSurface& s, const Eigen::Vector3d& y) {
+  const int m = 8;
+  double sum = 0.0;
+  for (Eigen::Index t = 0; t < s.triangles.rows(); ++t) {
+    const Eigen::Vector3d a = s.points.row(s.triangles(t, 0)), b = s.points.row(s.triangles(t, 1)),
+                          c = s.points.row(s.triangles(t, 2));
+    const Eigen::Vector3d e1 = (b - a) / m, e2 = (c - a) / m, g = (e1 + e2) / 3.0;
+    const double sub = 0.5 * e1.cross(e2).norm();
+    const double rad = std::max({g.norm(), (g - e1).norm(), (g - e2).norm()});
+    auto add = [&](const Eigen::Vector3d& x) {
+      const double r2 = 1.0 / ((y - x).norm() + rad + 1e-3) / ((y - x).norm() + rad + 1e-3);
+      sum += sub * r2 * r2;
+    };
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; i + j < m; ++j) {  // (o, o + e1, o + e2), and (o + e1, o + e2, o + e1 + e2)
+        const Eigen::Vector3d o = a + i * e1 + j * e2;
+        add(o + g);
+        if (i + j < m - 1) add(o + 2.0 * g);
+      }
+  }
+  return sum;
+}
+
+// The tree (tolerance τ) against the all-pairs sums on a 3 × 1 × 0.25 box of 1728 triangles:
+// |J̃ − J| ≤ τ J and ‖g̃ − g‖ ≤ τ S, S = ∫_∂Ω k dA (the documented bounds; S by a lower bound,
+// so the check is stricter than they are), plus the two
+// rules' own difference (the far rules' error, ≤ 1.4e-9 of J measured, §2.8: 1e-8 allowed);
+// and the tree must actually differ from all pairs (clusters taken) at most points.
+TEST(BodyIntegral, TreeWithinTolerance) {
+  const Eigen::Vector3d hi(3.0, 1.0, 0.25);
+  const TriangleSurface s = box_surface(Eigen::Vector3d::Zero(), hi, 12);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.4, 1.4);
+  std::vector<Eigen::Vector3d> ys;
+  while (ys.size() < 40) {  // at least 0.05 from the surface (S's lower bound stays close)
+    const Eigen::Vector3d y = Eigen::Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(hi);
+    const Eigen::Vector3d in = y.cwiseMax(Eigen::Vector3d::Zero()).cwiseMin(hi);
+    const double out = (y - in).norm(), depth = std::min(in.minCoeff(), (hi - in).minCoeff());
+    if ((out > 0.0 ? out : depth) >= 0.05) ys.push_back(y);
+  }
+  Eigen::MatrixXd y(ys.size(), 3);
+  Eigen::VectorXd S(ys.size());
+  for (std::size_t k = 0; k < ys.size(); ++k) {
+    y.row(k) = ys[k].transpose();
+    S[k] = kernel_area_lower(s, ys[k]);
+  }
+  BodyIntegralOptions all;
+  all.threads = 2;
+  Eigen::VectorXd j0, jv;
+  Eigen::MatrixXd g0;
+  BodyIntegral(s, all).evaluate(y, &j0, &g0);
+  Eigen::MatrixXd near(6, 3);  // within 3 ε of a face, on both sides, values only
+  near << 0.7, 0.4, 0.0015, 2.2, 0.55, 0.2525, 1.4, -0.002, 0.1, 2.9, 0.3, -0.0008, 0.31, 1.001,
+      0.2, 2.9985, 0.6, 0.15;
+  Eigen::VectorXd jn0;
+  BodyIntegral(s, all).evaluate(near, &jn0);
+  for (double tau : {1e-2, 1e-4}) {
+    BodyIntegralOptions o = all;
+    o.tolerance = tau;
+    const BodyIntegral tree(s, o);
+    Eigen::VectorXd j1;
+    Eigen::MatrixXd g1;
+    tree.evaluate(y, &j1, &g1);
+    tree.evaluate(y, &jv);  // value only: its own budget (no gradient's)
+    int differs = 0;
+    double worst_j = 0.0, worst_g = 0.0;
+    for (Eigen::Index k = 0; k < y.rows(); ++k) {
+      const double ej = std::abs(j1[k] - j0[k]) / j0[k], ev = std::abs(jv[k] - j0[k]) / j0[k];
+      const double eg = (g1.row(k) - g0.row(k)).norm() / S[k];
+      EXPECT_LE(ej, tau + 1e-8) << "tau " << tau << ", point " << k;
+      EXPECT_LE(ev, tau + 1e-8) << "tau " << tau << ", point " << k << " (value only)";
+      EXPECT_LE(eg, tau + 1e-8) << "tau " << tau << ", point " << k;
+      differs += ev > 1e-12;
+      worst_j = std::max({worst_j, ej, ev});
+      worst_g = std::max(worst_g, eg);
+    }
+    Eigen::VectorXd jn;
+    tree.evaluate(near, &jn);
+    for (Eigen::Index k = 0; k < near.rows(); ++k) {
+      const double e = std::abs(jn[k] - jn0[k]) / jn0[k];
+      EXPECT_LE(e, tau + 1e-8) << "tau " << tau << ", near point " << k;
+      differs += e > 1e-12;
+      worst_j = std::max(worst_j, e);
+    }
+    std::printf("tau %.0e: largest |dJ|/J %.2e, |dg|/S %.2e; %d of %ld values by the tree\n", tau,
+                worst_j, worst_g, differs, static_cast<long>(y.rows() + near.rows()));
+    EXPECT_GE(differs, y.rows() / 2) << "tau " << tau << ": the tree took (almost) no cluster";
+  }
+}
+
+// The surface product by the tree against all pairs: Σ_{t,a} of the corner sums' errors is at
+// most τ Σ_k |w_k| S_k; per surface point a, ‖Δvjp_a‖ ≤ Σ_{t ∋ a} |Δ corner sum| (unit normals),
+// so Σ_a ‖Δvjp_a‖ ≤ τ Σ_k |w_k| S_k (S_k by its lower bound: a stricter check).
+TEST(BodyIntegral, TreeSurfaceVjpWithinTolerance) {
+  const Eigen::Vector3d hi(3.0, 1.0, 0.25);
+  const TriangleSurface s = box_surface(Eigen::Vector3d::Zero(), hi, 12);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.4, 1.4);
+  std::vector<Eigen::Vector3d> ys;
+  while (ys.size() < 40) {
+    const Eigen::Vector3d y = Eigen::Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(hi);
+    const Eigen::Vector3d in = y.cwiseMax(Eigen::Vector3d::Zero()).cwiseMin(hi);
+    const double out = (y - in).norm(), depth = std::min(in.minCoeff(), (hi - in).minCoeff());
+    if ((out > 0.0 ? out : depth) >= 0.05) ys.push_back(y);
+  }
+  Eigen::MatrixXd y(ys.size(), 3);
+  const Eigen::VectorXd w = Eigen::VectorXd::LinSpaced(ys.size(), -1.0, 2.0);
+  double budget = 0.0;  // Σ_k |w_k| S_k
+  for (std::size_t k = 0; k < ys.size(); ++k) {
+    y.row(k) = ys[k].transpose();
+    budget += std::abs(w[k]) * kernel_area_lower(s, ys[k]);
+  }
+  BodyIntegralOptions all;
+  all.threads = 2;
+  const Eigen::MatrixXd v0 = BodyIntegral(s, all).surface_vjp(y, w);
+  for (double tau : {1e-2, 1e-4}) {
+    BodyIntegralOptions o = all;
+    o.tolerance = tau;
+    const Eigen::MatrixXd v1 = BodyIntegral(s, o).surface_vjp(y, w);
+    const double err = (v1 - v0).rowwise().norm().sum();
+    std::printf("tau %.0e: sum_a |dvjp_a| %.2e = %.2e of sum_k |w_k| S_k\n", tau, err,
+                err / budget);
+    EXPECT_LE(err, (tau + 1e-8) * budget) << "tau " << tau;
+    EXPECT_GT(err, 1e-12 * budget) << "tau " << tau << ": the tree took no cluster";
+  }
+}
+
+TEST(BodyIntegral, TreeSurfaceVjpTaylor) {
+  // As SurfaceVjpTaylor, the product and the values by the tree (τ = 1e-6), the box of
+  // TreeWithinTolerance and points far enough from one end to take clusters there.
+  const TriangleSurface s0 =
+      box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, 1.0, 0.25), 8);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::MatrixXd V(s0.points.rows(), 3);
+  for (Eigen::Index i = 0; i < V.size(); ++i) V.data()[i] = u(rng);
+  const struct {
+    Eigen::Vector3d y;
+    double h0;
+    const char* name;
+  } cases[] = {{{0.3, 0.45, 0.12}, 0.02, "tree, inside"},
+               {{0.43, 0.37, 0.0015}, 2e-4, "tree, within 2 eps of a face"},
+               {{-0.3, 0.5, 0.1}, 0.02, "tree, outside"}};
+  BodyIntegralOptions o;
+  o.tolerance = 1e-6;
+  int by_tree = 0;
+  for (const auto& c : cases) {
+    const Eigen::MatrixXd y = c.y.transpose();
+    const Eigen::VectorXd w = Eigen::VectorXd::Constant(1, 0.7);
+    const Eigen::MatrixXd vjp = BodyIntegral(s0, o).surface_vjp(y, w);
+    const double slope = (vjp.array() * V.array()).sum();
+    auto f = [&](double h) {
+      TriangleSurface s = s0;
+      s.points += h * V;
+      return 0.7 * J_at(BodyIntegral(s, o), c.y);
+    };
+    expect_second_order(f, slope, c.h0, c.name);
+    const Eigen::MatrixXd all = BodyIntegral(s0, {}).surface_vjp(y, w);
+    by_tree += (vjp - all).norm() > 1e-12 * all.norm();  // above the sums' rounding
+  }
+  EXPECT_GE(by_tree, 2) << "the tree took clusters at too few of the points";
+}
+
+TEST(BodyIntegral, TreeGradientInYTaylor) {
+  // The tree's gradient agrees with its value up to τ S (both within τ of all pairs): at
+  // τ = 1e-4 that is far below the Taylor remainders here, and the tree takes clusters.
+  BodyIntegralOptions o;
+  o.tolerance = 1e-4;
+  const BodyIntegral body(box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, 1.0, 0.25), 12),
+                          o);
+  const Eigen::Vector3d v = Eigen::Vector3d(0.3, -0.7, 0.5).normalized();
+  const struct {
+    Eigen::Vector3d y;
+    double h0;
+    const char* name;
+  } cases[] = {{{0.3, 0.45, 0.12}, 0.02, "tree, inside"},
+               {{0.43, 0.37, 0.0015}, 2e-4, "tree, within 2 eps of a face"},
+               {{-0.3, 0.5, 0.1}, 0.04, "tree, outside"},
+               {{8.0, 3.0, -2.0}, 0.2, "tree, far"}};
+  const BodyIntegral all(box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, 1.0, 0.25), 12),
+                         {});
+  int by_tree = 0;
+  for (const auto& c : cases) {
+    Eigen::VectorXd J;
+    Eigen::MatrixXd g;
+    body.evaluate(c.y.transpose(), &J, &g);
+    expect_second_order([&](double h) { return J_at(body, c.y + h * v); }, g.row(0).dot(v), c.h0,
+                        c.name);
+    by_tree += std::abs(J[0] - J_at(all, c.y)) > 1e-12 * J[0];  // above the sums' rounding
+  }
+  EXPECT_GE(by_tree, 3) << "the tree took clusters at too few of the points";
+}
+
 TEST(BodyIntegral, RigidMotionInvariance) {
   const TriangleSurface s0 =
       box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d(1.0, 0.7, 0.4), 3);
@@ -422,6 +618,32 @@ TEST(BodyIntegral, ThreadsGiveTheSameNumbers) {
             1e-12 * b2.surface_vjp(y, w).norm());
 }
 
+TEST(BodyIntegral, TreeGivesTheSameNumbersOnAnyThreads) {
+  // The tree's budgets chain within fixed blocks of 64 points: values and y-gradients are the
+  // same bits for any thread count; the surface product as the all-pairs one.
+  const TriangleSurface s =
+      box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, 1.0, 0.25), 6);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-0.2, 1.2);
+  Eigen::MatrixXd y(130, 3);  // three blocks
+  for (Eigen::Index i = 0; i < y.rows(); ++i) y.row(i) << 3.0 * u(rng), u(rng), 0.25 * u(rng);
+  const Eigen::VectorXd w = Eigen::VectorXd::LinSpaced(130, -1.0, 2.0);
+  BodyIntegralOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  one.tolerance = two.tolerance = 1e-2;
+  Eigen::VectorXd j1, j2;
+  Eigen::MatrixXd g1, g2;
+  BodyIntegral(s, one).evaluate(y, &j1, &g1);
+  BodyIntegral(s, two).evaluate(y, &j2, &g2);
+  EXPECT_EQ(j1, j2);
+  EXPECT_EQ(g1, g2);
+  const BodyIntegral b2(s, two);
+  EXPECT_EQ(b2.surface_vjp(y, w), b2.surface_vjp(y, w));
+  EXPECT_LT((BodyIntegral(s, one).surface_vjp(y, w) - b2.surface_vjp(y, w)).norm(),
+            1e-12 * b2.surface_vjp(y, w).norm());
+}
+
 TEST(BodyIntegral, RejectsBadInput) {
   const TriangleSurface s = box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 1);
   BodyIntegralOptions o;
@@ -432,6 +654,12 @@ TEST(BodyIntegral, RejectsBadInput) {
   EXPECT_THROW(BodyIntegral(s, o), softhd::InvalidArgument);
   o = {};
   o.near_ratio = 0.5;
+  EXPECT_THROW(BodyIntegral(s, o), softhd::InvalidArgument);
+  o = {};
+  o.tolerance = 1.0;
+  EXPECT_THROW(BodyIntegral(s, o), softhd::InvalidArgument);
+  o.tolerance = 1e-3;
+  o.alpha = 3.0;
   EXPECT_THROW(BodyIntegral(s, o), softhd::InvalidArgument);
   TriangleSurface bad = s;
   bad.triangles(0, 2) = bad.triangles(0, 1);

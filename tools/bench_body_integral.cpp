@@ -6,7 +6,10 @@
 //   bench_body_integral plate           the near ratio's error and time at a fifth of the
 //                                       bending plate's nodes
 //   bench_body_integral cost [THREADS]  J, its gradient and the surface product at the bending
-//                                       plate's nodes against the collocated rho~ (exact)
+//                                       plate's nodes against the collocated rho~ (exact); J, its
+//                                       gradient and the surface product by the tree (tolerance
+//                                       1e-2, also with near_ratio 2 and angle_points 8; 1e-6)
+//                                       against all pairs and collocation's tree at that tolerance
 #include <Eigen/Core>
 #include <chrono>
 #include <cstdio>
@@ -152,6 +155,50 @@ void cost(const char* scene_path, int threads) {
         rep, (long)X.rows(), t1 - t0, t2 - t1, t3 - t2, X.rows() / (t3 - t2), t4 - t3, t5 - t4,
         r.rho, J.mean());
   }
+  // The tree (tolerance τ; with near_ratio and angle_points) against all pairs (the defaults),
+  // interleaved, with collocation's tree at the same τ.
+  struct Config {
+    double tau, near_ratio;
+    int angle_points;
+  };
+  for (int rep = 0; rep < 2; ++rep)
+    for (const Config& cf : {Config{1e-2, 4.0, 12}, Config{1e-2, 2.0, 8}, Config{1e-6, 4.0, 12}}) {
+      BodyIntegralOptions ot = o;
+      ot.tolerance = cf.tau;
+      ot.near_ratio = cf.near_ratio;
+      ot.angle_points = cf.angle_points;
+      const BodyIntegral bt(surf, ot);
+      HausdorffOptions hot = ho;
+      hot.method = Method::tree;
+      hot.tolerance = cf.tau;
+      Eigen::VectorXd J0, J1;
+      Eigen::MatrixXd G0, G1;
+      double t0 = now();
+      b.evaluate(X, &J0, &G0);
+      double t1 = now();
+      const Eigen::MatrixXd V0 = b.surface_vjp(X, w);
+      double t2 = now();
+      bt.evaluate(X, &J1);
+      double t3 = now();
+      bt.evaluate(X, &J1, &G1);
+      double t4 = now();
+      const Eigen::MatrixXd V1 = bt.surface_vjp(X, w);
+      double t5 = now();
+      hausdorff(cloud, cloud, hot, {});
+      double t6 = now();
+      hausdorff(cloud, cloud, hot, req);
+      double t7 = now();
+      double ej = 0.0;
+      for (Eigen::Index k = 0; k < X.rows(); ++k)
+        ej = std::max(ej, std::abs(J1[k] - J0[k]) / J0[k]);
+      std::printf(
+          "rep %d, tau %.0e, near_ratio %.0f, angle_points %d: all pairs J+grad %.3f s, vjp %.3f "
+          "s | tree: J %.3f s, J+grad %.3f s, vjp %.3f s (max |dJ|/J %.1e, |dG|/|G| %.1e, |dV|/|V| "
+          "%.1e, Frobenius) | collocation tree: value %.3f s, value+grad %.3f s\n",
+          rep, cf.tau, cf.near_ratio, cf.angle_points, t1 - t0, t2 - t1, t3 - t2, t4 - t3, t5 - t4,
+          ej, (G1 - G0).norm() / G0.norm(), (V1 - V0).norm() / V0.norm(), t6 - t5, t7 - t6);
+      std::fflush(stdout);
+    }
   // near fraction
   long near = 0;
   for (int k = 0; k < X.rows(); ++k)

@@ -10,6 +10,14 @@
 //                                   hybrid: the difference model where |g| ≤ P/2; T0, TP:
 //                                   their graded rule's first panel (× ε) and points per panel;
 //                                   NMAX: the largest n; SPLIT: refine_crossed
+//   bench_cell_distance THREADS plate NX NY NZ MX MY MZ [REPS [TOL [NR AP]]]   the plate 10 × 2 ×
+//   0.1
+//                                   of NX·NY·NZ hexahedra against one of MX·MY·MZ: seconds of
+//                                   the cell ρ̃ (J over all pairs, by the tree at TOL, 1e-2, and
+//                                   so with J's near_ratio NR, 2, and angle_points AP, 8)
+//                                   and of collocation at the nodes (lumped volumes; method
+//                                   exact, tree at TOL and at its default), REPS repeats
+//                                   interleaved (REPS < 0: the last cell configuration alone)
 #include <Eigen/Geometry>
 #include <chrono>
 #include <cstdio>
@@ -47,8 +55,105 @@ static PointCloud collocation_cloud(const Eigen::Vector3d& lo, double side, int 
   return PointCloud(p, v);
 }
 
+// The box [0, 10] × [0, 2] × [0, 0.1] meshed by nx · ny · nz hexahedra (Gmsh's corner order).
+static HexCells plate_cells(int nx, int ny, int nz) {
+  const double size[3] = {10.0, 2.0, 0.1};
+  const int n[3] = {nx, ny, nz};
+  HexCells b;
+  const int mx = nx + 1, my = ny + 1, mz = nz + 1;
+  b.nodes.resize(mx * my * mz, 3);
+  for (int k = 0; k < mz; ++k)
+    for (int j = 0; j < my; ++j)
+      for (int i = 0; i < mx; ++i) {
+        const int idx[3] = {i, j, k};
+        for (int d = 0; d < 3; ++d) b.nodes((k * my + j) * mx + i, d) = size[d] * idx[d] / n[d];
+      }
+  const int sign[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                          {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  b.cells.resize(nx * ny * nz, 8);
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        for (int c = 0; c < 8; ++c)
+          b.cells((k * ny + j) * nx + i, c) =
+              ((k + sign[c][2]) * my + j + sign[c][1]) * mx + i + sign[c][0];
+  return b;
+}
+
+// The nodes of a hexahedral body with lumped volumes (an eighth of each cell's, the cells
+// being boxes here).
+static PointCloud node_cloud(const HexCells& b) {
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(b.nodes.rows());
+  for (Eigen::Index c = 0; c < b.cells.rows(); ++c) {
+    const Eigen::Vector3d d = b.nodes.row(b.cells(c, 6)) - b.nodes.row(b.cells(c, 0));
+    for (int i = 0; i < 8; ++i) v[b.cells(c, i)] += d.prod() / 8.0;
+  }
+  return PointCloud(b.nodes, v);
+}
+
+static int plate(int threads, int argc, char** argv) {
+  if (argc < 9) {
+    std::fprintf(stderr, "bench_cell_distance THREADS plate NX NY NZ MX MY MZ [REPS [TOL]]\n");
+    return 2;
+  }
+  const HexCells x = plate_cells(std::atoi(argv[3]), std::atoi(argv[4]), std::atoi(argv[5]));
+  const HexCells y = plate_cells(std::atoi(argv[6]), std::atoi(argv[7]), std::atoi(argv[8]));
+  int reps = argc > 9 ? std::atoi(argv[9]) : 1;
+  const double tol = argc > 10 ? std::atof(argv[10]) : 1e-2;
+  detail::CellDistanceOptions all, tree, loose;
+  all.threads = tree.threads = loose.threads = threads;
+  tree.tolerance = loose.tolerance = tol;
+  loose.j_near_ratio = argc > 11 ? std::atof(argv[11]) : 2.0;
+  loose.j_angle_points = argc > 12 ? std::atoi(argv[12]) : 8;
+  HausdorffOptions he, ht, hd;
+  he.method = Method::exact;
+  he.threads = ht.threads = hd.threads = threads;
+  ht.method = hd.method = Method::tree;
+  ht.tolerance = tol;  // hd: the default tolerance
+  const PointCloud cx = node_cloud(x), cy = node_cloud(y);
+  std::printf(
+      "# plate: %ld cells (%ld nodes) against %ld cells (%ld nodes), threads %d, J's and "
+      "the collocation tree's tolerance %.0e (and the tree's default %.0e)\n",
+      (long)x.cells.rows(), (long)x.nodes.rows(), (long)y.cells.rows(), (long)y.nodes.rows(),
+      threads, tol, hd.tolerance);
+  if (reps < 0) {  // the last configuration alone (profiles)
+    for (int rep = 0; rep < -reps; ++rep) {
+      const double t0 = now();
+      const detail::CellRho r = detail::cell_rho(x, y, loose);
+      std::printf("rep %d: cells, J tree, near_ratio %.1f, angle_points %d: rho %.9f %.3f s\n", rep,
+                  loose.j_near_ratio, loose.j_angle_points, r.rho, now() - t0);
+    }
+    return 0;
+  }
+  for (int rep = 0; rep < reps; ++rep) {
+    const double t0 = now();
+    const detail::CellRho r0 = detail::cell_rho(x, y, all);
+    const double t1 = now();
+    const detail::CellRho r1 = detail::cell_rho(x, y, tree);
+    const double t2 = now();
+    const detail::CellRho r2 = detail::cell_rho(x, y, loose);
+    const double t2b = now();
+    const double re = hausdorff(cx, cy, he).rho;
+    const double t3 = now();
+    const double rt = hausdorff(cx, cy, ht).rho;
+    const double t4 = now();
+    const double rd = hausdorff(cx, cy, hd).rho;
+    const double t5 = now();
+    std::printf(
+        "rep %d: cells, J all pairs: rho %.9f %.3f s; J tree: %+.1e %.3f s; J tree, near_ratio "
+        "%.1f, angle_points %d: %+.1e %.3f s (near points %ld) | collocation: exact %.6f %.3f s, "
+        "tree %.6f %.3f s, tree default %.6f %.3f s\n",
+        rep, r0.rho, t1 - t0, r1.rho / r0.rho - 1.0, t2 - t1, loose.j_near_ratio,
+        loose.j_angle_points, r2.rho / r0.rho - 1.0, t2b - t2, r1.a.near_points + r1.b.near_points,
+        re, t3 - t2b, rt, t4 - t3, rd, t5 - t4);
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
   const int threads = argc > 1 ? std::atoi(argv[1]) : 1;
+  if (argc > 2 && std::string(argv[2]) == "plate") return plate(threads, argc, argv);
   struct Case {
     const char* name;
     Eigen::Vector3d lo;

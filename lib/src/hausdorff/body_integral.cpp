@@ -1,12 +1,14 @@
 #include "body_integral.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 #include <utility>
 
 #include "../common/decimal.hpp"
 #include "../common/gauss_legendre.hpp"
+#include "../common/surface_bvh.hpp"
 #include "softhd/error.hpp"
 #include "softhd/parallel.hpp"
 
@@ -442,6 +444,320 @@ double distance2(const Triangle& t, const double* y) {
   return dx * dx + dy * dy + dz * dz;
 }
 
+// One point's sums over the triangles: J without the far solid angles' G∞ part, the near
+// triangles' exact solid angles and the far ones' estimate, ∂J/∂y, S = ∫_∂Ω k dA (with the
+// gradient), and the tree's error bounds of J, of the far solid angles and of g and S.
+struct PointSums {
+  double J = 0.0, near_omega = 0.0, far_omega = 0.0, g[3] = {0.0, 0.0, 0.0}, S = 0.0;
+  double err_j = 0.0, err_omega = 0.0, err_g = 0.0;
+  bool on_surface = false;
+};
+
+// One triangle's share by its rules (polar when near, else the far rule).
+void direct_triangle(const Triangle& t, const Radial& k, const Rules& rule, const double* y,
+                     bool want_b, bool coulomb, PointSums* s) {
+  double b = 0.0;
+  const double d2 = distance2(t, y);
+  if (d2 < t.near2) {
+    const EdgeFrame f = edge_frame(t, y);
+    double a;
+    near_pair(t, k, rule, f, true, want_b, &a, &b);
+    s->J += f.h * a;  // h_t ∫_t G(r)/r³ dA
+    if (coulomb) {
+      s->near_omega += solid_angle(t, y);
+      s->on_surface = s->on_surface || on_triangle(t, f);
+    }
+  } else {
+    const double h =
+        t.n[0] * (t.v[0][0] - y[0]) + t.n[1] * (t.v[0][1] - y[1]) + t.n[2] * (t.v[0][2] - y[2]);
+    const FarPoints p = far_points(t, d2);
+    double omega;
+    s->J += far_value(p, k, y, h, &omega);
+    s->far_omega += omega;
+    if (want_b) b = far_kernel(p, k, y);
+  }
+  if (want_b) {
+    for (int i = 0; i < 3; ++i) s->g[i] -= b * t.n[i];  // −n_t ∫_t k dA
+    s->S += b;
+  }
+}
+
+// The tree's expansions need ε ≤ kTreeX (|p − y| − ρ): the remainder bounds below sum the
+// kernels' series in ε/r up to there.
+constexpr double kTreeX = 0.05;
+
+// C_H: the remainder of the second-order expansion of n·d H(|d|) (α = 4) is at most
+// C_H ρ³/z⁶ per unit area, z = |p − y| − ρ ≥ ε/kTreeX. With x = ε/r, H = (1/3) Σ_{m=1}^{3}
+// r^−4 (1 + x)^−m = Σ_k a_k ε^k r^−(4+k), |a_k| ≤ (1/3) Σ_m C(m+k−1, k); each term
+// d r^−(4+k) = −∇ r^−(2+k)/(2 + k), and the order-2 remainder of n·∇f at s is
+// D⁴f(ξ)[n, s, s, s]/6, by polarisation at most max_u |D⁴f[u⁴]| |s|³/6, and for f = r^−2λ the
+// Gegenbauer expansion |z + t u|^−2λ = Σ_n C_n^λ(cos) tⁿ |z|^−(2λ+n), |C_n^λ| ≤ C(n + 2λ − 1, n),
+// gives |D⁴f[u⁴]| ≤ 4! C(5 + k, 4)/|z|^(6+k). So C_H = Σ_k |a_k| kTreeX^k 4 C(5+k, 4)/(2 + k).
+// C_K likewise for the scalar k = (r + ε)^−4 = Σ_k C(k+3, 3)(−ε)^k r^−(4+k) at order 2:
+// D³f[s³]/6 ≤ C(6 + k, 3) |s|³/|z|^(7+k), so C_K = Σ_k C(k+3, 3) C(6+k, 3) kTreeX^k. The solid
+// angle's n·d/r³ = −n·∇(1/r): 4 ρ³/z⁵ (Legendre, |P_4| ≤ 1).
+struct TreeConstants {
+  double c_h = 0.0, c_k = 0.0;
+  TreeConstants() {
+    auto binom = [](int n, int k) {
+      double c = 1.0;
+      for (int i = 1; i <= k; ++i) c = c * (n - k + i) / i;
+      return c;
+    };
+    double xk = 1.0;
+    for (int k = 0; k < 80; ++k, xk *= kTreeX) {
+      const double a = (binom(k, k) + binom(k + 1, k) + binom(k + 2, k)) / 3.0;
+      c_h += a * xk * 4.0 * binom(5 + k, 4) / (2.0 + k);
+      c_k += binom(k + 3, 3) * binom(6 + k, 3) * xk;
+    }
+  }
+};
+
+const TreeConstants& tree_constants() {
+  static const TreeConstants c;
+  return c;
+}
+
+// The vector kernel d g(r) contracted with a cluster's n-weighted moments to second order, d =
+// p − y: g (d·M0) + g tr M1 + g1 dᵀM1 d + ½ [g1 q·d + g2 Σ d_i d_j d_k M2_ijk], with g1 = g′/r
+// and g2 = g1′/r.
+double contract_vector(const BodyIntegral::Cluster& c, const double* d, double g, double g1,
+                       double g2) {
+  double dm1d = 0.0, d3 = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    double row = 0.0;
+    for (int j = 0; j < 3; ++j) {
+      row += c.m1[3 * i + j] * d[j];
+      double inner = 0.0;
+      for (int k = 0; k < 3; ++k) inner += c.m2[9 * i + 3 * j + k] * d[k];
+      d3 += d[i] * d[j] * inner;
+    }
+    dm1d += d[i] * row;
+  }
+  return g * (dot(d, c.m0) + c.tr1) + g1 * dm1d + 0.5 * (g1 * dot(c.q, d) + g2 * d3);
+}
+
+// A cluster's share by its expansions: the tail −Σ n·d H (into J), the solid angles' estimate,
+// and with want_b g −= f M0 + f1 M1 d + ½ [f1 v + f2 M2 : d d] and S += f A + f1 m1·d +
+// ½ [f1 tr m2 + f2 dᵀm2 d], f = (r + ε)^−4 (α = 4: H = (1/3)[r⁻³w⁻¹ + r⁻²w⁻² + r⁻¹w⁻³],
+// w = r + ε; H′/r = −[r⁻⁵w⁻¹ + r⁻⁴w⁻² + r⁻³w⁻³ + r⁻²w⁻⁴]; (H′/r)′/r = 5[r⁻⁷w⁻¹ + r⁻⁶w⁻² +
+// r⁻⁵w⁻³ + r⁻⁴w⁻⁴] + 4r⁻³w⁻⁵; f1 = −4r⁻¹w⁻⁵, f2 = 4r⁻³w⁻⁵ + 20r⁻²w⁻⁶).
+void cluster_share(const BodyIntegral::Cluster& c, double eps, const double* y, bool want_b,
+                   PointSums* s) {
+  const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
+  const double r = std::sqrt(dot(d, d)), ir = 1.0 / r, iw = 1.0 / (r + eps);
+  const double ir2 = ir * ir, iw2 = iw * iw, ir3 = ir2 * ir, iw3 = iw2 * iw;
+  const double H = (ir3 * iw + ir2 * iw2 + ir * iw3) / 3.0;
+  const double h1 = -ir2 * (ir3 * iw + ir2 * iw2 + ir * iw3 + iw2 * iw2);
+  const double h2 =
+      5.0 * ir3 * ir * (ir3 * iw + ir2 * iw2 + ir * iw3 + iw2 * iw2) + 4.0 * ir3 * iw2 * iw3;
+  s->J -= contract_vector(c, d, H, h1, h2);
+  const double ir5 = ir3 * ir2;
+  s->far_omega += contract_vector(c, d, ir3, -3.0 * ir5, 15.0 * ir5 * ir2);
+  if (!want_b) return;
+  const double f = iw2 * iw2, f1 = -4.0 * ir * f * iw,
+               f2 = 4.0 * ir3 * f * iw + 20.0 * ir2 * f * iw2;
+  for (int i = 0; i < 3; ++i) {
+    double m1d = 0.0, m2dd = 0.0;
+    for (int j = 0; j < 3; ++j) {
+      m1d += c.m1[3 * i + j] * d[j];
+      for (int k = 0; k < 3; ++k) m2dd += c.m2[9 * i + 3 * j + k] * d[j] * d[k];
+    }
+    s->g[i] -= f * c.m0[i] + f1 * m1d + 0.5 * (f1 * c.v[i] + f2 * m2dd);
+  }
+  double dm2d = 0.0;
+  for (int j = 0; j < 3; ++j)
+    for (int k = 0; k < 3; ++k) dm2d += d[j] * c.s2[3 * j + k] * d[k];
+  s->S += f * c.area + f1 * dot(c.s1, d) + 0.5 * (f1 * c.tr2 + f2 * dm2d);
+}
+
+// A cluster's moments over its triangles order[begin, end) (the 16-point rule, exact for the
+// quadratic moments), p its area-weighted centroid.
+BodyIntegral::Cluster make_cluster(const std::vector<Triangle>& tris, const std::vector<int>& order,
+                                   const BvhNode& node) {
+  BodyIntegral::Cluster c{};
+  c.left = node.left;
+  c.begin = node.begin;
+  c.end = node.end;
+  double area = 0.0, p[3] = {0.0, 0.0, 0.0};
+  for (int j = node.begin; j < node.end; ++j) {
+    const Triangle& t = tris[order[j]];
+    double a = 0.0;
+    for (int q = 0; q < kFarPoints; ++q) a += t.wq[q];
+    area += a;
+    for (int i = 0; i < 3; ++i) p[i] += a * t.c[i];
+  }
+  for (int i = 0; i < 3; ++i) c.p[i] = p[i] / area;
+  c.area = area;
+  for (int j = node.begin; j < node.end; ++j) {
+    const Triangle& t = tris[order[j]];
+    for (int a = 0; a < 3; ++a) {
+      const double e[3] = {t.v[a][0] - c.p[0], t.v[a][1] - c.p[1], t.v[a][2] - c.p[2]};
+      c.rho = std::max(c.rho, std::sqrt(dot(e, e)));
+    }
+    for (int q = 0; q < kFarPoints; ++q) {
+      const double sv[3] = {t.qx[q] - c.p[0], t.qy[q] - c.p[1], t.qz[q] - c.p[2]};
+      const double w = t.wq[q];
+      for (int i = 0; i < 3; ++i) {
+        c.m0[i] += w * t.n[i];
+        c.s1[i] += w * sv[i];
+        for (int jj = 0; jj < 3; ++jj) {
+          c.m1[3 * i + jj] += w * t.n[i] * sv[jj];
+          c.s2[3 * i + jj] += w * sv[i] * sv[jj];
+          for (int k = 0; k < 3; ++k) c.m2[9 * i + 3 * jj + k] += w * t.n[i] * sv[jj] * sv[k];
+        }
+      }
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    c.tr1 += c.m1[4 * i];
+    c.tr2 += c.s2[4 * i];
+    for (int j = 0; j < 3; ++j) {
+      c.v[i] += c.m2[9 * i + 4 * j];
+      c.q[i] += 2.0 * c.m2[9 * j + 3 * j + i] + c.m2[9 * i + 4 * j];
+    }
+  }
+  return c;
+}
+
+// The per-unit-area error budgets of one traversal: J's, the far solid angles' and g's (and S's);
+// theta > 0 (a probe for a first guess of J and S): J's and g's budgets replaced by ρ ≤ θ z.
+struct Budget {
+  double j, omega, g, theta = 0.0;
+};
+
+// The probe's opening ratio (a guess only: its results are not used unless the check passes).
+constexpr double kProbeTheta = 0.25;
+
+// One point's sums by the tree (tris: the triangles in the tree's order): a cluster enters by its
+// expansions when they are valid (ρ < R, ε ≤ kTreeX (R − ρ)) and their remainder bounds per unit
+// area fit the budget; a leaf that does not, triangle by triangle.
+PointSums traverse(const std::vector<BodyIntegral::Cluster>& clusters,
+                   const std::vector<Triangle>& tris, const Radial& k, const Rules& rule,
+                   const double* y, bool want_b, const Budget& budget) {
+  const TreeConstants& tc = tree_constants();
+  PointSums s;
+  int stack[2 * kBvhMaxDepth + 2];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const BodyIntegral::Cluster& c = clusters[stack[--top]];
+    const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
+    const double z = std::sqrt(dot(d, d)) - c.rho;
+    if (z > 0.0 && k.eps <= kTreeX * z) {
+      const double r3 = c.rho * c.rho * c.rho, z2 = z * z, z5 = z2 * z2 * z;
+      const double ej = tc.c_h * r3 / (z5 * z), eo = 4.0 * r3 / z5;
+      const double eg = want_b ? tc.c_k * r3 / (z5 * z2) : 0.0;
+      const bool fits =
+          budget.theta > 0.0 ? c.rho <= budget.theta * z : ej <= budget.j && eg <= budget.g;
+      if (fits && eo <= budget.omega) {
+        cluster_share(c, k.eps, y, want_b, &s);
+        s.err_j += c.area * ej;
+        s.err_omega += c.area * eo;
+        s.err_g += c.area * eg;
+        continue;
+      }
+    }
+    if (c.left >= 0) {
+      stack[top++] = c.left + 1;
+      stack[top++] = c.left;
+      continue;
+    }
+    for (int j = c.begin; j < c.end; ++j) direct_triangle(tris[j], k, rule, y, want_b, true, &s);
+  }
+  return s;
+}
+
+// The surface product's far field: a cluster's expansion of k(|x − y|) = k(|d + s|), d = p − y,
+// s = x − p, to second order, k̃(s) = f + f1 d·s + ½ (f1 |s|² + f2 (d·s)²), its coefficients
+// times w added to L (kLocal numbers: f, f1 d, f1, f2 d dᵀ by (00, 01, 02, 11, 12, 22)); returns
+// the cluster's ∫ k̃ dA = f A + f1 d·m1 + ½ (f1 tr m2 + f2 dᵀ m2 d) (S's share).
+constexpr int kLocal = 11;
+
+double local_share(const BodyIntegral::Cluster& c, double eps, const double* y, double w,
+                   double* L) {
+  const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
+  const double r = std::sqrt(dot(d, d)), ir = 1.0 / r, iw = 1.0 / (r + eps);
+  const double f = (iw * iw) * (iw * iw), f1 = -4.0 * ir * f * iw;
+  const double f2 = 4.0 * ir * ir * ir * f * iw + 20.0 * ir * ir * f * iw * iw;
+  L[0] += w * f;
+  for (int i = 0; i < 3; ++i) L[1 + i] += w * f1 * d[i];
+  L[4] += w * f1;
+  const int pair[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+  for (int e = 0; e < 6; ++e) L[5 + e] += w * f2 * d[pair[e][0]] * d[pair[e][1]];
+  double dm2d = 0.0;
+  for (int j = 0; j < 3; ++j)
+    for (int k = 0; k < 3; ++k) dm2d += d[j] * c.s2[3 * j + k] * d[k];
+  return f * c.area + f1 * dot(c.s1, d) + 0.5 * (f1 * c.tr2 + f2 * dm2d);
+}
+
+// Σ_q W_q λ_a(q) k̃(s_q) for the corners a of triangle t (the 16-point rule: exact, λ_a k̃ is
+// cubic), k̃ the expansion with coefficients L about p, added to c.
+void push_local(const Triangle& t, const double* p, const double* L, double* c) {
+  const FarRule& rule = far_rule();
+  for (int q = 0; q < kFarPoints; ++q) {
+    const double s[3] = {t.qx[q] - p[0], t.qy[q] - p[1], t.qz[q] - p[2]};
+    const double quad = L[5] * s[0] * s[0] + 2.0 * L[6] * s[0] * s[1] + 2.0 * L[7] * s[0] * s[2] +
+                        L[8] * s[1] * s[1] + 2.0 * L[9] * s[1] * s[2] + L[10] * s[2] * s[2];
+    const double v = t.wq[q] * (L[0] + L[1] * s[0] + L[2] * s[1] + L[3] * s[2] +
+                                0.5 * (L[4] * dot(s, s) + quad));
+    for (int a = 0; a < 3; ++a) c[a] += v * rule.lam[q][a];
+  }
+}
+
+// One point's share of the surface product by the tree, kept until its bound is checked: the
+// triangles taken one by one (w ∫_t k λ_a), the clusters by their expansions (w L), S̃ and the
+// bound of its error (that of every corner's sum too).
+struct VjpPoint {
+  std::vector<std::pair<int, std::array<double, 3>>> tris;
+  std::vector<std::pair<int, std::array<double, kLocal>>> clusters;
+  double S = 0.0, err = 0.0;
+};
+
+void traverse_vjp(const std::vector<BodyIntegral::Cluster>& clusters, const std::vector<int>& order,
+                  const std::vector<Triangle>& tris, const Radial& k, const Rules& rule,
+                  const double* y, double w, double budget, double theta, VjpPoint* out) {
+  const double c_k = tree_constants().c_k;
+  out->tris.clear();
+  out->clusters.clear();
+  out->S = out->err = 0.0;
+  int stack[2 * kBvhMaxDepth + 2];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const int id = stack[--top];
+    const BodyIntegral::Cluster& c = clusters[id];
+    const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
+    const double z = std::sqrt(dot(d, d)) - c.rho;
+    if (z > 0.0 && k.eps <= kTreeX * z) {
+      const double z2 = z * z, eg = c_k * c.rho * c.rho * c.rho / (z2 * z2 * z2 * z);
+      if (theta > 0.0 ? c.rho <= theta * z : eg <= budget) {
+        std::array<double, kLocal> L{};
+        out->S += local_share(c, k.eps, y, w, L.data());
+        out->err += c.area * eg;
+        out->clusters.emplace_back(id, L);
+        continue;
+      }
+    }
+    if (c.left >= 0) {
+      stack[top++] = c.left + 1;
+      stack[top++] = c.left;
+      continue;
+    }
+    for (int j = c.begin; j < c.end; ++j) {
+      const Triangle& tri = tris[j];
+      double ct[3];
+      const double d2 = distance2(tri, y);
+      if (d2 < tri.near2)
+        near_moments(tri, k, rule, edge_frame(tri, y), y, ct);
+      else
+        far_moments(far_points(tri, d2), k, y, ct);
+      out->S += ct[0] + ct[1] + ct[2];
+      out->tris.push_back({order[j], {w * ct[0], w * ct[1], w * ct[2]}});
+    }
+  }
+}
+
 void validate(const BodyIntegralOptions& o) {
   if (!(o.epsilon > 0.0) || !std::isfinite(o.epsilon))
     throw InvalidArgument("body integral: epsilon must be finite and > 0, got " +
@@ -457,6 +773,14 @@ void validate(const BodyIntegralOptions& o) {
   if (!(o.panel_width > 0.0) || !std::isfinite(o.panel_width))
     throw InvalidArgument("body integral: panel_width must be finite and > 0, got " +
                           decimal(o.panel_width));
+  if (!(o.tolerance >= 0.0 && o.tolerance < 1.0))
+    throw InvalidArgument("body integral: tolerance must be in [0, 1), got " +
+                          decimal(o.tolerance));
+  if (o.tolerance > 0.0 && o.alpha != 4.0)
+    throw InvalidArgument(
+        "body integral: tolerance > 0 needs alpha = 4 (the tree's expansions), "
+        "got alpha " +
+        decimal(o.alpha));
   check_threads(o.threads);
 }
 
@@ -571,11 +895,21 @@ BodyIntegral::BodyIntegral(const TriangleSurface& surface, const BodyIntegralOpt
   }
   check_closed(corners_);
   gauss_legendre_unit(options.angle_points, &rule_x_, &rule_w_);
+  if (options.tolerance > 0.0) {
+    const Bvh bvh = build_bvh(surface);
+    order_ = bvh.order;
+    clusters_.reserve(bvh.nodes.size());
+    for (const BvhNode& node : bvh.nodes)
+      clusters_.push_back(make_cluster(triangles_, order_, node));
+    total_area_ = clusters_[0].area;
+    for (int t : order_) ordered_.push_back(triangles_[t]);
+  }
 }
 
 void BodyIntegral::evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* value,
                             Eigen::MatrixXd* grad) const {
   if (points.cols() != 3) throw InvalidArgument("body integral: the points must be M by 3");
+  if (options_.tolerance > 0.0) return evaluate_tree(points, value, grad);
   const Eigen::Index m = points.rows();
   value->resize(m);
   if (grad) grad->resize(m, 3);
@@ -589,37 +923,73 @@ void BodyIntegral::evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* valu
 #pragma omp parallel for schedule(static) num_threads(threads)
   for (Eigen::Index j = 0; j < m; ++j) {
     const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
-    double J = 0.0, g[3] = {0.0, 0.0, 0.0};
-    double near_omega = 0.0, far_omega = 0.0;  // Σ ω_t: near (exact), far (the rule's)
-    bool on_surface = false;
-    for (const Triangle& t : triangles_) {
-      double b = 0.0;
-      const double d2 = distance2(t, y);
-      if (d2 < t.near2) {
-        const EdgeFrame f = edge_frame(t, y);
-        double a;
-        near_pair(t, k, rule, f, true, want_b, &a, &b);
-        J += f.h * a;  // h_t ∫_t G(r)/r³ dA
-        if (coulomb) {
-          near_omega += solid_angle(t, y);
-          on_surface = on_surface || on_triangle(t, f);
-        }
-      } else {
-        const double h =
-            t.n[0] * (t.v[0][0] - y[0]) + t.n[1] * (t.v[0][1] - y[1]) + t.n[2] * (t.v[0][2] - y[2]);
-        const FarPoints p = far_points(t, d2);
-        double omega;
-        J += far_value(p, k, y, h, &omega);
-        far_omega += omega;
-        if (want_b) b = far_kernel(p, k, y);
-      }
-      if (want_b)
-        for (int i = 0; i < 3; ++i) g[i] -= b * t.n[i];  // −n_t ∫_t k dA
-    }
-    if (coulomb) J += k.g_inf * far_solid_angle(near_omega, far_omega, on_surface);
+    PointSums s;  // Σ ω_t: near (exact), far (the rule's)
+    for (const Triangle& t : triangles_) direct_triangle(t, k, rule, y, want_b, coulomb, &s);
+    double J = s.J;
+    if (coulomb) J += k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface);
     (*value)[j] = J;
     if (grad)
-      for (int i = 0; i < 3; ++i) (*grad)(j, i) = g[i];
+      for (int i = 0; i < 3; ++i) (*grad)(j, i) = s.g[i];
+  }
+}
+
+void BodyIntegral::evaluate_tree(const Eigen::MatrixXd& points, Eigen::VectorXd* value,
+                                 Eigen::MatrixXd* grad) const {
+  const Eigen::Index m = points.rows();
+  value->resize(m);
+  if (grad) grad->resize(m, 3);
+  const Radial k(options_.epsilon, options_.alpha);
+  const Rules rule{rule_x_, rule_w_, options_.panel_width};
+  const bool want_b = grad != nullptr;
+  const double tau = options_.tolerance, area = total_area_;
+  constexpr Eigen::Index kBlock = 64;
+  const Eigen::Index blocks = (m + kBlock - 1) / kBlock;
+  // Per block of points in order: the budget of a point from the previous one's J and S (for
+  // the first, from a probe's: clusters with ρ ≤ z/4 taken, J̃ − E and S̃ − E), per unit area
+  // τ J/(2 |∂Ω|), likewise for g; the far solid angles' total bound below 3 (< 2π with the far
+  // rules' own error: the winding number rounds right; on the surface, where their estimate
+  // enters J, below τ J/(4 G∞) and J's own τ J/(4 |∂Ω|)). Accepted when the bounds give
+  // E_J ≤ τ (J̃ − E_J) ≤ τ J and E_g ≤ τ (S̃ − E_g) ≤ τ S; else redone with the point's own
+  // budget, then with none (every triangle).
+#pragma omp parallel for schedule(static) num_threads(resolve_threads(options_.threads))
+  for (Eigen::Index b = 0; b < blocks; ++b) {
+    double j_guess = 0.0, s_guess = 0.0;
+    bool surface = false;  // the last traversal's y was on the surface
+    for (Eigen::Index j = b * kBlock; j < std::min(m, (b + 1) * kBlock); ++j) {
+      const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
+      PointSums s;
+      double J = 0.0;
+      if (j_guess <= 0.0) {  // a block's first point: a probe's lower bounds as the guesses
+        s = traverse(clusters_, ordered_, k, rule, y, want_b,
+                     Budget{0.0, 3.0 / area, 0.0, kProbeTheta});
+        j_guess = s.J + k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface) -
+                  s.err_j - (s.on_surface ? k.g_inf * s.err_omega : 0.0);
+        s_guess = s.S - s.err_g;
+        surface = s.on_surface;
+      }
+      for (int attempt = 0; attempt < 3; ++attempt) {
+        const bool exact = attempt == 2 || j_guess <= 0.0 || (want_b && s_guess <= 0.0);
+        // On the surface the far solid angles' estimate enters J: half the budget for it.
+        const double share = surface ? 0.25 : 0.5;
+        const double omega = surface ? std::min(3.0, share * tau * j_guess / k.g_inf) : 3.0;
+        const Budget budget =
+            exact ? Budget{0.0, 0.0, 0.0}
+                  : Budget{share * tau * j_guess / area, omega / area, 0.5 * tau * s_guess / area};
+        s = traverse(clusters_, ordered_, k, rule, y, want_b, budget);
+        surface = s.on_surface;
+        J = s.J + k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface);
+        const double err = s.err_j + (s.on_surface ? k.g_inf * s.err_omega : 0.0);
+        if (exact || (err <= tau * (J - err) && (!want_b || s.err_g <= tau * (s.S - s.err_g))))
+          break;
+        j_guess = J - err;
+        s_guess = s.S - s.err_g;
+      }
+      j_guess = J;
+      s_guess = s.S;
+      (*value)[j] = J;
+      if (grad)
+        for (int i = 0; i < 3; ++i) (*grad)(j, i) = s.g[i];
+    }
   }
 }
 
@@ -628,6 +998,7 @@ Eigen::MatrixXd BodyIntegral::surface_vjp(const Eigen::MatrixXd& points,
   if (points.cols() != 3) throw InvalidArgument("body integral: the points must be M by 3");
   if (weights.size() != points.rows())
     throw InvalidArgument("body integral: weights must have one entry per point");
+  if (options_.tolerance > 0.0) return surface_vjp_tree(points, weights);
   const Radial k(options_.epsilon, options_.alpha);
   const Rules rule{rule_x_, rule_w_, options_.panel_width};
   const int threads = resolve_threads(options_.threads);
@@ -664,6 +1035,80 @@ Eigen::MatrixXd BodyIntegral::surface_vjp(const Eigen::MatrixXd& points,
         if (!c.empty()) s += c[3 * t + a];
       for (int i = 0; i < 3; ++i) out(corners_[3 * t + a], i) += s * triangles_[t].n[i];
     }
+  return out;
+}
+
+Eigen::MatrixXd BodyIntegral::surface_vjp_tree(const Eigen::MatrixXd& points,
+                                               const Eigen::VectorXd& weights) const {
+  const Radial k(options_.epsilon, options_.alpha);
+  const Rules rule{rule_x_, rule_w_, options_.panel_width};
+  const int threads = resolve_threads(options_.threads);
+  const std::size_t count = triangles_.size(), nodes = clusters_.size();
+  const double tau = options_.tolerance;
+  constexpr Eigen::Index kBlock = 64;
+  const Eigen::Index m = points.rows(), blocks = (m + kBlock - 1) / kBlock;
+  // Per thread: the triangles' corner sums and the clusters' coefficients, summed in thread
+  // order. A point's budget (per unit area, of every corner sum's error) τ S/(2 |∂Ω|) from the
+  // previous point's S (a probe's S̃ − E for a block's first, as in evaluate_tree), accepted when E
+  // ≤ τ (S̃ − E): then Σ_{t,a} |error of w ∫_t k λ_a| ≤ τ |w| S, S = ∫_∂Ω k dA; else redone with its
+  // own budget, then over all pairs.
+  std::vector<std::vector<double>> acc(threads), loc(threads);
+#pragma omp parallel num_threads(threads)
+  {
+    std::vector<double>& c = acc[thread_id()];
+    std::vector<double>& L = loc[thread_id()];
+    c.assign(3 * count, 0.0);
+    L.assign(kLocal * nodes, 0.0);
+    VjpPoint pt;
+#pragma omp for schedule(static)
+    for (Eigen::Index b = 0; b < blocks; ++b) {
+      double s_guess = 0.0;
+      for (Eigen::Index j = b * kBlock; j < std::min(m, (b + 1) * kBlock); ++j) {
+        const double wj = weights[j];
+        if (wj == 0.0) continue;
+        const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
+        if (s_guess <= 0.0) {  // a block's first point: a probe's lower bound as the guess
+          traverse_vjp(clusters_, order_, ordered_, k, rule, y, wj, 0.0, kProbeTheta, &pt);
+          s_guess = pt.S - pt.err;
+        }
+        for (int attempt = 0; attempt < 3; ++attempt) {
+          const bool exact = attempt == 2 || s_guess <= 0.0;
+          traverse_vjp(clusters_, order_, ordered_, k, rule, y, wj,
+                       exact ? 0.0 : 0.5 * tau * s_guess / total_area_, 0.0, &pt);
+          if (exact || pt.err <= tau * (pt.S - pt.err)) break;
+          s_guess = pt.S - pt.err;
+        }
+        s_guess = pt.S;
+        for (const auto& t : pt.tris)
+          for (int a = 0; a < 3; ++a) c[3 * t.first + a] += t.second[a];
+        for (const auto& q : pt.clusters)
+          for (int i = 0; i < kLocal; ++i) L[kLocal * q.first + i] += q.second[i];
+      }
+    }
+  }
+  std::vector<double> sum(3 * count, 0.0), local(kLocal);
+  for (int th = 0; th < threads; ++th) {
+    if (acc[th].empty()) continue;
+    for (std::size_t i = 0; i < 3 * count; ++i) sum[i] += acc[th][i];
+  }
+  for (std::size_t id = 0; id < nodes; ++id) {
+    std::fill(local.begin(), local.end(), 0.0);
+    bool any = false;
+    for (int th = 0; th < threads; ++th)
+      for (int i = 0; i < kLocal && !loc[th].empty(); ++i) {
+        local[i] += loc[th][kLocal * id + i];
+        any = any || loc[th][kLocal * id + i] != 0.0;
+      }
+    if (!any) continue;
+    const Cluster& cl = clusters_[id];
+    for (int j = cl.begin; j < cl.end; ++j)
+      push_local(ordered_[j], cl.p, local.data(), &sum[3 * order_[j]]);
+  }
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(point_count_, 3);
+  for (std::size_t t = 0; t < count; ++t)
+    for (int a = 0; a < 3; ++a)
+      for (int i = 0; i < 3; ++i)
+        out(corners_[3 * t + a], i) += sum[3 * t + a] * triangles_[t].n[i];
   return out;
 }
 

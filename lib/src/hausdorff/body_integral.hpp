@@ -24,8 +24,16 @@
 // beyond 4 · near_ratio · R_t Radon's 7-point rule (degree 5); for α ≥ 3.5 its point-charge part
 // G∞/r³ (G∞ = G(∞)) is summed exactly instead: the far triangles' solid angles are 4π × the winding
 // number minus the near ones' (exact), which needs a closed surface — seen from outside, those
-// terms cancel to a J smaller than them by up to 1/(εJ). All pairs: O(points × triangles), no tree
-// yet.
+// terms cancel to a J smaller than them by up to 1/(εJ). All pairs: O(points × triangles), or
+// with a tolerance τ > 0 (α = 4) a tree over the triangles (the surface's BVH): a cluster far
+// from y enters by the second-order Taylor expansion of its kernels about its centre p,
+//
+//     Σ_t ∫_t n_t·f(x − y) dA ≈ Σ_{m ≤ 2} (1/m!) D^m f(p − y) : Σ_t n_t ⊗ ∫_t (x − p)^⊗m dA,
+//
+// (the tail f = d H(|d|), H = (G∞ − G)/r³; the solid angle's d/r³; ∂J/∂y's n k(r)), accepted
+// when a proved bound of its remainder fits a per-point budget (docs/formulation.md §2.8):
+// |J̃ − J| ≤ τ J and ‖∂J̃/∂y − ∂J/∂y‖ ≤ τ ∫_∂Ω k dA against the same rules summed over all
+// pairs; in surface_vjp the corner sums' errors add up to at most τ Σ_k |w_k| ∫_∂Ω k(|y_k − x|) dA.
 
 #include <Eigen/Core>
 #include <vector>
@@ -51,6 +59,15 @@ struct BodyIntegralOptions {
   /// are analytic in the strip |Im u| < π/2, so a panel of width ≤ 2 converges geometrically
   /// at a fixed rate, however close y is to an edge.
   double panel_width = 2.0;
+  /// τ ∈ [0, 1): 0 sums every triangle (the rules above); > 0 (α = 4 only) takes far clusters
+  /// of triangles by their expansions, with |J̃ − J| ≤ τ J and, with the gradient,
+  /// ‖g̃ − g‖ ≤ τ ∫_∂Ω (|y − x| + ε)^−4 dA (the sum of the terms' norms, as the tree method's
+  /// gradient bound), J and g exact over the triangles a cluster replaces (the rules above
+  /// elsewhere; against the all-pairs values the far rules' own error, ≤ ~1e-9 of J at
+  /// near_ratio 4, comes on top); proved bounds, checked per point (a point whose check fails
+  /// is redone with the budget its own value gives, then over all pairs).
+  /// surface_vjp: Σ_{t, a} |error of Σ_k w_k ∫_t k λ_a dA| ≤ τ Σ_k |w_k| ∫_∂Ω k(|y_k − x|) dA.
+  double tolerance = 0.0;
   int threads = 0;  ///< OpenMP threads (0: softhd's default, see parallel.hpp)
 };
 
@@ -67,7 +84,8 @@ class BodyIntegral {
   BodyIntegral(const TriangleSurface& surface, const BodyIntegralOptions& options);
 
   /// J(y_k) for the rows y_k of `points` (M by 3) into `value` (M); with `grad` non-null also
-  /// ∂J/∂y_k (M by 3).
+  /// ∂J/∂y_k (M by 3). With a tolerance, each point's result depends on the points before it in
+  /// its block of 64 rows (their values set its budget), not on the threads.
   void evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* value,
                 Eigen::MatrixXd* grad = nullptr) const;
 
@@ -96,12 +114,41 @@ class BodyIntegral {
     double glam[3][3];  // in-plane gradients of the hat functions λ_a
   };
 
+  /// A node of the tree: its triangles' moments about p, n-weighted (M) and plain (m):
+  /// M0_i = Σ A_t n_i, M1_ij = Σ n_i ∫_t s_j, M2_ijk = Σ n_i ∫_t s_j s_k, m1, m2 likewise,
+  /// s = x − p (exact by the 16-point rule).
+  struct Cluster {
+    double p[3];     // the area-weighted centroid
+    double rho;      // the largest |v − p| over its triangles' corners
+    double area;     // Σ A_t
+    double m0[3];    // M0
+    double m1[9];    // M1, row-major
+    double m2[27];   // M2, [i][j][k]
+    double q[3];     // 2 Σ_i M2_iik + Σ_j M2_kjj (the ∂²K contraction)
+    double v[3];     // Σ_j M2_ijj
+    double tr1;      // Σ_i M1_ii
+    double s1[3];    // m1
+    double s2[9];    // m2
+    double tr2;      // Σ_j m2_jj
+    int left;        // −1: a leaf, else the children left and left + 1
+    int begin, end;  // its triangles: order_[begin, end)
+  };
+
  private:
   BodyIntegralOptions options_;
   Eigen::Index point_count_ = 0;
   std::vector<Triangle> triangles_;
   std::vector<int> corners_;             // 3 per triangle: the surface point indices
   std::vector<double> rule_x_, rule_w_;  // Gauss–Legendre on [0, 1]
+  std::vector<Cluster> clusters_;        // the tree (tolerance > 0), clusters_[0] the root
+  std::vector<int> order_;               // triangle ids grouped by leaf
+  std::vector<Triangle> ordered_;        // triangles_[order_[j]] (contiguous leaves)
+  double total_area_ = 0.0;
+
+  void evaluate_tree(const Eigen::MatrixXd& points, Eigen::VectorXd* value,
+                     Eigen::MatrixXd* grad) const;
+  Eigen::MatrixXd surface_vjp_tree(const Eigen::MatrixXd& points,
+                                   const Eigen::VectorXd& weights) const;
 };
 
 }  // namespace softhd::detail

@@ -260,6 +260,9 @@ void CellDistanceOptions::validate() const {
     bad("tangential_panel_points (1 to 64)");
   if (refine_crossed < 0 || refine_crossed > 4) bad("refine_crossed (0 to 4)");
   if (!(near_factor >= 0.0) || !std::isfinite(near_factor)) bad("near_factor (>= 0)");
+  if (!(tolerance >= 0.0 && tolerance < 1.0)) bad("tolerance (0 to 1)");
+  if (!(j_near_ratio >= 1.0) || !std::isfinite(j_near_ratio)) bad("j_near_ratio (>= 1)");
+  if (j_angle_points < 2 || j_angle_points > 64) bad("j_angle_points (2 to 64)");
   check_threads(threads);
 }
 
@@ -479,6 +482,9 @@ CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions
   bo.epsilon = options.epsilon;
   bo.alpha = 4.0;
   bo.threads = options.threads;
+  bo.tolerance = options.tolerance;
+  bo.near_ratio = options.j_near_ratio;
+  bo.angle_points = options.j_angle_points;
   const TriangleSurface sx = hex_boundary(x), sy = hex_boundary(y);
   const BodyIntegral jx(sx, bo), jy(sy, bo);
   const SurfaceDistance dx(sx), dy(sy);

@@ -65,6 +65,13 @@ struct CellDistanceOptions {
   /// Near cells whose corners and samples lie on both sides of the surface are split into 8
   /// children with samples of their own, this many times (0 to 4).
   int refine_crossed = 0;
+  /// J's tree tolerance τ ∈ [0, 1) (BodyIntegralOptions::tolerance: |ΔJ| ≤ τ J at every
+  /// sample); 0 (default): all pairs.
+  double tolerance = 0.0;
+  /// J's near_ratio and angle_points (BodyIntegralOptions: the far rules' and the polar rule's
+  /// accuracy, measured in docs/formulation.md §2.8; 4 and 12 keep both below ~1e-9).
+  double j_near_ratio = 4.0;
+  int j_angle_points = 12;
   int threads = 0;  ///< OpenMP threads (0: softhd's default)
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
