@@ -18,8 +18,11 @@
 //                                   and of collocation at the nodes (lumped volumes; method
 //                                   exact, tree at TOL and at its default), REPS repeats
 //                                   interleaved (REPS < 0: the last cell configuration alone)
+//   bench_cell_distance THREADS gradient [NMAX]   seconds of ρ̃ alone and of ρ̃ with its gradient
+//                                   (both bodies' nodes), in turn, per case and n_X × n_Y
 #include <Eigen/Geometry>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -151,19 +154,48 @@ static int plate(int threads, int argc, char** argv) {
   return 0;
 }
 
+struct Case {
+  const char* name;
+  Eigen::Vector3d lo;
+  double side, ref;
+};
+const Case cases[] = {{"self", {0, 0, 0}, 1.0, 0.124155377},
+                      {"shift 0.01", {0.01, 0, 0}, 1.0, 0.126529335},
+                      {"shift 0.02", {0.02, 0, 0}, 1.0, 0.133060278},
+                      {"side 0.875", {0.0625, 0.0625, 0.0625}, 0.875, 0.201406692}};
+const int pairs[][2] = {{4, 4}, {6, 6}, {8, 8}, {6, 8}, {12, 12}, {12, 16}, {16, 16}};
+
+// The cost of the gradient: ρ̃ alone, then ρ̃ with ∂ρ̃/∂(both bodies' nodes), per case and pair.
+static int gradient_cost(int threads, int max_n) {
+  detail::CellDistanceOptions o;
+  o.threads = threads;
+  std::printf("%-11s %7s %12s %9s %9s %7s %12s\n", "case", "nX x nY", "rho", "t_value", "t_grad",
+              "ratio", "|grad|");
+  for (const Case& c : cases)
+    for (const auto& p : pairs) {
+      if (p[1] > max_n) continue;
+      const HexCells x = detail::hex_cube(Eigen::Vector3d::Zero(), 1.0, p[0]);
+      const HexCells y = detail::hex_cube(c.lo, c.side, p[1]);
+      const double t0 = now();
+      const double value = detail::cell_rho(x, y, o).rho;
+      const double t1 = now();
+      detail::CellRhoGradient g;
+      const double again = detail::cell_rho(x, y, o, &g).rho;
+      const double t2 = now();
+      if (again != value) std::printf("(the values differ: %.17g)\n", again);
+      std::printf("%-11s %3d x %-3d %12.9f %9.3f %9.3f %7.2f %12.5e\n", c.name, p[0], p[1], value,
+                  t1 - t0, t2 - t1, (t2 - t1) / (t1 - t0),
+                  std::sqrt(g.x.squaredNorm() + g.y.squaredNorm()));
+      std::fflush(stdout);
+    }
+  return 0;
+}
+
 int main(int argc, char** argv) {
   const int threads = argc > 1 ? std::atoi(argv[1]) : 1;
   if (argc > 2 && std::string(argv[2]) == "plate") return plate(threads, argc, argv);
-  struct Case {
-    const char* name;
-    Eigen::Vector3d lo;
-    double side, ref;
-  };
-  const Case cases[] = {{"self", {0, 0, 0}, 1.0, 0.124155377},
-                        {"shift 0.01", {0.01, 0, 0}, 1.0, 0.126529335},
-                        {"shift 0.02", {0.02, 0, 0}, 1.0, 0.133060278},
-                        {"side 0.875", {0.0625, 0.0625, 0.0625}, 0.875, 0.201406692}};
-  const int pairs[][2] = {{4, 4}, {6, 6}, {8, 8}, {6, 8}, {12, 12}, {12, 16}, {16, 16}};
+  if (argc > 2 && std::string(argv[2]) == "gradient")
+    return gradient_cost(threads, argc > 3 ? std::atoi(argv[3]) : 8);
   detail::CellDistanceOptions o;
   o.threads = threads;
   o.grade_tangential = !(argc > 2 && std::string(argv[2]) == "flat");

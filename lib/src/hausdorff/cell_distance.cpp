@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "../common/gauss_legendre.hpp"
 #include "../common/surface_bvh.hpp"
 #include "body_integral.hpp"
+#include "cell_rule.hpp"
 #include "softhd/error.hpp"
 #include "softhd/parallel.hpp"
 
@@ -19,128 +19,14 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// The corners' reference signs (Gmsh's order).
-constexpr int kSign[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
-                             {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
-
-// One cell's corners (8 by 3, row-major).
-struct Cell {
-  double p[8][3];
-};
-
-// x(ξ) = Σ_i N_i(ξ) x_i, N_i = Π_k (1 + ξ_k s_ik)/2, and det ∂x/∂ξ.
-void map_point(const Cell& c, const double xi[3], double x[3], double* det) {
-  double jac[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  // jac[k][d] = ∂x_d/∂ξ_k
-  x[0] = x[1] = x[2] = 0.0;
-  for (int i = 0; i < 8; ++i) {
-    double f[3], df[3];
-    for (int k = 0; k < 3; ++k) {
-      f[k] = 0.5 * (1.0 + xi[k] * kSign[i][k]);
-      df[k] = 0.5 * kSign[i][k];
-    }
-    const double n = f[0] * f[1] * f[2];
-    const double dn[3] = {df[0] * f[1] * f[2], f[0] * df[1] * f[2], f[0] * f[1] * df[2]};
-    for (int d = 0; d < 3; ++d) {
-      x[d] += n * c.p[i][d];
-      for (int k = 0; k < 3; ++k) jac[k][d] += dn[k] * c.p[i][d];
-    }
-  }
-  if (det)
-    *det = jac[0][0] * (jac[1][1] * jac[2][2] - jac[1][2] * jac[2][1]) -
-           jac[0][1] * (jac[1][0] * jac[2][2] - jac[1][2] * jac[2][0]) +
-           jac[0][2] * (jac[1][0] * jac[2][1] - jac[1][1] * jac[2][0]);
-}
-
-double signed_distance(const SurfaceDistance& s, const double x[3]) {
-  return s.at(Eigen::Vector3d(x[0], x[1], x[2])).sd;
-}
-
-// d̃^4 = ((J/|Ω_X|)^(−1/4) − ε)^4.
-double field4(double j, double source_volume, double eps) {
-  const double d = std::pow(j / source_volume, -0.25) - eps;
-  const double d2 = d * d;
-  return d2 * d2;
-}
-
-// Composite Gauss on [−1, 1], panels graded geometrically (first d0, ratio q) on both sides of
-// the feature f (inside or outside the interval); appends (ξ, weight).
-void graded_line(double f, double d0, double q, const std::vector<double>& gx,
-                 const std::vector<double>& gw, std::vector<double>* x, std::vector<double>* w) {
-  std::vector<double> br = {-1.0, 1.0};
-  if (f > -1.0 && f < 1.0) br.push_back(f);
-  for (int sgn = -1; sgn <= 1; sgn += 2)
-    for (double t = d0; t < 4.0; t *= q) {
-      const double b = f + sgn * t;
-      if (b > -1.0 && b < 1.0) br.push_back(b);
-    }
-  std::sort(br.begin(), br.end());
-  double a = br[0];
-  for (std::size_t k = 1; k < br.size(); ++k) {
-    const double b = br[k];
-    if (b - a <= 1e-13) continue;  // a root on an end, within rounding
-    for (std::size_t g = 0; g < gx.size(); ++g) {
-      x->push_back(a + 0.5 * (b - a) * (gx[g] + 1.0));
-      w->push_back(0.5 * (b - a) * gw[g]);
-    }
-    a = b;
-  }
-}
-
-// Where sd crosses 0 on the reference line ξ_axis ∈ [−1, 1] (the other two coordinates in
-// xi): Illinois regula falsi inside, the linear extrapolation of the ends' values outside
-// (returned as is; a value beyond ±2 means no crossing within half a cell).
-double crossing(const Cell& c, const SurfaceDistance& s, double xi[3], int axis, double s0,
-                double s1) {
-  if (s0 == 0.0) return -1.0;
-  if (s1 == 0.0) return 1.0;
-  if ((s0 < 0) == (s1 < 0)) return s0 == s1 ? 1e300 : -1.0 + 2.0 * s0 / (s0 - s1);
-  double a = -1.0, b = 1.0, fa = s0, fb = s1;
-  int side = 0;
-  for (int it = 0; it < 60 && b - a > 1e-13; ++it) {
-    const double m = (a * fb - b * fa) / (fb - fa);
-    double x[3];
-    xi[axis] = m;
-    map_point(c, xi, x, nullptr);
-    const double fm = signed_distance(s, x);
-    if (fm == 0.0) return m;
-    if ((fm < 0) == (fb < 0)) {
-      b = m, fb = fm;
-      if (side == -1) fa *= 0.5;
-      side = -1;
-    } else {
-      a = m, fa = fm;
-      if (side == 1) fb *= 0.5;
-      side = 1;
-    }
-  }
-  return 0.5 * (a + b);
-}
-
-// The rule's fixed parts.
-struct Rule {
-  std::vector<double> tx, tw;  // tangential Gauss
-  std::vector<double> px, pw;  // per panel, and along a line without a crossing
-  double eps, d0, q, volume;   // ε, first panel (physical), ratio, |Ω_X|
-  bool grade_tangential;
-  double d0t;                           // the tangential rule's first panel (physical)
-  std::vector<double> qx, qw;           // its points per panel
-  const BodyIntegral* exact = nullptr;  // diagnostics: J itself at every near point
-  bool hybrid = false;
-};
-
-// f(ξ) trilinear through the samples at ξ_k = ±1/√3 (sample g = i + 2j + 4k).
-double interpolate(const double f[8], const double xi[3]) {
-  const double r3 = std::sqrt(3.0);
-  double t[3];
-  for (int k = 0; k < 3; ++k) t[k] = 0.5 * (xi[k] * r3 + 1.0);
-  double v = 0.0;
-  for (int g = 0; g < 8; ++g) {
-    double wgt = 1.0;
-    for (int k = 0; k < 3; ++k) wgt *= ((g >> k) & 1) ? t[k] : 1.0 - t[k];
-    v += wgt * f[g];
-  }
-  return v;
-}
+using cell_rule::Cell;
+using cell_rule::field4;
+using cell_rule::interpolate;
+using cell_rule::kSign;
+using cell_rule::Line;
+using cell_rule::map_point;
+using cell_rule::Rule;
+using cell_rule::signed_distance;
 
 // J at a point of a near cell from the profile P = P_ε(sd) there: the factor, P · exp(f); with
 // `hybrid` the difference, P + g, where it changes P by at most half (just outside the source J
@@ -157,57 +43,22 @@ double model_j(double p, const double f[8], const double g[8], const double xi[3
 // ∫_cell d̃^4 by the graded rule (J = P_ε(sd) exp(f)); counts its points.
 double near_cell(const Cell& c, const double f[8], const double g[8], const SurfaceDistance& s,
                  const Rule& r, long* points) {
-  // The axis along which sd changes most between opposite face centres (ties: the first).
-  double change[3], ends[3][2], length[3];
-  for (int k = 0; k < 3; ++k) {
-    double xi[3] = {0, 0, 0}, x0[3], x1[3];
-    xi[k] = -1.0;
-    map_point(c, xi, x0, nullptr);
-    xi[k] = 1.0;
-    map_point(c, xi, x1, nullptr);
-    ends[k][0] = signed_distance(s, x0), ends[k][1] = signed_distance(s, x1);
-    change[k] = std::abs(ends[k][1] - ends[k][0]);
-    length[k] = std::sqrt((x1[0] - x0[0]) * (x1[0] - x0[0]) + (x1[1] - x0[1]) * (x1[1] - x0[1]) +
-                          (x1[2] - x0[2]) * (x1[2] - x0[2]));
-  }
-  const double top = std::max({change[0], change[1], change[2]});
-  int axis = 0;
-  while (change[axis] < top * (1.0 - 1e-9)) ++axis;
+  Line centre[3];  // the centre lines: the axis along which sd changes most, the tangential rules
+  const int axis = cell_rule::cell_axes(c, s, centre);
   const int b = (axis + 1) % 3, e = (axis + 2) % 3;
-  // The tangential rules: Gauss, or graded towards the crossing of the cell's centre line along
-  // that axis (an edge or corner of the source in the cell) when r.grade_tangential.
-  std::vector<double> bx = r.tx, bw = r.tw, ex = r.tx, ew = r.tw;
-  for (int k : {b, e}) {
-    if (!r.grade_tangential) break;
-    double xi[3] = {0, 0, 0};
-    const double root = crossing(c, s, xi, k, ends[k][0], ends[k][1]);
-    if (std::abs(root) > 2.0) continue;
-    std::vector<double>& gx = k == b ? bx : ex;
-    std::vector<double>& gw = k == b ? bw : ew;
-    gx.clear(), gw.clear();
-    graded_line(root, 2.0 * r.d0t / length[k], r.q, r.qx, r.qw, &gx, &gw);
-  }
+  cell_rule::tangential_rule(c, s, r, b, &centre[b], false);
+  cell_rule::tangential_rule(c, s, r, e, &centre[e], false);
+  const std::vector<double>&bx = centre[b].rule.x, &bw = centre[b].rule.w;
+  const std::vector<double>&ex = centre[e].rule.x, &ew = centre[e].rule.w;
   double sum = 0.0;
-  std::vector<double> lx, lw;
+  Line line;
   for (std::size_t i = 0; i < bx.size(); ++i)
     for (std::size_t j = 0; j < ex.size(); ++j) {
-      double xi[3], x0[3], x1[3];
-      xi[b] = bx[i], xi[e] = ex[j];
-      xi[axis] = -1.0;
-      map_point(c, xi, x0, nullptr);
-      xi[axis] = 1.0;
-      map_point(c, xi, x1, nullptr);
-      const double s0 = signed_distance(s, x0), s1 = signed_distance(s, x1);
-      const double len =
-          std::sqrt((x1[0] - x0[0]) * (x1[0] - x0[0]) + (x1[1] - x0[1]) * (x1[1] - x0[1]) +
-                    (x1[2] - x0[2]) * (x1[2] - x0[2]));
-      const double root = crossing(c, s, xi, axis, s0, s1);
-      lx.clear(), lw.clear();
-      if (std::abs(root) <= 2.0) {
-        graded_line(root, 2.0 * r.d0 / len, r.q, r.px, r.pw, &lx, &lw);
-      } else {
-        lx = r.px, lw = r.pw;
-      }
+      double xi[3];
+      xi[b] = bx[i], xi[e] = ex[j], xi[axis] = 0.0;
+      cell_rule::line_ends(c, s, xi, axis, &line);
+      cell_rule::line_rule(c, s, xi, axis, r.d0, r.q, r.px, r.pw, r.px, r.pw, &line, false);
+      const std::vector<double>&lx = line.rule.x, &lw = line.rule.w;
       for (std::size_t k = 0; k < lx.size(); ++k) {
         xi[axis] = lx[k];
         double x[3], det;
@@ -225,13 +76,6 @@ double near_cell(const Cell& c, const double f[8], const double g[8], const Surf
       *points += static_cast<long>(lx.size());
     }
   return sum;
-}
-
-Cell cell_of(const HexCells& body, Eigen::Index c) {
-  Cell out;
-  for (int i = 0; i < 8; ++i)
-    for (int d = 0; d < 3; ++d) out.p[i][d] = body.nodes(body.cells(c, i), d);
-  return out;
 }
 
 void check_cells(const HexCells& body) {
@@ -276,7 +120,7 @@ double halfspace_profile(double sd, double epsilon) {
   return kPi / t - kPi * epsilon / (3.0 * t * t);
 }
 
-TriangleSurface hex_boundary(const HexCells& body) {
+TriangleSurface hex_boundary(const HexCells& body, std::vector<int>* point_node) {
   check_cells(body);
   // The outward faces in Gmsh's corner order.
   constexpr int kFace[6][4] = {{0, 3, 2, 1}, {0, 1, 5, 4}, {0, 4, 7, 3},
@@ -307,8 +151,12 @@ TriangleSurface hex_boundary(const HexCells& body) {
   }
   TriangleSurface s;
   s.points.resize(used, 3);
+  if (point_node) point_node->assign(static_cast<std::size_t>(used), -1);
   for (Eigen::Index v = 0; v < body.nodes.rows(); ++v)
-    if (id[v] >= 0) s.points.row(id[v]) = body.nodes.row(v);
+    if (id[v] >= 0) {
+      s.points.row(id[v]) = body.nodes.row(v);
+      if (point_node) (*point_node)[static_cast<std::size_t>(id[v])] = static_cast<int>(v);
+    }
   s.triangles.resize(static_cast<Eigen::Index>(tris.size()), 3);
   for (std::size_t t = 0; t < tris.size(); ++t)
     for (int k = 0; k < 3; ++k) s.triangles(t, k) = tris[t][k];
@@ -345,6 +193,19 @@ double enclosed_volume(const TriangleSurface& s) {
     v += a.dot(b.cross(c));
   }
   return v / 6.0;
+}
+
+Eigen::MatrixXd enclosed_volume_gradient(const TriangleSurface& s) {
+  // ∂/∂a of a·(b × c)/6 = (b × c)/6, ∂/∂b = (c × a)/6, ∂/∂c = (a × b)/6
+  Eigen::MatrixXd g = Eigen::MatrixXd::Zero(s.points.rows(), 3);
+  for (Eigen::Index t = 0; t < s.triangles.rows(); ++t) {
+    const Eigen::Vector3d a = s.points.row(s.triangles(t, 0)), b = s.points.row(s.triangles(t, 1)),
+                          c = s.points.row(s.triangles(t, 2));
+    g.row(s.triangles(t, 0)) += b.cross(c).transpose() / 6.0;
+    g.row(s.triangles(t, 1)) += c.cross(a).transpose() / 6.0;
+    g.row(s.triangles(t, 2)) += a.cross(b).transpose() / 6.0;
+  }
+  return g;
 }
 
 namespace {
@@ -387,17 +248,9 @@ bool crossed(const Cell& c, const SurfaceDistance& s, const std::vector<SignedDi
 double sum_cells(const std::vector<Cell>& cells, const Source& src, const Rule& rule,
                  const CellDistanceOptions& o, int level, OuterMean* out) {
   const std::size_t n = cells.size();
-  const double g = 1.0 / std::sqrt(3.0);
-  Eigen::MatrixXd samples(8 * n, 3);  // every cell's 2×2×2 Gauss points, weights det J
-  Eigen::VectorXd weight(8 * n);
-  for (std::size_t c = 0; c < n; ++c)
-    for (int q = 0; q < 8; ++q) {
-      const double xi[3] = {(q & 1) ? g : -g, (q & 2) ? g : -g, (q & 4) ? g : -g};
-      double x[3], det;
-      map_point(cells[c], xi, x, &det);
-      samples.row(8 * c + q) << x[0], x[1], x[2];
-      weight[8 * c + q] = det;
-    }
+  Eigen::MatrixXd samples;  // every cell's 2×2×2 Gauss points, weights det J
+  Eigen::VectorXd weight;
+  cell_rule::cell_samples(cells, &samples, &weight);
   Eigen::VectorXd j_s;
   src.j.evaluate(samples, &j_s);
   const int threads = resolve_threads(o.threads);
@@ -408,17 +261,7 @@ double sum_cells(const std::vector<Cell>& cells, const Source& src, const Rule& 
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
   for (std::size_t c = 0; c < n; ++c) {
     const Cell& cell = cells[c];
-    double centre[3];
-    const double zero[3] = {0, 0, 0};
-    map_point(cell, zero, centre, nullptr);
-    double diameter = 0.0;  // the longest body diagonal
-    for (int i = 0; i < 4; ++i) {
-      double d2 = 0.0;
-      for (int d = 0; d < 3; ++d)
-        d2 += std::pow(cell.p[i][d] - cell.p[(i < 2 ? i + 6 : i + 2)][d], 2);
-      diameter = std::max(diameter, std::sqrt(d2));
-    }
-    if (std::abs(signed_distance(src.sd, centre)) > o.near_factor * diameter) {
+    if (!cell_rule::is_near(cell, src.sd, o.near_factor)) {
       for (int q = 0; q < 8; ++q)
         part[c] += weight[8 * c + q] * field4(j_s[8 * c + q], rule.volume, o.epsilon);
       continue;
@@ -453,30 +296,38 @@ double sum_cells(const std::vector<Cell>& cells, const Source& src, const Rule& 
 
 OuterMean directed_outer_mean(const HexCells& outer, const BodyIntegral& source_j,
                               const SurfaceDistance& source_sd, double source_volume,
-                              const CellDistanceOptions& options) {
+                              const CellDistanceOptions& options, OuterMeanGradient* grad) {
   options.validate();
   check_cells(outer);
-  Rule rule;
-  gauss_legendre(options.tangential_points, &rule.tx, &rule.tw);
-  gauss_legendre(options.panel_points, &rule.px, &rule.pw);
-  rule.eps = options.epsilon;
-  rule.d0 = options.first_panel * options.epsilon;
-  rule.q = options.grading;
-  rule.volume = source_volume;
-  rule.grade_tangential = options.grade_tangential;
-  rule.d0t = options.tangential_first_panel * options.epsilon;
+  if (grad)
+    return outer_mean_with_gradient(outer, source_j, source_sd, source_volume, options, grad);
+  Rule rule = cell_rule::make_rule(options, source_volume);
   if (options.exact_near) rule.exact = &source_j;
-  rule.hybrid = options.hybrid;
-  gauss_legendre(options.tangential_panel_points, &rule.qx, &rule.qw);
   std::vector<Cell> cells;
-  for (Eigen::Index c = 0; c < outer.cells.rows(); ++c) cells.push_back(cell_of(outer, c));
+  for (Eigen::Index c = 0; c < outer.cells.rows(); ++c)
+    cells.push_back(cell_rule::cell_of(outer, c));
   OuterMean out;
   const double sum = sum_cells(cells, Source{source_j, source_sd}, rule, options, 0, &out);
   out.mean = sum / out.volume;
   return out;
 }
 
-CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions& options) {
+namespace {
+
+// The bars of a directed mean on the source's surface points (through J, sd and |Ω_X|), times
+// scale, added to the source's nodes (point_node: the surface point → node map).
+void add_source_bars(const OuterMeanGradient& g, double scale, const TriangleSurface& surface,
+                     const std::vector<int>& point_node, Eigen::MatrixXd* nodes) {
+  const Eigen::MatrixXd bars =
+      g.source + g.source_volume * enclosed_volume_gradient(surface);  // ∂|Ω_X|/∂points
+  for (Eigen::Index a = 0; a < bars.rows(); ++a)
+    nodes->row(point_node[static_cast<std::size_t>(a)]) += scale * bars.row(a);
+}
+
+}  // namespace
+
+CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions& options,
+                 CellRhoGradient* grad) {
   options.validate();
   BodyIntegralOptions bo;
   bo.epsilon = options.epsilon;
@@ -485,14 +336,24 @@ CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions
   bo.tolerance = options.tolerance;
   bo.near_ratio = options.j_near_ratio;
   bo.angle_points = options.j_angle_points;
-  const TriangleSurface sx = hex_boundary(x), sy = hex_boundary(y);
+  std::vector<int> node_x, node_y;
+  const TriangleSurface sx = hex_boundary(x, &node_x), sy = hex_boundary(y, &node_y);
   const BodyIntegral jx(sx, bo), jy(sy, bo);
   const SurfaceDistance dx(sx), dy(sy);
   CellRho r;
-  r.a = directed_outer_mean(y, jx, dx, enclosed_volume(sx), options);
-  r.b = directed_outer_mean(x, jy, dy, enclosed_volume(sy), options);
+  OuterMeanGradient ga, gb;
+  r.a = directed_outer_mean(y, jx, dx, enclosed_volume(sx), options, grad ? &ga : nullptr);
+  r.b = directed_outer_mean(x, jy, dy, enclosed_volume(sy), options, grad ? &gb : nullptr);
   // ρ̃ = ((A² + B²)/2)^(1/2), A = (A^4)^(1/4)
   r.rho = std::sqrt(0.5 * (std::sqrt(r.a.mean) + std::sqrt(r.b.mean)));
+  if (!grad) return r;
+  // ∂ρ̃/∂A^4 = 1/(8 ρ̃ √(A^4)), likewise B
+  const double ca = 1.0 / (8.0 * r.rho * std::sqrt(r.a.mean));
+  const double cb = 1.0 / (8.0 * r.rho * std::sqrt(r.b.mean));
+  grad->y = ca * ga.outer;
+  grad->x = cb * gb.outer;
+  add_source_bars(ga, ca, sx, node_x, &grad->x);
+  add_source_bars(gb, cb, sy, node_y, &grad->y);
   return r;
 }
 

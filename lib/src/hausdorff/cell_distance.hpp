@@ -1,7 +1,8 @@
 #pragma once
 // The directed outer mean over the outer body's cells, and the cell-integrated ρ̃ (internal, not
 // an option of the distance yet; docs/formulation.md §2.8, "The outer mean in C++"), for
-// α = β = 4, γ = 2 (the paper's), value only:
+// α = β = 4, γ = 2 (the paper's), and its exact gradient with respect to the nodes of both bodies
+// (the default rule only; cell_distance_gradient.cpp):
 //
 //     A^β = (1/|Ω_Y|) ∫_Ω_Y d̃_X(y)^β dy,   d̃_X(y) = (J_X(y)/|Ω_X|)^(−1/α) − ε,
 //     ρ̃ = ((A^γ + B^γ)/2)^(1/γ)   (B likewise, the bodies exchanged),
@@ -21,6 +22,7 @@
 // docs/formulation.md §2.8); refine_crossed splits those cells.
 
 #include <Eigen/Core>
+#include <vector>
 
 #include "softhd/triangle_surface.hpp"
 
@@ -78,11 +80,15 @@ struct CellDistanceOptions {
 };
 
 /// The faces of a hexahedral mesh that belong to one cell only, as outward triangles (two per
-/// quadrilateral face), over the nodes they use. InvalidArgument for a node id out of range.
-TriangleSurface hex_boundary(const HexCells& body);
+/// quadrilateral face), over the nodes they use; with point_node, the node of each surface point.
+/// InvalidArgument for a node id out of range.
+TriangleSurface hex_boundary(const HexCells& body, std::vector<int>* point_node = nullptr);
 
 /// The volume a closed outward triangle surface bounds: Σ_t a·(b × c)/6.
 double enclosed_volume(const TriangleSurface& surface);
+/// Its gradient with respect to the surface's points (N by 3): Σ_t over the triangles at a point,
+/// (b × c)/6 for a, (c × a)/6 for b, (a × b)/6 for c.
+Eigen::MatrixXd enclosed_volume_gradient(const TriangleSurface& surface);
 
 /// The directed mean and what it cost.
 struct OuterMean {
@@ -92,10 +98,20 @@ struct OuterMean {
   long near_points = 0;  ///< their quadrature points (one signed distance each)
 };
 
-/// A^4 of the outer cells against the source (its J, its signed distance, |Ω_X|).
+/// The directed mean's gradient with respect to what it depends on.
+struct OuterMeanGradient {
+  Eigen::MatrixXd outer;       ///< ∂mean/∂(the outer body's nodes), N_outer by 3
+  Eigen::MatrixXd source;      ///< ∂mean/∂(the source's surface points) through J and sd
+  double source_volume = 0.0;  ///< ∂mean/∂|Ω_X|
+};
+
+/// A^4 of the outer cells against the source (its J, its signed distance, |Ω_X|); with grad,
+/// also its gradient (InvalidArgument naming the field for exact_near, hybrid or
+/// refine_crossed > 0: the gradient is built for the default rule only).
 OuterMean directed_outer_mean(const HexCells& outer, const BodyIntegral& source_j,
                               const SurfaceDistance& source_sd, double source_volume,
-                              const CellDistanceOptions& options);
+                              const CellDistanceOptions& options,
+                              OuterMeanGradient* grad = nullptr);
 
 /// ρ̃ of two hexahedral bodies (α = β = 4, γ = 2), and its two directed means.
 struct CellRho {
@@ -103,7 +119,16 @@ struct CellRho {
   OuterMean a;  ///< over Y's cells, against X
   OuterMean b;  ///< over X's cells, against Y
 };
-CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions& options);
+/// The gradient of ρ̃ with respect to the nodes of both bodies.
+struct CellRhoGradient {
+  Eigen::MatrixXd x;  ///< ∂ρ̃/∂(X's nodes), N_x by 3
+  Eigen::MatrixXd y;  ///< ∂ρ̃/∂(Y's nodes), N_y by 3
+};
+/// With grad, also ∂ρ̃/∂ of both bodies' nodes: exact for the discrete ρ̃ (the panels' count fixed,
+/// their breakpoints moving with the crossings) where the rule's discrete choices (near or far,
+/// the graded axis, which lines cross) do not change; nothing of it is computed without grad.
+CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions& options,
+                 CellRhoGradient* grad = nullptr);
 
 /// The half-space profile J of (r + ε)^−4 at signed distance sd (negative inside, depth
 /// d = −sd): 4π/(3ε) − π/(d + ε) + πε/(3(d + ε)²) inside, π/(D + ε) − πε/(3(D + ε)²) outside.
