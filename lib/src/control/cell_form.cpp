@@ -81,4 +81,6 @@ CellRho CellForm::evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad) cons
   return r;
 }
 
+double CellForm::self_rho() const { return cell_rho(target_, target_, options_).rho; }
+
 }  // namespace softhd::detail

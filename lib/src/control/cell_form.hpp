@@ -32,7 +32,10 @@ class CellForm {
   /// with grad, dρ̃/du into *grad (node-major).
   CellRho evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad = nullptr) const;
 
+  /// ρ̃ of the target's cells against themselves (the self floor).
+  double self_rho() const;
   const HexCells& target() const { return target_; }
+  long body_hexahedra() const { return static_cast<long>(body_cells_.cells.rows()); }
 
  private:
   const fe::Mesh& body_;

@@ -352,6 +352,14 @@ void ShapeObjective::set_pose_warm_start(const Eigen::VectorXd& xi) {
   if (xi.size() == 0) throw InvalidArgument("set_pose_warm_start: an empty twist");
   impl_->warm_twist = impl_->pose->checked(xi);
 }
+double ShapeObjective::cell_rho(const Eigen::VectorXd* u) const {
+  if (!impl_->cells) throw InvalidArgument("cell_rho: the objective's quadrature is collocation");
+  return u ? impl_->cells->evaluate(*u).rho : impl_->cells->self_rho();
+}
+std::pair<long, long> ShapeObjective::cell_counts() const {
+  if (!impl_->cells) return {0, 0};
+  return {impl_->cells->body_hexahedra(), static_cast<long>(impl_->cells->target().cells.rows())};
+}
 const HausdorffTarget& ShapeObjective::target() const { return impl_->target; }
 const ShapeObjectiveOptions& ShapeObjective::options() const { return impl_->options; }
 const fe::Assembler& ShapeObjective::assembler() const { return impl_->assembler; }

@@ -21,6 +21,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "softhd/control/moving_cloud.hpp"
 #include "softhd/control/state_path.hpp"
@@ -240,6 +241,13 @@ class ShapeObjective {
   /// state's fields, cap_from_quantile). Throws InvalidArgument as DistanceForm::validate for
   /// the moving cloud's size.
   void set_form(DistanceForm form);
+
+  /// Quadrature cells only (else InvalidArgument): ρ̃ by the cell form of the body at the
+  /// displacement *u against the target's cells (the matched floor, u the known map), or, with
+  /// u null, of the target's cells against themselves (the self floor).
+  double cell_rho(const Eigen::VectorXd* u) const;
+  /// Quadrature cells: the hexahedra of the body and of the target ({0, 0} with collocation).
+  std::pair<long, long> cell_counts() const;
 
   /// The target with its trees.
   const HausdorffTarget& target() const;
