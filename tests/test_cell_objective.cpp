@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <memory>
 #include <string>
@@ -16,6 +17,7 @@
 #include "softhd/control/scene.hpp"
 #include "softhd/control/scene_target.hpp"
 #include "softhd/control/shape_objective.hpp"
+#include "softhd/control/tracking_run.hpp"
 #include "softhd/error.hpp"
 
 namespace softhd::test {
@@ -139,6 +141,35 @@ TEST(CellObjective, RefusesWhatItCannotDo) {
   o.target_cells = std::make_shared<const fe::Mesh>(A2.mesh());
   expect_error<InvalidArgument>(
       [&] { ShapeObjective(A2, space2, HausdorffTarget(random_cloud(10, 2, 3)), o); }, "2D");
+}
+
+// The run with quadrature cells: the floors by the cell form. The arc's grid here is the body's
+// own mesh (cells [2, 1, 1]), so the body deformed by the known map and the target's cells are the
+// same hexahedra: the matched floor equals the self floor (both computed: 2 ≤ 2 × 2 hexahedra).
+// A target without cells falls back to collocation, as its description says.
+TEST(CellObjective, TheRunsFloorsAreTheCellForms) {
+  Scene s = plate();
+  s.target_json = R"({ "kind": "arc", "angle": 0.4, "cells": [2, 1, 1] })";
+  TrackingRunOptions o;
+  o.distance.quadrature = Quadrature::cells;
+  o.optimiser.max_iterations = 1;
+  o.threads = 1;
+  const TrackingRunSummary r = TrackingRun(s, o).run();
+  EXPECT_NE(r.target.find("; quadrature cells"), std::string::npos) << r.target;
+  ASSERT_TRUE(r.floor_matched && r.floor_self);
+  EXPECT_GT(*r.floor_matched, 0.0);
+  EXPECT_NEAR(*r.floor_matched, *r.floor_self, 1e-12 * *r.floor_self);
+  EXPECT_EQ(r.levels.size(), 0u);  // one level
+
+  const std::string file = ::testing::TempDir() + "softhd_cell_objective.xyz";
+  std::FILE* f = std::fopen(file.c_str(), "w");
+  ASSERT_NE(f, nullptr);
+  std::fputs("0 0 0\n1 0 0.1\n2 0.5 0.2\n1.5 1 0.5\n", f);
+  std::fclose(f);
+  o.target.file = file;
+  const TrackingRunSummary c = TrackingRun(s, o).run();
+  EXPECT_NE(c.target.find("the target has no cells, collocation instead"), std::string::npos)
+      << c.target;
 }
 
 }  // namespace
