@@ -263,7 +263,7 @@ struct TrackingRun::Impl {
             "levels: a target in the camera's frame (joint pose) runs on one level (levels 1)");
       so.pose = start_pose(target, a, so, options.threads);
     }
-    HausdorffOptions points = so.hausdorff;  // the target's points (fields, floors): collocation
+    HausdorffOptions points = so.hausdorff;  // the target's points (fields): collocation
     points.quadrature = Quadrature::collocation;
     objective = std::make_unique<ShapeObjective>(
         a, c, HausdorffTarget(target.cloud, points), so,
