@@ -64,6 +64,11 @@ options:
                      exactly wherever its far field would not be cheaper)
   --tol T            tree: relative error bound on every kernel sum (default {tol},
                      which ends the bending and torsion runs at exact's rho/floor)
+  --quadrature Q     collocation | cells: where the distance is integrated (default: the
+                     scene target's "quadrature", else collocation); cells: over the
+                     body's cells and the target's (an arc, or a cloud with solved_on;
+                     other targets fall back to collocation), one level, the symmetric
+                     form with the default alpha beta gamma, not with --algorithm newton
   --distance F       symmetric | scan_to_body: the distance's form (docs/formulation.md
                      section 8; default: the scene target's "distance", else symmetric);
                      --distance, --cap or --cap-q replace the target's form as a whole
@@ -130,6 +135,8 @@ scene targets ("target" in the scene file):
       "cap": C  or  "cap": {"quantile": Q, "factor": F}   soft cap of every field
           value, fixed or F x the Q-quantile of the scan's d~ to the body at rest
       "cap_q": Q   the cap's sharpness (default 4)
+      "quadrature": "collocation" | "cells"   where the distance is integrated
+          (--quadrature overrides it)
   a cloud target may be in the camera's frame (docs/formulation.md section 8.10):
       "frame": "camera"   the pose (scan -> body) is refined with the control (then no
           "camera": the visible distance's camera is the pose's; no clean.crop)
@@ -273,6 +280,8 @@ void parse_objective(Args& args, const TrackingRunOptions& d, TrackingRunOptions
   if (o.distance.method == Method::nearest)
     throw UsageError("--method: nearest has no gradient; expected exact or tree");
   o.distance.tolerance = args.number("--tol", d.distance.tolerance);
+  if (const std::optional<std::string> q = args.value("--quadrature"))
+    o.distance.quadrature = named("--quadrature", *q, quadrature_from_string);
   o.tikhonov.mass = args.number("--tikhonov-mass", d.tikhonov.mass);
   o.tikhonov.gradient = args.number("--tikhonov-grad", d.tikhonov.gradient);
   const std::optional<std::string> distance = args.value("--distance");

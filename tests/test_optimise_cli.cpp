@@ -568,6 +568,12 @@ TEST_F(OptimiseCli, BadInputGivesExitCode2AndOneLine) {
   expect_refused(scene() + " --pose-method projection",
                  "--pose-method finds the pose of a target in the camera");
   expect_refused(scene() + " --pose-method both", "--pose-method: unknown");
+  expect_refused(scene() + " --quadrature points", "--quadrature: unknown quadrature 'points'");
+  expect_refused(scene() + " --quadrature cells --algorithm newton",
+                 "quadrature cells has no Hessian-vector product");
+  expect_refused(scene_with("quadrature.json",
+                            [](nlohmann::json& j) { j["target"]["quadrature"] = "points"; }),
+                 "target.quadrature must be \"collocation\" or \"cells\"");
   // Every bad value names its flag first, also where the objective's or the optimiser's own
   // check refuses it.
   for (const auto& [args, start] : std::vector<std::pair<std::string, std::string>>{

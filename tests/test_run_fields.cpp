@@ -65,8 +65,9 @@ TEST(RunFields, EveryFieldOfTheOptionsHasARow) {
   [[maybe_unused]] auto& [algorithm, hessian, max_iterations, max_evaluations, max_seconds,
                           relative_change, move_limit, initial_control] = o.optimiser;
   EXPECT_EQ(fields_under("optimiser.").size(), 8u);
-  [[maybe_unused]] auto& [particles, volumes, params, method, tolerance, form] = o.distance;
-  EXPECT_EQ(fields_under("distance.").size(), 6u);
+  [[maybe_unused]] auto& [particles, volumes, params, method, tolerance, form, quadrature] =
+      o.distance;
+  EXPECT_EQ(fields_under("distance.").size(), 7u);
   [[maybe_unused]] auto& [alpha, beta, gamma, epsilon] = o.distance.params;
   EXPECT_EQ(fields_under("distance.params.").size(), 4u);
   softhd::TargetDistance d;
@@ -363,6 +364,8 @@ std::map<std::string, Variant> variants() {
       {"distance.params.epsilon", {s, [](O& o) { o.distance.params.epsilon = 2e-3; }}},
       {"distance.method", {s, [](O& o) { o.distance.method = softhd::Method::exact; }}},
       {"distance.tolerance", {s, [](O& o) { o.distance.tolerance = 2e-2; }}},
+      // The scene's arc has cells.
+      {"distance.quadrature", {s, [](O& o) { o.distance.quadrature = softhd::Quadrature::cells; }}},
       {"distance.form.sides",
        {s, [](O& o) { o.distance.form.emplace().sides = softhd::Sides::scan_to_body; }}},
       {"distance.form.cap", {s, [](O& o) { o.distance.form.emplace().cap = 0.1; }}},

@@ -306,7 +306,7 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
              tikhonov_grad=None, coarse_levels=None, levels=None, refined_move_limit=None,
              coarse_iterations=None, switch_decrease=None, coarse_tol=None,
              distance=None, cap=None, cap_q=None, initial=None, pose_move=None, pose_method=None,
-             callback=None, threads=0):
+             quadrature=None, callback=None, threads=0):
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
     target: the run ``softhd optimise`` makes (the library's TrackingRun), with its options and
     its defaults for every option left None (:func:`optimise_defaults` lists them, e.g. method
@@ -341,6 +341,10 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     alone; the result's ``pose`` is the final fit); pose_move, the joint pose's move limit as a
     fraction of the control's, in (0, 1] (default 1). algorithm "newton" (trust-region Newton-CG) uses the exact Hessian-vector
     product of J, or with hessian "gauss_newton" its positive semi-definite part (``--hessian``).
+    quadrature: "collocation" or "cells" (``--quadrature``; None: the scene target's
+    "quadrature", else collocation): cells integrates the distance over the body's cells and the
+    target's (an arc, or a cloud with "solved_on"; a target without cells falls back to
+    collocation, as its description says), on one level, not with algorithm "newton".
     """
     points = vols = file = None
     if isinstance(target, (str, bytes, _os.PathLike)):
@@ -362,7 +366,8 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
                           coarse_tol=coarse_tol, distance=distance,
                           cap=cap, cap_q=cap_q,
                           initial=None if initial is None else _as_float64(initial, "initial"),
-                          pose_move=pose_move, pose_method=pose_method, callback=callback,
+                          pose_move=pose_move, pose_method=pose_method, quadrature=quadrature,
+                          callback=callback,
                           threads=threads)
 
 

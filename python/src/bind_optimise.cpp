@@ -78,6 +78,7 @@ py::dict optimise_defaults() {
   out["initial"] = py::none();  // the scene's control.initial
   out["pose_move"] = d.pose.move;
   out["pose_method"] = to_string(d.pose.method);
+  out["quadrature"] = py::none();  // the scene target's "quadrature", else collocation
   out["max_seconds"] = d.optimiser.max_seconds;
   out["rel_tol"] = d.optimiser.relative_change;
   out["algorithm"] = to_string(d.optimiser.algorithm);
@@ -221,8 +222,9 @@ void bind_optimise(py::module_& m) {
          const std::optional<std::string>& distance, std::optional<double> cap,
          std::optional<double> cap_q, const std::optional<Eigen::VectorXd>& initial,
          std::optional<double> pose_move, const std::optional<std::string>& pose_method,
-         const py::object& callback, int threads) {
+         const std::optional<std::string>& quadrature, const py::object& callback, int threads) {
         TrackingRunOptions o;
+        if (quadrature) o.distance.quadrature = quadrature_from_string(*quadrature);
         if (initial) o.optimiser.initial_control = *initial;
         if (pose_move) o.pose.move = *pose_move;
         if (pose_method) {
@@ -278,8 +280,8 @@ void bind_optimise(py::module_& m) {
       py::arg("tikhonov_grad"), py::arg("coarse_levels"), py::arg("levels"),
       py::arg("refined_move_limit"), py::arg("coarse_iterations"), py::arg("switch_decrease"),
       py::arg("coarse_tol"), py::arg("distance"), py::arg("cap"), py::arg("cap_q"),
-      py::arg("initial"), py::arg("pose_move"), py::arg("pose_method"), py::arg("callback"),
-      py::arg("threads"));
+      py::arg("initial"), py::arg("pose_move"), py::arg("pose_method"), py::arg("quadrature"),
+      py::arg("callback"), py::arg("threads"));
   m.def(
       "optimise_fields",
       [] {

@@ -323,3 +323,20 @@ def test_initial_control_starts_there(scene_file):
         softhd.optimise(scene, max_iter=1, pose_move=0.0)
     with pytest.raises(softhd.InvalidArgument, match="pose_method finds the pose of a target"):
         softhd.optimise(scene, max_iter=1, pose_method="projection")
+
+
+def test_quadrature_cells_from_the_keyword_or_the_scene(scene_file):
+    """quadrature="cells" integrates the distance over the body's and the arc's cells, as the
+    scene target's "quadrature" does; an unknown name is refused naming the keyword."""
+    small = {**SMALL_ARC, "mesh": {**SMALL_ARC["mesh"], "cells": [4, 1, 1], "order": 1},
+             "target": {"kind": "arc", "angle": 1.0, "cells": [8, 2, 2]}}
+    scene = softhd.Scene.load(scene_file(small))
+    r = softhd.optimise(scene, max_iter=1, quadrature="cells")
+    assert r.target.endswith("; quadrature cells")
+    plain = softhd.optimise(scene, max_iter=1)
+    assert "quadrature" not in plain.target and plain.rho_start != r.rho_start
+    keyed = {**small, "target": {**small["target"], "quadrature": "cells"}}
+    s = softhd.optimise(softhd.Scene.load(scene_file(keyed, "keyed.json")), max_iter=1)
+    assert s.rho_start == r.rho_start and s.rho_final == r.rho_final
+    with pytest.raises(softhd.InvalidArgument, match="unknown quadrature 'points'"):
+        softhd.optimise(scene, max_iter=1, quadrature="points")

@@ -68,6 +68,18 @@ std::string to_string(Method method);
 /// The Method named "exact", "tree" or "nearest".
 Method method_from_string(const std::string& name);
 
+/// Where the distance's integrals are evaluated (docs/formulation.md §2.8).
+enum class Quadrature {
+  collocation,  ///< at the clouds' points with their volumes (the paper's; the default)
+  /// over the two bodies' cells: needs bodies with cells (an objective whose target has cells,
+  /// ShapeObjectiveOptions::target_cells); the point-cloud API refuses it
+  cells,
+};
+/// "collocation" / "cells"; quadrature_from_string throws InvalidArgument naming `quadrature`.
+std::string to_string(Quadrature quadrature);
+/// The Quadrature named "collocation" or "cells".
+Quadrature quadrature_from_string(const std::string& name);
+
 /// Evaluation settings.
 struct HausdorffOptions {
   HausdorffParams params;         ///< α, β, γ, ε (paper defaults)
@@ -91,6 +103,10 @@ struct HausdorffOptions {
   /// (softhd/work_share.hpp; MPI builds: softhd::mpi::work_share(comm)). Every process
   /// gets the whole result, equal to the serial one. Null (default): this process does all.
   std::shared_ptr<const WorkShare> share;
+  /// collocation (default) or cells. HausdorffTarget (hence softhd::hausdorff) refuses cells
+  /// (InvalidArgument naming `quadrature`): point clouds have no cells; ShapeObjective
+  /// integrates over the body's cells and its target's (ShapeObjectiveOptions::target_cells).
+  Quadrature quadrature = Quadrature::collocation;
 
   /// Throws InvalidArgument naming the first invalid field: a parameter
   /// (HausdorffParams::validate), `threads` (check_threads) or `tolerance`. Called by the

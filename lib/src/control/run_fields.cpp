@@ -59,6 +59,7 @@ const std::vector<RunField>& tracking_run_fields() {
       {"distance.params.epsilon", "--eps", "eps", "", SOFTHD_COPY(distance.params.epsilon)},
       {"distance.method", "--method", "method", "", SOFTHD_COPY(distance.method)},
       {"distance.tolerance", "--tol", "tol", "", SOFTHD_COPY(distance.tolerance)},
+      {"distance.quadrature", "--quadrature", "quadrature", "", SOFTHD_COPY(distance.quadrature)},
       {"distance.form.sides", "--distance", "distance", "", SOFTHD_COPY_FORM(sides)},
       {"distance.form.cap", "--cap", "cap", "", SOFTHD_COPY_FORM(cap)},
       {"distance.form.cap_quantile", "", "",

@@ -443,11 +443,13 @@ SceneTarget scene_target(const Scene& scene, const fe::Mesh& mesh, double memory
   if (kind == "arc" || kind == "cloud") {
     if (kind == "arc")
       io::check_keys(t, where, "target",
-                     {"kind", "angle", "cells", "distance", "cap", "cap_q", "surface", "camera"});
+                     {"kind", "angle", "cells", "distance", "cap", "cap_q", "surface", "camera",
+                      "quadrature"});
     if (kind == "cloud")
-      io::check_keys(t, where, "target",
-                     {"kind", "file", "solved_on", "clean", "weights", "distance", "cap", "cap_q",
-                      "surface", "camera", "frame", "align", "pose", "pose_uncertainty"});
+      io::check_keys(
+          t, where, "target",
+          {"kind", "file", "solved_on", "clean", "weights", "distance", "cap", "cap_q",
+           "quadrature", "surface", "camera", "frame", "align", "pose", "pose_uncertainty"});
     // The frame's keys before the scan is read and cleaned.
     const FrameKeys frame = kind == "cloud" ? read_frame_keys(scene, t) : FrameKeys{};
     SceneTarget st = kind == "arc" ? arc_target(scene, mesh, t, memory_limit)
@@ -459,6 +461,14 @@ SceneTarget scene_target(const Scene& scene, const fe::Mesh& mesh, double memory
     st.description += frame.description;
     st.distance = target_distance(scene, t, st.frame == TargetFrame::camera);
     read_view_keys(scene, t, &st);
+    if (t.contains("quadrature")) {
+      const nlohmann::json& q = t["quadrature"];
+      if (!q.is_string() || (q != "collocation" && q != "cells"))
+        throw InvalidArgument(scene.source +
+                              ": target.quadrature must be \"collocation\" or \"cells\", got " +
+                              q.dump());
+      st.quadrature = quadrature_from_string(q.get<std::string>());
+    }
     return st;
   }
   throw InvalidArgument(scene.source + ": target.kind must be \"arc\" or \"cloud\", got \"" + kind +

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <optional>
 
+#include "cell_form.hpp"
 #include "softhd/enum_names.hpp"
 #include "softhd/error.hpp"
 #include "softhd/fe/geometry.hpp"
@@ -55,6 +56,50 @@ void check_same_distance(const HausdorffOptions& mine, const HausdorffOptions& t
                           "objective's options)");
 }
 
+/// quadrature cells: what the cell form cannot do yet, refused naming the field.
+void check_cells_quadrature(const ShapeObjectiveOptions& o) {
+  if (o.hausdorff.quadrature != Quadrature::cells) {
+    if (o.target_cells)
+      throw InvalidArgument(
+          "target_cells: given, but hausdorff.quadrature is collocation (cells uses them)");
+    return;
+  }
+  const HausdorffParams& p = o.hausdorff.params;
+  const char* field = p.alpha != 4.0   ? "hausdorff.params.alpha (4)"
+                      : p.beta != 4.0  ? "hausdorff.params.beta (4)"
+                      : p.gamma != 2.0 ? "hausdorff.params.gamma (2)"
+                                       : nullptr;
+  if (field)
+    throw InvalidArgument(std::string("quadrature cells: only the paper's exponents, not yet "
+                                      "other values of ") +
+                          field);
+  if (o.form.sides != Sides::symmetric)
+    throw InvalidArgument(
+        "form.sides: quadrature cells supports the symmetric distance only "
+        "(not yet " +
+        to_string(o.form.sides) + ")");
+  if (o.form.cap.c != 0.0) throw InvalidArgument("form.cap: quadrature cells has no cap (not yet)");
+  if (o.camera) throw InvalidArgument("camera: quadrature cells has no camera (not yet)");
+  if (o.pose) throw InvalidArgument("pose: quadrature cells has no pose (not yet)");
+  if (o.second_order)
+    throw InvalidArgument(
+        "second_order: quadrature cells has no Hessian-vector product (optimiser.algorithm "
+        "newton) yet");
+  if (!o.target_cells)
+    throw InvalidArgument(
+        "target_cells: quadrature cells needs the target's cells (a target with a mesh)");
+}
+
+/// The cell rule's options from the distance's: ε, threads, and J's tree tolerance τ with
+/// method tree (exact J otherwise).
+detail::CellDistanceOptions cell_options(const HausdorffOptions& h) {
+  detail::CellDistanceOptions c;
+  c.epsilon = h.params.epsilon;
+  c.threads = h.threads;
+  c.tolerance = h.method == Method::tree ? h.tolerance : 0.0;
+  return c;
+}
+
 }  // namespace
 
 std::string to_string(EvaluationStatus s) { return enum_name(kEvaluationStatus, s); }
@@ -73,6 +118,9 @@ struct ShapeObjective::Impl {
         cloud(make_moving_cloud(a, options)),
         path(a, c, make_solver(options.newton), options.newton, options.warm_start_states,
              options.coarse_correction_iterations) {
+    if (options.hausdorff.quadrature == Quadrature::cells)
+      cells = std::make_unique<detail::CellForm>(a.mesh(), *options.target_cells,
+                                                 cell_options(options.hausdorff));
     if (options.pose) {
       // Q₀ = P₀⁻¹ (body → camera) and the twist's centre c = Q₀(centroid of the rest cloud).
       const scan::Pose start_inverse = options.pose->inverse();
@@ -98,6 +146,7 @@ struct ShapeObjective::Impl {
   std::optional<scan::PoseMap> pose;  // with a pose (docs/formulation.md §8.10)
   Eigen::VectorXd warm_twist;         // projection: the next inner minimisation's start (§8.11)
   double pose_size = 0.0;             // projection: L of the rest moving cloud
+  std::unique_ptr<detail::CellForm> cells;  // quadrature cells (docs/formulation.md §2.8)
 
   bool projecting() const { return pose && options.pose_method == PoseMethod::projection; }
   /// The projection's inner minimisation (docs/formulation.md §8.11): the twist
@@ -160,6 +209,11 @@ struct ShapeObjective::Impl {
   /// `remember`: the converged state joins the warm starts (not when re-establishing a point).
   ShapeEvaluation evaluate(const Eigen::VectorXd& m, bool gradient, const Eigen::VectorXd& xi,
                            const fe::State* converged = nullptr, bool remember = true);
+
+  /// The rest of an evaluation with quadrature cells, from the converged state: ρ̃ by the cell
+  /// form, dρ̃/du = mapᵀ ∂ρ̃/∂points into the adjoint.
+  ShapeEvaluation finish_cells(const Eigen::VectorXd& m, bool gradient, const fe::State& state,
+                               std::chrono::steady_clock::time_point t0, ShapeEvaluation ev);
 
   /// A point of hessian_product (options.second_order): a control evaluated with the gradient,
   /// its converged state and its distance result (with the second-order quantities).
@@ -246,6 +300,7 @@ void ShapeObjectiveOptions::validate() const {
                           " (a camera selects the visible distance)");
   }
   newton.validate();
+  check_cells_quadrature(*this);
   if (second_order && volumes != ParticleVolumes::reference)
     throw InvalidArgument(
         "volumes: the Hessian-vector product (second_order, for optimiser.algorithm newton) "
@@ -296,6 +351,14 @@ void ShapeObjective::set_pose_warm_start(const Eigen::VectorXd& xi) {
     throw InvalidArgument("set_pose_warm_start: the objective has no pose by projection");
   if (xi.size() == 0) throw InvalidArgument("set_pose_warm_start: an empty twist");
   impl_->warm_twist = impl_->pose->checked(xi);
+}
+double ShapeObjective::cell_rho(const Eigen::VectorXd* u) const {
+  if (!impl_->cells) throw InvalidArgument("cell_rho: the objective's quadrature is collocation");
+  return u ? impl_->cells->evaluate(*u).rho : impl_->cells->self_rho();
+}
+std::pair<long, long> ShapeObjective::cell_counts() const {
+  if (!impl_->cells) return {0, 0};
+  return {impl_->cells->body_hexahedra(), static_cast<long>(impl_->cells->target().cells.rows())};
 }
 const HausdorffTarget& ShapeObjective::target() const { return impl_->target; }
 const ShapeObjectiveOptions& ShapeObjective::options() const { return impl_->options; }
@@ -369,6 +432,7 @@ ShapeEvaluation ShapeObjective::Impl::evaluate(const Eigen::VectorXd& m, bool gr
 
   // Distance (and its gradient w.r.t. the moved points).
   t0 = std::chrono::steady_clock::now();
+  if (cells) return finish_cells(m, gradient, state, t0, std::move(ev));
   HausdorffRequest req;
   Eigen::VectorXd xi = xi_in;
   // This state's visible set, fixed in the gradient (projection: from the warm start's camera,
@@ -405,6 +469,29 @@ ShapeEvaluation ShapeObjective::Impl::evaluate(const Eigen::VectorXd& m, bool gr
     if (options.second_order) last_gradient = {m, state, std::move(r), path.generation(), true};
   }
   if (pose) ev.pose_twist = xi;
+  ev.status = EvaluationStatus::ok;
+  return ev;
+}
+
+ShapeEvaluation ShapeObjective::Impl::finish_cells(const Eigen::VectorXd& m, bool gradient,
+                                                   const fe::State& state,
+                                                   std::chrono::steady_clock::time_point t0,
+                                                   ShapeEvaluation ev) {
+  Eigen::VectorXd g;
+  const detail::CellRho r = cells->evaluate(state.u, gradient ? &g : nullptr);
+  ev.seconds_distance = seconds_since(t0);
+  ev.rho = r.rho;
+  ev.A = std::sqrt(std::sqrt(r.a.mean));  // A = (A^4)^(1/4)
+  ev.B = std::sqrt(std::sqrt(r.b.mean));
+  Eigen::VectorXd reg_gradient;
+  ev.regularisation = control.regularisation(m, options.tikhonov_mass, options.tikhonov_gradient,
+                                             gradient ? &reg_gradient : nullptr);
+  ev.J = ev.rho + ev.regularisation;
+  if (gradient) {
+    t0 = std::chrono::steady_clock::now();
+    ev.gradient = reg_gradient + path.adjoint(g, &ev.factorizations);
+    ev.seconds_adjoint = seconds_since(t0);
+  }
   ev.status = EvaluationStatus::ok;
   return ev;
 }

@@ -264,6 +264,8 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
   f["distance"] = "alpha " + exact_text(h.params.alpha) + " beta " + exact_text(h.params.beta) +
                   " gamma " + exact_text(h.params.gamma) + " eps " + exact_text(h.params.epsilon) +
                   " method " + to_string(h.method) + " tol " + exact_text(h.tolerance);
+  // Only the cell quadrature is recorded (older checkpoints are collocation's).
+  if (h.quadrature == Quadrature::cells) f["distance"] += " quadrature cells";
   // Only a form other than the default is recorded (older checkpoints have no such key).
   if (so.form.sides != Sides::symmetric || so.form.cap.c != 0.0) {
     f["form"] = to_string(so.form.sides) + " cap " + exact_text(so.form.cap.c) + " q " +
@@ -437,12 +439,21 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   // only reported: computed after the run.
   const HausdorffTarget& Y = objective.target();
   const double m_points = static_cast<double>(Y.cloud().size());
-  const bool self_floor = m_points * m_points <= options.self_floor_max_pairs;
+  // Quadrature cells: both floors by the cell form; the self floor when the target has at most
+  // twice the body's hexahedra (it then costs about two evaluations; bending's 8×: 687 s).
+  const std::pair<long, long> hexahedra = objective.cell_counts();
+  const bool cells = hexahedra.first > 0;
+  const bool self_floor = cells ? hexahedra.second <= 2 * hexahedra.first
+                                : m_points * m_points <= options.self_floor_max_pairs;
   const FloorRequests floors = floor_requests(objective, map_displacement);
-  if (self_floor && !map_displacement) s.floor_self = Y.evaluate(Y.cloud(), floors.self).rho;
+  const auto self_rho = [&] {
+    return cells ? objective.cell_rho(nullptr) : Y.evaluate(Y.cloud(), floors.self).rho;
+  };
+  if (self_floor && !map_displacement) s.floor_self = self_rho();
   if (map_displacement)  // with a pose: the map's body at the start pose (the true one unknown)
     s.floor_matched =
-        Y.evaluate(target_frame_cloud(objective, *map_displacement), floors.matched).rho;
+        cells ? objective.cell_rho(&*map_displacement)
+              : Y.evaluate(target_frame_cloud(objective, *map_displacement), floors.matched).rho;
   const std::optional<double> floor = s.floor();
 
   const ShapeEvaluation start = objective.evaluate(m0, false);
@@ -532,7 +543,7 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
                       " iterations (resume from the checkpoint '" + options.checkpoint + "')");
   }
   finish(objective, recorder, r, map_displacement, options.checkpoint_every, &best_state, &s);
-  if (self_floor && map_displacement) s.floor_self = Y.evaluate(Y.cloud(), floors.self).rho;
+  if (self_floor && map_displacement) s.floor_self = self_rho();
   return s;
 }
 

@@ -197,9 +197,36 @@ ShapeTrackingOptions TrackingRunOptions::tracking() const {
   return t;
 }
 
+namespace {
+
+/// The quadrature a run asks for: the options', else the scene target's, else collocation.
+Quadrature run_quadrature(const TrackingRunOptions& options, const SceneTarget& target) {
+  return options.distance.quadrature.value_or(target.quadrature.value_or(Quadrature::collocation));
+}
+
+/// With quadrature cells: the objective's cell form against the target's cells, one level only;
+/// a target without cells falls back to collocation, said in its description.
+void apply_quadrature(const TrackingRunOptions& options, SceneTarget* target,
+                      ShapeObjectiveOptions* so) {
+  if (run_quadrature(options, *target) != Quadrature::cells) return;
+  if (!target->cells) {
+    target->description += "; quadrature cells: the target has no cells, collocation instead";
+    return;
+  }
+  if (options.levels.count > 1)
+    throw InvalidArgument("levels: quadrature cells runs on one level (levels 1; not yet more)");
+  so->hausdorff.quadrature = Quadrature::cells;
+  so->target_cells = std::make_shared<const fe::Mesh>(*target->cells);
+  target->description += "; quadrature cells";
+}
+
+}  // namespace
+
 int tracking_levels(const Scene& scene, const TrackingRunOptions& options,
                     const SceneTarget& target) {
   if (options.levels.count > 0) return options.levels.count;
+  // The cell quadrature runs on one level (its coarse levels are not built yet).
+  if (run_quadrature(options, target) == Quadrature::cells) return 1;
   // A given start or a joint pose runs on one level (validate, TrackingRun refuse more).
   if (options.optimiser.initial_control || target.frame == TargetFrame::camera) return 1;
   // A cloud without a known map (a scan): one level. On noisy one-sided scans the coarse
@@ -229,14 +256,17 @@ struct TrackingRun::Impl {
                             "D but the scene's body is " + std::to_string(scene.body.dim()) + "D");
     ShapeObjectiveOptions so = options.objective();
     apply_target_settings(target, &so);
+    apply_quadrature(options, &target, &so);
     if (target.frame == TargetFrame::camera) {  // the pose joins the control (§8.10)
       if (options.levels.count > 1)
         throw InvalidArgument(
             "levels: a target in the camera's frame (joint pose) runs on one level (levels 1)");
       so.pose = start_pose(target, a, so, options.threads);
     }
+    HausdorffOptions points = so.hausdorff;  // the target's points (fields): collocation
+    points.quadrature = Quadrature::collocation;
     objective = std::make_unique<ShapeObjective>(
-        a, c, HausdorffTarget(target.cloud, so.hausdorff), so,
+        a, c, HausdorffTarget(target.cloud, points), so,
         fe::state_solver_factory(scene.body, options.state.backend, &a, &c));
     if (options.distance.form) target.distance = *options.distance.form;
     detail::apply_target_form(*objective, target);

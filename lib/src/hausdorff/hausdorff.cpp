@@ -78,6 +78,14 @@ Method method_from_string(const std::string& name) {
   return enum_from_name(kMethodNames, name, "method");
 }
 
+constexpr auto kQuadratureNames = enum_sequence<Quadrature::cells>({"collocation", "cells"});
+
+std::string to_string(Quadrature quadrature) { return enum_name(kQuadratureNames, quadrature); }
+
+Quadrature quadrature_from_string(const std::string& name) {
+  return enum_from_name(kQuadratureNames, name, "quadrature");
+}
+
 struct SumsEvaluation;  // one evaluation by pair sums, step by step (below)
 
 struct HausdorffTarget::Impl {
@@ -124,6 +132,10 @@ struct HausdorffTarget::Impl {
 
 HausdorffTarget::HausdorffTarget(PointCloud target, HausdorffOptions options) {
   options.validate();
+  if (options.quadrature == Quadrature::cells)
+    throw InvalidArgument(
+        "quadrature cells needs bodies with cells (an objective with a target that has cells); "
+        "a point cloud target uses quadrature collocation");
   check_coordinates(target, "target");
   impl_ = std::make_unique<Impl>(std::move(target), options);
 }

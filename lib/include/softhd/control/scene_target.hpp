@@ -85,6 +85,9 @@ struct SceneTarget {
   /// maps (the samples are their centres), a solved_on target's source mesh with the file's
   /// nodes. Empty for a cloud that is only points.
   std::optional<fe::Mesh> cells = std::nullopt;
+  /// "quadrature": "collocation" | "cells" (TrackingRunOptions::Distance::quadrature); unset
+  /// when the block has none.
+  std::optional<Quadrature> quadrature = std::nullopt;
 };
 
 /// The objective settings a target asks for: surface → particles boundary with deformed

@@ -21,6 +21,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "softhd/control/moving_cloud.hpp"
 #include "softhd/control/state_path.hpp"
@@ -60,7 +61,13 @@ struct PoseBound {
 
 /// Settings of the objective J(m) (docs/formulation.md §4.2, §4.3); defaults per field.
 struct ShapeObjectiveOptions {
-  HausdorffOptions hausdorff;                            ///< α, β, γ, ε, method, threads
+  /// α, β, γ, ε, method, threads, and the quadrature: collocation (default; the moving cloud
+  /// against the target's points) or cells (docs/formulation.md §2.8: ρ̃ of the body's cells,
+  /// deformed by u, against target_cells; particles and volumes then play no part, and the
+  /// target's points only serve fields()). Cells need target_cells and a 3D body, and do not
+  /// yet support α, β, γ other than 4, 4, 2, a form other than the symmetric one without a
+  /// cap, a camera, a pose, or second_order (InvalidArgument naming the field).
+  HausdorffOptions hausdorff;
   Particles particles = Particles::nodes;                ///< moving cloud: nodes (paper)
   ParticleVolumes volumes = ParticleVolumes::reference;  ///< paper's simplification
   double tikhonov_mass = 0.0;                            ///< M ≥ 0 (paper: 0)
@@ -106,6 +113,10 @@ struct ShapeObjectiveOptions {
   /// distance's second-order quantities, HausdorffRequest::hessian_points). False (default):
   /// evaluations pay nothing for it. Needs reference volumes and no pose.
   bool second_order = false;
+  /// hausdorff.quadrature cells only: the target as a body with cells, a 3D mesh (any cell
+  /// type) with its nodes where the target is (SceneTarget::cells). Its hexahedra, boundary and
+  /// kernel integrals are built once, when the objective is made.
+  std::shared_ptr<const fe::Mesh> target_cells;
 
   /// Throws InvalidArgument naming the first invalid field (the distance's parameters and
   /// form, and the Newton options included). The visible mask's size is checked against the
@@ -230,6 +241,13 @@ class ShapeObjective {
   /// state's fields, cap_from_quantile). Throws InvalidArgument as DistanceForm::validate for
   /// the moving cloud's size.
   void set_form(DistanceForm form);
+
+  /// Quadrature cells only (else InvalidArgument): ρ̃ by the cell form of the body at the
+  /// displacement *u against the target's cells (the matched floor, u the known map), or, with
+  /// u null, of the target's cells against themselves (the self floor).
+  double cell_rho(const Eigen::VectorXd* u) const;
+  /// Quadrature cells: the hexahedra of the body and of the target ({0, 0} with collocation).
+  std::pair<long, long> cell_counts() const;
 
   /// The target with its trees.
   const HausdorffTarget& target() const;

@@ -80,6 +80,13 @@ struct TrackingRunOptions {
     /// without a cap). Unset (default): the target's. Sides::visible is refused (it needs the
     /// camera).
     std::optional<TargetDistance> form;
+    /// Where the distance is integrated (docs/formulation.md §2.8): collocation (at the clouds'
+    /// points) or cells (over the body's cells and the target's: an arc, or a solved_on cloud;
+    /// a target without cells falls back to collocation, which the target's description says).
+    /// Unset (default): the scene target's "quadrature", collocation without one. Cells run on
+    /// one level (levels.count 0 chooses 1) with the paper's α, β, γ, the symmetric form, no
+    /// cap, no pose, and not with the newton algorithm (not yet).
+    std::optional<Quadrature> quadrature;
   };
   /// The Tikhonov terms of the objective (ShapeObjectiveOptions).
   struct Tikhonov {

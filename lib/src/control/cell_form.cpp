@@ -1,0 +1,86 @@
+#include "cell_form.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "../common/surface_bvh.hpp"
+#include "../hausdorff/body_integral.hpp"
+#include "softhd/error.hpp"
+
+namespace softhd::detail {
+
+namespace {
+
+BodyIntegralOptions body_integral_options(const CellDistanceOptions& o) {
+  BodyIntegralOptions bo;
+  bo.epsilon = o.epsilon;
+  bo.alpha = 4.0;
+  bo.threads = o.threads;
+  bo.tolerance = o.tolerance;
+  bo.near_ratio = o.j_near_ratio;
+  bo.angle_points = o.j_angle_points;
+  return bo;
+}
+
+HexCells hex_cells(const fe::HexDecomposition& d, const Eigen::MatrixXd& nodes) {
+  return {d.map * nodes, d.cells};
+}
+
+void check_3d(const fe::Mesh& mesh, const char* which) {
+  if (mesh.dim != 3)
+    throw InvalidArgument(std::string("quadrature cells: the ") + which +
+                          " is 2D; the cell quadrature is 3D only (not yet 2D)");
+}
+
+}  // namespace
+
+CellForm::CellForm(const fe::Mesh& body, const fe::Mesh& target, const CellDistanceOptions& options)
+    : body_(body), options_(options) {
+  check_3d(body, "body");
+  check_3d(target, "target's mesh");
+  options_.validate();
+  body_cells_ = fe::hex_decomposition(body);
+  target_ = hex_cells(fe::hex_decomposition(target), target.nodes);
+  const TriangleSurface surface = hex_boundary(target_);
+  target_j_ = std::make_unique<BodyIntegral>(surface, body_integral_options(options_));
+  target_sd_ = std::make_unique<SurfaceDistance>(surface);
+  target_volume_ = enclosed_volume(surface);
+}
+
+CellForm::~CellForm() = default;
+
+/// ρ̃ = ((A² + B²)/2)^(1/2) from A^4 (the target's cells against the body) and B^4 (the body's
+/// cells against the target); ∂ρ̃/∂A^4 = 1/(8 ρ̃ √(A^4)), likewise B. The body's points get
+/// B's outer gradient and A's source bars (through the body's J, sd and |Ω_X|).
+CellRho CellForm::evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad) const {
+  const Eigen::Index n = body_.num_nodes();
+  if (u.size() != 3 * n)
+    throw InvalidArgument("CellForm: u has " + std::to_string(u.size()) + " values, expected " +
+                          std::to_string(3 * n));
+  const Eigen::MatrixXd U = u.reshaped(3, n).transpose();
+  const HexCells x = hex_cells(body_cells_, body_.nodes + U);
+  std::vector<int> node_x;
+  const TriangleSurface sx = hex_boundary(x, &node_x);
+  const BodyIntegral jx(sx, body_integral_options(options_));
+  const SurfaceDistance dx(sx);
+  CellRho r;
+  OuterMeanGradient ga, gb;
+  r.a = directed_outer_mean(target_, jx, dx, enclosed_volume(sx), options_, grad ? &ga : nullptr);
+  r.b = directed_outer_mean(x, *target_j_, *target_sd_, target_volume_, options_,
+                            grad ? &gb : nullptr);
+  r.rho = std::sqrt(0.5 * (std::sqrt(r.a.mean) + std::sqrt(r.b.mean)));
+  if (!grad) return r;
+  const double ca = 1.0 / (8.0 * r.rho * std::sqrt(r.a.mean));
+  const double cb = 1.0 / (8.0 * r.rho * std::sqrt(r.b.mean));
+  Eigen::MatrixXd points = cb * gb.outer;  // ∂ρ̃/∂(the body's hexahedron points)
+  const Eigen::MatrixXd bars = ga.source + ga.source_volume * enclosed_volume_gradient(sx);
+  for (Eigen::Index a = 0; a < bars.rows(); ++a)
+    points.row(node_x[static_cast<std::size_t>(a)]) += ca * bars.row(a);
+  const Eigen::MatrixXd nodes = body_cells_.map.transpose() * points;  // mapᵀ: N by 3
+  *grad = nodes.transpose().reshaped();                                // node-major
+  return r;
+}
+
+double CellForm::self_rho() const { return cell_rho(target_, target_, options_).rho; }
+
+}  // namespace softhd::detail

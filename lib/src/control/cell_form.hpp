@@ -1,0 +1,50 @@
+#pragma once
+// The shape objective's distance with quadrature cells (internal; docs/formulation.md §2.8, "The
+// cell quadrature in the objective"): ρ̃ of the body deformed by u against the target's cells,
+//
+//     ρ̃ = ((A² + B²)/2)^(1/2),  A^4 over the target's cells against the body,
+//                               B^4 over the body's cells against the target,
+//
+// and dρ̃/du = mapᵀ ∂ρ̃/∂(hexahedron points) (node-major), the body's hexahedra being
+// points = map · (X + u) (fe::hex_decomposition). The body's decomposition and the target's
+// hexahedra, boundary, J, signed distance and volume are built once; the body's J and signed
+// distance at every evaluation (its boundary moves).
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "../fe/hex_decomposition.hpp"
+#include "../hausdorff/cell_distance.hpp"
+#include "softhd/fe/mesh.hpp"
+
+namespace softhd::detail {
+
+/// ρ̃ of a body's mesh deformed by u against a fixed target mesh, both 3D (any cell type).
+class CellForm {
+ public:
+  /// `body` must outlive the form; `target` has its nodes where the target is. Throws
+  /// InvalidArgument for a 2D mesh or invalid options.
+  CellForm(const fe::Mesh& body, const fe::Mesh& target, const CellDistanceOptions& options);
+  ~CellForm();
+
+  /// ρ̃ (and its directed means) of the body at X + u (u node-major, num_nodes × 3 values);
+  /// with grad, dρ̃/du into *grad (node-major).
+  CellRho evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad = nullptr) const;
+
+  /// ρ̃ of the target's cells against themselves (the self floor).
+  double self_rho() const;
+  const HexCells& target() const { return target_; }
+  long body_hexahedra() const { return static_cast<long>(body_cells_.cells.rows()); }
+
+ private:
+  const fe::Mesh& body_;
+  fe::HexDecomposition body_cells_;
+  CellDistanceOptions options_;
+  HexCells target_;
+  std::unique_ptr<BodyIntegral> target_j_;
+  std::unique_ptr<SurfaceDistance> target_sd_;
+  double target_volume_ = 0.0;
+};
+
+}  // namespace softhd::detail
