@@ -368,7 +368,7 @@ void print_start(const ShapeTrackingSummary& start) {
   std::fprintf(
       stderr, "  rho start %.6g, floor self %s, floor matched %s\n", start.rho_start,
       start.floor_self      ? std::to_string(*start.floor_self).c_str()
-      : start.floor_matched ? "computed at the end"
+      : start.floor_matched ? "at the end, if the target is small enough"
                             : "n/a (skipped: target too large)",
       start.floor_matched ? std::to_string(*start.floor_matched).c_str() : "n/a (no known map)");
   std::fprintf(stderr, "  %5s %12s %12s %10s %10s %7s %8s\n", "iter", "J", "rho", "rho/floor",
