@@ -6,7 +6,7 @@
 // 8 trilinear sub-cells through its 27 nodes).
 //
 //   bench_cell_landscape [--threads T] [--h H1,H2] [--scales S1,S2] [--rays T1,T2,...]
-//                        [--components K] [--check C] [--cells N1,N2,N3]
+//                        [--components K] [--check C] [--cells N1,N2,N3] [--target fine|body]
 //
 // For each scale s of m* (default 1 and 0.5): ρ̃'s gradient with respect to the controls by
 // central differences of the value at steps H (in units of the bound range, default 1e-3 and
@@ -16,6 +16,8 @@
 // §4.5). The second step only on every C-th component (default 7), to check the first. Then both
 // values along the ray t m* (T; "--rays ''": none), the target's cell self floor, and one value's
 // cost of each. K ≥ 0: the differences on the first K components only (0: the adjoint's only).
+// --target body: the body's own equilibrium at m* on the finer mesh's nodes and cells (its FE
+// interpolant), a target the body reaches exactly at m*: the quadratures' part alone.
 #include <Eigen/Core>
 #include <chrono>
 #include <cstdio>
@@ -134,6 +136,7 @@ double rel(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 
 int main(int argc, char** argv) try {
   int threads = 1, K = -1, check = 7;
+  std::string target_kind = "fine";
   std::vector<double> steps{1e-3, 3e-4}, scales{1.0, 0.5},
       rays{0.5, 0.75, 0.9, 0.95, 1.0, 1.05, 1.1, 1.25};
   std::vector<double> cells{13, 3, 1};
@@ -152,6 +155,8 @@ int main(int argc, char** argv) try {
       K = std::stoi(argv[++i]);
     else if (a == "--check" && more)
       check = std::max(1, std::stoi(argv[++i]));
+    else if (a == "--target" && more)
+      target_kind = argv[++i];
     else if (a == "--cells" && more)
       cells = numbers(argv[++i]);
     else {
@@ -166,22 +171,39 @@ int main(int argc, char** argv) try {
   const double m_top = -2.6e4, thickness = 0.1;  // m* = m_top X3 / thickness
   const double lower = scene.body.control_lower, upper = scene.body.control_upper;
 
-  // The target: m* on the 2× finer mesh, solved from rest with grid sequencing.
-  fe::Body fine = scene.body;
-  for (int k = 0; k < 3; ++k) fine.cells[k] = 2 * static_cast<int>(cells[k]);
-  const fe::Assembler fa = fine.make_assembler();
-  const fe::ControlSpace fc = fine.make_control_space(fa);
-  const Eigen::VectorXd m_fine = m_top * fc.positions(fa.mesh()).col(2) / thickness;
-  const fe::ForwardResult fr = fe::solve_forward(fine, fa, fc, m_fine);
-  if (!fr.summary.converged()) throw StateSolveError("the fine solve did not converge");
-  const PointCloud target =
-      fe::deformed_cloud(fa, fr.state.u, fe::CloudPoints::kNodes, fe::CloudVolumes::kDeformed);
-
   Landscape L;
   L.body = scene.body;
   for (int k = 0; k < 3; ++k) L.body.cells[k] = static_cast<int>(cells[k]);
   L.assembler = std::make_unique<fe::Assembler>(L.body.make_assembler());
   L.control = std::make_unique<fe::ControlSpace>(L.body.make_control_space(*L.assembler));
+  const Eigen::VectorXd m_star =
+      m_top * L.control->positions(L.assembler->mesh()).col(2) / thickness;
+
+  // The target: m* on the 2× finer mesh, solved from rest with grid sequencing; or (--target
+  // body) the body's own equilibrium at m* carried to the finer mesh's nodes by its FE map.
+  fe::Body fine = scene.body;
+  for (int k = 0; k < 3; ++k) fine.cells[k] = 2 * static_cast<int>(cells[k]);
+  const fe::Assembler fa = fine.make_assembler();
+  const fe::ControlSpace fc = fine.make_control_space(fa);
+  Eigen::VectorXd u_target;
+  if (target_kind == "fine") {
+    const Eigen::VectorXd m_fine = m_top * fc.positions(fa.mesh()).col(2) / thickness;
+    const fe::ForwardResult fr = fe::solve_forward(fine, fa, fc, m_fine);
+    if (!fr.summary.converged()) throw StateSolveError("the fine solve did not converge");
+    u_target = fr.state.u;
+  } else if (target_kind == "body") {
+    const fe::ForwardResult fr = fe::solve_forward(L.body, *L.assembler, *L.control, m_star);
+    if (!fr.summary.converged()) throw StateSolveError("the body's solve did not converge");
+    u_target = NodalMap(L.assembler->mesh(),
+                        fe::deformed_cloud(*L.assembler, fr.state.u, fe::CloudPoints::kNodes,
+                                           fe::CloudVolumes::kReference))
+                   .displacement(fa.mesh());
+  } else {
+    throw InvalidArgument("--target: expected fine or body, got " + target_kind);
+  }
+  const PointCloud target =
+      fe::deformed_cloud(fa, u_target, fe::CloudPoints::kNodes, fe::CloudVolumes::kDeformed);
+
   ShapeObjectiveOptions so;
   so.hausdorff.method = Method::exact;
   so.hausdorff.threads = threads;
@@ -189,10 +211,8 @@ int main(int argc, char** argv) try {
   so.newton.relative_tolerance = 1e-11;
   L.objective = std::make_unique<ShapeObjective>(*L.assembler, *L.control,
                                                  HausdorffTarget(target, so.hausdorff), so);
-  L.target_cells = deformed_cells(fa, fr.state.u);
+  L.target_cells = deformed_cells(fa, u_target);
   L.cell.threads = threads;
-  const Eigen::VectorXd m_star =
-      m_top * L.control->positions(L.assembler->mesh()).col(2) / thickness;
   const int n = static_cast<int>(m_star.size());
   if (K < 0 || K > n) K = n;
   std::printf(
