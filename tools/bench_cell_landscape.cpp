@@ -7,6 +7,7 @@
 //
 //   bench_cell_landscape [--threads T] [--h H1,H2] [--scales S1,S2] [--rays T1,T2,...]
 //                        [--components K] [--check C] [--cells N1,N2,N3] [--target fine|body]
+//                        [--refine R]
 //
 // For each scale s of m* (default 1 and 0.5): ρ̃'s gradient with respect to the controls by
 // central differences of the value at steps H (in units of the bound range, default 1e-3 and
@@ -17,7 +18,8 @@
 // values along the ray t m* (T; "--rays ''": none), the target's cell self floor, and one value's
 // cost of each. K ≥ 0: the differences on the first K components only (0: the adjoint's only).
 // --target body: the body's own equilibrium at m* on the finer mesh's nodes and cells (its FE
-// interpolant), a target the body reaches exactly at m*: the quadratures' part alone.
+// interpolant), a target the body reaches exactly at m*: the quadratures' part alone. --refine R:
+// the target's mesh R× the body's cells (default 2; 1 with --target body: the body's own cells).
 #include <Eigen/Core>
 #include <chrono>
 #include <cstdio>
@@ -137,6 +139,7 @@ double rel(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 int main(int argc, char** argv) try {
   int threads = 1, K = -1, check = 7;
   std::string target_kind = "fine";
+  int refine = 2;
   std::vector<double> steps{1e-3, 3e-4}, scales{1.0, 0.5},
       rays{0.5, 0.75, 0.9, 0.95, 1.0, 1.05, 1.1, 1.25};
   std::vector<double> cells{13, 3, 1};
@@ -155,6 +158,8 @@ int main(int argc, char** argv) try {
       K = std::stoi(argv[++i]);
     else if (a == "--check" && more)
       check = std::max(1, std::stoi(argv[++i]));
+    else if (a == "--refine" && more)
+      refine = std::max(1, std::stoi(argv[++i]));
     else if (a == "--target" && more)
       target_kind = argv[++i];
     else if (a == "--cells" && more)
@@ -179,10 +184,10 @@ int main(int argc, char** argv) try {
   const Eigen::VectorXd m_star =
       m_top * L.control->positions(L.assembler->mesh()).col(2) / thickness;
 
-  // The target: m* on the 2× finer mesh, solved from rest with grid sequencing; or (--target
+  // The target: m* on the R× finer mesh, solved from rest with grid sequencing; or (--target
   // body) the body's own equilibrium at m* carried to the finer mesh's nodes by its FE map.
   fe::Body fine = scene.body;
-  for (int k = 0; k < 3; ++k) fine.cells[k] = 2 * static_cast<int>(cells[k]);
+  for (int k = 0; k < 3; ++k) fine.cells[k] = refine * static_cast<int>(cells[k]);
   const fe::Assembler fa = fine.make_assembler();
   const fe::ControlSpace fc = fine.make_control_space(fa);
   Eigen::VectorXd u_target;
