@@ -134,156 +134,130 @@ double rel(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return (a - b).norm() / std::max(b.norm(), 1e-300);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) try {
-  int threads = 1, K = -1, check = 7;
-  std::string target_kind = "fine";
-  int refine = 2;
+struct Args {
+  int threads = 1, components = -1, check = 7, refine = 2;
+  std::string target = "fine";
   std::vector<double> steps{1e-3, 3e-4}, scales{1.0, 0.5},
-      rays{0.5, 0.75, 0.9, 0.95, 1.0, 1.05, 1.1, 1.25};
-  std::vector<double> cells{13, 3, 1};
+      rays{0.5, 0.75, 0.9, 0.95, 1.0, 1.05, 1.1, 1.25}, cells{13, 3, 1};
+};
+
+Args parse_args(int argc, char** argv) {
+  Args a;
   for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const bool more = i + 1 < argc;
-    if (a == "--threads" && more)
-      threads = std::stoi(argv[++i]);
-    else if (a == "--h" && more)
-      steps = numbers(argv[++i]);
-    else if (a == "--scales" && more)
-      scales = numbers(argv[++i]);
-    else if (a == "--rays" && more)
-      rays = numbers(argv[++i]);
-    else if (a == "--components" && more)
-      K = std::stoi(argv[++i]);
-    else if (a == "--check" && more)
-      check = std::max(1, std::stoi(argv[++i]));
-    else if (a == "--refine" && more)
-      refine = std::max(1, std::stoi(argv[++i]));
-    else if (a == "--target" && more)
-      target_kind = argv[++i];
-    else if (a == "--cells" && more)
-      cells = numbers(argv[++i]);
-    else {
-      std::fprintf(stderr, "bench_cell_landscape: unknown argument %s\n", a.c_str());
-      return 2;
-    }
+    const std::string k = argv[i];
+    if (i + 1 >= argc) throw InvalidArgument("bench_cell_landscape: " + k + " needs a value");
+    const std::string v = argv[++i];
+    if (k == "--threads")
+      a.threads = std::stoi(v);
+    else if (k == "--h")
+      a.steps = numbers(v);
+    else if (k == "--scales")
+      a.scales = numbers(v);
+    else if (k == "--rays")
+      a.rays = numbers(v);
+    else if (k == "--components")
+      a.components = std::stoi(v);
+    else if (k == "--check")
+      a.check = std::max(1, std::stoi(v));
+    else if (k == "--refine")
+      a.refine = std::max(1, std::stoi(v));
+    else if (k == "--target")
+      a.target = v;
+    else if (k == "--cells")
+      a.cells = numbers(v);
+    else
+      throw InvalidArgument("bench_cell_landscape: unknown argument " + k);
   }
-  if (steps.size() != 2 || cells.size() != 3) throw InvalidArgument("--h needs 2, --cells 3");
-  set_threads(threads);
-  limit_blas_threads();
-  const Scene scene = load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/bending.json");
-  const double m_top = -2.6e4, thickness = 0.1;  // m* = m_top X3 / thickness
-  const double lower = scene.body.control_lower, upper = scene.body.control_upper;
+  if (a.steps.size() != 2 || a.cells.size() != 3)
+    throw InvalidArgument("bench_cell_landscape: --h needs 2 values, --cells 3");
+  if (a.target != "fine" && a.target != "body")
+    throw InvalidArgument("bench_cell_landscape: --target: expected fine or body, got " + a.target);
+  return a;
+}
 
-  Landscape L;
-  L.body = scene.body;
-  for (int k = 0; k < 3; ++k) L.body.cells[k] = static_cast<int>(cells[k]);
-  L.assembler = std::make_unique<fe::Assembler>(L.body.make_assembler());
-  L.control = std::make_unique<fe::ControlSpace>(L.body.make_control_space(*L.assembler));
-  const Eigen::VectorXd m_star =
-      m_top * L.control->positions(L.assembler->mesh()).col(2) / thickness;
+constexpr double kMTop = -2.6e4, kThickness = 0.1;  // m* = kMTop X3 / kThickness
 
-  // The target: m* on the R× finer mesh, solved from rest with grid sequencing; or (--target
-  // body) the body's own equilibrium at m* carried to the finer mesh's nodes by its FE map.
-  fe::Body fine = scene.body;
-  for (int k = 0; k < 3; ++k) fine.cells[k] = refine * static_cast<int>(cells[k]);
-  const fe::Assembler fa = fine.make_assembler();
-  const fe::ControlSpace fc = fine.make_control_space(fa);
-  Eigen::VectorXd u_target;
-  if (target_kind == "fine") {
-    const Eigen::VectorXd m_fine = m_top * fc.positions(fa.mesh()).col(2) / thickness;
+// The target's displacement on `fa` (R× the body's cells): m* solved there from rest with grid
+// sequencing (fine), or the body's own equilibrium at m* carried to its nodes by the body's FE
+// map (body).
+Eigen::VectorXd target_displacement(const Args& a, const fe::Body& fine, const fe::Assembler& fa,
+                                    const Landscape& L, const Eigen::VectorXd& m_star) {
+  if (a.target == "fine") {
+    const fe::ControlSpace fc = fine.make_control_space(fa);
+    const Eigen::VectorXd m_fine = kMTop * fc.positions(fa.mesh()).col(2) / kThickness;
     const fe::ForwardResult fr = fe::solve_forward(fine, fa, fc, m_fine);
     if (!fr.summary.converged()) throw StateSolveError("the fine solve did not converge");
-    u_target = fr.state.u;
-  } else if (target_kind == "body") {
-    const fe::ForwardResult fr = fe::solve_forward(L.body, *L.assembler, *L.control, m_star);
-    if (!fr.summary.converged()) throw StateSolveError("the body's solve did not converge");
-    u_target = NodalMap(L.assembler->mesh(),
-                        fe::deformed_cloud(*L.assembler, fr.state.u, fe::CloudPoints::kNodes,
-                                           fe::CloudVolumes::kReference))
-                   .displacement(fa.mesh());
-  } else {
-    throw InvalidArgument("--target: expected fine or body, got " + target_kind);
+    return fr.state.u;
   }
-  const PointCloud target =
-      fe::deformed_cloud(fa, u_target, fe::CloudPoints::kNodes, fe::CloudVolumes::kDeformed);
+  const fe::ForwardResult fr = fe::solve_forward(L.body, *L.assembler, *L.control, m_star);
+  if (!fr.summary.converged()) throw StateSolveError("the body's solve did not converge");
+  return NodalMap(L.assembler->mesh(),
+                  fe::deformed_cloud(*L.assembler, fr.state.u, fe::CloudPoints::kNodes,
+                                     fe::CloudVolumes::kReference))
+      .displacement(fa.mesh());
+}
 
-  ShapeObjectiveOptions so;
-  so.hausdorff.method = Method::exact;
-  so.hausdorff.threads = threads;
-  so.newton.displacement_tolerance = 1e-12;
-  so.newton.relative_tolerance = 1e-11;
-  L.objective = std::make_unique<ShapeObjective>(*L.assembler, *L.control,
-                                                 HausdorffTarget(target, so.hausdorff), so);
-  L.target_cells = deformed_cells(fa, u_target);
-  L.cell.threads = threads;
-  const int n = static_cast<int>(m_star.size());
-  if (K < 0 || K > n) K = n;
+// How far the body's own equilibrium at m* is from the target's map at the body's nodes.
+void report_gap(Landscape& L, const fe::Mesh& target_mesh, const PointCloud& target,
+                const Eigen::VectorXd& m_star) {
+  const ShapeEvaluation e = L.objective->evaluate(m_star, false);
+  if (e.status != EvaluationStatus::ok) throw StateSolveError("state solve failed: " + e.failure);
+  const Eigen::VectorXd d = L.objective->state_path().last_state().u -
+                            NodalMap(target_mesh, target).displacement(L.assembler->mesh());
+  const Eigen::Index nn = L.assembler->mesh().num_nodes();
+  const Eigen::VectorXd dn =
+      Eigen::Map<const Eigen::MatrixXd>(d.data(), 3, nn).colwise().norm().transpose();
+  std::printf("body at m* against the target's map at its nodes: RMS %.4g, max %.4g\n",
+              std::sqrt(dn.squaredNorm() / nn), dn.maxCoeff());
+}
+
+// At m: collocation's adjoint gradient; with K > 0 both gradients by differences (step 1 on
+// components < K, step 2 on every check-th of them), their agreement and norms.
+void report_gradients(Landscape& L, const Args& a, const Eigen::VectorXd& m, double s) {
+  const double lower = L.body.control_lower, upper = L.body.control_upper;
+  const double sb = std::max(std::abs(lower), std::abs(upper)), range = upper - lower;
+  const ShapeEvaluation e = L.objective->evaluate(m, true);
+  if (e.status != EvaluationStatus::ok) throw StateSolveError("state solve failed: " + e.failure);
   std::printf(
-      "body %gx%gx%g Q%d (%d controls), target %dx%dx%d (%ld points, %ld sub-cells), "
-      "body %ld sub-cells, threads %d\n",
-      cells[0], cells[1], cells[2], L.assembler->mesh().order, n, fine.cells[0], fine.cells[1],
-      fine.cells[2], static_cast<long>(target.size()),
-      static_cast<long>(L.target_cells.cells.rows()),
-      static_cast<long>(
-          deformed_cells(*L.assembler, Eigen::VectorXd::Zero(L.assembler->dofs().num_dofs))
-              .cells.rows()),
-      threads);
-  const double range = upper - lower;
-  {  // How far the body's own equilibrium at m* is from the target (its nodes on the fine state).
-    const ShapeEvaluation e = L.objective->evaluate(m_star, false);
-    if (e.status != EvaluationStatus::ok) throw StateSolveError("state solve failed: " + e.failure);
-    const Eigen::VectorXd d = L.objective->state_path().last_state().u -
-                              NodalMap(fa.mesh(), target).displacement(L.assembler->mesh());
-    const Eigen::Index nn = L.assembler->mesh().num_nodes();
-    const Eigen::VectorXd dn =
-        Eigen::Map<const Eigen::MatrixXd>(d.data(), 3, nn).colwise().norm().transpose();
-    std::printf("body at m* against the target's map at its nodes: RMS %.4g, max %.4g\n",
-                std::sqrt(dn.squaredNorm() / nn), dn.maxCoeff());
-  }
+      "m = %g m*: colloc rho %.9g, adjoint: projected gradient norm %.4g, |grad_z| %.4g "
+      "(s_b = %g)\n",
+      s, e.rho, projected_norm(m, e.gradient, lower, upper), sb * e.gradient.norm(), sb);
+  std::fflush(stdout);
+  const int n = static_cast<int>(m.size());
+  const int K = a.components < 0 || a.components > n ? n : a.components;
+  if (K == 0) return;
+  Eigen::VectorXd gc[2], gx[2];
+  fd_gradients(L, m, a.steps[0] * range, K, 1, &gc[0], &gx[0]);
+  fd_gradients(L, m, a.steps[1] * range, K, a.check, &gc[1], &gx[1]);
+  Eigen::VectorXd adj = e.gradient, sub[2] = {gx[0], gc[0]}, adj_sub = adj;
+  adj.tail(n - K).setZero();
+  for (int i = 0; i < n; ++i)
+    if (i >= K || i % a.check) sub[0][i] = sub[1][i] = adj_sub[i] = 0.0;
+  std::printf(
+      "  FD step %g x range on %d components, %g on every %d-th: |g1 - g2|/|g2| cells "
+      "%.2e, colloc %.2e; colloc FD vs adjoint %.2e (h1, %d components) %.2e (h2)\n",
+      a.steps[0], K, a.steps[1], a.check, rel(sub[0], gx[1]), rel(sub[1], gc[1]), rel(gc[0], adj),
+      K, rel(gc[1], adj_sub));
+  std::printf(
+      "  on the %d components: projected gradient norm colloc adjoint %.4g, FD %.4g | "
+      "cells FD %.4g; |grad_z| colloc %.4g, cells %.4g\n",
+      K, projected_norm(m, adj, lower, upper), projected_norm(m, gc[0], lower, upper),
+      projected_norm(m, gx[0], lower, upper), sb * adj.norm(), sb * gx[0].norm());
+  std::printf("  cells FD gradient (h1):");
+  for (int i = 0; i < K; ++i) std::printf(" %.6g", gx[0][i]);
+  std::printf("\n  colloc adjoint gradient:");
+  for (int i = 0; i < n; ++i) std::printf(" %.6g", e.gradient[i]);
+  std::printf("\n");
+  std::fflush(stdout);
+}
 
-  for (double s : scales) {
-    const Eigen::VectorXd m = s * m_star;
-    const ShapeEvaluation e = L.objective->evaluate(m, true);
-    if (e.status != EvaluationStatus::ok) throw StateSolveError("state solve failed: " + e.failure);
-    const double sb = std::max(std::abs(lower), std::abs(upper));
-    std::printf(
-        "m = %g m*: colloc rho %.9g, adjoint: projected gradient norm %.4g, |grad_z| %.4g "
-        "(s_b = %g)\n",
-        s, e.rho, projected_norm(m, e.gradient, lower, upper), sb * e.gradient.norm(), sb);
-    std::fflush(stdout);
-    if (K == 0) continue;
-    // Step 1 on components < K; step 2 on every check-th of them (the step's check).
-    Eigen::VectorXd gc[2], gx[2];
-    fd_gradients(L, m, steps[0] * range, K, 1, &gc[0], &gx[0]);
-    fd_gradients(L, m, steps[1] * range, K, check, &gc[1], &gx[1]);
-    Eigen::VectorXd adj = e.gradient, sub[2] = {gx[0], gc[0]}, adj_sub = adj;
-    adj.tail(n - K).setZero();
-    for (int i = 0; i < n; ++i)
-      if (i >= K || i % check) sub[0][i] = sub[1][i] = adj_sub[i] = 0.0;
-    std::printf(
-        "  FD step %g x range on %d components, %g on every %d-th: |g1 - g2|/|g2| cells "
-        "%.2e, colloc %.2e; colloc FD vs adjoint %.2e (h1, %d components) %.2e (h2)\n",
-        steps[0], K, steps[1], check, rel(sub[0], gx[1]), rel(sub[1], gc[1]), rel(gc[0], adj), K,
-        rel(gc[1], adj_sub));
-    std::printf(
-        "  on the %d components: projected gradient norm colloc adjoint %.4g, FD %.4g | "
-        "cells FD %.4g; |grad_z| colloc %.4g, cells %.4g\n",
-        K, projected_norm(m, adj, lower, upper), projected_norm(m, gc[0], lower, upper),
-        projected_norm(m, gx[0], lower, upper), sb * adj.norm(), sb * gx[0].norm());
-    std::printf("  cells FD gradient (h1):");
-    for (int i = 0; i < K; ++i) std::printf(" %.6g", gx[0][i]);
-    std::printf("\n  colloc adjoint gradient:");
-    for (int i = 0; i < n; ++i) std::printf(" %.6g", e.gradient[i]);
-    std::printf("\n");
-    std::fflush(stdout);
-  }
-
-  if (rays.empty()) return 0;
+// Both values along the ray t m*, the target's cell self floor, and one value's cost of each at
+// m* (collocation exact and tree at 1e-2, cells), side by side.
+void report_ray_and_cost(Landscape& L, const Args& a, const PointCloud& target,
+                         const Eigen::VectorXd& m_star) {
   std::printf("ray t m*: t, colloc rho, cells rho\n");
-  for (double t : rays) {
-    double c, x;
+  double c, x;
+  for (double t : a.rays) {
     L.values(t * m_star, &c, &x);
     std::printf("  %5.3f %.9g %.9g\n", t, c, x);
     std::fflush(stdout);
@@ -291,18 +265,15 @@ int main(int argc, char** argv) try {
   const double t0 = now();
   const double self = detail::cell_rho(L.target_cells, L.target_cells, L.cell).rho;
   std::printf("target cell self floor %.9g (%.2f s)\n", self, now() - t0);
-
-  // One value of each at m*, side by side (the state solved first).
-  double c, x;
   L.values(m_star, &c, &x);
-  const HexCells body = deformed_cells(*L.assembler, L.objective->state_path().last_state().u);
+  const Eigen::VectorXd& u = L.objective->state_path().last_state().u;
+  const HexCells body = deformed_cells(*L.assembler, u);
   const PointCloud moving =
-      fe::deformed_cloud(*L.assembler, L.objective->state_path().last_state().u,
-                         fe::CloudPoints::kNodes, fe::CloudVolumes::kReference);
-  HausdorffOptions tree = so.hausdorff;
+      fe::deformed_cloud(*L.assembler, u, fe::CloudPoints::kNodes, fe::CloudVolumes::kReference);
+  HausdorffOptions tree = L.objective->options().hausdorff;
   tree.method = Method::tree;
   tree.tolerance = 1e-2;
-  const HausdorffTarget exact_t(target, so.hausdorff), tree_t(target, tree);
+  const HausdorffTarget exact_t(target, L.objective->options().hausdorff), tree_t(target, tree);
   const double a0 = now();
   (void)exact_t.evaluate(moving, HausdorffRequest{});
   const double a1 = now();
@@ -312,6 +283,51 @@ int main(int argc, char** argv) try {
   const double a3 = now();
   std::printf("one value at m*: colloc exact %.4f s, colloc tree 1e-2 %.4f s, cells %.3f s\n",
               a1 - a0, a2 - a1, a3 - a2);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  const Args a = parse_args(argc, argv);
+  set_threads(a.threads);
+  limit_blas_threads();
+  const Scene scene = load_scene(std::string(SOFTHD_SOURCE_DIR) + "/data/scenes/bending.json");
+  Landscape L;
+  L.body = scene.body;
+  fe::Body fine = scene.body;
+  for (int k = 0; k < 3; ++k) {
+    L.body.cells[k] = static_cast<int>(a.cells[k]);
+    fine.cells[k] = a.refine * L.body.cells[k];
+  }
+  L.assembler = std::make_unique<fe::Assembler>(L.body.make_assembler());
+  L.control = std::make_unique<fe::ControlSpace>(L.body.make_control_space(*L.assembler));
+  const Eigen::VectorXd m_star =
+      kMTop * L.control->positions(L.assembler->mesh()).col(2) / kThickness;
+  const fe::Assembler fa = fine.make_assembler();
+  const Eigen::VectorXd u_target = target_displacement(a, fine, fa, L, m_star);
+  const PointCloud target =
+      fe::deformed_cloud(fa, u_target, fe::CloudPoints::kNodes, fe::CloudVolumes::kDeformed);
+  ShapeObjectiveOptions so;
+  so.hausdorff.method = Method::exact;
+  so.hausdorff.threads = a.threads;
+  so.newton.displacement_tolerance = 1e-12;
+  so.newton.relative_tolerance = 1e-11;
+  L.objective = std::make_unique<ShapeObjective>(*L.assembler, *L.control,
+                                                 HausdorffTarget(target, so.hausdorff), so);
+  L.target_cells = deformed_cells(fa, u_target);
+  L.cell.threads = a.threads;
+  std::printf(
+      "body %dx%dx%d Q%d (%ld controls), target %dx%dx%d (%ld points, %ld sub-cells), "
+      "body %ld sub-cells, threads %d\n",
+      L.body.cells[0], L.body.cells[1], L.body.cells[2], L.assembler->mesh().order,
+      static_cast<long>(m_star.size()), fine.cells[0], fine.cells[1], fine.cells[2],
+      static_cast<long>(target.size()), static_cast<long>(L.target_cells.cells.rows()),
+      static_cast<long>(L.assembler->mesh().num_elements() * L.assembler->mesh().order *
+                        L.assembler->mesh().order * L.assembler->mesh().order),
+      a.threads);
+  report_gap(L, fa.mesh(), target, m_star);
+  for (double s : a.scales) report_gradients(L, a, s * m_star, s);
+  if (!a.rays.empty()) report_ray_and_cost(L, a, target, m_star);
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "bench_cell_landscape: %s\n", e.what());
