@@ -340,13 +340,34 @@ TEST(BodyIntegral, GradientInYTaylor) {
   }
 }
 
+// Random directions for every surface point (seed 7).
+Eigen::MatrixXd random_field(Eigen::Index rows) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::MatrixXd V(rows, 3);
+  for (Eigen::Index i = 0; i < V.size(); ++i) V.data()[i] = u(rng);
+  return V;
+}
+
+// F(X) = 0.7 J(y; X) along V: second order with the slope Σ_a vjp_a·V_a; returns the vjp.
+Eigen::MatrixXd expect_surface_taylor(const TriangleSurface& s0, const Eigen::MatrixXd& V,
+                                      const BodyIntegralOptions& o, const Eigen::Vector3d& y,
+                                      double h0, const char* name) {
+  const Eigen::VectorXd w = Eigen::VectorXd::Constant(1, 0.7);
+  const Eigen::MatrixXd vjp = BodyIntegral(s0, o).surface_vjp(y.transpose(), w);
+  auto f = [&](double h) {
+    TriangleSurface s = s0;
+    s.points += h * V;
+    return 0.7 * J_at(BodyIntegral(s, o), y);
+  };
+  expect_second_order(f, (vjp.array() * V.array()).sum(), h0, name);
+  return vjp;
+}
+
 TEST(BodyIntegral, SurfaceVjpTaylor) {
   // F(X) = Σ_k w_k J(y_k; X) along a random field V of the surface points: dF = Σ_a vjp_a·V_a.
   const TriangleSurface s0 = box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 3);
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Eigen::MatrixXd V(s0.points.rows(), 3);
-  for (Eigen::Index i = 0; i < V.size(); ++i) V.data()[i] = u(rng);
+  const Eigen::MatrixXd V = random_field(s0.points.rows());
   const struct {
     Eigen::Vector3d y;
     double h0;
@@ -356,19 +377,7 @@ TEST(BodyIntegral, SurfaceVjpTaylor) {
                {{0.2, 1.0008, 0.7}, 2e-4, "outside, within 1 eps"},
                {{1.2, 0.5, 0.3}, 0.02, "outside"},
                {{4.0, 3.0, -2.0}, 0.1, "far"}};
-  const BodyIntegralOptions o;
-  for (const auto& c : cases) {
-    const Eigen::MatrixXd y = c.y.transpose();
-    const Eigen::VectorXd w = Eigen::VectorXd::Constant(1, 0.7);
-    const Eigen::MatrixXd vjp = BodyIntegral(s0, o).surface_vjp(y, w);
-    const double slope = (vjp.array() * V.array()).sum();
-    auto f = [&](double h) {
-      TriangleSurface s = s0;
-      s.points += h * V;
-      return 0.7 * J_at(BodyIntegral(s, o), c.y);
-    };
-    expect_second_order(f, slope, c.h0, c.name);
-  }
+  for (const auto& c : cases) expect_surface_taylor(s0, V, {}, c.y, c.h0, c.name);
 }
 
 // A lower bound of S = ∫_∂Ω (|y − x| + ε)^−4 dA (ε = 1e-3): Σ A_u (|y − c_u| + R_u + ε)^−4 over
@@ -506,10 +515,7 @@ TEST(BodyIntegral, TreeSurfaceVjpTaylor) {
   // TreeWithinTolerance and points far enough from one end to take clusters there.
   const TriangleSurface s0 =
       box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, 1.0, 0.25), 8);
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Eigen::MatrixXd V(s0.points.rows(), 3);
-  for (Eigen::Index i = 0; i < V.size(); ++i) V.data()[i] = u(rng);
+  const Eigen::MatrixXd V = random_field(s0.points.rows());
   const struct {
     Eigen::Vector3d y;
     double h0;
@@ -521,17 +527,9 @@ TEST(BodyIntegral, TreeSurfaceVjpTaylor) {
   o.tolerance = 1e-6;
   int by_tree = 0;
   for (const auto& c : cases) {
-    const Eigen::MatrixXd y = c.y.transpose();
-    const Eigen::VectorXd w = Eigen::VectorXd::Constant(1, 0.7);
-    const Eigen::MatrixXd vjp = BodyIntegral(s0, o).surface_vjp(y, w);
-    const double slope = (vjp.array() * V.array()).sum();
-    auto f = [&](double h) {
-      TriangleSurface s = s0;
-      s.points += h * V;
-      return 0.7 * J_at(BodyIntegral(s, o), c.y);
-    };
-    expect_second_order(f, slope, c.h0, c.name);
-    const Eigen::MatrixXd all = BodyIntegral(s0, {}).surface_vjp(y, w);
+    const Eigen::MatrixXd vjp = expect_surface_taylor(s0, V, o, c.y, c.h0, c.name);
+    const Eigen::MatrixXd all =
+        BodyIntegral(s0, {}).surface_vjp(c.y.transpose(), Eigen::VectorXd::Constant(1, 0.7));
     by_tree += (vjp - all).norm() > 1e-12 * all.norm();  // above the sums' rounding
   }
   EXPECT_GE(by_tree, 2) << "the tree took clusters at too few of the points";

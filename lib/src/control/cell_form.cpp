@@ -11,17 +11,6 @@ namespace softhd::detail {
 
 namespace {
 
-BodyIntegralOptions body_integral_options(const CellDistanceOptions& o) {
-  BodyIntegralOptions bo;
-  bo.epsilon = o.epsilon;
-  bo.alpha = 4.0;
-  bo.threads = o.threads;
-  bo.tolerance = o.tolerance;
-  bo.near_ratio = o.j_near_ratio;
-  bo.angle_points = o.j_angle_points;
-  return bo;
-}
-
 HexCells hex_cells(const fe::HexDecomposition& d, const Eigen::MatrixXd& nodes) {
   return {d.map * nodes, d.cells};
 }

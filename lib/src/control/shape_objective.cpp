@@ -212,6 +212,13 @@ struct ShapeObjective::Impl {
 
   /// The rest of an evaluation with quadrature cells, from the converged state: ρ̃ by the cell
   /// form, dρ̃/du = mapᵀ ∂ρ̃/∂points into the adjoint.
+  // J = ρ̃ + the Tikhonov terms of m (their gradient into reg_gradient if non-null).
+  void add_regularisation(const Eigen::VectorXd& m, Eigen::VectorXd* reg_gradient,
+                          ShapeEvaluation* ev) const {
+    ev->regularisation =
+        control.regularisation(m, options.tikhonov_mass, options.tikhonov_gradient, reg_gradient);
+    ev->J = ev->rho + ev->regularisation;
+  }
   ShapeEvaluation finish_cells(const Eigen::VectorXd& m, bool gradient, const fe::State& state,
                                std::chrono::steady_clock::time_point t0, ShapeEvaluation ev);
 
@@ -454,9 +461,7 @@ ShapeEvaluation ShapeObjective::Impl::evaluate(const Eigen::VectorXd& m, bool gr
   ev.A = r.A;
   ev.B = r.B;
   Eigen::VectorXd reg_gradient;
-  ev.regularisation = control.regularisation(m, options.tikhonov_mass, options.tikhonov_gradient,
-                                             gradient ? &reg_gradient : nullptr);
-  ev.J = ev.rho + ev.regularisation;
+  add_regularisation(m, gradient ? &reg_gradient : nullptr, &ev);
   if (gradient) {
     t0 = std::chrono::steady_clock::now();
     if (pose) {
@@ -484,9 +489,7 @@ ShapeEvaluation ShapeObjective::Impl::finish_cells(const Eigen::VectorXd& m, boo
   ev.A = std::sqrt(std::sqrt(r.a.mean));  // A = (A^4)^(1/4)
   ev.B = std::sqrt(std::sqrt(r.b.mean));
   Eigen::VectorXd reg_gradient;
-  ev.regularisation = control.regularisation(m, options.tikhonov_mass, options.tikhonov_gradient,
-                                             gradient ? &reg_gradient : nullptr);
-  ev.J = ev.rho + ev.regularisation;
+  add_regularisation(m, gradient ? &reg_gradient : nullptr, &ev);
   if (gradient) {
     t0 = std::chrono::steady_clock::now();
     ev.gradient = reg_gradient + path.adjoint(g, &ev.factorizations);

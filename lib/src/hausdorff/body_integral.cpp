@@ -444,6 +444,16 @@ double distance2(const Triangle& t, const double* y) {
   return dx * dx + dy * dy + dz * dz;
 }
 
+// ∫_t k λ_a dA for the three corners of any triangle: the polar rule near y, the far rule else.
+void corner_moments(const Triangle& tri, const Radial& k, const Rules& rule, const double* y,
+                    double c[3]) {
+  const double d2 = distance2(tri, y);
+  if (d2 < tri.near2)
+    near_moments(tri, k, rule, edge_frame(tri, y), y, c);
+  else
+    far_moments(far_points(tri, d2), k, y, c);
+}
+
 // One point's sums over the triangles: J without the far solid angles' G∞ part, the near
 // triangles' exact solid angles and the far ones' estimate, ∂J/∂y, S = ∫_∂Ω k dA (with the
 // gradient), and the tree's error bounds of J, of the far solid angles and of g and S.
@@ -747,11 +757,7 @@ void traverse_vjp(const std::vector<BodyIntegral::Cluster>& clusters, const std:
     for (int j = c.begin; j < c.end; ++j) {
       const Triangle& tri = tris[j];
       double ct[3];
-      const double d2 = distance2(tri, y);
-      if (d2 < tri.near2)
-        near_moments(tri, k, rule, edge_frame(tri, y), y, ct);
-      else
-        far_moments(far_points(tri, d2), k, y, ct);
+      corner_moments(tri, k, rule, y, ct);
       out->S += ct[0] + ct[1] + ct[2];
       out->tris.push_back({order[j], {w * ct[0], w * ct[1], w * ct[2]}});
     }
@@ -1018,11 +1024,7 @@ Eigen::MatrixXd BodyIntegral::surface_vjp(const Eigen::MatrixXd& points,
       for (std::size_t t = 0; t < count; ++t) {
         const Triangle& tri = triangles_[t];
         double ct[3];
-        const double d2 = distance2(tri, y);
-        if (d2 < tri.near2)
-          near_moments(tri, k, rule, edge_frame(tri, y), y, ct);
-        else
-          far_moments(far_points(tri, d2), k, y, ct);
+        corner_moments(tri, k, rule, y, ct);
         for (int a = 0; a < 3; ++a) c[3 * t + a] += wj * ct[a];
       }
     }

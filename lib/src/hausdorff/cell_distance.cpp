@@ -326,9 +326,7 @@ void add_source_bars(const OuterMeanGradient& g, double scale, const TriangleSur
 
 }  // namespace
 
-CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions& options,
-                 CellRhoGradient* grad) {
-  options.validate();
+BodyIntegralOptions body_integral_options(const CellDistanceOptions& options) {
   BodyIntegralOptions bo;
   bo.epsilon = options.epsilon;
   bo.alpha = 4.0;
@@ -336,6 +334,13 @@ CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions
   bo.tolerance = options.tolerance;
   bo.near_ratio = options.j_near_ratio;
   bo.angle_points = options.j_angle_points;
+  return bo;
+}
+
+CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions& options,
+                 CellRhoGradient* grad) {
+  options.validate();
+  const BodyIntegralOptions bo = body_integral_options(options);
   std::vector<int> node_x, node_y;
   const TriangleSurface sx = hex_boundary(x, &node_x), sy = hex_boundary(y, &node_y);
   const BodyIntegral jx(sx, bo), jy(sy, bo);

@@ -29,6 +29,7 @@
 namespace softhd::detail {
 
 class BodyIntegral;
+struct BodyIntegralOptions;
 class SurfaceDistance;
 
 /// A body meshed by trilinear hexahedra (plain data; the FE is not needed). The cells' corners in
@@ -129,6 +130,10 @@ struct CellRhoGradient {
 /// the graded axis, which lines cross) do not change; nothing of it is computed without grad.
 CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions& options,
                  CellRhoGradient* grad = nullptr);
+
+/// The inner integral's options the cell distance uses: ε, α = 4, threads, and J's tolerance,
+/// near ratio and angle points.
+BodyIntegralOptions body_integral_options(const CellDistanceOptions& options);
 
 /// The half-space profile J of (r + ε)^−4 at signed distance sd (negative inside, depth
 /// d = −sd): 4π/(3ε) − π/(d + ε) + πε/(3(d + ε)²) inside, π/(D + ε) − πε/(3(D + ε)²) outside.
