@@ -349,6 +349,13 @@ Eigen::MatrixXd random_field(Eigen::Index rows) {
   return V;
 }
 
+// A Taylor test's point, first step and name.
+struct TaylorCase {
+  Eigen::Vector3d y;
+  double h0;
+  const char* name;
+};
+
 // F(X) = 0.7 J(y; X) along V: second order with the slope Σ_a vjp_a·V_a; returns the vjp.
 Eigen::MatrixXd expect_surface_taylor(const TriangleSurface& s0, const Eigen::MatrixXd& V,
                                       const BodyIntegralOptions& o, const Eigen::Vector3d& y,
@@ -368,15 +375,11 @@ TEST(BodyIntegral, SurfaceVjpTaylor) {
   // F(X) = Σ_k w_k J(y_k; X) along a random field V of the surface points: dF = Σ_a vjp_a·V_a.
   const TriangleSurface s0 = box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 3);
   const Eigen::MatrixXd V = random_field(s0.points.rows());
-  const struct {
-    Eigen::Vector3d y;
-    double h0;
-    const char* name;
-  } cases[] = {{{0.3, 0.45, 0.6}, 0.02, "inside"},
-               {{0.43, 0.37, 0.0015}, 2e-4, "within 2 eps of a face"},
-               {{0.2, 1.0008, 0.7}, 2e-4, "outside, within 1 eps"},
-               {{1.2, 0.5, 0.3}, 0.02, "outside"},
-               {{4.0, 3.0, -2.0}, 0.1, "far"}};
+  const TaylorCase cases[] = {{{0.3, 0.45, 0.6}, 0.02, "inside"},
+                              {{0.43, 0.37, 0.0015}, 2e-4, "within 2 eps of a face"},
+                              {{0.2, 1.0008, 0.7}, 2e-4, "outside, within 1 eps"},
+                              {{1.2, 0.5, 0.3}, 0.02, "outside"},
+                              {{4.0, 3.0, -2.0}, 0.1, "far"}};
   for (const auto& c : cases) expect_surface_taylor(s0, V, {}, c.y, c.h0, c.name);
 }
 
@@ -516,13 +519,9 @@ TEST(BodyIntegral, TreeSurfaceVjpTaylor) {
   const TriangleSurface s0 =
       box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, 1.0, 0.25), 8);
   const Eigen::MatrixXd V = random_field(s0.points.rows());
-  const struct {
-    Eigen::Vector3d y;
-    double h0;
-    const char* name;
-  } cases[] = {{{0.3, 0.45, 0.12}, 0.02, "tree, inside"},
-               {{0.43, 0.37, 0.0015}, 2e-4, "tree, within 2 eps of a face"},
-               {{-0.3, 0.5, 0.1}, 0.02, "tree, outside"}};
+  const TaylorCase cases[] = {{{0.3, 0.45, 0.12}, 0.02, "tree, inside"},
+                              {{0.43, 0.37, 0.0015}, 2e-4, "tree, within 2 eps of a face"},
+                              {{-0.3, 0.5, 0.1}, 0.02, "tree, outside"}};
   BodyIntegralOptions o;
   o.tolerance = 1e-6;
   int by_tree = 0;
@@ -543,14 +542,10 @@ TEST(BodyIntegral, TreeGradientInYTaylor) {
   const BodyIntegral body(box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, 1.0, 0.25), 12),
                           o);
   const Eigen::Vector3d v = Eigen::Vector3d(0.3, -0.7, 0.5).normalized();
-  const struct {
-    Eigen::Vector3d y;
-    double h0;
-    const char* name;
-  } cases[] = {{{0.3, 0.45, 0.12}, 0.02, "tree, inside"},
-               {{0.43, 0.37, 0.0015}, 2e-4, "tree, within 2 eps of a face"},
-               {{-0.3, 0.5, 0.1}, 0.04, "tree, outside"},
-               {{8.0, 3.0, -2.0}, 0.2, "tree, far"}};
+  const TaylorCase cases[] = {{{0.3, 0.45, 0.12}, 0.02, "tree, inside"},
+                              {{0.43, 0.37, 0.0015}, 2e-4, "tree, within 2 eps of a face"},
+                              {{-0.3, 0.5, 0.1}, 0.04, "tree, outside"},
+                              {{8.0, 3.0, -2.0}, 0.2, "tree, far"}};
   const BodyIntegral all(box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d(3.0, 1.0, 0.25), 12),
                          {});
   int by_tree = 0;
