@@ -318,6 +318,16 @@ void expect_second_order(F&& f, double slope, double h0, const char* what) {
   EXPECT_LE(best, 2.3) << what;
 }
 
+// J along y + h v: second order with the slope ∂J/∂y·v; returns J(y).
+double expect_y_taylor(const BodyIntegral& body, const Eigen::Vector3d& v, const Eigen::Vector3d& y,
+                       double h0, const char* name) {
+  Eigen::VectorXd J;
+  Eigen::MatrixXd g;
+  body.evaluate(y.transpose(), &J, &g);
+  expect_second_order([&](double h) { return J_at(body, y + h * v); }, g.row(0).dot(v), h0, name);
+  return J[0];
+}
+
 TEST(BodyIntegral, GradientInYTaylor) {
   // n = 4: near (polar) and far (7-point) triangles mixed at every point.
   const BodyIntegral body(box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 4), {});
@@ -331,13 +341,7 @@ TEST(BodyIntegral, GradientInYTaylor) {
                {{0.42, 0.61, -0.0012}, 2e-4, "outside, within 2 eps"},
                {{1.2, 0.5, 0.3}, 0.04, "outside"},
                {{4.0, 3.0, -2.0}, 0.2, "far"}};
-  for (const auto& c : cases) {
-    Eigen::VectorXd J;
-    Eigen::MatrixXd g;
-    body.evaluate(c.y.transpose(), &J, &g);
-    expect_second_order([&](double h) { return J_at(body, c.y + h * v); }, g.row(0).dot(v), c.h0,
-                        c.name);
-  }
+  for (const auto& c : cases) expect_y_taylor(body, v, c.y, c.h0, c.name);
 }
 
 // Random directions for every surface point (seed 7).
@@ -550,12 +554,8 @@ TEST(BodyIntegral, TreeGradientInYTaylor) {
                          {});
   int by_tree = 0;
   for (const auto& c : cases) {
-    Eigen::VectorXd J;
-    Eigen::MatrixXd g;
-    body.evaluate(c.y.transpose(), &J, &g);
-    expect_second_order([&](double h) { return J_at(body, c.y + h * v); }, g.row(0).dot(v), c.h0,
-                        c.name);
-    by_tree += std::abs(J[0] - J_at(all, c.y)) > 1e-12 * J[0];  // above the sums' rounding
+    const double J = expect_y_taylor(body, v, c.y, c.h0, c.name);
+    by_tree += std::abs(J - J_at(all, c.y)) > 1e-12 * J;  // above the sums' rounding
   }
   EXPECT_GE(by_tree, 3) << "the tree took clusters at too few of the points";
 }

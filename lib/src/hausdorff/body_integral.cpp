@@ -824,22 +824,18 @@ Triangle make_triangle(const double v[3][3], double near_ratio, double* area2) {
     cross(t.n, d, t.glam[a]);
     for (int i = 0; i < 3; ++i) t.glam[a][i] /= *area2;
   }
-  const FarRule& rule = far_rule();
-  double* coord[3] = {t.qx, t.qy, t.qz};
-  for (int q = 0; q < kFarPoints; ++q) {
-    const double* lam = rule.lam[q];
-    for (int i = 0; i < 3; ++i)
-      coord[i][q] = lam[0] * v[0][i] + lam[1] * v[1][i] + lam[2] * v[2][i];
-    t.wq[q] = 0.5 * *area2 * rule.w[q];
-  }
-  const CoarseRule& coarse = coarse_rule();
-  double* ccoord[3] = {t.cx, t.cy, t.cz};
-  for (int q = 0; q < kCoarsePoints; ++q) {
-    const double* lam = coarse.lam[q];
-    for (int i = 0; i < 3; ++i)
-      ccoord[i][q] = lam[0] * v[0][i] + lam[1] * v[1][i] + lam[2] * v[2][i];
-    t.cw[q] = 0.5 * *area2 * coarse.w[q];
-  }
+  // A rule's points x = Σ_a λ_a v_a by coordinate, and its weights times the area.
+  const auto place = [&](const auto& rule, int n, double* x, double* y, double* z, double* w) {
+    double* coord[3] = {x, y, z};
+    for (int q = 0; q < n; ++q) {
+      const double* lam = rule.lam[q];
+      for (int i = 0; i < 3; ++i)
+        coord[i][q] = lam[0] * v[0][i] + lam[1] * v[1][i] + lam[2] * v[2][i];
+      w[q] = 0.5 * *area2 * rule.w[q];
+    }
+  };
+  place(far_rule(), kFarPoints, t.qx, t.qy, t.qz, t.wq);
+  place(coarse_rule(), kCoarsePoints, t.cx, t.cy, t.cz, t.cw);
   return t;
 }
 
