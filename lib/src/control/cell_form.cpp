@@ -70,6 +70,12 @@ CellRho CellForm::evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad) cons
   return r;
 }
 
-double CellForm::self_rho() const { return cell_rho(target_, target_, options_).rho; }
+// The target against itself: both directed means are the same one, A^4 over its cells against
+// its own J, sd and |Ω| (built once), so ρ̃ = ((A² + A²)/2)^(1/2) = (A^4)^(1/4).
+double CellForm::self_rho() const {
+  const double a4 =
+      directed_outer_mean(target_, *target_j_, *target_sd_, target_volume_, options_).mean;
+  return std::sqrt(std::sqrt(a4));
+}
 
 }  // namespace softhd::detail
