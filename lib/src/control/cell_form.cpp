@@ -57,14 +57,11 @@ CellRho CellForm::evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad) cons
   r.a = directed_outer_mean(target_, jx, dx, enclosed_volume(sx), options_, grad ? &ga : nullptr);
   r.b = directed_outer_mean(x, *target_j_, *target_sd_, target_volume_, options_,
                             grad ? &gb : nullptr);
-  r.rho = std::sqrt(0.5 * (std::sqrt(r.a.mean) + std::sqrt(r.b.mean)));
+  double ca = 0.0, cb = 0.0;
+  combine_means(&r, &ca, &cb);
   if (!grad) return r;
-  const double ca = 1.0 / (8.0 * r.rho * std::sqrt(r.a.mean));
-  const double cb = 1.0 / (8.0 * r.rho * std::sqrt(r.b.mean));
   Eigen::MatrixXd points = cb * gb.outer;  // ∂ρ̃/∂(the body's hexahedron points)
-  const Eigen::MatrixXd bars = ga.source + ga.source_volume * enclosed_volume_gradient(sx);
-  for (Eigen::Index a = 0; a < bars.rows(); ++a)
-    points.row(node_x[static_cast<std::size_t>(a)]) += ca * bars.row(a);
+  add_source_bars(ga, ca, sx, node_x, &points);
   const Eigen::MatrixXd nodes = body_cells_.map.transpose() * points;  // mapᵀ: N by 3
   *grad = nodes.transpose().reshaped();                                // node-major
   return r;

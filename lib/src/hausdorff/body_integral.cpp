@@ -911,10 +911,10 @@ BodyIntegral::BodyIntegral(const TriangleSurface& surface, const BodyIntegralOpt
 void BodyIntegral::evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* value,
                             Eigen::MatrixXd* grad) const {
   if (points.cols() != 3) throw InvalidArgument("body integral: the points must be M by 3");
-  if (options_.tolerance > 0.0) return evaluate_tree(points, value, grad);
   const Eigen::Index m = points.rows();
   value->resize(m);
   if (grad) grad->resize(m, 3);
+  if (options_.tolerance > 0.0) return evaluate_tree(points, value, grad);
   const Radial k(options_.epsilon, options_.alpha);
   const Rules rule{rule_x_, rule_w_, options_.panel_width};
   const bool want_b = grad != nullptr;
@@ -937,9 +937,7 @@ void BodyIntegral::evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* valu
 
 void BodyIntegral::evaluate_tree(const Eigen::MatrixXd& points, Eigen::VectorXd* value,
                                  Eigen::MatrixXd* grad) const {
-  const Eigen::Index m = points.rows();
-  value->resize(m);
-  if (grad) grad->resize(m, 3);
+  const Eigen::Index m = points.rows();  // value and grad sized by evaluate()
   const Radial k(options_.epsilon, options_.alpha);
   const Rules rule{rule_x_, rule_w_, options_.panel_width};
   const bool want_b = grad != nullptr;

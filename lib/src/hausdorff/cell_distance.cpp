@@ -312,7 +312,7 @@ OuterMean directed_outer_mean(const HexCells& outer, const BodyIntegral& source_
   return out;
 }
 
-namespace {
+namespace {}  // namespace
 
 // The bars of a directed mean on the source's surface points (through J, sd and |Ω_X|), times
 // scale, added to the source's nodes (point_node: the surface point → node map).
@@ -324,7 +324,13 @@ void add_source_bars(const OuterMeanGradient& g, double scale, const TriangleSur
     nodes->row(point_node[static_cast<std::size_t>(a)]) += scale * bars.row(a);
 }
 
-}  // namespace
+double combine_means(CellRho* r, double* ca, double* cb) {
+  // ρ̃ = ((A² + B²)/2)^(1/2), A = (A^4)^(1/4); ∂ρ̃/∂A^4 = 1/(8 ρ̃ √(A^4)), likewise B
+  r->rho = std::sqrt(0.5 * (std::sqrt(r->a.mean) + std::sqrt(r->b.mean)));
+  if (ca) *ca = 1.0 / (8.0 * r->rho * std::sqrt(r->a.mean));
+  if (cb) *cb = 1.0 / (8.0 * r->rho * std::sqrt(r->b.mean));
+  return r->rho;
+}
 
 BodyIntegralOptions body_integral_options(const CellDistanceOptions& options) {
   BodyIntegralOptions bo;
@@ -349,12 +355,9 @@ CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions
   OuterMeanGradient ga, gb;
   r.a = directed_outer_mean(y, jx, dx, enclosed_volume(sx), options, grad ? &ga : nullptr);
   r.b = directed_outer_mean(x, jy, dy, enclosed_volume(sy), options, grad ? &gb : nullptr);
-  // ρ̃ = ((A² + B²)/2)^(1/2), A = (A^4)^(1/4)
-  r.rho = std::sqrt(0.5 * (std::sqrt(r.a.mean) + std::sqrt(r.b.mean)));
+  double ca = 0.0, cb = 0.0;
+  combine_means(&r, &ca, &cb);
   if (!grad) return r;
-  // ∂ρ̃/∂A^4 = 1/(8 ρ̃ √(A^4)), likewise B
-  const double ca = 1.0 / (8.0 * r.rho * std::sqrt(r.a.mean));
-  const double cb = 1.0 / (8.0 * r.rho * std::sqrt(r.b.mean));
   grad->y = ca * ga.outer;
   grad->x = cb * gb.outer;
   add_source_bars(ga, ca, sx, node_x, &grad->x);

@@ -131,6 +131,15 @@ struct CellRhoGradient {
 CellRho cell_rho(const HexCells& x, const HexCells& y, const CellDistanceOptions& options,
                  CellRhoGradient* grad = nullptr);
 
+/// ρ̃ = ((A² + B²)/2)^(1/2) from r's directed means A^4 and B^4 into r->rho (returned), and
+/// with ca, cb non-null ∂ρ̃/∂A^4 = 1/(8 ρ̃ √(A^4)) and ∂ρ̃/∂B^4.
+double combine_means(CellRho* r, double* ca = nullptr, double* cb = nullptr);
+
+/// Adds scale × a directed mean's bars on its source's surface points (through J, sd and
+/// |Ω_X|) to the source's nodes (point_node: hex_boundary's surface point → node map).
+void add_source_bars(const OuterMeanGradient& g, double scale, const TriangleSurface& surface,
+                     const std::vector<int>& point_node, Eigen::MatrixXd* nodes);
+
 /// The inner integral's options the cell distance uses: ε, α = 4, threads, and J's tolerance,
 /// near ratio and angle points.
 BodyIntegralOptions body_integral_options(const CellDistanceOptions& options);
