@@ -18,6 +18,7 @@
 //                                   and of collocation at the nodes (lumped volumes; method
 //                                   exact, tree at TOL and at its default), REPS repeats
 //                                   interleaved (REPS < 0: the last cell configuration alone)
+//   bench_cell_distance THREADS rules CONFIG...   the outer rule's options compared (see rules())
 //   bench_cell_distance THREADS gradient [NMAX]   seconds of ρ̃ alone and of ρ̃ with its gradient
 //                                   (both bodies' nodes), in turn, per case and n_X × n_Y
 #include <Eigen/Geometry>
@@ -26,6 +27,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include "hausdorff/cell_distance.hpp"
 #include "softhd/hausdorff.hpp"
@@ -191,9 +193,98 @@ static int gradient_cost(int threads, int max_n) {
   return 0;
 }
 
+// The plate bent into a half-turn (radius 10/π about the axis X₂, the fibre side outside):
+// (x, y, z) → ((R − z) sin(x/R), y, R − (R − z) cos(x/R)).
+static HexCells arc_cells(int nx, int ny, int nz) {
+  HexCells b = plate_cells(nx, ny, nz);
+  const double r = 10.0 / 3.14159265358979323846;
+  for (Eigen::Index i = 0; i < b.nodes.rows(); ++i) {
+    const double x = b.nodes(i, 0), z = b.nodes(i, 2);
+    b.nodes(i, 0) = (r - z) * std::sin(x / r);
+    b.nodes(i, 2) = r - (r - z) * std::cos(x / r);
+  }
+  return b;
+}
+
+// One option of the outer rule by name (the rules mode's configurations).
+static void set_option(detail::CellDistanceOptions* o, const std::string& key, double v) {
+  if (key == "tp") o->tangential_points = static_cast<int>(v);
+  else if (key == "d0") o->first_panel = v;
+  else if (key == "q") o->grading = v;
+  else if (key == "pp") o->panel_points = static_cast<int>(v);
+  else if (key == "near") o->near_factor = v;
+  else if (key == "t0") o->tangential_first_panel = v;
+  else if (key == "tpp") o->tangential_panel_points = static_cast<int>(v);
+  else if (key == "tol") o->tolerance = v;
+  else if (key == "nr") o->j_near_ratio = v;
+  else if (key == "ap") o->j_angle_points = static_cast<int>(v);
+  else {
+    std::fprintf(stderr, "rules: unknown key %s\n", key.c_str());
+    std::exit(2);
+  }
+}
+
+// bench_cell_distance THREADS rules CONFIG...: each CONFIG "key=v,key=v" (keys: tp d0 q pp near t0
+// tpp tol nr ap; "-" the defaults), interleaved per case: ρ̃, its error against the continuum
+// (cubes, the flat plate) or its difference from the first configuration (the arcs), seconds
+// and near points.
+static int rules(int threads, int argc, char** argv) {
+  std::vector<detail::CellDistanceOptions> configs;
+  for (int a = 3; a < argc; ++a) {
+    detail::CellDistanceOptions o;
+    o.threads = threads;
+    std::string s = argv[a];
+    for (std::size_t start = 0; s != "-" && start < s.size();) {
+      std::size_t comma = s.find(',', start);
+      if (comma == std::string::npos) comma = s.size();
+      const std::string kv = s.substr(start, comma - start);
+      const std::size_t eq = kv.find('=');
+      set_option(&o, kv.substr(0, eq), std::atof(kv.substr(eq + 1).c_str()));
+      start = comma + 1;
+    }
+    o.validate();
+    configs.push_back(o);
+  }
+  struct Body {
+    const char* name;
+    HexCells x, y;
+    double ref;  // 0: against the first configuration
+  };
+  const std::vector<Body> bodies = {
+      {"cube self 8x8", detail::hex_cube({0, 0, 0}, 1, 8), detail::hex_cube({0, 0, 0}, 1, 8),
+       0.124155377},
+      {"cube self 6x8", detail::hex_cube({0, 0, 0}, 1, 6), detail::hex_cube({0, 0, 0}, 1, 8),
+       0.124155377},
+      {"cube shift 0.01 8x8", detail::hex_cube({0, 0, 0}, 1, 8),
+       detail::hex_cube({0.01, 0, 0}, 1, 8), 0.126529335},
+      {"cube side 0.875 8x8", detail::hex_cube({0, 0, 0}, 1, 8),
+       detail::hex_cube({0.0625, 0.0625, 0.0625}, 0.875, 8), 0.201406692},
+      {"plate 100x10x4 self", plate_cells(100, 10, 4), plate_cells(100, 10, 4), 0.149702598},
+      {"plate 50x5x2 x 100x10x4", plate_cells(50, 5, 2), plate_cells(100, 10, 4), 0.149702598},
+      {"arc 50x5x2 x 100x10x4", arc_cells(50, 5, 2), arc_cells(100, 10, 4), 0.0},
+      {"arc 100x10x4 x 76x8x3", arc_cells(100, 10, 4), arc_cells(76, 8, 3), 0.0}};
+  std::printf("# threads %d; per case, configuration: rho, error (or difference from #0), s, near points\n",
+              threads);
+  for (const Body& b : bodies) {
+    double first = 0.0;
+    for (std::size_t k = 0; k < configs.size(); ++k) {
+      const double t0 = now();
+      const detail::CellRho r = detail::cell_rho(b.x, b.y, configs[k]);
+      const double t = now() - t0;
+      if (k == 0) first = r.rho;
+      const double ref = b.ref > 0 ? b.ref : first;
+      std::printf("%-26s #%zu %-28s %.9f %+9.4f%% %8.3f s %9ld\n", b.name, k, argv[3 + k], r.rho,
+                  100.0 * (r.rho / ref - 1.0), t, r.a.near_points + r.b.near_points);
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
   const int threads = argc > 1 ? std::atoi(argv[1]) : 1;
   if (argc > 2 && std::string(argv[2]) == "plate") return plate(threads, argc, argv);
+  if (argc > 2 && std::string(argv[2]) == "rules") return rules(threads, argc, argv);
   if (argc > 2 && std::string(argv[2]) == "gradient")
     return gradient_cost(threads, argc > 3 ? std::atoi(argv[3]) : 8);
   detail::CellDistanceOptions o;

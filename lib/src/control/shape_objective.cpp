@@ -90,13 +90,16 @@ void check_cells_quadrature(const ShapeObjectiveOptions& o) {
         "target_cells: quadrature cells needs the target's cells (a target with a mesh)");
 }
 
-/// The cell rule's options from the distance's: ε, threads, and J's tree tolerance τ with
-/// method tree (exact J otherwise).
+/// The cell rule's options from the distance's: ε, threads, and with method tree J's tree
+/// tolerance τ and the cheapest of J's rules whose own measured error (docs/formulation.md §2.8:
+/// near_ratio 2, 8 angle points: 3.7e-6 of J) stays below τ/10; method exact: all pairs at the
+/// default rules (≤ ~1e-9).
 detail::CellDistanceOptions cell_options(const HausdorffOptions& h) {
   detail::CellDistanceOptions c;
   c.epsilon = h.params.epsilon;
   c.threads = h.threads;
   c.tolerance = h.method == Method::tree ? h.tolerance : 0.0;
+  if (c.tolerance >= 3.7e-5) c.j_near_ratio = 2.0, c.j_angle_points = 8;
   return c;
 }
 

@@ -47,12 +47,13 @@ HexCells hex_cube(const Eigen::Vector3d& lo, double side, int n);
 struct CellDistanceOptions {
   double epsilon = 1e-3;      ///< ε > 0 of the kernel (r + ε)^−4
   int tangential_points = 4;  ///< Gauss points per tangential axis of a near cell (1 to 64)
-  double first_panel = 0.02;  ///< the graded rule's first panel, × ε (physical length; > 0)
+  double first_panel = 0.2;   ///< the graded rule's first panel, × ε (physical length; > 0)
   double grading = 4.0;       ///< the panels' ratio (> 1)
-  int panel_points = 4;       ///< Gauss points per panel, and along a line without a crossing
-  /// A cell is near (the graded rule) when |sd| at its centre ≤ near_factor × its diameter
-  /// (≥ 0).
-  double near_factor = 1.0;
+  int panel_points = 3;       ///< Gauss points per panel, and along a line without a crossing
+  /// A cell is near (the graded rule) when sd changes sign over its centre and corners, or
+  /// the smallest |sd| among them is ≤ near_factor × the cell's extent along ∇sd there (≥ 0);
+  /// the others take the 2×2×2 Gauss rule with J itself.
+  double near_factor = 0.5;
   /// Near cells: grade the two tangential axes too where the cell's centre line along one
   /// crosses sd = 0 within half a cell (an edge or corner of the source in the cell); false:
   /// tangential_points Gauss points on them always.

@@ -173,17 +173,27 @@ void cell_samples(const std::vector<Cell>& cells, Eigen::MatrixXd* samples,
 }
 
 bool is_near(const Cell& cell, const SurfaceDistance& s, double near_factor) {
-  double centre[3];
+  // sd at the centre and the corners: a sign change, or the smallest |sd| against the cell's
+  // extent along ∇sd there (the direction in which the integrand varies on the scale |sd|)
   const double zero[3] = {0, 0, 0};
+  double centre[3];
   map_point(cell, zero, centre, nullptr);
-  double diameter = 0.0;  // the longest body diagonal
-  for (int i = 0; i < 4; ++i) {
-    double d2 = 0.0;
-    for (int d = 0; d < 3; ++d)
-      d2 += std::pow(cell.p[i][d] - cell.p[(i < 2 ? i + 6 : i + 2)][d], 2);
-    diameter = std::max(diameter, std::sqrt(d2));
+  SignedDistance nearest = sd_at(s, centre);
+  bool below = nearest.sd < 0.0, above = nearest.sd > 0.0;
+  for (int i = 0; i < 8; ++i) {
+    const SignedDistance q = sd_at(s, cell.p[i]);
+    below = below || q.sd < 0.0;
+    above = above || q.sd > 0.0;
+    if (std::abs(q.sd) < std::abs(nearest.sd)) nearest = q;
   }
-  return std::abs(signed_distance(s, centre)) <= near_factor * diameter;
+  if (below && above) return true;
+  double lo = 1e300, hi = -1e300;  // the corners' extent along n̂ = ∇sd
+  for (int i = 0; i < 8; ++i) {
+    const double t = nearest.gradient[0] * cell.p[i][0] + nearest.gradient[1] * cell.p[i][1] +
+                     nearest.gradient[2] * cell.p[i][2];
+    lo = std::min(lo, t), hi = std::max(hi, t);
+  }
+  return std::abs(nearest.sd) <= near_factor * (hi - lo);
 }
 
 double halfspace_slope(double sd, double epsilon) {

@@ -164,8 +164,8 @@ void cell_samples(const std::vector<Cell>& cells, Eigen::MatrixXd* samples,
 // The reference point of sample q.
 void sample_xi(int q, double xi[3]);
 
-// Whether the graded rule takes the cell: |sd| at its centre ≤ near_factor × its longest body
-// diagonal.
+// Whether the graded rule takes the cell: sd changes sign over its centre and corners, or the
+// smallest |sd| among them is ≤ near_factor × the cell's extent along ∇sd at that point.
 bool is_near(const Cell& c, const SurfaceDistance& s, double near_factor);
 
 // The half-space profile's slope dP_ε/dsd (continuous at sd = 0: −π/(3ε²)).
