@@ -4,7 +4,7 @@
 #   scripts/run_benchmarks.sh [--quick] [--only a,b,...] BUILD_DIR OUT_DIR REPORT
 #
 # Benchmarks: kernel, hausdorff, resolution, control, stability, time_to_floor, forward_fenics, finger,
-# align, python (--only picks some; the report then also uses the CSVs already in OUT_DIR for the
+# align, python, cells (--only picks some; the report then also uses the CSVs already in OUT_DIR for the
 # others; finger has no smoke variant and runs only without --quick). Each writes
 # OUT_DIR/<name>.csv, its log OUT_DIR/<name>.log and OUT_DIR/<name>.meta (command, date,
 # commit, machine, load before and after); then bench/make_report.py writes REPORT and the
@@ -12,7 +12,7 @@
 # suite runs it). Exit code: non-zero if any benchmark or the report failed.
 set -euo pipefail
 quick=0
-only="kernel,hausdorff,resolution,control,stability,time_to_floor,forward_fenics,finger,align,python"
+only="kernel,hausdorff,resolution,control,stability,time_to_floor,forward_fenics,finger,align,python,cells"
 # The goal cases of issue 13 (value + gradient, methods interleaved, medians of 3): the
 # exact sums of the large cases are timed on a sample of target points and scaled.
 goals() {  # bench_dir csv
@@ -91,6 +91,7 @@ if [ $quick -eq 1 ]; then
     --csv "$out/time_to_floor.csv"
   align_bench --poses 2
   python_bench --n 2000 --torch-n 1000 --repeats 2
+  run cells "$b/bench_cells" --quick --csv "$out/cells.csv"
 else
   run kernel "$b/bench_kernel" --n 20000 --repeats 5 --csv "$out/kernel.csv"
   # The Hausdorff ladder (one run per size; a (method, tau, mode) stops growing when its next
@@ -118,6 +119,9 @@ else
   align_bench --poses 40 --distance scan_to_body
   # The Python module: overhead over C++ and HausdorffLoss against plain PyTorch (issue 14).
   python_bench --n 10000 --torch-n 10000 --repeats 5
+  # The distance integrated over cells against collocation: the cubes and the plate against
+  # their continuum values, and the bending loop's cost (about 10 minutes on 2 cores).
+  run cells "$b/bench_cells" --csv "$out/cells.csv"
 fi
 /usr/bin/python3 "$here/bench/make_report.py" "$out" --report "$report" $([ $quick -eq 1 ] && echo --quick)
 echo "report: $report" >&2

@@ -105,6 +105,28 @@ TEST(CellDistance, InvariantUnderARigidMotion) {
   EXPECT_GT(std::abs(before / kShift01 - 1), 0.0);  // (a value, not a NaN)
 }
 
+// The near test: a cube of 3³ cells against itself: the 26 cells with a face on the surface
+// are near (sd = 0 at their corners); the centre cell's corners lie h from the surface, twice
+// near_factor × its extent h along ∇sd, so it takes the 2×2×2 rule; near_factor 1.5 makes it
+// near too. A thin slab of 4 × 4 × 4 cells 1 × 1 × 0.1 against itself: its 2 × 2 × 2 inner
+// cells (corners 0.025 from the faces, extent 0.025) take the 2×2×2 rule, although their
+// diameter is 0.35 (the first rule's test made every cell of a thin body near).
+TEST(CellDistance, NearCellsAreThoseAtTheSurface) {
+  auto near_cells = [](const HexCells& b, double near_factor) {
+    const softhd::TriangleSurface surface = hex_boundary(b);
+    const softhd::detail::BodyIntegral j(surface, softhd::detail::BodyIntegralOptions());
+    const softhd::detail::SurfaceDistance sd(surface);
+    CellDistanceOptions o;
+    o.near_factor = near_factor;
+    return directed_outer_mean(b, j, sd, enclosed_volume(surface), o).near_cells;
+  };
+  EXPECT_EQ(near_cells(unit(3), CellDistanceOptions().near_factor), 26);
+  EXPECT_EQ(near_cells(unit(3), 1.5), 27);
+  HexCells slab = hex_cube({0, 0, 0}, 1.0, 4);
+  slab.nodes.col(2) *= 0.1;
+  EXPECT_EQ(near_cells(slab, CellDistanceOptions().near_factor), 64 - 8);
+}
+
 TEST(CellDistance, BadInputIsNamed) {
   HexCells x = unit(2);
   x.cells(0, 3) = 999;

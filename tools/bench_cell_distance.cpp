@@ -208,16 +208,26 @@ static HexCells arc_cells(int nx, int ny, int nz) {
 
 // One option of the outer rule by name (the rules mode's configurations).
 static void set_option(detail::CellDistanceOptions* o, const std::string& key, double v) {
-  if (key == "tp") o->tangential_points = static_cast<int>(v);
-  else if (key == "d0") o->first_panel = v;
-  else if (key == "q") o->grading = v;
-  else if (key == "pp") o->panel_points = static_cast<int>(v);
-  else if (key == "near") o->near_factor = v;
-  else if (key == "t0") o->tangential_first_panel = v;
-  else if (key == "tpp") o->tangential_panel_points = static_cast<int>(v);
-  else if (key == "tol") o->tolerance = v;
-  else if (key == "nr") o->j_near_ratio = v;
-  else if (key == "ap") o->j_angle_points = static_cast<int>(v);
+  if (key == "tp")
+    o->tangential_points = static_cast<int>(v);
+  else if (key == "d0")
+    o->first_panel = v;
+  else if (key == "q")
+    o->grading = v;
+  else if (key == "pp")
+    o->panel_points = static_cast<int>(v);
+  else if (key == "near")
+    o->near_factor = v;
+  else if (key == "t0")
+    o->tangential_first_panel = v;
+  else if (key == "tpp")
+    o->tangential_panel_points = static_cast<int>(v);
+  else if (key == "tol")
+    o->tolerance = v;
+  else if (key == "nr")
+    o->j_near_ratio = v;
+  else if (key == "ap")
+    o->j_angle_points = static_cast<int>(v);
   else {
     std::fprintf(stderr, "rules: unknown key %s\n", key.c_str());
     std::exit(2);
@@ -263,8 +273,9 @@ static int rules(int threads, int argc, char** argv) {
       {"plate 50x5x2 x 100x10x4", plate_cells(50, 5, 2), plate_cells(100, 10, 4), 0.149702598},
       {"arc 50x5x2 x 100x10x4", arc_cells(50, 5, 2), arc_cells(100, 10, 4), 0.0},
       {"arc 100x10x4 x 76x8x3", arc_cells(100, 10, 4), arc_cells(76, 8, 3), 0.0}};
-  std::printf("# threads %d; per case, configuration: rho, error (or difference from #0), s, near points\n",
-              threads);
+  std::printf(
+      "# threads %d; per case, configuration: rho, error (or difference from #0), s, near points\n",
+      threads);
   for (const Body& b : bodies) {
     double first = 0.0;
     for (std::size_t k = 0; k < configs.size(); ++k) {

@@ -179,7 +179,7 @@ bool is_near(const Cell& cell, const SurfaceDistance& s, double near_factor) {
   double centre[3];
   map_point(cell, zero, centre, nullptr);
   SignedDistance nearest = sd_at(s, centre);
-  bool below = nearest.sd < 0.0, above = nearest.sd > 0.0;
+  bool below = nearest.sd<0.0, above = nearest.sd> 0.0;
   for (int i = 0; i < 8; ++i) {
     const SignedDistance q = sd_at(s, cell.p[i]);
     below = below || q.sd < 0.0;
