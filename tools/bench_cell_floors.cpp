@@ -3,8 +3,10 @@
 // floor (the target's cells against themselves), two values of the same continuum quantity when
 // the target has cells (an arc, or a solved_on target).
 //
-//   bench_cell_floors SCENE [THREADS]
+//   bench_cell_floors SCENE [THREADS [TOL]]
 //
+// TOL > 0: J by the tree at τ = TOL with near_ratio 2 and 8 angle points (as the objective's
+// loop); default 0: all pairs at the accurate rules.
 // Prints the cell counts, both floors and the seconds of each.
 
 #include <chrono>
@@ -35,8 +37,8 @@ detail::HexCells hex_cells(const fe::Mesh& mesh, const Eigen::MatrixXd& x) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2 || argc > 3) {
-    std::fprintf(stderr, "usage: bench_cell_floors SCENE [THREADS]\n");
+  if (argc < 2 || argc > 4) {
+    std::fprintf(stderr, "usage: bench_cell_floors SCENE [THREADS [TOL]]\n");
     return 2;
   }
   std::setvbuf(stdout, nullptr, _IOLBF, 0);  // each line as it is printed (long runs)
@@ -51,6 +53,8 @@ int main(int argc, char** argv) {
     }
     detail::CellDistanceOptions options;
     options.threads = argc > 2 ? std::atoi(argv[2]) : 0;
+    options.tolerance = argc > 3 ? std::atof(argv[3]) : 0.0;
+    if (options.tolerance > 0) options.j_near_ratio = 2.0, options.j_angle_points = 8;
     // The body deformed by the known map: X + u_T (u_T node-major).
     const Eigen::MatrixXd u =
         Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
