@@ -98,6 +98,43 @@ TEST(CellObjective, TaylorRemainderIsSecondOrder) {
     EXPECT_GE(std::log2(r[k] / r[k + 1]), 1.9) << "steps " << k << ", " << k + 1;
 }
 
+// The per-point fields with cells are the continuum's d̃ = (J/|Ω|)^(−1/4) − ε: at u = 0 the
+// body is the box [0, 2] × [0, 1] × [0, 0.5], so at the target's points d̃ ≥ the exact distance
+// to the box (d̃ ≥ dist holds for the continuum mean as for the sums, formulation §2.1), and at
+// points at depth ≥ d inside it the box's J lies between 4π/(3ε) − Σ_faces π/(d_f + ε) (the
+// half-spaces beyond its faces hold what it lacks) and 4π/(3ε). ρ̃, A, B are evaluate()'s.
+TEST(CellObjective, FieldsAreTheContinuumDTilde) {
+  const Plate p;
+  ShapeObjectiveOptions o = p.cells_options();
+  const ShapeObjective J = p.objective(o);
+  const Eigen::VectorXd u = Eigen::VectorXd::Zero(3 * p.A.mesh().num_nodes());
+  const HausdorffResult f = J.fields(u);
+  const Eigen::MatrixXd& y = p.target.cloud.points();
+  ASSERT_EQ(f.field_target.size(), y.rows());
+  ASSERT_EQ(f.field_moving.size(), J.moving_cloud().at(u).size());
+  EXPECT_TRUE(f.field_moving.allFinite() && f.field_moving.minCoeff() > 0.0);
+  const double eps = o.hausdorff.params.epsilon, volume = 1.0, pi = std::acos(-1.0);
+  const Eigen::Vector3d lo(0, 0, 0), hi(2, 1, 0.5);
+  int inside = 0;
+  for (Eigen::Index k = 0; k < y.rows(); ++k) {
+    const Eigen::Vector3d q = y.row(k).transpose();
+    const Eigen::Vector3d out = (lo - q).cwiseMax(q - hi).cwiseMax(0.0);
+    EXPECT_GE(f.field_target[k], out.norm() - 1e-12) << "point " << k;
+    if (out.norm() > 0.0) continue;
+    double lack = 0.0;  // Σ_faces π/(d_f + ε)
+    for (int a = 0; a < 3; ++a) lack += pi / (q[a] - lo[a] + eps) + pi / (hi[a] - q[a] + eps);
+    const double j_hi = 4 * pi / (3 * eps), j_lo = j_hi - lack;
+    if (j_lo <= 0.0) continue;
+    ++inside;
+    EXPECT_GE(f.field_target[k], std::pow(j_hi / volume, -0.25) - eps - 1e-12) << "point " << k;
+    EXPECT_LE(f.field_target[k], std::pow(j_lo / volume, -0.25) - eps + 1e-12) << "point " << k;
+  }
+  EXPECT_GT(inside, 0);
+  const ShapeEvaluation e =
+      ShapeObjective(p.objective(o)).evaluate(Eigen::VectorXd::Zero(p.space.size()), false);
+  EXPECT_DOUBLE_EQ(f.rho, e.rho);
+}
+
 // What the cell form does not do yet is refused, naming the field; the point-cloud API refuses
 // quadrature cells (point clouds have no cells).
 TEST(CellObjective, RefusesWhatItCannotDo) {

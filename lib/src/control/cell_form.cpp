@@ -21,6 +21,15 @@ void check_3d(const fe::Mesh& mesh, const char* which) {
                           " is 2D; the cell quadrature is 3D only (not yet 2D)");
 }
 
+// d̃ = (J/|Ω|)^(−1/4) − ε (α = 4) at every row of `points` against a body's J.
+Eigen::VectorXd d_tilde(const BodyIntegral& j, double volume, double epsilon,
+                        const Eigen::MatrixXd& points) {
+  Eigen::VectorXd v;
+  j.evaluate(points, &v);
+  for (Eigen::Index k = 0; k < v.size(); ++k) v[k] = std::pow(v[k] / volume, -0.25) - epsilon;
+  return v;
+}
+
 }  // namespace
 
 CellForm::CellForm(const fe::Mesh& body, const fe::Mesh& target, const CellDistanceOptions& options)
@@ -65,6 +74,18 @@ CellRho CellForm::evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad) cons
   const Eigen::MatrixXd nodes = body_cells_.map.transpose() * points;  // mapᵀ: N by 3
   *grad = nodes.transpose().reshaped();                                // node-major
   return r;
+}
+
+CellForm::Fields CellForm::fields(const Eigen::VectorXd& u, const Eigen::MatrixXd& moving,
+                                  const Eigen::MatrixXd& target_points) const {
+  Fields f;
+  f.rho = evaluate(u);
+  const Eigen::MatrixXd U = u.reshaped(3, body_.num_nodes()).transpose();
+  const TriangleSurface sx = hex_boundary(hex_cells(body_cells_, body_.nodes + U));
+  const BodyIntegral jx(sx, body_integral_options(options_));
+  f.moving = d_tilde(*target_j_, target_volume_, options_.epsilon, moving);
+  f.target = d_tilde(jx, enclosed_volume(sx), options_.epsilon, target_points);
+  return f;
 }
 
 // The target against itself: both directed means are the same one, A^4 over its cells against

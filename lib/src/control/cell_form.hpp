@@ -32,6 +32,16 @@ class CellForm {
   /// with grad, dρ̃/du into *grad (node-major).
   CellRho evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad = nullptr) const;
 
+  /// Per-point fields of the continuum distance (docs/formulation.md §2.8):
+  /// d̃ = (J/|Ω|)^(−1/4) − ε at `moving` (N by 3) against the target's J, and at `target_points`
+  /// (M by 3) against the body's at X + u; with ρ̃, A, B of evaluate().
+  struct Fields {
+    CellRho rho;
+    Eigen::VectorXd moving, target;
+  };
+  Fields fields(const Eigen::VectorXd& u, const Eigen::MatrixXd& moving,
+                const Eigen::MatrixXd& target_points) const;
+
   /// ρ̃ of the target's cells against themselves (the self floor).
   double self_rho() const;
   const HexCells& target() const { return target_; }

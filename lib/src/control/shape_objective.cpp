@@ -390,6 +390,17 @@ DistanceForm ShapeObjective::distance_form(const Eigen::VectorXd& u,
 
 HausdorffResult ShapeObjective::fields(const Eigen::VectorXd& u, const Eigen::VectorXd& xi) const {
   const Eigen::VectorXd x = impl_->checked_twist(xi);
+  if (impl_->cells) {  // the continuum fields; no pose, cap or camera with cells
+    const detail::CellForm::Fields f =
+        impl_->cells->fields(u, impl_->moved(u, x).points(), impl_->target.cloud().points());
+    HausdorffResult r;
+    r.rho = f.rho.rho;
+    r.A = std::sqrt(std::sqrt(f.rho.a.mean));
+    r.B = std::sqrt(std::sqrt(f.rho.b.mean));
+    r.field_moving = f.moving;
+    r.field_target = f.target;
+    return r;
+  }
   HausdorffRequest req;
   req.fields = true;
   req.form = impl_->form(u, impl_->camera_at(x));
