@@ -243,6 +243,41 @@ bool crossed(const Cell& c, const SurfaceDistance& s, const std::vector<SignedDi
   return neg > 0 && pos > 0;
 }
 
+// node_samples: J at the distinct corners of `cells`, then per cell the factor at its 8 Gauss
+// points from the trilinear through its corners, f(ξ_q) = Σ_i N_i(ξ_q) log(J_i/P_ε(sd_i)), and
+// J_q = P_ε(sd_q) exp(f(ξ_q)) at the samples (sd_q exact). Overwrites j_s (8 per cell).
+void corner_samples(const std::vector<Cell>& cells, const Source& src, const CellDistanceOptions& o,
+                    const std::vector<SignedDistance>& sd_s, Eigen::VectorXd* j_s) {
+  std::map<std::array<double, 3>, int> id;
+  std::vector<std::array<double, 3>> points;
+  std::vector<int> corner(8 * cells.size());
+  for (std::size_t c = 0; c < cells.size(); ++c)
+    for (int i = 0; i < 8; ++i) {
+      const std::array<double, 3> p = {cells[c].p[i][0], cells[c].p[i][1], cells[c].p[i][2]};
+      auto it = id.emplace(p, static_cast<int>(points.size())).first;
+      if (it->second == static_cast<int>(points.size())) points.push_back(p);
+      corner[8 * c + i] = it->second;
+    }
+  Eigen::MatrixXd y(static_cast<Eigen::Index>(points.size()), 3);
+  for (std::size_t k = 0; k < points.size(); ++k)
+    y.row(k) << points[k][0], points[k][1], points[k][2];
+  Eigen::VectorXd j;
+  src.j.evaluate(y, &j);
+  const std::vector<SignedDistance> sd = src.sd.at_rows(y, resolve_threads(o.threads));
+  for (std::size_t c = 0; c < cells.size(); ++c)
+    for (int q = 0; q < 8; ++q) {
+      double xi[3], f = 0.0;
+      cell_rule::sample_xi(q, xi);
+      for (int i = 0; i < 8; ++i) {
+        double n = 1.0;  // N_i(ξ) = Π_k (1 + ξ_k s_ik)/2
+        for (int k = 0; k < 3; ++k) n *= 0.5 * (1.0 + xi[k] * kSign[i][k]);
+        const int v = corner[8 * c + i];
+        f += n * std::log(j[v] / halfspace_profile(sd[v].sd, o.epsilon));
+      }
+      (*j_s)[8 * c + q] = halfspace_profile(sd_s[8 * c + q].sd, o.epsilon) * std::exp(f);
+    }
+}
+
 // Σ over the cells of ∫_cell d̃^4 (the rule of the header); the near cells the surface crosses
 // are split into 8 children with samples of their own while level < refine_crossed.
 double sum_cells(const std::vector<Cell>& cells, const Source& src, const Rule& rule,
@@ -251,10 +286,13 @@ double sum_cells(const std::vector<Cell>& cells, const Source& src, const Rule& 
   Eigen::MatrixXd samples;  // every cell's 2×2×2 Gauss points, weights det J
   Eigen::VectorXd weight;
   cell_rule::cell_samples(cells, &samples, &weight);
-  Eigen::VectorXd j_s;
-  src.j.evaluate(samples, &j_s);
+  Eigen::VectorXd j_s(samples.rows());
   const int threads = resolve_threads(o.threads);
   const std::vector<SignedDistance> sd_s = src.sd.at_rows(samples, threads);
+  if (o.node_samples)
+    corner_samples(cells, src, o, sd_s, &j_s);
+  else
+    src.j.evaluate(samples, &j_s);
   std::vector<double> part(n, 0.0);
   std::vector<long> near(n, 0), points(n, 0);
   std::vector<char> split(n, 0);

@@ -66,6 +66,11 @@ struct CellDistanceOptions {
   /// Near cells: J = P_ε(sd) + g (g = J − P_ε(sd) interpolated from the samples) where |g| ≤
   /// P_ε(sd)/2, the factor elsewhere; false: the factor everywhere.
   bool hybrid = false;
+  /// Diagnostics (value only): J at the cells' corners, each distinct point once, instead of
+  /// at every cell's 2×2×2 Gauss points; the factor f = log(J/P_ε(sd)) trilinear through the
+  /// corners, and far cells' J = P_ε(sd) exp(f) at their Gauss points (about 1/8 of the J
+  /// evaluations on a structured mesh; measures what shared samples cost in accuracy).
+  bool node_samples = false;
   /// Near cells whose corners and samples lie on both sides of the surface are split into 8
   /// children with samples of their own, this many times (0 to 4).
   int refine_crossed = 0;

@@ -393,6 +393,7 @@ void refuse_diagnostics(const CellDistanceOptions& o) {
   if (o.exact_near) refuse("exact_near (must be false)");
   if (o.hybrid) refuse("hybrid (must be false)");
   if (o.refine_crossed != 0) refuse("refine_crossed (must be 0)");
+  if (o.node_samples) refuse("node_samples (must be false)");
 }
 
 }  // namespace
