@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -214,22 +215,101 @@ struct Rules {
   double width;
 };
 
+// The most angle points (validate: angle_points ≤ 64).
+constexpr int kMaxAnglePoints = 64;
+
+// 1/j! for j = 0 … 18.
+constexpr std::array<double, 19> inverse_factorials() {
+  std::array<double, 19> a{};
+  double f = 1.0;
+  for (int j = 0; j < 19; ++j) {
+    if (j > 0) f *= j;
+    a[j] = 1.0 / f;
+  }
+  return a;
+}
+constexpr std::array<double, 19> kInverseFactorial = inverse_factorials();
+
+// cosh u at the nodes u = m + δ of one panel of width du about its middle m: cosh m C(δ) +
+// sinh m S(δ), C and S the Taylor series of cosh δ and sinh δ to δ¹⁸ and δ¹⁷ (|δ| ≤ du/2 ≤ 1:
+// the next terms below 1e-17; sinh m from e^m is exact to ~1e-16 cosh m, as the sum needs), so
+// one exp per panel and a loop the compiler vectorises; std::cosh per node for panels wider
+// than 2 (panel_width > 2).
+void panel_cosh(const Rules& rule, double m, double du, double* ch) {
+  const int n = static_cast<int>(rule.x.size());
+  if (du > 2.0) {
+    for (int i = 0; i < n; ++i) ch[i] = std::cosh(m + du * (rule.x[i] - 0.5));
+    return;
+  }
+  const double e = std::exp(m), cm = 0.5 * (e + 1.0 / e), sm = 0.5 * (e - 1.0 / e);
+#pragma omp simd
+  for (int i = 0; i < n; ++i) {
+    const double d = du * (rule.x[i] - 0.5), d2 = d * d;
+    double c = kInverseFactorial[18], s = kInverseFactorial[17];
+    for (int j = 8; j >= 0; --j) c = c * d2 + kInverseFactorial[2 * j];
+    for (int j = 7; j >= 0; --j) s = s * d2 + kInverseFactorial[2 * j + 1];
+    ch[i] = cm * c + sm * (s * d);
+  }
+}
+
+// asinh x = sign(x) log(|x| + √(x² + 1)) (absolute error ~1e-16: the panels' ends).
+double fast_asinh(double x) {
+  const double a = std::abs(x);
+  const double v = a > 1e8 ? std::log(2.0 * a) : std::log(a + std::sqrt(a * a + 1.0));
+  return x < 0.0 ? -v : v;
+}
+
+// The Gauss–Legendre panels of [u1, u2] of width ≤ rule.width with cosh u at their nodes:
+// calls f(ch, weight) per panel (n = angle_points values each).
+template <class F>
+void cosh_panels(const Rules& rule, double u1, double u2, F&& f) {
+  const int panels = std::max(1, static_cast<int>(std::ceil((u2 - u1) / rule.width)));
+  const double du = (u2 - u1) / panels;
+  double ch[kMaxAnglePoints];
+  for (int p = 0; p < panels; ++p) {
+    panel_cosh(rule, u1 + (p + 0.5) * du, du, ch);
+    f(ch, du);
+  }
+}
+
 // The wedge of one edge seen from the foot p of y (in-plane distance |p_e| > 0 to the edge's
 // line, t1 < t2 its ends along it), polar about p, T(u) = √(p_e² cosh²u + h²), θ = gd(u):
 //   W_A = ∫ [Φ_A(T) − Φ_A(|h|)] dθ = ∫ ∫₀^R G(r)/r³ s ds dθ
 //   W_B = ∫ [K₁(T) − K₁(|h|)] dθ   = ∫ ∫₀^R k(r) s ds dθ
+// (dθ = du / cosh u). α = 4: Φ_A and K₁'s closed forms inline, the nodes' loop vectorised.
 void edge_wedge(const Radial& k, const Rules& rule, double pe, double h, double t1, double t2,
                 bool want_a, bool want_b, double* wa, double* wb) {
   const double ah = std::abs(h), p2 = pe * pe, h2 = h * h;
   const double fa = want_a ? k.phi_a(ah) : 0.0, fb = want_b ? k.k1(ah) : 0.0;
+  const double u1 = fast_asinh(t1 / pe), u2 = fast_asinh(t2 / pe);
+  const int n = static_cast<int>(rule.x.size());
+  const double* w = rule.w.data();
+  const double eps = k.eps, ie = 1.0 / eps;
   double sa = 0.0, sb = 0.0;
-  panel_rule(rule.x, rule.w, rule.width, std::asinh(t1 / pe), std::asinh(t2 / pe),
-             [&](double u, double wt) {
-               const double ch = std::cosh(u), T = std::sqrt(p2 * ch * ch + h2);
-               const double f = wt / ch;
-               if (want_a) sa += f * (k.phi_a(T) - fa);
-               if (want_b) sb += f * (k.k1(T) - fb);
-             });
+  cosh_panels(rule, u1, u2, [&](const double* ch, double du) {
+    if (!k.four) {
+      for (int i = 0; i < n; ++i) {
+        const double T = std::sqrt(p2 * ch[i] * ch[i] + h2), f = du * w[i] / ch[i];
+        if (want_a) sa += f * (k.phi_a(T) - fa);
+        if (want_b) sb += f * (k.k1(T) - fb);
+      }
+      return;
+    }
+    if (want_a) {  // Φ_A = −(s − ε s²/2)/(3ε), s = 1/(T + ε)
+#pragma omp simd reduction(+ : sa)
+      for (int i = 0; i < n; ++i) {
+        const double T = std::sqrt(p2 * ch[i] * ch[i] + h2), s = 1.0 / (T + eps);
+        sa += du * w[i] / ch[i] * (-(s - 0.5 * eps * s * s) * ie / 3.0 - fa);
+      }
+    }
+    if (want_b) {  // K₁ = z²(3 + z)/(6ε²(1 + z)³), z = T/ε
+#pragma omp simd reduction(+ : sb)
+      for (int i = 0; i < n; ++i) {
+        const double z = std::sqrt(p2 * ch[i] * ch[i] + h2) * ie, v = 1.0 + z;
+        sb += du * w[i] / ch[i] * (z * z * (3.0 + z) * ie * ie / (6.0 * v * v * v) - fb);
+      }
+    }
+  });
   *wa = sa;
   *wb = sb;
 }
@@ -240,11 +320,14 @@ void edge_wedge(const Radial& k, const Rules& rule, double pe, double h, double 
 double edge_line(const Radial& k, const Rules& rule, double q, double t1, double t2) {
   double s = 0.0;
   if (q > 0.0) {
-    panel_rule(rule.x, rule.w, rule.width, std::asinh(t1 / q), std::asinh(t2 / q),
-               [&](double u, double wt) {
-                 const double r = q * std::cosh(u);
-                 s += wt * k.k1(r) * r;
-               });
+    const int n = static_cast<int>(rule.x.size());
+    const double* w = rule.w.data();
+    cosh_panels(rule, fast_asinh(t1 / q), fast_asinh(t2 / q), [&](const double* ch, double du) {
+      for (int i = 0; i < n; ++i) {
+        const double r = q * ch[i];
+        s += du * w[i] * k.k1(r) * r;
+      }
+    });
     return s;
   }
   auto side = [&](double a, double b) {  // ∫_a^b K₁(t) dt, 0 ≤ a < b
@@ -333,12 +416,14 @@ double solid_angle(const Triangle& t, const double* y) {
 double far_value(const FarPoints& t, const Radial& k, const double* y, double h, double* omega) {
   double s = 0.0, c = 0.0;
   if (k.four) {  // H(r) = (3W² − 3W + 1)/(3ε W³ r³), W = 1 + r/ε
-    const double inv_eps = 1.0 / k.eps;
+    const double inv_eps = 1.0 / k.eps, y0 = y[0], y1 = y[1], y2 = y[2];
+    const double *px = t.x, *py = t.y, *pz = t.z, *pw = t.w;
+    const int n = t.n;
 #pragma omp simd reduction(+ : s, c)
-    for (int q = 0; q < t.n; ++q) {
-      const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
+    for (int q = 0; q < n; ++q) {
+      const double dx = px[q] - y0, dy = py[q] - y1, dz = pz[q] - y2;
       const double r = std::sqrt(dx * dx + dy * dy + dz * dz), W = 1.0 + r * inv_eps;
-      const double W3 = W * W * W, wi = t.w[q] / (r * r * r * W3);  // one division
+      const double W3 = W * W * W, wi = pw[q] / (r * r * r * W3);  // one division
       s += wi * (3.0 * W * W - 3.0 * W + 1.0);
       c += wi * W3;
     }
@@ -377,11 +462,14 @@ bool on_triangle(const Triangle& t, const EdgeFrame& f) {
 double far_kernel(const FarPoints& t, const Radial& k, const double* y) {
   double s = 0.0;
   if (k.four) {
+    const double eps = k.eps, y0 = y[0], y1 = y[1], y2 = y[2];
+    const double *px = t.x, *py = t.y, *pz = t.z, *pw = t.w;
+    const int n = t.n;
 #pragma omp simd reduction(+ : s)
-    for (int q = 0; q < t.n; ++q) {
-      const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
-      const double u = 1.0 / (std::sqrt(dx * dx + dy * dy + dz * dz) + k.eps);
-      s += t.w[q] * (u * u) * (u * u);
+    for (int q = 0; q < n; ++q) {
+      const double dx = px[q] - y0, dy = py[q] - y1, dz = pz[q] - y2;
+      const double u = 1.0 / (std::sqrt(dx * dx + dy * dy + dz * dz) + eps);
+      s += pw[q] * (u * u) * (u * u);
     }
     return s;
   }
@@ -490,6 +578,12 @@ void direct_triangle(const Triangle& t, const Radial& k, const Rules& rule, cons
     for (int i = 0; i < 3; ++i) s->g[i] -= b * t.n[i];  // −n_t ∫_t k dA
     s->S += b;
   }
+}
+
+// The triangles tris[begin, end) one by one (a leaf of the tree).
+void direct_range(const std::vector<Triangle>& tris, int begin, int end, const Radial& k,
+                  const Rules& rule, const double* y, bool want_b, PointSums* s) {
+  for (int j = begin; j < end; ++j) direct_triangle(tris[j], k, rule, y, want_b, true, s);
 }
 
 // The tree's expansions need ε ≤ kTreeX (|p − y| − ρ): the remainder bounds below sum the
@@ -639,42 +733,167 @@ struct Budget {
 // The probe's opening ratio (a guess only: its results are not used unless the check passes).
 constexpr double kProbeTheta = 0.25;
 
-// One point's sums by the tree (tris: the triangles in the tree's order): a cluster enters by its
-// expansions when they are valid (ρ < R, ε ≤ kTreeX (R − ρ)) and their remainder bounds per unit
-// area fit the budget; a leaf that does not, triangle by triangle.
+// A cluster's remainder bounds per unit area at z = |p − y| − ρ (valid: z > 0, ε ≤ kTreeX z):
+// J's tail C_H ρ³/z⁶, the solid angle's 4 ρ³/z⁵, and with the gradient k's C_K ρ³/z⁷.
+struct Bounds {
+  bool valid;
+  double j, omega, g;
+};
+
+Bounds cluster_bounds(const BodyIntegral::Cluster& c, double eps, double z, bool want_b) {
+  if (!(z > 0.0 && eps <= kTreeX * z)) return {false, 0.0, 0.0, 0.0};
+  const TreeConstants& tc = tree_constants();
+  const double r3 = c.rho * c.rho * c.rho, z2 = z * z, z5 = z2 * z2 * z;
+  return {true, tc.c_h * r3 / (z5 * z), 4.0 * r3 / z5, want_b ? tc.c_k * r3 / (z5 * z2) : 0.0};
+}
+
+// Whether a cluster at z, its bounds e there, enters by its expansions under the budget
+// (decreasing in z: fits at z implies fits at every larger z).
+bool cluster_fits(const BodyIntegral::Cluster& c, const Bounds& e, double z, const Budget& budget) {
+  if (!e.valid || e.omega > budget.omega) return false;
+  return budget.theta > 0.0 ? c.rho <= budget.theta * z : e.j <= budget.j && e.g <= budget.g;
+}
+
+// A cluster's expansions into y's sums, e its bounds at y's distance.
+void take_cluster(const BodyIntegral::Cluster& c, double eps, const double* y, bool want_b,
+                  const Bounds& e, PointSums* s) {
+  cluster_share(c, eps, y, want_b, s);
+  s->err_j += c.area * e.j;
+  s->err_omega += c.area * e.omega;
+  s->err_g += c.area * e.g;
+}
+
+// One point's sums by the tree below the nodes `start` (tris: the triangles in the tree's
+// order): a cluster enters by its expansions when they are valid (ρ < R, ε ≤ kTreeX (R − ρ)) and
+// their remainder bounds per unit area fit the budget; a leaf that does not, triangle by triangle.
+void traverse(const std::vector<BodyIntegral::Cluster>& clusters, const std::vector<Triangle>& tris,
+              const Radial& k, const Rules& rule, const double* y, bool want_b,
+              const Budget& budget, const std::vector<int>& start, PointSums* s) {
+  int stack[2 * kBvhMaxDepth + 2];
+  for (int root : start) {
+    int top = 0;
+    stack[top++] = root;
+    while (top > 0) {
+      const BodyIntegral::Cluster& c = clusters[stack[--top]];
+      const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
+      const double z = std::sqrt(dot(d, d)) - c.rho;
+      const Bounds e = cluster_bounds(c, k.eps, z, want_b);
+      if (cluster_fits(c, e, z, budget)) {
+        take_cluster(c, k.eps, y, want_b, e, s);
+        continue;
+      }
+      if (c.left >= 0) {
+        stack[top++] = c.left + 1;
+        stack[top++] = c.left;
+        continue;
+      }
+      direct_range(tris, c.begin, c.end, k, rule, y, want_b, s);
+    }
+  }
+}
+
+// One point's sums by the whole tree.
 PointSums traverse(const std::vector<BodyIntegral::Cluster>& clusters,
                    const std::vector<Triangle>& tris, const Radial& k, const Rules& rule,
                    const double* y, bool want_b, const Budget& budget) {
-  const TreeConstants& tc = tree_constants();
   PointSums s;
+  traverse(clusters, tris, k, rule, y, want_b, budget, {0}, &s);
+  return s;
+}
+
+// A group of points (|y − centre| ≤ radius for each) and the decisions its points share: the
+// clusters every point takes (fits at z − radius ≤ each point's z), the leaves no point takes
+// (fails at z + radius), the nodes each point decides itself (the roots of its own traversal).
+// With one budget for the group, each point's sums are those of its own traversal (the fits are
+// monotone in z), in another order.
+struct GroupLists {
+  std::vector<int> taken, leaves, open;
+};
+
+template <class Fits>
+void group_lists(const std::vector<BodyIntegral::Cluster>& clusters, const double* centre,
+                 double radius, Fits&& fits, GroupLists* out) {
+  out->taken.clear();
+  out->leaves.clear();
+  out->open.clear();
   int stack[2 * kBvhMaxDepth + 2];
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
-    const BodyIntegral::Cluster& c = clusters[stack[--top]];
-    const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
+    const int id = stack[--top];
+    const BodyIntegral::Cluster& c = clusters[id];
+    const double d[3] = {c.p[0] - centre[0], c.p[1] - centre[1], c.p[2] - centre[2]};
     const double z = std::sqrt(dot(d, d)) - c.rho;
-    if (z > 0.0 && k.eps <= kTreeX * z) {
-      const double r3 = c.rho * c.rho * c.rho, z2 = z * z, z5 = z2 * z2 * z;
-      const double ej = tc.c_h * r3 / (z5 * z), eo = 4.0 * r3 / z5;
-      const double eg = want_b ? tc.c_k * r3 / (z5 * z2) : 0.0;
-      const bool fits =
-          budget.theta > 0.0 ? c.rho <= budget.theta * z : ej <= budget.j && eg <= budget.g;
-      if (fits && eo <= budget.omega) {
-        cluster_share(c, k.eps, y, want_b, &s);
-        s.err_j += c.area * ej;
-        s.err_omega += c.area * eo;
-        s.err_g += c.area * eg;
-        continue;
-      }
-    }
-    if (c.left >= 0) {
+    if (fits(c, z - radius)) {
+      out->taken.push_back(id);
+    } else if (fits(c, z + radius)) {
+      out->open.push_back(id);
+    } else if (c.left >= 0) {
       stack[top++] = c.left + 1;
       stack[top++] = c.left;
-      continue;
+    } else {
+      out->leaves.push_back(id);
     }
-    for (int j = c.begin; j < c.end; ++j) direct_triangle(tris[j], k, rule, y, want_b, true, &s);
   }
+}
+
+// Points are taken in blocks of kBlock rows (a block's points depend on the ones before them in
+// it, not on the threads), each in groups of up to kGroup consecutive rows within a sphere of
+// radius kGroupRadius × the root cluster's ρ that share one traversal.
+constexpr Eigen::Index kBlock = 64;
+constexpr Eigen::Index kGroup = 8;
+constexpr double kGroupRadius = 1.0 / 32.0;
+
+// The centre and radius of rows [begin, end) of points (the mean; the largest distance to it,
+// widened by 1e-12 of itself against rounding).
+double group_sphere(const Eigen::MatrixXd& points, Eigen::Index begin, Eigen::Index end,
+                    double* centre) {
+  for (int i = 0; i < 3; ++i) centre[i] = points.col(i).segment(begin, end - begin).mean();
+  double r2 = 0.0;
+  for (Eigen::Index j = begin; j < end; ++j) {
+    const double d[3] = {points(j, 0) - centre[0], points(j, 1) - centre[1],
+                         points(j, 2) - centre[2]};
+    r2 = std::max(r2, dot(d, d));
+  }
+  return std::sqrt(r2) * (1.0 + 1e-12);
+}
+
+// The group of rows from begin: the most consecutive rows, up to kGroup and before limit, whose
+// sphere's radius stays ≤ max_radius (one row at least); its end into *end, centre and radius.
+double next_group(const Eigen::MatrixXd& points, Eigen::Index begin, Eigen::Index limit,
+                  double max_radius, double* centre, Eigen::Index* end) {
+  double radius = group_sphere(points, begin, begin + 1, centre);
+  *end = begin + 1;
+  for (Eigen::Index e = begin + 2; e <= std::min(limit, begin + kGroup); ++e) {
+    double c[3];
+    const double r = group_sphere(points, begin, e, c);
+    if (r > max_radius) break;
+    std::copy(c, c + 3, centre);
+    radius = r;
+    *end = e;
+  }
+  return radius;
+}
+
+// One point's sums from its group's lists.
+PointSums group_point(const std::vector<BodyIntegral::Cluster>& clusters,
+                      const std::vector<Triangle>& tris, const Radial& k, const Rules& rule,
+                      const double* y, bool want_b, const Budget& budget, const GroupLists& g) {
+  PointSums s;
+  const auto direct = [&](const BodyIntegral::Cluster& c) {
+    direct_range(tris, c.begin, c.end, k, rule, y, want_b, &s);
+  };
+  for (int id : g.taken) {  // by the bounds at y's own distance (≥ the group's, up to rounding)
+    const BodyIntegral::Cluster& c = clusters[id];
+    const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
+    const Bounds e = cluster_bounds(c, k.eps, std::sqrt(dot(d, d)) - c.rho, want_b);
+    if (e.valid)
+      take_cluster(c, k.eps, y, want_b, e, &s);
+    else  // invalid at y by rounding only: its triangles one by one
+      direct(c);
+  }
+  for (int id : g.leaves) direct(clusters[id]);
+  traverse(clusters, tris, k, rule, y, want_b, budget, g.open, &s);
   return s;
 }
 
@@ -761,6 +980,69 @@ void traverse_vjp(const std::vector<BodyIntegral::Cluster>& clusters, const std:
       out->S += ct[0] + ct[1] + ct[2];
       out->tris.push_back({order[j], {w * ct[0], w * ct[1], w * ct[2]}});
     }
+  }
+}
+
+// What one evaluation by the tree reads: the clusters, the triangles in the tree's order, the
+// rules, whether ∂J/∂y is wanted, τ and |∂Ω|.
+struct TreeView {
+  const std::vector<BodyIntegral::Cluster>& clusters;
+  const std::vector<Triangle>& tris;
+  const Radial& k;
+  const Rules& rule;
+  bool want_b;
+  double tau, area;
+};
+
+// The guesses of J and S a budget is made from, and whether y was on the surface.
+struct Guess {
+  double j = 0.0, s = 0.0;
+  bool surface = false;
+};
+
+// J = Σ + G∞ × the far solid angles (exact off the surface) and the bound of its error.
+double total_j(const Radial& k, const PointSums& s) {
+  return s.J + k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface);
+}
+double error_j(const Radial& k, const PointSums& s) {
+  return s.err_j + (s.on_surface ? k.g_inf * s.err_omega : 0.0);
+}
+
+// A probe's lower bounds of J and S at y (clusters with ρ ≤ z/4 taken).
+Guess probe(const TreeView& t, const double* y) {
+  const PointSums s = traverse(t.clusters, t.tris, t.k, t.rule, y, t.want_b,
+                               Budget{0.0, 3.0 / t.area, 0.0, kProbeTheta});
+  return {total_j(t.k, s) - error_j(t.k, s), s.S - s.err_g, s.on_surface};
+}
+
+// The budget of the guesses (per unit area τ J/(2 |∂Ω|), τ S/(2 |∂Ω|); on the surface, where the
+// far solid angles' estimate enters J, a quarter of J's for it and a quarter for the rest), or
+// none (exact: every triangle).
+Budget make_budget(const TreeView& t, const Guess& g, bool exact) {
+  if (exact) return Budget{0.0, 0.0, 0.0};
+  const double share = g.surface ? 0.25 : 0.5;
+  const double omega = g.surface ? std::min(3.0, share * t.tau * g.j / t.k.g_inf) : 3.0;
+  return Budget{share * t.tau * g.j / t.area, omega / t.area, 0.5 * t.tau * g.s / t.area};
+}
+
+// One point's sums from its group's lists.
+PointSums group_point(const TreeView& t, const double* y, const Budget& budget,
+                      const GroupLists& lists) {
+  return group_point(t.clusters, t.tris, t.k, t.rule, y, t.want_b, budget, lists);
+}
+
+// A point's sums s checked: accepted (its J into *J) when E_J ≤ τ (J̃ − E_J) and, with the
+// gradient, E_g ≤ τ (S̃ − E_g), or when exact; else redone with the budget its own lower bounds
+// give, then over all pairs.
+PointSums settle(const TreeView& t, const double* y, PointSums s, bool exact, double* J) {
+  for (int attempt = 1;; ++attempt) {
+    *J = total_j(t.k, s);
+    const double err = error_j(t.k, s);
+    if (exact || (err <= t.tau * (*J - err) && (!t.want_b || s.err_g <= t.tau * (s.S - s.err_g))))
+      return s;
+    const Guess own{*J - err, s.S - s.err_g, s.on_surface};
+    exact = attempt == 2 || own.j <= 0.0 || (t.want_b && own.s <= 0.0);
+    s = traverse(t.clusters, t.tris, t.k, t.rule, y, t.want_b, make_budget(t, own, exact));
   }
 }
 
@@ -904,6 +1186,7 @@ BodyIntegral::BodyIntegral(const TriangleSurface& surface, const BodyIntegralOpt
     for (const BvhNode& node : bvh.nodes)
       clusters_.push_back(make_cluster(triangles_, order_, node));
     total_area_ = clusters_[0].area;
+    group_radius_ = kGroupRadius * clusters_[0].rho;
     for (int t : order_) ordered_.push_back(triangles_[t]);
   }
 }
@@ -940,55 +1223,48 @@ void BodyIntegral::evaluate_tree(const Eigen::MatrixXd& points, Eigen::VectorXd*
   const Eigen::Index m = points.rows();  // value and grad sized by evaluate()
   const Radial k(options_.epsilon, options_.alpha);
   const Rules rule{rule_x_, rule_w_, options_.panel_width};
-  const bool want_b = grad != nullptr;
-  const double tau = options_.tolerance, area = total_area_;
-  constexpr Eigen::Index kBlock = 64;
+  const TreeView t{clusters_, ordered_, k, rule, grad != nullptr, options_.tolerance, total_area_};
   const Eigen::Index blocks = (m + kBlock - 1) / kBlock;
-  // Per block of points in order: the budget of a point from the previous one's J and S (for
-  // the first, from a probe's: clusters with ρ ≤ z/4 taken, J̃ − E and S̃ − E), per unit area
-  // τ J/(2 |∂Ω|), likewise for g; the far solid angles' total bound below 3 (< 2π with the far
-  // rules' own error: the winding number rounds right; on the surface, where their estimate
-  // enters J, below τ J/(4 G∞) and J's own τ J/(4 |∂Ω|)). Accepted when the bounds give
-  // E_J ≤ τ (J̃ − E_J) ≤ τ J and E_g ≤ τ (S̃ − E_g) ≤ τ S; else redone with the point's own
-  // budget, then with none (every triangle).
+  // Per block of points in order, per group of kGroup rows in it: one budget for the group from
+  // the previous group's smallest J and S (for a block's first, from a probe at its first point:
+  // clusters with ρ ≤ z/4 taken, J̃ − E and S̃ − E), per unit area τ J/(2 |∂Ω|), likewise for g;
+  // the far solid angles' total bound below 3 (< 2π with the far rules' own error: the winding
+  // number rounds right; on the surface, where their estimate enters J, below τ J/(4 G∞) and
+  // J's own τ J/(4 |∂Ω|)). One traversal decides what the group's points share (group_lists),
+  // each point the rest. A point is accepted when the bounds give E_J ≤ τ (J̃ − E_J) ≤ τ J and
+  // E_g ≤ τ (S̃ − E_g) ≤ τ S; else redone with its own budget, then with none (every triangle).
 #pragma omp parallel for schedule(static) num_threads(resolve_threads(options_.threads))
   for (Eigen::Index b = 0; b < blocks; ++b) {
-    double j_guess = 0.0, s_guess = 0.0;
-    bool surface = false;  // the last traversal's y was on the surface
-    for (Eigen::Index j = b * kBlock; j < std::min(m, (b + 1) * kBlock); ++j) {
-      const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
-      PointSums s;
-      double J = 0.0;
-      if (j_guess <= 0.0) {  // a block's first point: a probe's lower bounds as the guesses
-        s = traverse(clusters_, ordered_, k, rule, y, want_b,
-                     Budget{0.0, 3.0 / area, 0.0, kProbeTheta});
-        j_guess = s.J + k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface) -
-                  s.err_j - (s.on_surface ? k.g_inf * s.err_omega : 0.0);
-        s_guess = s.S - s.err_g;
-        surface = s.on_surface;
+    Guess guess;
+    GroupLists lists;
+    const Eigen::Index block_end = std::min(m, (b + 1) * kBlock);
+    for (Eigen::Index g = b * kBlock, end; g < block_end; g = end) {
+      double centre[3];
+      const double radius = next_group(points, g, block_end, group_radius_, centre, &end);
+      if (guess.j <= 0.0) {  // a block's first group: a probe's lower bounds as the guesses
+        const double y[3] = {points(g, 0), points(g, 1), points(g, 2)};
+        guess = probe(t, y);
       }
-      for (int attempt = 0; attempt < 3; ++attempt) {
-        const bool exact = attempt == 2 || j_guess <= 0.0 || (want_b && s_guess <= 0.0);
-        // On the surface the far solid angles' estimate enters J: half the budget for it.
-        const double share = surface ? 0.25 : 0.5;
-        const double omega = surface ? std::min(3.0, share * tau * j_guess / k.g_inf) : 3.0;
-        const Budget budget =
-            exact ? Budget{0.0, 0.0, 0.0}
-                  : Budget{share * tau * j_guess / area, omega / area, 0.5 * tau * s_guess / area};
-        s = traverse(clusters_, ordered_, k, rule, y, want_b, budget);
-        surface = s.on_surface;
-        J = s.J + k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface);
-        const double err = s.err_j + (s.on_surface ? k.g_inf * s.err_omega : 0.0);
-        if (exact || (err <= tau * (J - err) && (!want_b || s.err_g <= tau * (s.S - s.err_g))))
-          break;
-        j_guess = J - err;
-        s_guess = s.S - s.err_g;
+      const bool exact = guess.j <= 0.0 || (t.want_b && guess.s <= 0.0);
+      const Budget budget = make_budget(t, guess, exact);
+      group_lists(
+          t.clusters, centre, radius,
+          [&](const Cluster& c, double z) {
+            return cluster_fits(c, cluster_bounds(c, k.eps, z, t.want_b), z, budget);
+          },
+          &lists);
+      Guess next{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                 false};
+      for (Eigen::Index j = g; j < end; ++j) {
+        const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
+        double J;
+        const PointSums s = settle(t, y, group_point(t, y, budget, lists), exact, &J);
+        next = {std::min(next.j, J), std::min(next.s, s.S), next.surface || s.on_surface};
+        (*value)[j] = J;
+        if (grad)
+          for (int i = 0; i < 3; ++i) (*grad)(j, i) = s.g[i];
       }
-      j_guess = J;
-      s_guess = s.S;
-      (*value)[j] = J;
-      if (grad)
-        for (int i = 0; i < 3; ++i) (*grad)(j, i) = s.g[i];
+      guess = next;
     }
   }
 }
@@ -1041,7 +1317,6 @@ Eigen::MatrixXd BodyIntegral::surface_vjp_tree(const Eigen::MatrixXd& points,
   const int threads = resolve_threads(options_.threads);
   const std::size_t count = triangles_.size(), nodes = clusters_.size();
   const double tau = options_.tolerance;
-  constexpr Eigen::Index kBlock = 64;
   const Eigen::Index m = points.rows(), blocks = (m + kBlock - 1) / kBlock;
   // Per thread: the triangles' corner sums and the clusters' coefficients, summed in thread
   // order. A point's budget (per unit area, of every corner sum's error) τ S/(2 |∂Ω|) from the

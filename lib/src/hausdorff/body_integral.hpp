@@ -144,6 +144,7 @@ class BodyIntegral {
   std::vector<int> order_;               // triangle ids grouped by leaf
   std::vector<Triangle> ordered_;        // triangles_[order_[j]] (contiguous leaves)
   double total_area_ = 0.0;
+  double group_radius_ = 0.0;  // the largest radius of a group of points sharing a traversal
 
   void evaluate_tree(const Eigen::MatrixXd& points, Eigen::VectorXd* value,
                      Eigen::MatrixXd* grad) const;
