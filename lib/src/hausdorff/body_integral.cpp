@@ -27,6 +27,7 @@ constexpr int kFarPoints = 16;
 
 struct FarRule {
   double lam[kFarPoints][3];
+  double corner[3][kFarPoints];  // lam by corner (the vectorised loops)
   double w[kFarPoints];
   FarRule() {
     int q = 0;
@@ -48,6 +49,8 @@ struct FarRule {
     const double c[3] = {0.008394777409958, 0.263112829634638, 0.728492392955404};
     const int perm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
     for (const auto& p : perm) put(c[p[0]], c[p[1]], c[p[2]], 0.027230314174435);
+    for (int i = 0; i < kFarPoints; ++i)
+      for (int a = 0; a < 3; ++a) corner[a][i] = lam[i][a];
   }
 };
 
@@ -64,6 +67,7 @@ constexpr double kCoarseRatio = 4.0;
 
 struct CoarseRule {
   double lam[kCoarsePoints][3];
+  double corner[3][kCoarsePoints];  // lam by corner
   double w[kCoarsePoints];
   CoarseRule() {
     const double s15 = std::sqrt(15.0);
@@ -80,6 +84,8 @@ struct CoarseRule {
         L[v] = 1.0 - 2.0 * a[o];
         w[1 + 3 * o + v] = wa[o];
       }
+    for (int i = 0; i < kCoarsePoints; ++i)
+      for (int a = 0; a < 3; ++a) corner[a][i] = lam[i][a];
   }
 };
 
@@ -91,14 +97,18 @@ const CoarseRule& coarse_rule() {
 // The points of a far rule on one triangle, by coordinate, weights times the area.
 struct FarPoints {
   const double *x, *y, *z, *w;
-  const double (*lam)[3];
+  const double *l0, *l1, *l2;  // the barycentric coordinates λ_0, λ_1, λ_2 of the points
   int n;
 };
 
 // The 16-point rule within (kCoarseRatio · near_ratio · R_t)² = t.far2 of y, else the 7-point.
 FarPoints far_points(const Triangle& t, double d2) {
-  if (d2 < t.far2) return {t.qx, t.qy, t.qz, t.wq, far_rule().lam, kFarPoints};
-  return {t.cx, t.cy, t.cz, t.cw, coarse_rule().lam, kCoarsePoints};
+  if (d2 < t.far2) {
+    const FarRule& r = far_rule();
+    return {t.qx, t.qy, t.qz, t.wq, r.corner[0], r.corner[1], r.corner[2], kFarPoints};
+  }
+  const CoarseRule& r = coarse_rule();
+  return {t.cx, t.cy, t.cz, t.cw, r.corner[0], r.corner[1], r.corner[2], kCoarsePoints};
 }
 
 // d_m(z) = ε^−(m+1) ∫_ε^{ε(1+z)} w^m dw: log(1 + z) for m = −1, else ((1 + z)^{m+1} − 1)/(m+1)
@@ -230,18 +240,18 @@ constexpr std::array<double, 19> inverse_factorials() {
 }
 constexpr std::array<double, 19> kInverseFactorial = inverse_factorials();
 
-// cosh u at the nodes u = m + δ of one panel of width du about its middle m: cosh m C(δ) +
-// sinh m S(δ), C and S the Taylor series of cosh δ and sinh δ to δ¹⁸ and δ¹⁷ (|δ| ≤ du/2 ≤ 1:
-// the next terms below 1e-17; sinh m from e^m is exact to ~1e-16 cosh m, as the sum needs), so
-// one exp per panel and a loop the compiler vectorises; std::cosh per node for panels wider
-// than 2 (panel_width > 2).
-void panel_cosh(const Rules& rule, double m, double du, double* ch) {
+// cosh u at the nodes u = m + δ of one panel of width du about its middle m (em = e^m): cosh m
+// C(δ) + sinh m S(δ), C and S the Taylor series of cosh δ and sinh δ to δ¹⁸ and δ¹⁷ (|δ| ≤ du/2 ≤
+// 1: the next terms below 1e-17; sinh m from e^m is exact to ~1e-16 cosh m, as the sum needs),
+// a loop the compiler vectorises; std::cosh per node for panels wider than 2 (panel_width > 2).
+void panel_cosh(const Rules& rule, double em, double du, double* ch) {
   const int n = static_cast<int>(rule.x.size());
+  const double cm = 0.5 * (em + 1.0 / em), sm = 0.5 * (em - 1.0 / em);
   if (du > 2.0) {
+    const double m = std::log(em);
     for (int i = 0; i < n; ++i) ch[i] = std::cosh(m + du * (rule.x[i] - 0.5));
     return;
   }
-  const double e = std::exp(m), cm = 0.5 * (e + 1.0 / e), sm = 0.5 * (e - 1.0 / e);
 #pragma omp simd
   for (int i = 0; i < n; ++i) {
     const double d = du * (rule.x[i] - 0.5), d2 = d * d;
@@ -252,22 +262,27 @@ void panel_cosh(const Rules& rule, double m, double du, double* ch) {
   }
 }
 
-// asinh x = sign(x) log(|x| + √(x² + 1)) (absolute error ~1e-16: the panels' ends).
-double fast_asinh(double x) {
-  const double a = std::abs(x);
-  const double v = a > 1e8 ? std::log(2.0 * a) : std::log(a + std::sqrt(a * a + 1.0));
-  return x < 0.0 ? -v : v;
+// e^{asinh x} = x + √(x² + 1) (for x < 0 its reciprocal's form, without cancellation; 2x and
+// 1/(2|x|) beyond |x| = 1e8).
+double exp_asinh(double x) {
+  const double a = std::abs(x), v = a > 1e8 ? 2.0 * a : a + std::sqrt(a * a + 1.0);
+  return x < 0.0 ? 1.0 / v : v;
 }
 
-// The Gauss–Legendre panels of [u1, u2] of width ≤ rule.width with cosh u at their nodes:
-// calls f(ch, weight) per panel (n = angle_points values each).
+// The Gauss–Legendre panels of [u1, u2], u = asinh x, x from x1 to x2, of width ≤ rule.width,
+// with cosh u at their nodes: calls f(ch, du) per panel (angle_points values). From E = e^u at
+// the ends: u2 − u1 = log(E2/E1), a panel's middle e^m = √(E1 E2) for one panel, E1 e^{(p+½)du}
+// else (one logarithm per edge instead of two asinh and an exp per panel).
 template <class F>
-void cosh_panels(const Rules& rule, double u1, double u2, F&& f) {
-  const int panels = std::max(1, static_cast<int>(std::ceil((u2 - u1) / rule.width)));
-  const double du = (u2 - u1) / panels;
+void cosh_panels(const Rules& rule, double x1, double x2, F&& f) {
+  const double e1 = exp_asinh(x1), e2 = exp_asinh(x2), ratio = e2 / e1;
+  const double span = std::isfinite(ratio) ? std::log(ratio) : std::log(e2) - std::log(e1);
+  const int panels = std::max(1, static_cast<int>(std::ceil(span / rule.width)));
+  const double du = span / panels;
   double ch[kMaxAnglePoints];
   for (int p = 0; p < panels; ++p) {
-    panel_cosh(rule, u1 + (p + 0.5) * du, du, ch);
+    panel_cosh(rule, panels == 1 ? std::sqrt(e1) * std::sqrt(e2) : e1 * std::exp((p + 0.5) * du),
+               du, ch);
     f(ch, du);
   }
 }
@@ -281,12 +296,11 @@ void edge_wedge(const Radial& k, const Rules& rule, double pe, double h, double 
                 bool want_a, bool want_b, double* wa, double* wb) {
   const double ah = std::abs(h), p2 = pe * pe, h2 = h * h;
   const double fa = want_a ? k.phi_a(ah) : 0.0, fb = want_b ? k.k1(ah) : 0.0;
-  const double u1 = fast_asinh(t1 / pe), u2 = fast_asinh(t2 / pe);
   const int n = static_cast<int>(rule.x.size());
   const double* w = rule.w.data();
   const double eps = k.eps, ie = 1.0 / eps;
   double sa = 0.0, sb = 0.0;
-  cosh_panels(rule, u1, u2, [&](const double* ch, double du) {
+  cosh_panels(rule, t1 / pe, t2 / pe, [&](const double* ch, double du) {
     if (!k.four) {
       for (int i = 0; i < n; ++i) {
         const double T = std::sqrt(p2 * ch[i] * ch[i] + h2), f = du * w[i] / ch[i];
@@ -322,10 +336,16 @@ double edge_line(const Radial& k, const Rules& rule, double q, double t1, double
   if (q > 0.0) {
     const int n = static_cast<int>(rule.x.size());
     const double* w = rule.w.data();
-    cosh_panels(rule, fast_asinh(t1 / q), fast_asinh(t2 / q), [&](const double* ch, double du) {
-      for (int i = 0; i < n; ++i) {
-        const double r = q * ch[i];
-        s += du * w[i] * k.k1(r) * r;
+    const double ie = 1.0 / k.eps;
+    cosh_panels(rule, t1 / q, t2 / q, [&](const double* ch, double du) {
+      if (!k.four) {
+        for (int i = 0; i < n; ++i) s += du * w[i] * k.k1(q * ch[i]) * q * ch[i];
+        return;
+      }
+#pragma omp simd reduction(+ : s)
+      for (int i = 0; i < n; ++i) {  // K₁ = z²(3 + z)/(6ε²(1 + z)³), z = r/ε
+        const double r = q * ch[i], z = r * ie, v = 1.0 + z;
+        s += du * w[i] * r * z * z * (3.0 + z) * ie * ie / (6.0 * v * v * v);
       }
     });
     return s;
@@ -502,23 +522,26 @@ void near_moments(const Triangle& t, const Radial& k, const Rules& rule, const E
 // ∫_t k λ_a dA by the far rule.
 void far_moments(const FarPoints& t, const Radial& k, const double* y, double c[3]) {
   double c0 = 0.0, c1 = 0.0, c2 = 0.0;
+  const double eps = k.eps, y0 = y[0], y1 = y[1], y2 = y[2];
+  const double *px = t.x, *py = t.y, *pz = t.z, *pw = t.w, *l0 = t.l0, *l1 = t.l1, *l2 = t.l2;
+  const int n = t.n;
   if (k.four) {
 #pragma omp simd reduction(+ : c0, c1, c2)
-    for (int q = 0; q < t.n; ++q) {
-      const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
-      const double u = 1.0 / (std::sqrt(dx * dx + dy * dy + dz * dz) + k.eps);
-      const double kw = t.w[q] * (u * u) * (u * u);
-      c0 += kw * t.lam[q][0];
-      c1 += kw * t.lam[q][1];
-      c2 += kw * t.lam[q][2];
+    for (int q = 0; q < n; ++q) {
+      const double dx = px[q] - y0, dy = py[q] - y1, dz = pz[q] - y2;
+      const double u = 1.0 / (std::sqrt(dx * dx + dy * dy + dz * dz) + eps);
+      const double kw = pw[q] * (u * u) * (u * u);
+      c0 += kw * l0[q];
+      c1 += kw * l1[q];
+      c2 += kw * l2[q];
     }
   } else {
-    for (int q = 0; q < t.n; ++q) {
-      const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
-      const double kw = t.w[q] * k.kernel(std::sqrt(dx * dx + dy * dy + dz * dz));
-      c0 += kw * t.lam[q][0];
-      c1 += kw * t.lam[q][1];
-      c2 += kw * t.lam[q][2];
+    for (int q = 0; q < n; ++q) {
+      const double dx = px[q] - y0, dy = py[q] - y1, dz = pz[q] - y2;
+      const double kw = pw[q] * k.kernel(std::sqrt(dx * dx + dy * dy + dz * dz));
+      c0 += kw * l0[q];
+      c1 += kw * l1[q];
+      c2 += kw * l2[q];
     }
   }
   c[0] = c0;
@@ -943,44 +966,96 @@ struct VjpPoint {
   double S = 0.0, err = 0.0;
 };
 
-void traverse_vjp(const std::vector<BodyIntegral::Cluster>& clusters, const std::vector<int>& order,
-                  const std::vector<Triangle>& tris, const Radial& k, const Rules& rule,
-                  const double* y, double w, double budget, double theta, VjpPoint* out) {
-  const double c_k = tree_constants().c_k;
+// What the surface product's traversals read: the clusters, the tree's triangle order and the
+// triangles in it, the rules.
+struct VjpView {
+  const std::vector<BodyIntegral::Cluster>& clusters;
+  const std::vector<int>& order;
+  const std::vector<Triangle>& tris;
+  const Radial& k;
+  const Rules& rule;
+};
+
+// Cluster id's expansion into y's share (weight w), g its bound per unit area at y.
+void take_vjp_cluster(const VjpView& v, int id, const double* y, double w, double g,
+                      VjpPoint* out) {
+  const BodyIntegral::Cluster& c = v.clusters[id];
+  std::array<double, kLocal> L{};
+  out->S += local_share(c, v.k.eps, y, w, L.data());
+  out->err += c.area * g;
+  out->clusters.emplace_back(id, L);
+}
+
+// The triangles of cluster c one by one into y's share.
+void direct_vjp(const VjpView& v, const BodyIntegral::Cluster& c, const double* y, double w,
+                VjpPoint* out) {
+  for (int j = c.begin; j < c.end; ++j) {
+    double ct[3];
+    corner_moments(v.tris[j], v.k, v.rule, y, ct);
+    out->S += ct[0] + ct[1] + ct[2];
+    out->tris.push_back({v.order[j], {w * ct[0], w * ct[1], w * ct[2]}});
+  }
+}
+
+// Whether a cluster at z enters the product by its expansion: valid, and its bound g per unit
+// area within the budget (or, theta > 0, ρ ≤ θ z).
+bool vjp_fits(const BodyIntegral::Cluster& c, const Bounds& e, double z, double budget,
+              double theta) {
+  return e.valid && (theta > 0.0 ? c.rho <= theta * z : e.g <= budget);
+}
+
+// y's share of the surface product below the nodes `start`, added to out.
+void traverse_vjp(const VjpView& v, const double* y, double w, double budget, double theta,
+                  const std::vector<int>& start, VjpPoint* out) {
+  int stack[2 * kBvhMaxDepth + 2];
+  for (int root : start) {
+    int top = 0;
+    stack[top++] = root;
+    while (top > 0) {
+      const int id = stack[--top];
+      const BodyIntegral::Cluster& c = v.clusters[id];
+      const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
+      const double z = std::sqrt(dot(d, d)) - c.rho;
+      const Bounds e = cluster_bounds(c, v.k.eps, z, true);
+      if (vjp_fits(c, e, z, budget, theta)) {
+        take_vjp_cluster(v, id, y, w, e.g, out);
+      } else if (c.left >= 0) {
+        stack[top++] = c.left + 1;
+        stack[top++] = c.left;
+      } else {
+        direct_vjp(v, c, y, w, out);
+      }
+    }
+  }
+}
+
+// y's share by the whole tree (out cleared first).
+void traverse_vjp(const VjpView& v, const double* y, double w, double budget, double theta,
+                  VjpPoint* out) {
   out->tris.clear();
   out->clusters.clear();
   out->S = out->err = 0.0;
-  int stack[2 * kBvhMaxDepth + 2];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const int id = stack[--top];
-    const BodyIntegral::Cluster& c = clusters[id];
+  traverse_vjp(v, y, w, budget, theta, {0}, out);
+}
+
+// y's share from its group's lists (out cleared first); a taken cluster by its bound at y's own
+// distance (its triangles one by one where rounding makes it invalid there).
+void group_vjp(const VjpView& v, const double* y, double w, double budget, const GroupLists& g,
+               VjpPoint* out) {
+  out->tris.clear();
+  out->clusters.clear();
+  out->S = out->err = 0.0;
+  for (int id : g.taken) {
+    const BodyIntegral::Cluster& c = v.clusters[id];
     const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
-    const double z = std::sqrt(dot(d, d)) - c.rho;
-    if (z > 0.0 && k.eps <= kTreeX * z) {
-      const double z2 = z * z, eg = c_k * c.rho * c.rho * c.rho / (z2 * z2 * z2 * z);
-      if (theta > 0.0 ? c.rho <= theta * z : eg <= budget) {
-        std::array<double, kLocal> L{};
-        out->S += local_share(c, k.eps, y, w, L.data());
-        out->err += c.area * eg;
-        out->clusters.emplace_back(id, L);
-        continue;
-      }
-    }
-    if (c.left >= 0) {
-      stack[top++] = c.left + 1;
-      stack[top++] = c.left;
-      continue;
-    }
-    for (int j = c.begin; j < c.end; ++j) {
-      const Triangle& tri = tris[j];
-      double ct[3];
-      corner_moments(tri, k, rule, y, ct);
-      out->S += ct[0] + ct[1] + ct[2];
-      out->tris.push_back({order[j], {w * ct[0], w * ct[1], w * ct[2]}});
-    }
+    const Bounds e = cluster_bounds(c, v.k.eps, std::sqrt(dot(d, d)) - c.rho, true);
+    if (e.valid)
+      take_vjp_cluster(v, id, y, w, e.g, out);
+    else
+      direct_vjp(v, c, y, w, out);
   }
+  for (int id : g.leaves) direct_vjp(v, v.clusters[id], y, w, out);
+  traverse_vjp(v, y, w, budget, 0.0, g.open, out);
 }
 
 // What one evaluation by the tree reads: the clusters, the triangles in the tree's order, the
@@ -1043,6 +1118,18 @@ PointSums settle(const TreeView& t, const double* y, PointSums s, bool exact, do
     const Guess own{*J - err, s.S - s.err_g, s.on_surface};
     exact = attempt == 2 || own.j <= 0.0 || (t.want_b && own.s <= 0.0);
     s = traverse(t.clusters, t.tris, t.k, t.rule, y, t.want_b, make_budget(t, own, exact));
+  }
+}
+
+// A point's share pt checked: accepted when E ≤ τ (S̃ − E) (S̃ = pt->S, without the weight), or
+// when exact; else redone with the budget its own lower bound gives, then over all pairs.
+void settle_vjp(const VjpView& v, const double* y, double w, double tau, double area, bool exact,
+                VjpPoint* pt) {
+  for (int attempt = 1;; ++attempt) {
+    if (exact || pt->err <= tau * (pt->S - pt->err)) return;
+    const double own = pt->S - pt->err;
+    exact = attempt == 2 || own <= 0.0;
+    traverse_vjp(v, y, w, exact ? 0.0 : 0.5 * tau * own / area, 0.0, pt);
   }
 }
 
@@ -1314,14 +1401,15 @@ Eigen::MatrixXd BodyIntegral::surface_vjp_tree(const Eigen::MatrixXd& points,
                                                const Eigen::VectorXd& weights) const {
   const Radial k(options_.epsilon, options_.alpha);
   const Rules rule{rule_x_, rule_w_, options_.panel_width};
+  const VjpView view{clusters_, order_, ordered_, k, rule};
   const int threads = resolve_threads(options_.threads);
   const std::size_t count = triangles_.size(), nodes = clusters_.size();
-  const double tau = options_.tolerance;
   const Eigen::Index m = points.rows(), blocks = (m + kBlock - 1) / kBlock;
   // Per thread: the triangles' corner sums and the clusters' coefficients, summed in thread
-  // order. A point's budget (per unit area, of every corner sum's error) τ S/(2 |∂Ω|) from the
-  // previous point's S (a probe's S̃ − E for a block's first, as in evaluate_tree), accepted when E
-  // ≤ τ (S̃ − E): then Σ_{t,a} |error of w ∫_t k λ_a| ≤ τ |w| S, S = ∫_∂Ω k dA; else redone with its
+  // order. Per group of rows (as in evaluate_tree) one budget (per unit area, of every corner
+  // sum's error) τ S/(2 |∂Ω|) from the previous group's smallest S (a probe's S̃ − E for a
+  // block's first), one traversal for what its points share; a point is accepted when E ≤
+  // τ (S̃ − E): then Σ_{t,a} |error of w ∫_t k λ_a| ≤ τ |w| S, S = ∫_∂Ω k dA; else redone with its
   // own budget, then over all pairs.
   std::vector<std::vector<double>> acc(threads), loc(threads);
 #pragma omp parallel num_threads(threads)
@@ -1331,29 +1419,41 @@ Eigen::MatrixXd BodyIntegral::surface_vjp_tree(const Eigen::MatrixXd& points,
     c.assign(3 * count, 0.0);
     L.assign(kLocal * nodes, 0.0);
     VjpPoint pt;
+    GroupLists lists;
 #pragma omp for schedule(static)
     for (Eigen::Index b = 0; b < blocks; ++b) {
       double s_guess = 0.0;
-      for (Eigen::Index j = b * kBlock; j < std::min(m, (b + 1) * kBlock); ++j) {
-        const double wj = weights[j];
-        if (wj == 0.0) continue;
-        const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
-        if (s_guess <= 0.0) {  // a block's first point: a probe's lower bound as the guess
-          traverse_vjp(clusters_, order_, ordered_, k, rule, y, wj, 0.0, kProbeTheta, &pt);
+      const Eigen::Index block_end = std::min(m, (b + 1) * kBlock);
+      for (Eigen::Index g = b * kBlock, end; g < block_end; g = end) {
+        double centre[3];
+        const double radius = next_group(points, g, block_end, group_radius_, centre, &end);
+        if (s_guess <= 0.0) {  // a block's first group: a probe's lower bound as the guess
+          const double y[3] = {points(g, 0), points(g, 1), points(g, 2)};
+          traverse_vjp(view, y, 1.0, 0.0, kProbeTheta, &pt);
           s_guess = pt.S - pt.err;
         }
-        for (int attempt = 0; attempt < 3; ++attempt) {
-          const bool exact = attempt == 2 || s_guess <= 0.0;
-          traverse_vjp(clusters_, order_, ordered_, k, rule, y, wj,
-                       exact ? 0.0 : 0.5 * tau * s_guess / total_area_, 0.0, &pt);
-          if (exact || pt.err <= tau * (pt.S - pt.err)) break;
-          s_guess = pt.S - pt.err;
+        const double budget =
+            s_guess > 0.0 ? 0.5 * options_.tolerance * s_guess / total_area_ : 0.0;
+        group_lists(
+            clusters_, centre, radius,
+            [&](const Cluster& cl, double z) {
+              return vjp_fits(cl, cluster_bounds(cl, k.eps, z, true), z, budget, 0.0);
+            },
+            &lists);
+        double next = std::numeric_limits<double>::infinity();
+        for (Eigen::Index j = g; j < end; ++j) {
+          const double wj = weights[j];
+          if (wj == 0.0) continue;
+          const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
+          group_vjp(view, y, wj, budget, lists, &pt);
+          settle_vjp(view, y, wj, options_.tolerance, total_area_, budget == 0.0, &pt);
+          next = std::min(next, pt.S);
+          for (const auto& t : pt.tris)
+            for (int a = 0; a < 3; ++a) c[3 * t.first + a] += t.second[a];
+          for (const auto& q : pt.clusters)
+            for (int i = 0; i < kLocal; ++i) L[kLocal * q.first + i] += q.second[i];
         }
-        s_guess = pt.S;
-        for (const auto& t : pt.tris)
-          for (int a = 0; a < 3; ++a) c[3 * t.first + a] += t.second[a];
-        for (const auto& q : pt.clusters)
-          for (int i = 0; i < kLocal; ++i) L[kLocal * q.first + i] += q.second[i];
+        if (next < std::numeric_limits<double>::infinity()) s_guess = next;
       }
     }
   }
