@@ -309,18 +309,18 @@ void edge_wedge(const Radial& k, const Rules& rule, double pe, double h, double 
       }
       return;
     }
-    if (want_a) {  // Φ_A = −(s − ε s²/2)/(3ε), s = 1/(T + ε)
+    if (want_a) {  // Φ_A = −(T + ε/2)/(3ε (T + ε)²): [Φ_A(T) − fa]/cosh u by one division
 #pragma omp simd reduction(+ : sa)
       for (int i = 0; i < n; ++i) {
-        const double T = std::sqrt(p2 * ch[i] * ch[i] + h2), s = 1.0 / (T + eps);
-        sa += du * w[i] / ch[i] * (-(s - 0.5 * eps * s * s) * ie / 3.0 - fa);
+        const double T = std::sqrt(p2 * ch[i] * ch[i] + h2), v = T + eps, v2 = v * v;
+        sa += du * w[i] * (-(T + 0.5 * eps) - 3.0 * eps * fa * v2) / (3.0 * eps * v2 * ch[i]);
       }
     }
-    if (want_b) {  // K₁ = z²(3 + z)/(6ε²(1 + z)³), z = T/ε
+    if (want_b) {  // K₁ = z²(3 + z)/(6ε²(1 + z)³), z = T/ε: likewise
 #pragma omp simd reduction(+ : sb)
       for (int i = 0; i < n; ++i) {
-        const double z = std::sqrt(p2 * ch[i] * ch[i] + h2) * ie, v = 1.0 + z;
-        sb += du * w[i] / ch[i] * (z * z * (3.0 + z) * ie * ie / (6.0 * v * v * v) - fb);
+        const double z = std::sqrt(p2 * ch[i] * ch[i] + h2) * ie, v = 1.0 + z, v3 = v * v * v;
+        sb += du * w[i] * (z * z * (3.0 + z) * ie * ie - 6.0 * v3 * fb) / (6.0 * v3 * ch[i]);
       }
     }
   });
@@ -549,6 +549,28 @@ void far_moments(const FarPoints& t, const Radial& k, const double* y, double c[
   c[2] = c2;
 }
 
+// far_value and far_kernel together for α = 4 (B = ∫_t k dA into *b): per point one square root
+// and one division, D = 1/(r W), 1/(r³W³) = D³, k = (εW)^−4 = (D r/ε)⁴.
+double far_value_kernel(const FarPoints& t, double eps, const double* y, double h, double* omega,
+                        double* b) {
+  double s = 0.0, c = 0.0, kb = 0.0;
+  const double inv_eps = 1.0 / eps, y0 = y[0], y1 = y[1], y2 = y[2];
+  const double *px = t.x, *py = t.y, *pz = t.z, *pw = t.w;
+  const int n = t.n;
+#pragma omp simd reduction(+ : s, c, kb)
+  for (int q = 0; q < n; ++q) {
+    const double dx = px[q] - y0, dy = py[q] - y1, dz = pz[q] - y2;
+    const double r = std::sqrt(dx * dx + dy * dy + dz * dz), W = 1.0 + r * inv_eps;
+    const double D = 1.0 / (r * W), D3 = D * D * D, u = D * r * inv_eps, wi = pw[q] * D3;
+    s += wi * (3.0 * W * W - 3.0 * W + 1.0);
+    c += wi * W * W * W;
+    kb += pw[q] * (u * u) * (u * u);
+  }
+  *omega = h * c;
+  *b = kb;
+  return -h * s * inv_eps / 3.0;
+}
+
 // |y − c_t|²: near below t.near2 (the polar rule), the 16-point rule below t.far2.
 double distance2(const Triangle& t, const double* y) {
   const double dx = y[0] - t.c[0], dy = y[1] - t.c[1], dz = y[2] - t.c[2];
@@ -593,9 +615,13 @@ void direct_triangle(const Triangle& t, const Radial& k, const Rules& rule, cons
         t.n[0] * (t.v[0][0] - y[0]) + t.n[1] * (t.v[0][1] - y[1]) + t.n[2] * (t.v[0][2] - y[2]);
     const FarPoints p = far_points(t, d2);
     double omega;
-    s->J += far_value(p, k, y, h, &omega);
+    if (want_b && k.four) {
+      s->J += far_value_kernel(p, k.eps, y, h, &omega, &b);
+    } else {
+      s->J += far_value(p, k, y, h, &omega);
+      if (want_b) b = far_kernel(p, k, y);
+    }
     s->far_omega += omega;
-    if (want_b) b = far_kernel(p, k, y);
   }
   if (want_b) {
     for (int i = 0; i < 3; ++i) s->g[i] -= b * t.n[i];  // −n_t ∫_t k dA
