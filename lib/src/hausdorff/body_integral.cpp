@@ -1159,6 +1159,31 @@ void settle_vjp(const VjpView& v, const double* y, double w, double tau, double 
   }
 }
 
+// The corner sums Σ_k w_k ∫_t k λ_a dA of every triangle (3 per triangle, in the surface's
+// order): the threads' direct sums (acc) and their clusters' expansion coefficients (loc, kLocal
+// per cluster) pushed to the clusters' triangles, summed in thread order.
+std::vector<double> corner_sums(const VjpView& v, const std::vector<std::vector<double>>& acc,
+                                const std::vector<std::vector<double>>& loc) {
+  const std::size_t count = v.tris.size(), nodes = v.clusters.size();
+  std::vector<double> sum(3 * count, 0.0), local(kLocal);
+  for (const std::vector<double>& a : acc)
+    for (std::size_t i = 0; i < a.size(); ++i) sum[i] += a[i];
+  for (std::size_t id = 0; id < nodes; ++id) {
+    std::fill(local.begin(), local.end(), 0.0);
+    bool any = false;
+    for (const std::vector<double>& l : loc)
+      for (int i = 0; i < kLocal && !l.empty(); ++i) {
+        local[i] += l[kLocal * id + i];
+        any = any || l[kLocal * id + i] != 0.0;
+      }
+    if (!any) continue;
+    const BodyIntegral::Cluster& cl = v.clusters[id];
+    for (int j = cl.begin; j < cl.end; ++j)
+      push_local(v.tris[j], cl.p, local.data(), &sum[3 * v.order[j]]);
+  }
+  return sum;
+}
+
 void validate(const BodyIntegralOptions& o) {
   if (!(o.epsilon > 0.0) || !std::isfinite(o.epsilon))
     throw InvalidArgument("body integral: epsilon must be finite and > 0, got " +
@@ -1483,24 +1508,7 @@ Eigen::MatrixXd BodyIntegral::surface_vjp_tree(const Eigen::MatrixXd& points,
       }
     }
   }
-  std::vector<double> sum(3 * count, 0.0), local(kLocal);
-  for (int th = 0; th < threads; ++th) {
-    if (acc[th].empty()) continue;
-    for (std::size_t i = 0; i < 3 * count; ++i) sum[i] += acc[th][i];
-  }
-  for (std::size_t id = 0; id < nodes; ++id) {
-    std::fill(local.begin(), local.end(), 0.0);
-    bool any = false;
-    for (int th = 0; th < threads; ++th)
-      for (int i = 0; i < kLocal && !loc[th].empty(); ++i) {
-        local[i] += loc[th][kLocal * id + i];
-        any = any || loc[th][kLocal * id + i] != 0.0;
-      }
-    if (!any) continue;
-    const Cluster& cl = clusters_[id];
-    for (int j = cl.begin; j < cl.end; ++j)
-      push_local(ordered_[j], cl.p, local.data(), &sum[3 * order_[j]]);
-  }
+  const std::vector<double> sum = corner_sums(view, acc, loc);
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(point_count_, 3);
   for (std::size_t t = 0; t < count; ++t)
     for (int a = 0; a < 3; ++a)
