@@ -394,12 +394,13 @@ EdgeFrame edge_frame(const Triangle& t, const double* y) {
   return f;
 }
 
-// Near triangle, polar rule: A = ∫_t G(r)/r³ dA = Σ_e sign(p_e) W_A,e, likewise B = ∫_t k dA.
+// Near triangle, polar rule: A = ∫_t G(r)/r³ dA = Σ_e sign(p_e) W_A,e, likewise B = ∫_t k dA;
+// the edges in the bit mask skip left out (their wedges cancel against a coplanar neighbour's).
 void near_pair(const Triangle& t, const Radial& k, const Rules& rule, const EdgeFrame& f,
-               bool want_a, bool want_b, double* a, double* b) {
+               bool want_a, bool want_b, double* a, double* b, int skip = 0) {
   double sa = 0.0, sb = 0.0;
   for (int e = 0; e < 3; ++e) {
-    if (f.pe[e] == 0.0) continue;  // a degenerate wedge
+    if (f.pe[e] == 0.0 || (skip >> e & 1)) continue;  // a degenerate or cancelled wedge
     double wa, wb;
     edge_wedge(k, rule, std::abs(f.pe[e]), f.h, f.t1[e], f.t1[e] + t.len[e], want_a, want_b, &wa,
                &wb);
@@ -598,13 +599,13 @@ struct PointSums {
 
 // One triangle's share by its rules (polar when near, else the far rule).
 void direct_triangle(const Triangle& t, const Radial& k, const Rules& rule, const double* y,
-                     bool want_b, bool coulomb, PointSums* s) {
+                     bool want_b, bool coulomb, PointSums* s, int skip = 0) {
   double b = 0.0;
   const double d2 = distance2(t, y);
   if (d2 < t.near2) {
     const EdgeFrame f = edge_frame(t, y);
     double a;
-    near_pair(t, k, rule, f, true, want_b, &a, &b);
+    near_pair(t, k, rule, f, true, want_b, &a, &b, skip);
     s->J += f.h * a;  // h_t ∫_t G(r)/r³ dA
     if (coulomb) {
       s->near_omega += solid_angle(t, y);
@@ -629,10 +630,27 @@ void direct_triangle(const Triangle& t, const Radial& k, const Rules& rule, cons
   }
 }
 
-// The triangles tris[begin, end) one by one (a leaf of the tree).
+// The edges of tris[j] whose wedges cancel at y: both it and the coplanar neighbour across the
+// edge near y (so both summed one by one by the polar rule: cluster_bounds), the foot and h the
+// same for both, the edge traversed the other way (W_e cancels, in J's h_t W and in B's n_t W
+// alike).
+int cancelled_edges(const std::vector<Triangle>& tris, int j, const double* y) {
+  int skip = 0;
+  for (int e = 0; e < 3; ++e) {
+    const int s = tris[j].twin[e];
+    if (s >= 0 && distance2(tris[s], y) < tris[s].near2) skip |= 1 << e;
+  }
+  return skip;
+}
+
+// The triangles tris[begin, end) one by one (a leaf of the tree, or all of them).
 void direct_range(const std::vector<Triangle>& tris, int begin, int end, const Radial& k,
-                  const Rules& rule, const double* y, bool want_b, PointSums* s) {
-  for (int j = begin; j < end; ++j) direct_triangle(tris[j], k, rule, y, want_b, true, s);
+                  const Rules& rule, const double* y, bool want_b, bool coulomb, PointSums* s) {
+  for (int j = begin; j < end; ++j) {
+    const Triangle& t = tris[j];
+    const int skip = distance2(t, y) < t.near2 ? cancelled_edges(tris, j, y) : 0;
+    direct_triangle(t, k, rule, y, want_b, coulomb, s, skip);
+  }
 }
 
 // The tree's expansions need ε ≤ kTreeX (|p − y| − ρ): the remainder bounds below sum the
@@ -748,6 +766,7 @@ BodyIntegral::Cluster make_cluster(const std::vector<Triangle>& tris, const std:
       const double e[3] = {t.v[a][0] - c.p[0], t.v[a][1] - c.p[1], t.v[a][2] - c.p[2]};
       c.rho = std::max(c.rho, std::sqrt(dot(e, e)));
     }
+    c.reach = std::max(c.reach, std::sqrt(t.near2));
     for (int q = 0; q < kFarPoints; ++q) {
       const double sv[3] = {t.qx[q] - c.p[0], t.qy[q] - c.p[1], t.qz[q] - c.p[2]};
       const double w = t.wq[q];
@@ -783,14 +802,16 @@ struct Budget {
 constexpr double kProbeTheta = 0.25;
 
 // A cluster's remainder bounds per unit area at z = |p − y| − ρ (valid: z > 0, ε ≤ kTreeX z):
-// J's tail C_H ρ³/z⁶, the solid angle's 4 ρ³/z⁵, and with the gradient k's C_K ρ³/z⁷.
+// J's tail C_H ρ³/z⁶, the solid angle's 4 ρ³/z⁵, and with the gradient k's C_K ρ³/z⁷. Taken only
+// beyond its triangles' near radii (z ≥ reach, so |y − c_t| ≥ z: none of them near y): a triangle
+// near y is always summed one by one (cancelled_edges relies on it).
 struct Bounds {
   bool valid;
   double j, omega, g;
 };
 
 Bounds cluster_bounds(const BodyIntegral::Cluster& c, double eps, double z, bool want_b) {
-  if (!(z > 0.0 && eps <= kTreeX * z)) return {false, 0.0, 0.0, 0.0};
+  if (!(z > 0.0 && eps <= kTreeX * z && z >= c.reach)) return {false, 0.0, 0.0, 0.0};
   const TreeConstants& tc = tree_constants();
   const double r3 = c.rho * c.rho * c.rho, z2 = z * z, z5 = z2 * z2 * z;
   return {true, tc.c_h * r3 / (z5 * z), 4.0 * r3 / z5, want_b ? tc.c_k * r3 / (z5 * z2) : 0.0};
@@ -836,7 +857,7 @@ void traverse(const std::vector<BodyIntegral::Cluster>& clusters, const std::vec
         stack[top++] = c.left;
         continue;
       }
-      direct_range(tris, c.begin, c.end, k, rule, y, want_b, s);
+      direct_range(tris, c.begin, c.end, k, rule, y, want_b, true, s);
     }
   }
 }
@@ -930,7 +951,7 @@ PointSums group_point(const std::vector<BodyIntegral::Cluster>& clusters,
                       const double* y, bool want_b, const Budget& budget, const GroupLists& g) {
   PointSums s;
   const auto direct = [&](const BodyIntegral::Cluster& c) {
-    direct_range(tris, c.begin, c.end, k, rule, y, want_b, &s);
+    direct_range(tris, c.begin, c.end, k, rule, y, want_b, true, &s);
   };
   for (int id : g.taken) {  // by the bounds at y's own distance (≥ the group's, up to rounding)
     const BodyIntegral::Cluster& c = clusters[id];
@@ -1283,6 +1304,31 @@ void check_closed(const std::vector<int>& corners) {
   }
 }
 
+// Each triangle's coplanar neighbours (Triangle::twin): across edge (a, b) the one triangle with
+// the edge (b, a), when their unit normals agree to 1e-13 and its centroid lies in the plane to
+// 1e-13 of the edges' length; else −1.
+void find_twins(const std::vector<int>& corners, std::vector<Triangle>* tris) {
+  std::vector<std::array<int, 4>> edges;  // (a, b, triangle, edge)
+  for (std::size_t t = 0; t < tris->size(); ++t)
+    for (int e = 0; e < 3; ++e)
+      edges.push_back({corners[3 * t + e], corners[3 * t + (e + 1) % 3], static_cast<int>(t), e});
+  std::sort(edges.begin(), edges.end());
+  for (const auto& ed : edges) {
+    Triangle& t = (*tris)[ed[2]];
+    t.twin[ed[3]] = -1;
+    const std::array<int, 4> lo{ed[1], ed[0], -1, -1}, hi{ed[1], ed[0] + 1, -1, -1};
+    const auto first = std::lower_bound(edges.begin(), edges.end(), lo);
+    const auto last = std::lower_bound(edges.begin(), edges.end(), hi);
+    if (last - first != 1) continue;
+    const Triangle& s = (*tris)[(*first)[2]];
+    const double size = t.len[0] + t.len[1] + t.len[2];
+    const double off[3] = {s.c[0] - t.c[0], s.c[1] - t.c[1], s.c[2] - t.c[2]};
+    bool flat = std::abs(dot(t.n, off)) <= 1e-13 * size;
+    for (int i = 0; i < 3; ++i) flat = flat && std::abs(s.n[i] - t.n[i]) <= 1e-13;
+    if (flat) t.twin[ed[3]] = (*first)[2];
+  }
+}
+
 }  // namespace
 
 double radial_g(double r, double epsilon, double alpha) {
@@ -1316,6 +1362,7 @@ BodyIntegral::BodyIntegral(const TriangleSurface& surface, const BodyIntegralOpt
       throw InvalidArgument("body integral: triangle " + std::to_string(t) + " has zero area");
   }
   check_closed(corners_);
+  find_twins(corners_, &triangles_);
   gauss_legendre_unit(options.angle_points, &rule_x_, &rule_w_);
   if (options.tolerance > 0.0) {
     const Bvh bvh = build_bvh(surface);
@@ -1325,7 +1372,13 @@ BodyIntegral::BodyIntegral(const TriangleSurface& surface, const BodyIntegralOpt
       clusters_.push_back(make_cluster(triangles_, order_, node));
     total_area_ = clusters_[0].area;
     group_radius_ = kGroupRadius * clusters_[0].rho;
-    for (int t : order_) ordered_.push_back(triangles_[t]);
+    std::vector<int> position(order_.size());
+    for (std::size_t j = 0; j < order_.size(); ++j) position[order_[j]] = static_cast<int>(j);
+    for (int t : order_) {
+      ordered_.push_back(triangles_[t]);
+      for (int& twin : ordered_.back().twin)
+        if (twin >= 0) twin = position[twin];
+    }
   }
 }
 
@@ -1347,7 +1400,8 @@ void BodyIntegral::evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* valu
   for (Eigen::Index j = 0; j < m; ++j) {
     const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
     PointSums s;  // Σ ω_t: near (exact), far (the rule's)
-    for (const Triangle& t : triangles_) direct_triangle(t, k, rule, y, want_b, coulomb, &s);
+    direct_range(triangles_, 0, static_cast<int>(triangles_.size()), k, rule, y, want_b, coulomb,
+                 &s);
     double J = s.J;
     if (coulomb) J += k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface);
     (*value)[j] = J;

@@ -114,6 +114,9 @@ class BodyIntegral {
     double nu[3][3];    // in-plane outward edge normals, τ_e × n
     double len[3];      // edge lengths
     double glam[3][3];  // in-plane gradients of the hat functions λ_a
+    // Across edge e, the coplanar neighbour's index in the same list of triangles (−1: none,
+    // or not coplanar): where both are near, their wedges on the edge cancel.
+    int twin[3];
   };
 
   /// A node of the tree: its triangles' moments about p, n-weighted (M) and plain (m):
@@ -122,6 +125,7 @@ class BodyIntegral {
   struct Cluster {
     double p[3];     // the area-weighted centroid
     double rho;      // the largest |v − p| over its triangles' corners
+    double reach;    // the largest near radius (near_ratio · R_t) of its triangles
     double area;     // Σ A_t
     double m0[3];    // M0
     double m1[9];    // M1, row-major
