@@ -18,7 +18,8 @@
 // Near triangles (|y − c_t| < near_ratio · R_t, c_t the centroid and R_t the largest distance
 // from it to a vertex) are integrated in polar coordinates about the foot of y in the
 // triangle's plane: the radial integral in closed form, the angle over each edge's wedge by
-// composite Gauss–Legendre in u (tan θ = sinh u); the first moment of the kernel, which the
+// composite Gauss–Legendre in u (tan θ = sinh u; a wedge on an edge shared with a coplanar near
+// neighbour is left out, the two cancel); the first moment of the kernel, which the
 // hat functions need, as a line integral over the edges (∫_t k (x − p) dA = ∮ K₁(r) ν dl,
 // K₁(r) = ∫₀^r s k(s) ds). The other triangles by Dunavant's symmetric 16-point rule (degree 8), or
 // beyond 4 · near_ratio · R_t Radon's 7-point rule (degree 5); for α ≥ 3.5 its point-charge part
@@ -31,7 +32,8 @@
 //     Σ_t ∫_t n_t·f(x − y) dA ≈ Σ_{m ≤ 2} (1/m!) D^m f(p − y) : Σ_t n_t ⊗ ∫_t (x − p)^⊗m dA,
 //
 // (the tail f = d H(|d|), H = (G∞ − G)/r³; the solid angle's d/r³; ∂J/∂y's n k(r)), accepted
-// when a proved bound of its remainder fits a per-point budget (docs/formulation.md §2.8):
+// when it lies beyond its triangles' near radii and a proved bound of its remainder fits a
+// budget (docs/formulation.md §2.8; one traversal per group of nearby consecutive points):
 // |J̃ − J| ≤ τ J and ‖∂J̃/∂y − ∂J/∂y‖ ≤ τ ∫_∂Ω k dA against the same rules summed over all
 // pairs; in surface_vjp the corner sums' errors add up to at most τ Σ_k |w_k| ∫_∂Ω k(|y_k − x|) dA.
 
