@@ -632,6 +632,106 @@ TEST(BodyIntegral, TreeGivesTheSameNumbersOnAnyThreads) {
   expect_same_on_one_and_two_threads(s, y, w, 1e-2);
 }
 
+// The 2×2×2 Gauss points of cubes of side 0.04 about the centres c (8 consecutive rows each, as
+// the cell distance's samples: one group of the tree's traversal per cube).
+Eigen::MatrixXd cube_gauss_points(const std::vector<Eigen::Vector3d>& centres) {
+  Eigen::MatrixXd y(8 * centres.size(), 3);
+  const double g = 0.02 / std::sqrt(3.0);
+  for (std::size_t c = 0; c < centres.size(); ++c)
+    for (int q = 0; q < 8; ++q)
+      y.row(8 * c + q) =
+          (centres[c] + g * Eigen::Vector3d(q & 1 ? 1 : -1, q & 2 ? 1 : -1, q & 4 ? 1 : -1))
+              .transpose();
+  return y;
+}
+
+TEST(BodyIntegral, TreeGroupsWithinTolerance) {
+  // Rows in tight groups of 8 share one traversal per group (radius 0.02 within the limit
+  // ρ_root/32 ≈ 0.05 here): the documented bounds against all pairs hold as for single points
+  // (TreeWithinTolerance: S by a lower bound, 1e-8 for the far rules' own difference), values at
+  // cubes inside, outside and across a face, gradients and the surface product at those ≥ 0.05
+  // from the surface; the same numbers on one and two threads (three blocks of 64 rows).
+  const Eigen::Vector3d hi(3.0, 1.0, 0.25);
+  const TriangleSurface s = box_surface(Eigen::Vector3d::Zero(), hi, 8);
+  std::vector<Eigen::Vector3d> away, across;
+  for (int i = 0; i < 12; ++i) {
+    const double x = 0.1 + 0.25 * i, yy = 0.5 + 0.3 * std::sin(1.7 * i);
+    away.emplace_back(x, yy, i % 3 == 0 ? 0.125 : (i % 3 == 1 ? 0.4 : -0.2));
+  }
+  for (int i = 0; i < 6; ++i)  // across the top face, and about its edge y = 0
+    across.emplace_back(0.3 + 0.45 * i, i % 2 ? 0.001 : 0.5, i < 4 ? 0.25 : 0.249);
+  const Eigen::MatrixXd ya = cube_gauss_points(away), yc = cube_gauss_points(across);
+  Eigen::VectorXd S(ya.rows());
+  for (Eigen::Index k = 0; k < ya.rows(); ++k) S[k] = kernel_area_lower(s, ya.row(k).transpose());
+  const Eigen::VectorXd w = Eigen::VectorXd::LinSpaced(ya.rows(), -1.0, 2.0);
+  const double vjp_budget = w.cwiseAbs().dot(S);
+  BodyIntegralOptions all;
+  Eigen::VectorXd j0, jc0;
+  Eigen::MatrixXd g0;
+  const BodyIntegral pairs(s, all);
+  pairs.evaluate(ya, &j0, &g0);
+  pairs.evaluate(yc, &jc0);
+  const Eigen::MatrixXd v0 = pairs.surface_vjp(ya, w);
+  for (double tau : {1e-2, 1e-4}) {
+    BodyIntegralOptions o = all;
+    o.tolerance = tau;
+    const BodyIntegral tree(s, o);
+    Eigen::VectorXd j1, jc1;
+    Eigen::MatrixXd g1;
+    tree.evaluate(ya, &j1, &g1);
+    tree.evaluate(yc, &jc1);
+    int differs = 0;
+    double worst_j = 0.0, worst_g = 0.0;
+    for (Eigen::Index k = 0; k < ya.rows(); ++k) {
+      worst_j = std::max(worst_j, std::abs(j1[k] - j0[k]) / j0[k]);
+      worst_g = std::max(worst_g, (g1.row(k) - g0.row(k)).norm() / S[k]);
+      EXPECT_LE(std::abs(j1[k] - j0[k]), (tau + 1e-8) * j0[k]) << "tau " << tau << ", row " << k;
+      EXPECT_LE((g1.row(k) - g0.row(k)).norm(), (tau + 1e-8) * S[k])
+          << "tau " << tau << ", row " << k;
+      differs += std::abs(j1[k] - j0[k]) > 1e-12 * j0[k];
+    }
+    for (Eigen::Index k = 0; k < yc.rows(); ++k) {
+      worst_j = std::max(worst_j, std::abs(jc1[k] - jc0[k]) / jc0[k]);
+      EXPECT_LE(std::abs(jc1[k] - jc0[k]), (tau + 1e-8) * jc0[k]) << "tau " << tau << ", row " << k;
+    }
+    const double err = (tree.surface_vjp(ya, w) - v0).rowwise().norm().sum();
+    std::printf("tau %.0e: largest |dJ|/J %.2e, |dg|/S %.2e, product %.2e of its bound\n", tau,
+                worst_j, worst_g, err / vjp_budget);
+    EXPECT_LE(err, (tau + 1e-8) * vjp_budget) << "tau " << tau;
+    EXPECT_GT(err, 1e-12 * vjp_budget) << "tau " << tau << ": the tree took no cluster";
+    EXPECT_GE(differs, ya.rows() / 2) << "tau " << tau << ": the tree took (almost) no cluster";
+  }
+  Eigen::MatrixXd y3(ya.rows() + yc.rows(), 3);
+  y3 << ya, yc;
+  expect_same_on_one_and_two_threads(s, y3, Eigen::VectorXd::LinSpaced(y3.rows(), -1.0, 2.0), 1e-2);
+}
+
+TEST(BodyIntegral, CoplanarWedgesCancel) {
+  // On a flat face the wedges of an edge shared by two near triangles cancel and are left out;
+  // moving the surface points by ~1e-11 makes no two triangles coplanar (to 1e-13), so there
+  // every wedge is summed: J and ∂J/∂y agree to what the shift itself moves (≲ 1e-8 relative at
+  // 2ε from a face), many pairs near (near_ratio 8).
+  const TriangleSurface flat = box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 4);
+  TriangleSurface bent = flat;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1e-11, 1e-11);
+  for (Eigen::Index i = 0; i < bent.points.size(); ++i) bent.points.data()[i] += u(rng);
+  Eigen::MatrixXd y(6, 3);
+  y << 0.5, 0.5, 0.5, 0.3, 0.6, 0.002, 0.7, 0.2, -0.002, 1.3, 0.4, 0.5, 0.12, 0.998, 0.5, 0.01,
+      0.01, 0.01;
+  BodyIntegralOptions o;
+  o.near_ratio = 8.0;
+  Eigen::VectorXd j0, j1;
+  Eigen::MatrixXd g0, g1;
+  BodyIntegral(flat, o).evaluate(y, &j0, &g0);
+  BodyIntegral(bent, o).evaluate(y, &j1, &g1);
+  for (Eigen::Index k = 0; k < y.rows(); ++k) {
+    EXPECT_LE(std::abs(j1[k] - j0[k]), 1e-8 * j0[k]) << "point " << k;
+    EXPECT_LE((g1.row(k) - g0.row(k)).norm(), 1e-8 * g0.row(k).norm() + 1e-8 * j0[k])
+        << "point " << k;
+  }
+}
+
 TEST(BodyIntegral, RejectsBadInput) {
   const TriangleSurface s = box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 1);
   BodyIntegralOptions o;

@@ -10,6 +10,13 @@
 //                                       gradient and the surface product by the tree (tolerance
 //                                       1e-2, also with near_ratio 2 and angle_points 8; 1e-6)
 //                                       against all pairs and collocation's tree at that tolerance
+//   bench_body_integral cells [THREADS [REPS [OUT]]]  J, J and its gradient, and the surface
+//                                       product (weights 1) at the 2×2×2 Gauss points of the
+//                                       10 × 2 × 0.1 plate's 100 × 10 × 4 hexahedra (the cell
+//                                       distance's samples) against the plate's own boundary, by
+//                                       the tree at 1e-2 (near_ratio 2, angle_points 8; then the
+//                                       defaults): seconds, REPS repeats; OUT: J, the gradient
+//                                       and the product's rows written there (raw doubles)
 #include <Eigen/Core>
 #include <chrono>
 #include <cstdio>
@@ -19,6 +26,7 @@
 
 #include "hausdorff/body_integral.hpp"
 #include "hausdorff/cell_distance.hpp"
+#include "hausdorff/cell_rule.hpp"
 #include "softhd/control/scene.hpp"
 #include "softhd/fe/boundary.hpp"
 #include "softhd/fe/geometry.hpp"
@@ -223,10 +231,90 @@ void cost(const char* scene_path, int threads) {
               double(near) / (X.rows() * surf.triangles.rows()));
 }
 
+// The box [0, 10] × [0, 2] × [0, 0.1] meshed by nx · ny · nz hexahedra (Gmsh's corner order).
+detail::HexCells plate_cells(int nx, int ny, int nz) {
+  const double size[3] = {10.0, 2.0, 0.1};
+  const int n[3] = {nx, ny, nz}, mx = nx + 1, my = ny + 1, mz = nz + 1;
+  detail::HexCells b;
+  b.nodes.resize(mx * my * mz, 3);
+  for (int k = 0; k < mz; ++k)
+    for (int j = 0; j < my; ++j)
+      for (int i = 0; i < mx; ++i) {
+        const int idx[3] = {i, j, k};
+        for (int d = 0; d < 3; ++d) b.nodes((k * my + j) * mx + i, d) = size[d] * idx[d] / n[d];
+      }
+  const int sign[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                          {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  b.cells.resize(nx * ny * nz, 8);
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        for (int c = 0; c < 8; ++c)
+          b.cells((k * ny + j) * nx + i, c) =
+              ((k + sign[c][2]) * my + j + sign[c][1]) * mx + i + sign[c][0];
+  return b;
+}
+
+void cells(int threads, int reps, const char* out) {
+  const detail::HexCells plate = plate_cells(100, 10, 4);
+  const TriangleSurface surf = detail::hex_boundary(plate);
+  std::vector<detail::cell_rule::Cell> cs;
+  for (Eigen::Index c = 0; c < plate.cells.rows(); ++c)
+    cs.push_back(detail::cell_rule::cell_of(plate, c));
+  Eigen::MatrixXd y;
+  Eigen::VectorXd weight;
+  detail::cell_rule::cell_samples(cs, &y, &weight);
+  const Eigen::VectorXd w = Eigen::VectorXd::Ones(y.rows());
+  std::printf(
+      "# cells: %ld Gauss points of the plate's %ld cells, %ld boundary triangles, "
+      "threads %d\n",
+      (long)y.rows(), (long)plate.cells.rows(), (long)surf.triangles.rows(), threads);
+  struct Config {
+    double near_ratio;
+    int angle_points;
+  };
+  Eigen::VectorXd J;
+  Eigen::MatrixXd G, V;
+  for (int rep = 0; rep < reps; ++rep)
+    for (const Config& cf : {Config{2.0, 8}, Config{4.0, 12}}) {
+      BodyIntegralOptions o;
+      o.threads = threads;
+      o.tolerance = 1e-2;
+      o.near_ratio = cf.near_ratio;
+      o.angle_points = cf.angle_points;
+      const BodyIntegral b(surf, o);
+      Eigen::VectorXd J1;
+      const double t0 = now();
+      b.evaluate(y, &J1);
+      const double t1 = now();
+      b.evaluate(y, &J, &G);
+      const double t2 = now();
+      V = b.surface_vjp(y, w);
+      const double t3 = now();
+      std::printf(
+          "rep %d, tau 1e-2, near_ratio %.0f, angle_points %d: J %.3f s, J+grad %.3f s, vjp %.3f s "
+          "| mean J %.9g, max |J(value) - J(value+grad)|/J %.1e\n",
+          rep, cf.near_ratio, cf.angle_points, t1 - t0, t2 - t1, t3 - t2, J.mean(),
+          ((J1 - J).array() / J.array()).abs().maxCoeff());
+      std::fflush(stdout);
+      if (out && rep == 0 && cf.near_ratio == 2.0) {
+        std::FILE* f = std::fopen(out, "wb");
+        const Eigen::MatrixXd gt = G.transpose(), vt = V.transpose();
+        std::fwrite(J1.data(), sizeof(double), J1.size(), f);
+        std::fwrite(J.data(), sizeof(double), J.size(), f);
+        std::fwrite(gt.data(), sizeof(double), gt.size(), f);
+        std::fwrite(vt.data(), sizeof(double), vt.size(), f);
+        std::fclose(f);
+      }
+    }
+}
+
 int main(int argc, char** argv) {
   std::string what = argc > 1 ? argv[1] : "";
-  if (what != "accuracy" && what != "plate" && what != "cost") {
-    std::fprintf(stderr, "usage: bench_body_integral accuracy FILE | plate | cost [THREADS]\n");
+  if (what != "accuracy" && what != "plate" && what != "cost" && what != "cells") {
+    std::fprintf(stderr,
+                 "usage: bench_body_integral accuracy FILE | plate | cost [THREADS] | cells "
+                 "[THREADS [REPS [OUT]]]\n");
     return 2;
   }
   if (what == "accuracy") {
@@ -269,6 +357,9 @@ int main(int argc, char** argv) {
               ((J - Jref).array() / Jref.array()).abs().maxCoeff());
         }
   }
+  if (what == "cells")
+    cells(argc > 2 ? std::atoi(argv[2]) : 1, argc > 3 ? std::atoi(argv[3]) : 1,
+          argc > 4 ? argv[4] : nullptr);
   if (what == "cost") {
     const int threads = argc > 2 ? std::atoi(argv[2]) : 1;
     cost(SOFTHD_SOURCE_DIR "/data/scenes/bending.json", threads);

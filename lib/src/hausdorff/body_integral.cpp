@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -26,6 +27,7 @@ constexpr int kFarPoints = 16;
 
 struct FarRule {
   double lam[kFarPoints][3];
+  double corner[3][kFarPoints];  // lam by corner (the vectorised loops)
   double w[kFarPoints];
   FarRule() {
     int q = 0;
@@ -47,6 +49,8 @@ struct FarRule {
     const double c[3] = {0.008394777409958, 0.263112829634638, 0.728492392955404};
     const int perm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
     for (const auto& p : perm) put(c[p[0]], c[p[1]], c[p[2]], 0.027230314174435);
+    for (int i = 0; i < kFarPoints; ++i)
+      for (int a = 0; a < 3; ++a) corner[a][i] = lam[i][a];
   }
 };
 
@@ -63,6 +67,7 @@ constexpr double kCoarseRatio = 4.0;
 
 struct CoarseRule {
   double lam[kCoarsePoints][3];
+  double corner[3][kCoarsePoints];  // lam by corner
   double w[kCoarsePoints];
   CoarseRule() {
     const double s15 = std::sqrt(15.0);
@@ -79,6 +84,8 @@ struct CoarseRule {
         L[v] = 1.0 - 2.0 * a[o];
         w[1 + 3 * o + v] = wa[o];
       }
+    for (int i = 0; i < kCoarsePoints; ++i)
+      for (int a = 0; a < 3; ++a) corner[a][i] = lam[i][a];
   }
 };
 
@@ -90,14 +97,18 @@ const CoarseRule& coarse_rule() {
 // The points of a far rule on one triangle, by coordinate, weights times the area.
 struct FarPoints {
   const double *x, *y, *z, *w;
-  const double (*lam)[3];
+  const double *l0, *l1, *l2;  // the barycentric coordinates λ_0, λ_1, λ_2 of the points
   int n;
 };
 
 // The 16-point rule within (kCoarseRatio · near_ratio · R_t)² = t.far2 of y, else the 7-point.
 FarPoints far_points(const Triangle& t, double d2) {
-  if (d2 < t.far2) return {t.qx, t.qy, t.qz, t.wq, far_rule().lam, kFarPoints};
-  return {t.cx, t.cy, t.cz, t.cw, coarse_rule().lam, kCoarsePoints};
+  if (d2 < t.far2) {
+    const FarRule& r = far_rule();
+    return {t.qx, t.qy, t.qz, t.wq, r.corner[0], r.corner[1], r.corner[2], kFarPoints};
+  }
+  const CoarseRule& r = coarse_rule();
+  return {t.cx, t.cy, t.cz, t.cw, r.corner[0], r.corner[1], r.corner[2], kCoarsePoints};
 }
 
 // d_m(z) = ε^−(m+1) ∫_ε^{ε(1+z)} w^m dw: log(1 + z) for m = −1, else ((1 + z)^{m+1} − 1)/(m+1)
@@ -214,22 +225,105 @@ struct Rules {
   double width;
 };
 
+// The most angle points (validate: angle_points ≤ 64).
+constexpr int kMaxAnglePoints = 64;
+
+// 1/j! for j = 0 … 18.
+constexpr std::array<double, 19> inverse_factorials() {
+  std::array<double, 19> a{};
+  double f = 1.0;
+  for (int j = 0; j < 19; ++j) {
+    if (j > 0) f *= j;
+    a[j] = 1.0 / f;
+  }
+  return a;
+}
+constexpr std::array<double, 19> kInverseFactorial = inverse_factorials();
+
+// cosh u at the nodes u = m + δ of one panel of width du about its middle m (em = e^m): cosh m
+// C(δ) + sinh m S(δ), C and S the Taylor series of cosh δ and sinh δ to δ¹⁸ and δ¹⁷ (|δ| ≤ du/2 ≤
+// 1: the next terms below 1e-17; sinh m from e^m is exact to ~1e-16 cosh m, as the sum needs),
+// a loop the compiler vectorises; std::cosh per node for panels wider than 2 (panel_width > 2).
+void panel_cosh(const Rules& rule, double em, double du, double* ch) {
+  const int n = static_cast<int>(rule.x.size());
+  const double cm = 0.5 * (em + 1.0 / em), sm = 0.5 * (em - 1.0 / em);
+  if (du > 2.0) {
+    const double m = std::log(em);
+    for (int i = 0; i < n; ++i) ch[i] = std::cosh(m + du * (rule.x[i] - 0.5));
+    return;
+  }
+#pragma omp simd
+  for (int i = 0; i < n; ++i) {
+    const double d = du * (rule.x[i] - 0.5), d2 = d * d;
+    double c = kInverseFactorial[18], s = kInverseFactorial[17];
+    for (int j = 8; j >= 0; --j) c = c * d2 + kInverseFactorial[2 * j];
+    for (int j = 7; j >= 0; --j) s = s * d2 + kInverseFactorial[2 * j + 1];
+    ch[i] = cm * c + sm * (s * d);
+  }
+}
+
+// e^{asinh x} = x + √(x² + 1) (for x < 0 its reciprocal's form, without cancellation; 2x and
+// 1/(2|x|) beyond |x| = 1e8).
+double exp_asinh(double x) {
+  const double a = std::abs(x), v = a > 1e8 ? 2.0 * a : a + std::sqrt(a * a + 1.0);
+  return x < 0.0 ? 1.0 / v : v;
+}
+
+// The Gauss–Legendre panels of [u1, u2], u = asinh x, x from x1 to x2, of width ≤ rule.width,
+// with cosh u at their nodes: calls f(ch, du) per panel (angle_points values). From E = e^u at
+// the ends: u2 − u1 = log(E2/E1), a panel's middle e^m = √(E1 E2) for one panel, E1 e^{(p+½)du}
+// else (one logarithm per edge instead of two asinh and an exp per panel).
+template <class F>
+void cosh_panels(const Rules& rule, double x1, double x2, F&& f) {
+  const double e1 = exp_asinh(x1), e2 = exp_asinh(x2), ratio = e2 / e1;
+  const double span = std::isfinite(ratio) ? std::log(ratio) : std::log(e2) - std::log(e1);
+  const int panels = std::max(1, static_cast<int>(std::ceil(span / rule.width)));
+  const double du = span / panels;
+  double ch[kMaxAnglePoints];
+  for (int p = 0; p < panels; ++p) {
+    panel_cosh(rule, panels == 1 ? std::sqrt(e1) * std::sqrt(e2) : e1 * std::exp((p + 0.5) * du),
+               du, ch);
+    f(ch, du);
+  }
+}
+
 // The wedge of one edge seen from the foot p of y (in-plane distance |p_e| > 0 to the edge's
 // line, t1 < t2 its ends along it), polar about p, T(u) = √(p_e² cosh²u + h²), θ = gd(u):
 //   W_A = ∫ [Φ_A(T) − Φ_A(|h|)] dθ = ∫ ∫₀^R G(r)/r³ s ds dθ
 //   W_B = ∫ [K₁(T) − K₁(|h|)] dθ   = ∫ ∫₀^R k(r) s ds dθ
+// (dθ = du / cosh u). α = 4: Φ_A and K₁'s closed forms inline, the nodes' loop vectorised.
 void edge_wedge(const Radial& k, const Rules& rule, double pe, double h, double t1, double t2,
                 bool want_a, bool want_b, double* wa, double* wb) {
   const double ah = std::abs(h), p2 = pe * pe, h2 = h * h;
   const double fa = want_a ? k.phi_a(ah) : 0.0, fb = want_b ? k.k1(ah) : 0.0;
+  const int n = static_cast<int>(rule.x.size());
+  const double* w = rule.w.data();
+  const double eps = k.eps, ie = 1.0 / eps;
   double sa = 0.0, sb = 0.0;
-  panel_rule(rule.x, rule.w, rule.width, std::asinh(t1 / pe), std::asinh(t2 / pe),
-             [&](double u, double wt) {
-               const double ch = std::cosh(u), T = std::sqrt(p2 * ch * ch + h2);
-               const double f = wt / ch;
-               if (want_a) sa += f * (k.phi_a(T) - fa);
-               if (want_b) sb += f * (k.k1(T) - fb);
-             });
+  cosh_panels(rule, t1 / pe, t2 / pe, [&](const double* ch, double du) {
+    if (!k.four) {
+      for (int i = 0; i < n; ++i) {
+        const double T = std::sqrt(p2 * ch[i] * ch[i] + h2), f = du * w[i] / ch[i];
+        if (want_a) sa += f * (k.phi_a(T) - fa);
+        if (want_b) sb += f * (k.k1(T) - fb);
+      }
+      return;
+    }
+    if (want_a) {  // Φ_A = −(T + ε/2)/(3ε (T + ε)²): [Φ_A(T) − fa]/cosh u by one division
+#pragma omp simd reduction(+ : sa)
+      for (int i = 0; i < n; ++i) {
+        const double T = std::sqrt(p2 * ch[i] * ch[i] + h2), v = T + eps, v2 = v * v;
+        sa += du * w[i] * (-(T + 0.5 * eps) - 3.0 * eps * fa * v2) / (3.0 * eps * v2 * ch[i]);
+      }
+    }
+    if (want_b) {  // K₁ = z²(3 + z)/(6ε²(1 + z)³), z = T/ε: likewise
+#pragma omp simd reduction(+ : sb)
+      for (int i = 0; i < n; ++i) {
+        const double z = std::sqrt(p2 * ch[i] * ch[i] + h2) * ie, v = 1.0 + z, v3 = v * v * v;
+        sb += du * w[i] * (z * z * (3.0 + z) * ie * ie - 6.0 * v3 * fb) / (6.0 * v3 * ch[i]);
+      }
+    }
+  });
   *wa = sa;
   *wb = sb;
 }
@@ -240,11 +334,20 @@ void edge_wedge(const Radial& k, const Rules& rule, double pe, double h, double 
 double edge_line(const Radial& k, const Rules& rule, double q, double t1, double t2) {
   double s = 0.0;
   if (q > 0.0) {
-    panel_rule(rule.x, rule.w, rule.width, std::asinh(t1 / q), std::asinh(t2 / q),
-               [&](double u, double wt) {
-                 const double r = q * std::cosh(u);
-                 s += wt * k.k1(r) * r;
-               });
+    const int n = static_cast<int>(rule.x.size());
+    const double* w = rule.w.data();
+    const double ie = 1.0 / k.eps;
+    cosh_panels(rule, t1 / q, t2 / q, [&](const double* ch, double du) {
+      if (!k.four) {
+        for (int i = 0; i < n; ++i) s += du * w[i] * k.k1(q * ch[i]) * q * ch[i];
+        return;
+      }
+#pragma omp simd reduction(+ : s)
+      for (int i = 0; i < n; ++i) {  // K₁ = z²(3 + z)/(6ε²(1 + z)³), z = r/ε
+        const double r = q * ch[i], z = r * ie, v = 1.0 + z;
+        s += du * w[i] * r * z * z * (3.0 + z) * ie * ie / (6.0 * v * v * v);
+      }
+    });
     return s;
   }
   auto side = [&](double a, double b) {  // ∫_a^b K₁(t) dt, 0 ≤ a < b
@@ -291,12 +394,13 @@ EdgeFrame edge_frame(const Triangle& t, const double* y) {
   return f;
 }
 
-// Near triangle, polar rule: A = ∫_t G(r)/r³ dA = Σ_e sign(p_e) W_A,e, likewise B = ∫_t k dA.
+// Near triangle, polar rule: A = ∫_t G(r)/r³ dA = Σ_e sign(p_e) W_A,e, likewise B = ∫_t k dA;
+// the edges in the bit mask skip left out (their wedges cancel against a coplanar neighbour's).
 void near_pair(const Triangle& t, const Radial& k, const Rules& rule, const EdgeFrame& f,
-               bool want_a, bool want_b, double* a, double* b) {
+               bool want_a, bool want_b, double* a, double* b, int skip = 0) {
   double sa = 0.0, sb = 0.0;
   for (int e = 0; e < 3; ++e) {
-    if (f.pe[e] == 0.0) continue;  // a degenerate wedge
+    if (f.pe[e] == 0.0 || (skip >> e & 1)) continue;  // a degenerate or cancelled wedge
     double wa, wb;
     edge_wedge(k, rule, std::abs(f.pe[e]), f.h, f.t1[e], f.t1[e] + t.len[e], want_a, want_b, &wa,
                &wb);
@@ -333,12 +437,14 @@ double solid_angle(const Triangle& t, const double* y) {
 double far_value(const FarPoints& t, const Radial& k, const double* y, double h, double* omega) {
   double s = 0.0, c = 0.0;
   if (k.four) {  // H(r) = (3W² − 3W + 1)/(3ε W³ r³), W = 1 + r/ε
-    const double inv_eps = 1.0 / k.eps;
+    const double inv_eps = 1.0 / k.eps, y0 = y[0], y1 = y[1], y2 = y[2];
+    const double *px = t.x, *py = t.y, *pz = t.z, *pw = t.w;
+    const int n = t.n;
 #pragma omp simd reduction(+ : s, c)
-    for (int q = 0; q < t.n; ++q) {
-      const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
+    for (int q = 0; q < n; ++q) {
+      const double dx = px[q] - y0, dy = py[q] - y1, dz = pz[q] - y2;
       const double r = std::sqrt(dx * dx + dy * dy + dz * dz), W = 1.0 + r * inv_eps;
-      const double W3 = W * W * W, wi = t.w[q] / (r * r * r * W3);  // one division
+      const double W3 = W * W * W, wi = pw[q] / (r * r * r * W3);  // one division
       s += wi * (3.0 * W * W - 3.0 * W + 1.0);
       c += wi * W3;
     }
@@ -377,11 +483,14 @@ bool on_triangle(const Triangle& t, const EdgeFrame& f) {
 double far_kernel(const FarPoints& t, const Radial& k, const double* y) {
   double s = 0.0;
   if (k.four) {
+    const double eps = k.eps, y0 = y[0], y1 = y[1], y2 = y[2];
+    const double *px = t.x, *py = t.y, *pz = t.z, *pw = t.w;
+    const int n = t.n;
 #pragma omp simd reduction(+ : s)
-    for (int q = 0; q < t.n; ++q) {
-      const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
-      const double u = 1.0 / (std::sqrt(dx * dx + dy * dy + dz * dz) + k.eps);
-      s += t.w[q] * (u * u) * (u * u);
+    for (int q = 0; q < n; ++q) {
+      const double dx = px[q] - y0, dy = py[q] - y1, dz = pz[q] - y2;
+      const double u = 1.0 / (std::sqrt(dx * dx + dy * dy + dz * dz) + eps);
+      s += pw[q] * (u * u) * (u * u);
     }
     return s;
   }
@@ -414,28 +523,53 @@ void near_moments(const Triangle& t, const Radial& k, const Rules& rule, const E
 // ∫_t k λ_a dA by the far rule.
 void far_moments(const FarPoints& t, const Radial& k, const double* y, double c[3]) {
   double c0 = 0.0, c1 = 0.0, c2 = 0.0;
+  const double eps = k.eps, y0 = y[0], y1 = y[1], y2 = y[2];
+  const double *px = t.x, *py = t.y, *pz = t.z, *pw = t.w, *l0 = t.l0, *l1 = t.l1, *l2 = t.l2;
+  const int n = t.n;
   if (k.four) {
 #pragma omp simd reduction(+ : c0, c1, c2)
-    for (int q = 0; q < t.n; ++q) {
-      const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
-      const double u = 1.0 / (std::sqrt(dx * dx + dy * dy + dz * dz) + k.eps);
-      const double kw = t.w[q] * (u * u) * (u * u);
-      c0 += kw * t.lam[q][0];
-      c1 += kw * t.lam[q][1];
-      c2 += kw * t.lam[q][2];
+    for (int q = 0; q < n; ++q) {
+      const double dx = px[q] - y0, dy = py[q] - y1, dz = pz[q] - y2;
+      const double u = 1.0 / (std::sqrt(dx * dx + dy * dy + dz * dz) + eps);
+      const double kw = pw[q] * (u * u) * (u * u);
+      c0 += kw * l0[q];
+      c1 += kw * l1[q];
+      c2 += kw * l2[q];
     }
   } else {
-    for (int q = 0; q < t.n; ++q) {
-      const double dx = t.x[q] - y[0], dy = t.y[q] - y[1], dz = t.z[q] - y[2];
-      const double kw = t.w[q] * k.kernel(std::sqrt(dx * dx + dy * dy + dz * dz));
-      c0 += kw * t.lam[q][0];
-      c1 += kw * t.lam[q][1];
-      c2 += kw * t.lam[q][2];
+    for (int q = 0; q < n; ++q) {
+      const double dx = px[q] - y0, dy = py[q] - y1, dz = pz[q] - y2;
+      const double kw = pw[q] * k.kernel(std::sqrt(dx * dx + dy * dy + dz * dz));
+      c0 += kw * l0[q];
+      c1 += kw * l1[q];
+      c2 += kw * l2[q];
     }
   }
   c[0] = c0;
   c[1] = c1;
   c[2] = c2;
+}
+
+// far_value and far_kernel together for α = 4 (B = ∫_t k dA into *b): per point one square root
+// and one division, D = 1/(r W), 1/(r³W³) = D³, k = (εW)^−4 = (D r/ε)⁴.
+double far_value_kernel(const FarPoints& t, double eps, const double* y, double h, double* omega,
+                        double* b) {
+  double s = 0.0, c = 0.0, kb = 0.0;
+  const double inv_eps = 1.0 / eps, y0 = y[0], y1 = y[1], y2 = y[2];
+  const double *px = t.x, *py = t.y, *pz = t.z, *pw = t.w;
+  const int n = t.n;
+#pragma omp simd reduction(+ : s, c, kb)
+  for (int q = 0; q < n; ++q) {
+    const double dx = px[q] - y0, dy = py[q] - y1, dz = pz[q] - y2;
+    const double r = std::sqrt(dx * dx + dy * dy + dz * dz), W = 1.0 + r * inv_eps;
+    const double D = 1.0 / (r * W), D3 = D * D * D, u = D * r * inv_eps, wi = pw[q] * D3;
+    s += wi * (3.0 * W * W - 3.0 * W + 1.0);
+    c += wi * W * W * W;
+    kb += pw[q] * (u * u) * (u * u);
+  }
+  *omega = h * c;
+  *b = kb;
+  return -h * s * inv_eps / 3.0;
 }
 
 // |y − c_t|²: near below t.near2 (the polar rule), the 16-point rule below t.far2.
@@ -465,13 +599,13 @@ struct PointSums {
 
 // One triangle's share by its rules (polar when near, else the far rule).
 void direct_triangle(const Triangle& t, const Radial& k, const Rules& rule, const double* y,
-                     bool want_b, bool coulomb, PointSums* s) {
+                     bool want_b, bool coulomb, PointSums* s, int skip = 0) {
   double b = 0.0;
   const double d2 = distance2(t, y);
   if (d2 < t.near2) {
     const EdgeFrame f = edge_frame(t, y);
     double a;
-    near_pair(t, k, rule, f, true, want_b, &a, &b);
+    near_pair(t, k, rule, f, true, want_b, &a, &b, skip);
     s->J += f.h * a;  // h_t ∫_t G(r)/r³ dA
     if (coulomb) {
       s->near_omega += solid_angle(t, y);
@@ -482,13 +616,40 @@ void direct_triangle(const Triangle& t, const Radial& k, const Rules& rule, cons
         t.n[0] * (t.v[0][0] - y[0]) + t.n[1] * (t.v[0][1] - y[1]) + t.n[2] * (t.v[0][2] - y[2]);
     const FarPoints p = far_points(t, d2);
     double omega;
-    s->J += far_value(p, k, y, h, &omega);
+    if (want_b && k.four) {
+      s->J += far_value_kernel(p, k.eps, y, h, &omega, &b);
+    } else {
+      s->J += far_value(p, k, y, h, &omega);
+      if (want_b) b = far_kernel(p, k, y);
+    }
     s->far_omega += omega;
-    if (want_b) b = far_kernel(p, k, y);
   }
   if (want_b) {
     for (int i = 0; i < 3; ++i) s->g[i] -= b * t.n[i];  // −n_t ∫_t k dA
     s->S += b;
+  }
+}
+
+// The edges of tris[j] whose wedges cancel at y: both it and the coplanar neighbour across the
+// edge near y (so both summed one by one by the polar rule: cluster_bounds), the foot and h the
+// same for both, the edge traversed the other way (W_e cancels, in J's h_t W and in B's n_t W
+// alike).
+int cancelled_edges(const std::vector<Triangle>& tris, int j, const double* y) {
+  int skip = 0;
+  for (int e = 0; e < 3; ++e) {
+    const int s = tris[j].twin[e];
+    if (s >= 0 && distance2(tris[s], y) < tris[s].near2) skip |= 1 << e;
+  }
+  return skip;
+}
+
+// The triangles tris[begin, end) one by one (a leaf of the tree, or all of them).
+void direct_range(const std::vector<Triangle>& tris, int begin, int end, const Radial& k,
+                  const Rules& rule, const double* y, bool want_b, bool coulomb, PointSums* s) {
+  for (int j = begin; j < end; ++j) {
+    const Triangle& t = tris[j];
+    const int skip = distance2(t, y) < t.near2 ? cancelled_edges(tris, j, y) : 0;
+    direct_triangle(t, k, rule, y, want_b, coulomb, s, skip);
   }
 }
 
@@ -605,6 +766,7 @@ BodyIntegral::Cluster make_cluster(const std::vector<Triangle>& tris, const std:
       const double e[3] = {t.v[a][0] - c.p[0], t.v[a][1] - c.p[1], t.v[a][2] - c.p[2]};
       c.rho = std::max(c.rho, std::sqrt(dot(e, e)));
     }
+    c.reach = std::max(c.reach, std::sqrt(t.near2));
     for (int q = 0; q < kFarPoints; ++q) {
       const double sv[3] = {t.qx[q] - c.p[0], t.qy[q] - c.p[1], t.qz[q] - c.p[2]};
       const double w = t.wq[q];
@@ -639,42 +801,169 @@ struct Budget {
 // The probe's opening ratio (a guess only: its results are not used unless the check passes).
 constexpr double kProbeTheta = 0.25;
 
-// One point's sums by the tree (tris: the triangles in the tree's order): a cluster enters by its
-// expansions when they are valid (ρ < R, ε ≤ kTreeX (R − ρ)) and their remainder bounds per unit
-// area fit the budget; a leaf that does not, triangle by triangle.
+// A cluster's remainder bounds per unit area at z = |p − y| − ρ (valid: z > 0, ε ≤ kTreeX z):
+// J's tail C_H ρ³/z⁶, the solid angle's 4 ρ³/z⁵, and with the gradient k's C_K ρ³/z⁷. Taken only
+// beyond its triangles' near radii (z ≥ reach, so |y − c_t| ≥ z: none of them near y): a triangle
+// near y is always summed one by one (cancelled_edges relies on it).
+struct Bounds {
+  bool valid;
+  double j, omega, g;
+};
+
+Bounds cluster_bounds(const BodyIntegral::Cluster& c, double eps, double z, bool want_b) {
+  if (!(z > 0.0 && eps <= kTreeX * z && z >= c.reach)) return {false, 0.0, 0.0, 0.0};
+  const TreeConstants& tc = tree_constants();
+  const double r3 = c.rho * c.rho * c.rho, z2 = z * z, z5 = z2 * z2 * z;
+  return {true, tc.c_h * r3 / (z5 * z), 4.0 * r3 / z5, want_b ? tc.c_k * r3 / (z5 * z2) : 0.0};
+}
+
+// Whether a cluster at z, its bounds e there, enters by its expansions under the budget
+// (decreasing in z: fits at z implies fits at every larger z).
+bool cluster_fits(const BodyIntegral::Cluster& c, const Bounds& e, double z, const Budget& budget) {
+  if (!e.valid || e.omega > budget.omega) return false;
+  return budget.theta > 0.0 ? c.rho <= budget.theta * z : e.j <= budget.j && e.g <= budget.g;
+}
+
+// A cluster's expansions into y's sums, e its bounds at y's distance.
+void take_cluster(const BodyIntegral::Cluster& c, double eps, const double* y, bool want_b,
+                  const Bounds& e, PointSums* s) {
+  cluster_share(c, eps, y, want_b, s);
+  s->err_j += c.area * e.j;
+  s->err_omega += c.area * e.omega;
+  s->err_g += c.area * e.g;
+}
+
+// One point's sums by the tree below the nodes `start` (tris: the triangles in the tree's
+// order): a cluster enters by its expansions when they are valid (ρ < R, ε ≤ kTreeX (R − ρ)) and
+// their remainder bounds per unit area fit the budget; a leaf that does not, triangle by triangle.
+void traverse(const std::vector<BodyIntegral::Cluster>& clusters, const std::vector<Triangle>& tris,
+              const Radial& k, const Rules& rule, const double* y, bool want_b,
+              const Budget& budget, const std::vector<int>& start, PointSums* s) {
+  int stack[2 * kBvhMaxDepth + 2];
+  for (int root : start) {
+    int top = 0;
+    stack[top++] = root;
+    while (top > 0) {
+      const BodyIntegral::Cluster& c = clusters[stack[--top]];
+      const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
+      const double z = std::sqrt(dot(d, d)) - c.rho;
+      const Bounds e = cluster_bounds(c, k.eps, z, want_b);
+      if (cluster_fits(c, e, z, budget)) {
+        take_cluster(c, k.eps, y, want_b, e, s);
+        continue;
+      }
+      if (c.left >= 0) {
+        stack[top++] = c.left + 1;
+        stack[top++] = c.left;
+        continue;
+      }
+      direct_range(tris, c.begin, c.end, k, rule, y, want_b, true, s);
+    }
+  }
+}
+
+// One point's sums by the whole tree.
 PointSums traverse(const std::vector<BodyIntegral::Cluster>& clusters,
                    const std::vector<Triangle>& tris, const Radial& k, const Rules& rule,
                    const double* y, bool want_b, const Budget& budget) {
-  const TreeConstants& tc = tree_constants();
   PointSums s;
+  traverse(clusters, tris, k, rule, y, want_b, budget, {0}, &s);
+  return s;
+}
+
+// A group of points (|y − centre| ≤ radius for each) and the decisions its points share: the
+// clusters every point takes (fits at z − radius ≤ each point's z), the leaves no point takes
+// (fails at z + radius), the nodes each point decides itself (the roots of its own traversal).
+// With one budget for the group, each point's sums are those of its own traversal (the fits are
+// monotone in z), in another order.
+struct GroupLists {
+  std::vector<int> taken, leaves, open;
+};
+
+template <class Fits>
+void group_lists(const std::vector<BodyIntegral::Cluster>& clusters, const double* centre,
+                 double radius, Fits&& fits, GroupLists* out) {
+  out->taken.clear();
+  out->leaves.clear();
+  out->open.clear();
   int stack[2 * kBvhMaxDepth + 2];
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
-    const BodyIntegral::Cluster& c = clusters[stack[--top]];
-    const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
+    const int id = stack[--top];
+    const BodyIntegral::Cluster& c = clusters[id];
+    const double d[3] = {c.p[0] - centre[0], c.p[1] - centre[1], c.p[2] - centre[2]};
     const double z = std::sqrt(dot(d, d)) - c.rho;
-    if (z > 0.0 && k.eps <= kTreeX * z) {
-      const double r3 = c.rho * c.rho * c.rho, z2 = z * z, z5 = z2 * z2 * z;
-      const double ej = tc.c_h * r3 / (z5 * z), eo = 4.0 * r3 / z5;
-      const double eg = want_b ? tc.c_k * r3 / (z5 * z2) : 0.0;
-      const bool fits =
-          budget.theta > 0.0 ? c.rho <= budget.theta * z : ej <= budget.j && eg <= budget.g;
-      if (fits && eo <= budget.omega) {
-        cluster_share(c, k.eps, y, want_b, &s);
-        s.err_j += c.area * ej;
-        s.err_omega += c.area * eo;
-        s.err_g += c.area * eg;
-        continue;
-      }
-    }
-    if (c.left >= 0) {
+    if (fits(c, z - radius)) {
+      out->taken.push_back(id);
+    } else if (fits(c, z + radius)) {
+      out->open.push_back(id);
+    } else if (c.left >= 0) {
       stack[top++] = c.left + 1;
       stack[top++] = c.left;
-      continue;
+    } else {
+      out->leaves.push_back(id);
     }
-    for (int j = c.begin; j < c.end; ++j) direct_triangle(tris[j], k, rule, y, want_b, true, &s);
   }
+}
+
+// Points are taken in blocks of kBlock rows (a block's points depend on the ones before them in
+// it, not on the threads), each in groups of up to kGroup consecutive rows within a sphere of
+// radius kGroupRadius × the root cluster's ρ that share one traversal.
+constexpr Eigen::Index kBlock = 64;
+constexpr Eigen::Index kGroup = 8;
+constexpr double kGroupRadius = 1.0 / 32.0;
+
+// The centre and radius of rows [begin, end) of points (the mean; the largest distance to it,
+// widened by 1e-12 of itself against rounding).
+double group_sphere(const Eigen::MatrixXd& points, Eigen::Index begin, Eigen::Index end,
+                    double* centre) {
+  for (int i = 0; i < 3; ++i) centre[i] = points.col(i).segment(begin, end - begin).mean();
+  double r2 = 0.0;
+  for (Eigen::Index j = begin; j < end; ++j) {
+    const double d[3] = {points(j, 0) - centre[0], points(j, 1) - centre[1],
+                         points(j, 2) - centre[2]};
+    r2 = std::max(r2, dot(d, d));
+  }
+  return std::sqrt(r2) * (1.0 + 1e-12);
+}
+
+// The group of rows from begin: the most consecutive rows, up to kGroup and before limit, whose
+// sphere's radius stays ≤ max_radius (one row at least); its end into *end, centre and radius.
+double next_group(const Eigen::MatrixXd& points, Eigen::Index begin, Eigen::Index limit,
+                  double max_radius, double* centre, Eigen::Index* end) {
+  double radius = group_sphere(points, begin, begin + 1, centre);
+  *end = begin + 1;
+  for (Eigen::Index e = begin + 2; e <= std::min(limit, begin + kGroup); ++e) {
+    double c[3];
+    const double r = group_sphere(points, begin, e, c);
+    if (r > max_radius) break;
+    std::copy(c, c + 3, centre);
+    radius = r;
+    *end = e;
+  }
+  return radius;
+}
+
+// One point's sums from its group's lists.
+PointSums group_point(const std::vector<BodyIntegral::Cluster>& clusters,
+                      const std::vector<Triangle>& tris, const Radial& k, const Rules& rule,
+                      const double* y, bool want_b, const Budget& budget, const GroupLists& g) {
+  PointSums s;
+  const auto direct = [&](const BodyIntegral::Cluster& c) {
+    direct_range(tris, c.begin, c.end, k, rule, y, want_b, true, &s);
+  };
+  for (int id : g.taken) {  // by the bounds at y's own distance (≥ the group's, up to rounding)
+    const BodyIntegral::Cluster& c = clusters[id];
+    const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
+    const Bounds e = cluster_bounds(c, k.eps, std::sqrt(dot(d, d)) - c.rho, want_b);
+    if (e.valid)
+      take_cluster(c, k.eps, y, want_b, e, &s);
+    else  // invalid at y by rounding only: its triangles one by one
+      direct(c);
+  }
+  for (int id : g.leaves) direct(clusters[id]);
+  traverse(clusters, tris, k, rule, y, want_b, budget, g.open, &s);
   return s;
 }
 
@@ -724,44 +1013,196 @@ struct VjpPoint {
   double S = 0.0, err = 0.0;
 };
 
-void traverse_vjp(const std::vector<BodyIntegral::Cluster>& clusters, const std::vector<int>& order,
-                  const std::vector<Triangle>& tris, const Radial& k, const Rules& rule,
-                  const double* y, double w, double budget, double theta, VjpPoint* out) {
-  const double c_k = tree_constants().c_k;
+// What the surface product's traversals read: the clusters, the tree's triangle order and the
+// triangles in it, the rules.
+struct VjpView {
+  const std::vector<BodyIntegral::Cluster>& clusters;
+  const std::vector<int>& order;
+  const std::vector<Triangle>& tris;
+  const Radial& k;
+  const Rules& rule;
+};
+
+// Cluster id's expansion into y's share (weight w), g its bound per unit area at y.
+void take_vjp_cluster(const VjpView& v, int id, const double* y, double w, double g,
+                      VjpPoint* out) {
+  const BodyIntegral::Cluster& c = v.clusters[id];
+  std::array<double, kLocal> L{};
+  out->S += local_share(c, v.k.eps, y, w, L.data());
+  out->err += c.area * g;
+  out->clusters.emplace_back(id, L);
+}
+
+// The triangles of cluster c one by one into y's share.
+void direct_vjp(const VjpView& v, const BodyIntegral::Cluster& c, const double* y, double w,
+                VjpPoint* out) {
+  for (int j = c.begin; j < c.end; ++j) {
+    double ct[3];
+    corner_moments(v.tris[j], v.k, v.rule, y, ct);
+    out->S += ct[0] + ct[1] + ct[2];
+    out->tris.push_back({v.order[j], {w * ct[0], w * ct[1], w * ct[2]}});
+  }
+}
+
+// Whether a cluster at z enters the product by its expansion: valid, and its bound g per unit
+// area within the budget (or, theta > 0, ρ ≤ θ z).
+bool vjp_fits(const BodyIntegral::Cluster& c, const Bounds& e, double z, double budget,
+              double theta) {
+  return e.valid && (theta > 0.0 ? c.rho <= theta * z : e.g <= budget);
+}
+
+// y's share of the surface product below the nodes `start`, added to out.
+void traverse_vjp(const VjpView& v, const double* y, double w, double budget, double theta,
+                  const std::vector<int>& start, VjpPoint* out) {
+  int stack[2 * kBvhMaxDepth + 2];
+  for (int root : start) {
+    int top = 0;
+    stack[top++] = root;
+    while (top > 0) {
+      const int id = stack[--top];
+      const BodyIntegral::Cluster& c = v.clusters[id];
+      const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
+      const double z = std::sqrt(dot(d, d)) - c.rho;
+      const Bounds e = cluster_bounds(c, v.k.eps, z, true);
+      if (vjp_fits(c, e, z, budget, theta)) {
+        take_vjp_cluster(v, id, y, w, e.g, out);
+      } else if (c.left >= 0) {
+        stack[top++] = c.left + 1;
+        stack[top++] = c.left;
+      } else {
+        direct_vjp(v, c, y, w, out);
+      }
+    }
+  }
+}
+
+// y's share by the whole tree (out cleared first).
+void traverse_vjp(const VjpView& v, const double* y, double w, double budget, double theta,
+                  VjpPoint* out) {
   out->tris.clear();
   out->clusters.clear();
   out->S = out->err = 0.0;
-  int stack[2 * kBvhMaxDepth + 2];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const int id = stack[--top];
-    const BodyIntegral::Cluster& c = clusters[id];
+  traverse_vjp(v, y, w, budget, theta, {0}, out);
+}
+
+// y's share from its group's lists (out cleared first); a taken cluster by its bound at y's own
+// distance (its triangles one by one where rounding makes it invalid there).
+void group_vjp(const VjpView& v, const double* y, double w, double budget, const GroupLists& g,
+               VjpPoint* out) {
+  out->tris.clear();
+  out->clusters.clear();
+  out->S = out->err = 0.0;
+  for (int id : g.taken) {
+    const BodyIntegral::Cluster& c = v.clusters[id];
     const double d[3] = {c.p[0] - y[0], c.p[1] - y[1], c.p[2] - y[2]};
-    const double z = std::sqrt(dot(d, d)) - c.rho;
-    if (z > 0.0 && k.eps <= kTreeX * z) {
-      const double z2 = z * z, eg = c_k * c.rho * c.rho * c.rho / (z2 * z2 * z2 * z);
-      if (theta > 0.0 ? c.rho <= theta * z : eg <= budget) {
-        std::array<double, kLocal> L{};
-        out->S += local_share(c, k.eps, y, w, L.data());
-        out->err += c.area * eg;
-        out->clusters.emplace_back(id, L);
-        continue;
-      }
-    }
-    if (c.left >= 0) {
-      stack[top++] = c.left + 1;
-      stack[top++] = c.left;
-      continue;
-    }
-    for (int j = c.begin; j < c.end; ++j) {
-      const Triangle& tri = tris[j];
-      double ct[3];
-      corner_moments(tri, k, rule, y, ct);
-      out->S += ct[0] + ct[1] + ct[2];
-      out->tris.push_back({order[j], {w * ct[0], w * ct[1], w * ct[2]}});
-    }
+    const Bounds e = cluster_bounds(c, v.k.eps, std::sqrt(dot(d, d)) - c.rho, true);
+    if (e.valid)
+      take_vjp_cluster(v, id, y, w, e.g, out);
+    else
+      direct_vjp(v, c, y, w, out);
   }
+  for (int id : g.leaves) direct_vjp(v, v.clusters[id], y, w, out);
+  traverse_vjp(v, y, w, budget, 0.0, g.open, out);
+}
+
+// What one evaluation by the tree reads: the clusters, the triangles in the tree's order, the
+// rules, whether ∂J/∂y is wanted, τ and |∂Ω|.
+struct TreeView {
+  const std::vector<BodyIntegral::Cluster>& clusters;
+  const std::vector<Triangle>& tris;
+  const Radial& k;
+  const Rules& rule;
+  bool want_b;
+  double tau, area;
+};
+
+// The guesses of J and S a budget is made from, and whether y was on the surface.
+struct Guess {
+  double j = 0.0, s = 0.0;
+  bool surface = false;
+};
+
+// J = Σ + G∞ × the far solid angles (exact off the surface) and the bound of its error.
+double total_j(const Radial& k, const PointSums& s) {
+  return s.J + k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface);
+}
+double error_j(const Radial& k, const PointSums& s) {
+  return s.err_j + (s.on_surface ? k.g_inf * s.err_omega : 0.0);
+}
+
+// A probe's lower bounds of J and S at y (clusters with ρ ≤ z/4 taken).
+Guess probe(const TreeView& t, const double* y) {
+  const PointSums s = traverse(t.clusters, t.tris, t.k, t.rule, y, t.want_b,
+                               Budget{0.0, 3.0 / t.area, 0.0, kProbeTheta});
+  return {total_j(t.k, s) - error_j(t.k, s), s.S - s.err_g, s.on_surface};
+}
+
+// The budget of the guesses (per unit area τ J/(2 |∂Ω|), τ S/(2 |∂Ω|); on the surface, where the
+// far solid angles' estimate enters J, a quarter of J's for it and a quarter for the rest), or
+// none (exact: every triangle).
+Budget make_budget(const TreeView& t, const Guess& g, bool exact) {
+  if (exact) return Budget{0.0, 0.0, 0.0};
+  const double share = g.surface ? 0.25 : 0.5;
+  const double omega = g.surface ? std::min(3.0, share * t.tau * g.j / t.k.g_inf) : 3.0;
+  return Budget{share * t.tau * g.j / t.area, omega / t.area, 0.5 * t.tau * g.s / t.area};
+}
+
+// One point's sums from its group's lists.
+PointSums group_point(const TreeView& t, const double* y, const Budget& budget,
+                      const GroupLists& lists) {
+  return group_point(t.clusters, t.tris, t.k, t.rule, y, t.want_b, budget, lists);
+}
+
+// A point's sums s checked: accepted (its J into *J) when E_J ≤ τ (J̃ − E_J) and, with the
+// gradient, E_g ≤ τ (S̃ − E_g), or when exact; else redone with the budget its own lower bounds
+// give, then over all pairs.
+PointSums settle(const TreeView& t, const double* y, PointSums s, bool exact, double* J) {
+  for (int attempt = 1;; ++attempt) {
+    *J = total_j(t.k, s);
+    const double err = error_j(t.k, s);
+    if (exact || (err <= t.tau * (*J - err) && (!t.want_b || s.err_g <= t.tau * (s.S - s.err_g))))
+      return s;
+    const Guess own{*J - err, s.S - s.err_g, s.on_surface};
+    exact = attempt == 2 || own.j <= 0.0 || (t.want_b && own.s <= 0.0);
+    s = traverse(t.clusters, t.tris, t.k, t.rule, y, t.want_b, make_budget(t, own, exact));
+  }
+}
+
+// A point's share pt checked: accepted when E ≤ τ (S̃ − E) (S̃ = pt->S, without the weight), or
+// when exact; else redone with the budget its own lower bound gives, then over all pairs.
+void settle_vjp(const VjpView& v, const double* y, double w, double tau, double area, bool exact,
+                VjpPoint* pt) {
+  for (int attempt = 1;; ++attempt) {
+    if (exact || pt->err <= tau * (pt->S - pt->err)) return;
+    const double own = pt->S - pt->err;
+    exact = attempt == 2 || own <= 0.0;
+    traverse_vjp(v, y, w, exact ? 0.0 : 0.5 * tau * own / area, 0.0, pt);
+  }
+}
+
+// The corner sums Σ_k w_k ∫_t k λ_a dA of every triangle (3 per triangle, in the surface's
+// order): the threads' direct sums (acc) and their clusters' expansion coefficients (loc, kLocal
+// per cluster) pushed to the clusters' triangles, summed in thread order.
+std::vector<double> corner_sums(const VjpView& v, const std::vector<std::vector<double>>& acc,
+                                const std::vector<std::vector<double>>& loc) {
+  const std::size_t count = v.tris.size(), nodes = v.clusters.size();
+  std::vector<double> sum(3 * count, 0.0), local(kLocal);
+  for (const std::vector<double>& a : acc)
+    for (std::size_t i = 0; i < a.size(); ++i) sum[i] += a[i];
+  for (std::size_t id = 0; id < nodes; ++id) {
+    std::fill(local.begin(), local.end(), 0.0);
+    bool any = false;
+    for (const std::vector<double>& l : loc)
+      for (int i = 0; i < kLocal && !l.empty(); ++i) {
+        local[i] += l[kLocal * id + i];
+        any = any || l[kLocal * id + i] != 0.0;
+      }
+    if (!any) continue;
+    const BodyIntegral::Cluster& cl = v.clusters[id];
+    for (int j = cl.begin; j < cl.end; ++j)
+      push_local(v.tris[j], cl.p, local.data(), &sum[3 * v.order[j]]);
+  }
+  return sum;
 }
 
 void validate(const BodyIntegralOptions& o) {
@@ -863,6 +1304,31 @@ void check_closed(const std::vector<int>& corners) {
   }
 }
 
+// Each triangle's coplanar neighbours (Triangle::twin): across edge (a, b) the one triangle with
+// the edge (b, a), when their unit normals agree to 1e-13 and its centroid lies in the plane to
+// 1e-13 of the edges' length; else −1.
+void find_twins(const std::vector<int>& corners, std::vector<Triangle>* tris) {
+  std::vector<std::array<int, 4>> edges;  // (a, b, triangle, edge)
+  for (std::size_t t = 0; t < tris->size(); ++t)
+    for (int e = 0; e < 3; ++e)
+      edges.push_back({corners[3 * t + e], corners[3 * t + (e + 1) % 3], static_cast<int>(t), e});
+  std::sort(edges.begin(), edges.end());
+  for (const auto& ed : edges) {
+    Triangle& t = (*tris)[ed[2]];
+    t.twin[ed[3]] = -1;
+    const std::array<int, 4> lo{ed[1], ed[0], -1, -1}, hi{ed[1], ed[0] + 1, -1, -1};
+    const auto first = std::lower_bound(edges.begin(), edges.end(), lo);
+    const auto last = std::lower_bound(edges.begin(), edges.end(), hi);
+    if (last - first != 1) continue;
+    const Triangle& s = (*tris)[(*first)[2]];
+    const double size = t.len[0] + t.len[1] + t.len[2];
+    const double off[3] = {s.c[0] - t.c[0], s.c[1] - t.c[1], s.c[2] - t.c[2]};
+    bool flat = std::abs(dot(t.n, off)) <= 1e-13 * size;
+    for (int i = 0; i < 3; ++i) flat = flat && std::abs(s.n[i] - t.n[i]) <= 1e-13;
+    if (flat) t.twin[ed[3]] = (*first)[2];
+  }
+}
+
 }  // namespace
 
 double radial_g(double r, double epsilon, double alpha) {
@@ -896,6 +1362,7 @@ BodyIntegral::BodyIntegral(const TriangleSurface& surface, const BodyIntegralOpt
       throw InvalidArgument("body integral: triangle " + std::to_string(t) + " has zero area");
   }
   check_closed(corners_);
+  find_twins(corners_, &triangles_);
   gauss_legendre_unit(options.angle_points, &rule_x_, &rule_w_);
   if (options.tolerance > 0.0) {
     const Bvh bvh = build_bvh(surface);
@@ -904,7 +1371,14 @@ BodyIntegral::BodyIntegral(const TriangleSurface& surface, const BodyIntegralOpt
     for (const BvhNode& node : bvh.nodes)
       clusters_.push_back(make_cluster(triangles_, order_, node));
     total_area_ = clusters_[0].area;
-    for (int t : order_) ordered_.push_back(triangles_[t]);
+    group_radius_ = kGroupRadius * clusters_[0].rho;
+    std::vector<int> position(order_.size());
+    for (std::size_t j = 0; j < order_.size(); ++j) position[order_[j]] = static_cast<int>(j);
+    for (int t : order_) {
+      ordered_.push_back(triangles_[t]);
+      for (int& twin : ordered_.back().twin)
+        if (twin >= 0) twin = position[twin];
+    }
   }
 }
 
@@ -926,7 +1400,8 @@ void BodyIntegral::evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* valu
   for (Eigen::Index j = 0; j < m; ++j) {
     const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
     PointSums s;  // Σ ω_t: near (exact), far (the rule's)
-    for (const Triangle& t : triangles_) direct_triangle(t, k, rule, y, want_b, coulomb, &s);
+    direct_range(triangles_, 0, static_cast<int>(triangles_.size()), k, rule, y, want_b, coulomb,
+                 &s);
     double J = s.J;
     if (coulomb) J += k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface);
     (*value)[j] = J;
@@ -940,55 +1415,48 @@ void BodyIntegral::evaluate_tree(const Eigen::MatrixXd& points, Eigen::VectorXd*
   const Eigen::Index m = points.rows();  // value and grad sized by evaluate()
   const Radial k(options_.epsilon, options_.alpha);
   const Rules rule{rule_x_, rule_w_, options_.panel_width};
-  const bool want_b = grad != nullptr;
-  const double tau = options_.tolerance, area = total_area_;
-  constexpr Eigen::Index kBlock = 64;
+  const TreeView t{clusters_, ordered_, k, rule, grad != nullptr, options_.tolerance, total_area_};
   const Eigen::Index blocks = (m + kBlock - 1) / kBlock;
-  // Per block of points in order: the budget of a point from the previous one's J and S (for
-  // the first, from a probe's: clusters with ρ ≤ z/4 taken, J̃ − E and S̃ − E), per unit area
-  // τ J/(2 |∂Ω|), likewise for g; the far solid angles' total bound below 3 (< 2π with the far
-  // rules' own error: the winding number rounds right; on the surface, where their estimate
-  // enters J, below τ J/(4 G∞) and J's own τ J/(4 |∂Ω|)). Accepted when the bounds give
-  // E_J ≤ τ (J̃ − E_J) ≤ τ J and E_g ≤ τ (S̃ − E_g) ≤ τ S; else redone with the point's own
-  // budget, then with none (every triangle).
+  // Per block of points in order, per group of kGroup rows in it: one budget for the group from
+  // the previous group's smallest J and S (for a block's first, from a probe at its first point:
+  // clusters with ρ ≤ z/4 taken, J̃ − E and S̃ − E), per unit area τ J/(2 |∂Ω|), likewise for g;
+  // the far solid angles' total bound below 3 (< 2π with the far rules' own error: the winding
+  // number rounds right; on the surface, where their estimate enters J, below τ J/(4 G∞) and
+  // J's own τ J/(4 |∂Ω|)). One traversal decides what the group's points share (group_lists),
+  // each point the rest. A point is accepted when the bounds give E_J ≤ τ (J̃ − E_J) ≤ τ J and
+  // E_g ≤ τ (S̃ − E_g) ≤ τ S; else redone with its own budget, then with none (every triangle).
 #pragma omp parallel for schedule(static) num_threads(resolve_threads(options_.threads))
   for (Eigen::Index b = 0; b < blocks; ++b) {
-    double j_guess = 0.0, s_guess = 0.0;
-    bool surface = false;  // the last traversal's y was on the surface
-    for (Eigen::Index j = b * kBlock; j < std::min(m, (b + 1) * kBlock); ++j) {
-      const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
-      PointSums s;
-      double J = 0.0;
-      if (j_guess <= 0.0) {  // a block's first point: a probe's lower bounds as the guesses
-        s = traverse(clusters_, ordered_, k, rule, y, want_b,
-                     Budget{0.0, 3.0 / area, 0.0, kProbeTheta});
-        j_guess = s.J + k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface) -
-                  s.err_j - (s.on_surface ? k.g_inf * s.err_omega : 0.0);
-        s_guess = s.S - s.err_g;
-        surface = s.on_surface;
+    Guess guess;
+    GroupLists lists;
+    const Eigen::Index block_end = std::min(m, (b + 1) * kBlock);
+    for (Eigen::Index g = b * kBlock, end; g < block_end; g = end) {
+      double centre[3];
+      const double radius = next_group(points, g, block_end, group_radius_, centre, &end);
+      if (guess.j <= 0.0) {  // a block's first group: a probe's lower bounds as the guesses
+        const double y[3] = {points(g, 0), points(g, 1), points(g, 2)};
+        guess = probe(t, y);
       }
-      for (int attempt = 0; attempt < 3; ++attempt) {
-        const bool exact = attempt == 2 || j_guess <= 0.0 || (want_b && s_guess <= 0.0);
-        // On the surface the far solid angles' estimate enters J: half the budget for it.
-        const double share = surface ? 0.25 : 0.5;
-        const double omega = surface ? std::min(3.0, share * tau * j_guess / k.g_inf) : 3.0;
-        const Budget budget =
-            exact ? Budget{0.0, 0.0, 0.0}
-                  : Budget{share * tau * j_guess / area, omega / area, 0.5 * tau * s_guess / area};
-        s = traverse(clusters_, ordered_, k, rule, y, want_b, budget);
-        surface = s.on_surface;
-        J = s.J + k.g_inf * far_solid_angle(s.near_omega, s.far_omega, s.on_surface);
-        const double err = s.err_j + (s.on_surface ? k.g_inf * s.err_omega : 0.0);
-        if (exact || (err <= tau * (J - err) && (!want_b || s.err_g <= tau * (s.S - s.err_g))))
-          break;
-        j_guess = J - err;
-        s_guess = s.S - s.err_g;
+      const bool exact = guess.j <= 0.0 || (t.want_b && guess.s <= 0.0);
+      const Budget budget = make_budget(t, guess, exact);
+      group_lists(
+          t.clusters, centre, radius,
+          [&](const Cluster& c, double z) {
+            return cluster_fits(c, cluster_bounds(c, k.eps, z, t.want_b), z, budget);
+          },
+          &lists);
+      Guess next{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                 false};
+      for (Eigen::Index j = g; j < end; ++j) {
+        const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
+        double J;
+        const PointSums s = settle(t, y, group_point(t, y, budget, lists), exact, &J);
+        next = {std::min(next.j, J), std::min(next.s, s.S), next.surface || s.on_surface};
+        (*value)[j] = J;
+        if (grad)
+          for (int i = 0; i < 3; ++i) (*grad)(j, i) = s.g[i];
       }
-      j_guess = J;
-      s_guess = s.S;
-      (*value)[j] = J;
-      if (grad)
-        for (int i = 0; i < 3; ++i) (*grad)(j, i) = s.g[i];
+      guess = next;
     }
   }
 }
@@ -1038,15 +1506,15 @@ Eigen::MatrixXd BodyIntegral::surface_vjp_tree(const Eigen::MatrixXd& points,
                                                const Eigen::VectorXd& weights) const {
   const Radial k(options_.epsilon, options_.alpha);
   const Rules rule{rule_x_, rule_w_, options_.panel_width};
+  const VjpView view{clusters_, order_, ordered_, k, rule};
   const int threads = resolve_threads(options_.threads);
   const std::size_t count = triangles_.size(), nodes = clusters_.size();
-  const double tau = options_.tolerance;
-  constexpr Eigen::Index kBlock = 64;
   const Eigen::Index m = points.rows(), blocks = (m + kBlock - 1) / kBlock;
   // Per thread: the triangles' corner sums and the clusters' coefficients, summed in thread
-  // order. A point's budget (per unit area, of every corner sum's error) τ S/(2 |∂Ω|) from the
-  // previous point's S (a probe's S̃ − E for a block's first, as in evaluate_tree), accepted when E
-  // ≤ τ (S̃ − E): then Σ_{t,a} |error of w ∫_t k λ_a| ≤ τ |w| S, S = ∫_∂Ω k dA; else redone with its
+  // order. Per group of rows (as in evaluate_tree) one budget (per unit area, of every corner
+  // sum's error) τ S/(2 |∂Ω|) from the previous group's smallest S (a probe's S̃ − E for a
+  // block's first), one traversal for what its points share; a point is accepted when E ≤
+  // τ (S̃ − E): then Σ_{t,a} |error of w ∫_t k λ_a| ≤ τ |w| S, S = ∫_∂Ω k dA; else redone with its
   // own budget, then over all pairs.
   std::vector<std::vector<double>> acc(threads), loc(threads);
 #pragma omp parallel num_threads(threads)
@@ -1056,50 +1524,45 @@ Eigen::MatrixXd BodyIntegral::surface_vjp_tree(const Eigen::MatrixXd& points,
     c.assign(3 * count, 0.0);
     L.assign(kLocal * nodes, 0.0);
     VjpPoint pt;
+    GroupLists lists;
 #pragma omp for schedule(static)
     for (Eigen::Index b = 0; b < blocks; ++b) {
       double s_guess = 0.0;
-      for (Eigen::Index j = b * kBlock; j < std::min(m, (b + 1) * kBlock); ++j) {
-        const double wj = weights[j];
-        if (wj == 0.0) continue;
-        const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
-        if (s_guess <= 0.0) {  // a block's first point: a probe's lower bound as the guess
-          traverse_vjp(clusters_, order_, ordered_, k, rule, y, wj, 0.0, kProbeTheta, &pt);
+      const Eigen::Index block_end = std::min(m, (b + 1) * kBlock);
+      for (Eigen::Index g = b * kBlock, end; g < block_end; g = end) {
+        double centre[3];
+        const double radius = next_group(points, g, block_end, group_radius_, centre, &end);
+        if (s_guess <= 0.0) {  // a block's first group: a probe's lower bound as the guess
+          const double y[3] = {points(g, 0), points(g, 1), points(g, 2)};
+          traverse_vjp(view, y, 1.0, 0.0, kProbeTheta, &pt);
           s_guess = pt.S - pt.err;
         }
-        for (int attempt = 0; attempt < 3; ++attempt) {
-          const bool exact = attempt == 2 || s_guess <= 0.0;
-          traverse_vjp(clusters_, order_, ordered_, k, rule, y, wj,
-                       exact ? 0.0 : 0.5 * tau * s_guess / total_area_, 0.0, &pt);
-          if (exact || pt.err <= tau * (pt.S - pt.err)) break;
-          s_guess = pt.S - pt.err;
+        const double budget =
+            s_guess > 0.0 ? 0.5 * options_.tolerance * s_guess / total_area_ : 0.0;
+        group_lists(
+            clusters_, centre, radius,
+            [&](const Cluster& cl, double z) {
+              return vjp_fits(cl, cluster_bounds(cl, k.eps, z, true), z, budget, 0.0);
+            },
+            &lists);
+        double next = std::numeric_limits<double>::infinity();
+        for (Eigen::Index j = g; j < end; ++j) {
+          const double wj = weights[j];
+          if (wj == 0.0) continue;
+          const double y[3] = {points(j, 0), points(j, 1), points(j, 2)};
+          group_vjp(view, y, wj, budget, lists, &pt);
+          settle_vjp(view, y, wj, options_.tolerance, total_area_, budget == 0.0, &pt);
+          next = std::min(next, pt.S);
+          for (const auto& t : pt.tris)
+            for (int a = 0; a < 3; ++a) c[3 * t.first + a] += t.second[a];
+          for (const auto& q : pt.clusters)
+            for (int i = 0; i < kLocal; ++i) L[kLocal * q.first + i] += q.second[i];
         }
-        s_guess = pt.S;
-        for (const auto& t : pt.tris)
-          for (int a = 0; a < 3; ++a) c[3 * t.first + a] += t.second[a];
-        for (const auto& q : pt.clusters)
-          for (int i = 0; i < kLocal; ++i) L[kLocal * q.first + i] += q.second[i];
+        if (next < std::numeric_limits<double>::infinity()) s_guess = next;
       }
     }
   }
-  std::vector<double> sum(3 * count, 0.0), local(kLocal);
-  for (int th = 0; th < threads; ++th) {
-    if (acc[th].empty()) continue;
-    for (std::size_t i = 0; i < 3 * count; ++i) sum[i] += acc[th][i];
-  }
-  for (std::size_t id = 0; id < nodes; ++id) {
-    std::fill(local.begin(), local.end(), 0.0);
-    bool any = false;
-    for (int th = 0; th < threads; ++th)
-      for (int i = 0; i < kLocal && !loc[th].empty(); ++i) {
-        local[i] += loc[th][kLocal * id + i];
-        any = any || loc[th][kLocal * id + i] != 0.0;
-      }
-    if (!any) continue;
-    const Cluster& cl = clusters_[id];
-    for (int j = cl.begin; j < cl.end; ++j)
-      push_local(ordered_[j], cl.p, local.data(), &sum[3 * order_[j]]);
-  }
+  const std::vector<double> sum = corner_sums(view, acc, loc);
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(point_count_, 3);
   for (std::size_t t = 0; t < count; ++t)
     for (int a = 0; a < 3; ++a)

@@ -18,7 +18,8 @@
 // Near triangles (|y − c_t| < near_ratio · R_t, c_t the centroid and R_t the largest distance
 // from it to a vertex) are integrated in polar coordinates about the foot of y in the
 // triangle's plane: the radial integral in closed form, the angle over each edge's wedge by
-// composite Gauss–Legendre in u (tan θ = sinh u); the first moment of the kernel, which the
+// composite Gauss–Legendre in u (tan θ = sinh u; a wedge on an edge shared with a coplanar near
+// neighbour is left out, the two cancel); the first moment of the kernel, which the
 // hat functions need, as a line integral over the edges (∫_t k (x − p) dA = ∮ K₁(r) ν dl,
 // K₁(r) = ∫₀^r s k(s) ds). The other triangles by Dunavant's symmetric 16-point rule (degree 8), or
 // beyond 4 · near_ratio · R_t Radon's 7-point rule (degree 5); for α ≥ 3.5 its point-charge part
@@ -31,7 +32,8 @@
 //     Σ_t ∫_t n_t·f(x − y) dA ≈ Σ_{m ≤ 2} (1/m!) D^m f(p − y) : Σ_t n_t ⊗ ∫_t (x − p)^⊗m dA,
 //
 // (the tail f = d H(|d|), H = (G∞ − G)/r³; the solid angle's d/r³; ∂J/∂y's n k(r)), accepted
-// when a proved bound of its remainder fits a per-point budget (docs/formulation.md §2.8):
+// when it lies beyond its triangles' near radii and a proved bound of its remainder fits a
+// budget (docs/formulation.md §2.8; one traversal per group of nearby consecutive points):
 // |J̃ − J| ≤ τ J and ‖∂J̃/∂y − ∂J/∂y‖ ≤ τ ∫_∂Ω k dA against the same rules summed over all
 // pairs; in surface_vjp the corner sums' errors add up to at most τ Σ_k |w_k| ∫_∂Ω k(|y_k − x|) dA.
 
@@ -85,7 +87,9 @@ class BodyIntegral {
 
   /// J(y_k) for the rows y_k of `points` (M by 3) into `value` (M); with `grad` non-null also
   /// ∂J/∂y_k (M by 3). With a tolerance, each point's result depends on the points before it in
-  /// its block of 64 rows (their values set its budget), not on the threads.
+  /// its block of 64 rows (their values set its budget), not on the threads; consecutive rows
+  /// close together (up to 8 within 1/32 of the surface's bounding radius, as a cell's Gauss
+  /// points) share one traversal of the tree, so order the rows by place for speed.
   void evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* value,
                 Eigen::MatrixXd* grad = nullptr) const;
 
@@ -112,6 +116,9 @@ class BodyIntegral {
     double nu[3][3];    // in-plane outward edge normals, τ_e × n
     double len[3];      // edge lengths
     double glam[3][3];  // in-plane gradients of the hat functions λ_a
+    // Across edge e, the coplanar neighbour's index in the same list of triangles (−1: none,
+    // or not coplanar): where both are near, their wedges on the edge cancel.
+    int twin[3];
   };
 
   /// A node of the tree: its triangles' moments about p, n-weighted (M) and plain (m):
@@ -120,6 +127,7 @@ class BodyIntegral {
   struct Cluster {
     double p[3];     // the area-weighted centroid
     double rho;      // the largest |v − p| over its triangles' corners
+    double reach;    // the largest near radius (near_ratio · R_t) of its triangles
     double area;     // Σ A_t
     double m0[3];    // M0
     double m1[9];    // M1, row-major
@@ -144,6 +152,7 @@ class BodyIntegral {
   std::vector<int> order_;               // triangle ids grouped by leaf
   std::vector<Triangle> ordered_;        // triangles_[order_[j]] (contiguous leaves)
   double total_area_ = 0.0;
+  double group_radius_ = 0.0;  // the largest radius of a group of points sharing a traversal
 
   void evaluate_tree(const Eigen::MatrixXd& points, Eigen::VectorXd* value,
                      Eigen::MatrixXd* grad) const;
