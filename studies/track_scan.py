@@ -4,7 +4,7 @@ the same run against the clean, complete target in the body's frame).
 
     PYTHONPATH=build/python /usr/bin/python3 studies/track_scan.py [--seed S] [--view full|half]
         [--max-iter N] [--rounds K] [--out DIR] [--clean-rms R]
-        [--joint [--staged] [--start align|ladder|true|perturbed] [--cap-stages K]
+        [--joint [--staged] [--start align|ladder|true|perturbed|fixture] [--cap-stages K]
                  [--first-eps F] [--algorithm A] [--pose-method joint|projection]]
 
 1. The view. The finger of data/scenes/finger.json, deformed by m*(X) = -1.5 X3 on a 2x finer
@@ -30,6 +30,9 @@ the same run against the clean, complete target in the body's frame).
    the initial control and its far bound (ladder_align), the lowest rho kept, with that control
    as the start; --hold-first: the first stage with pose_move 0.001 (the pose nearly held while
    the control bends; --hold-all: every stage so); --distance visible: the joint runs' distance (the camera the pose's).
+   --start fixture: align against the body at rest with the fixture (the table under the
+   finger, known in the body's frame: synthetic.table_plane) and the table the clean-up found
+   in the scan: the pose keeps the table's tilt and height (docs/formulation.md section 8.12).
    --start perturbed: a calibrated camera's pose (the true one rotated by 3 degrees about a
    random axis through the body's centre and moved by 0.02 L; also the crop's pose);
    --pose-method projection: the pose found inside every evaluation (docs/formulation.md
@@ -93,7 +96,11 @@ def true_nodes(scene_nodes, fine_deformed=None):
 node_errors = synthetic_scan.node_errors
 
 
-def clean_scan(scan, L, log, plane=0.01):
+def clean_scan(scan, L, log, plane=0.01, found=None):
+    """The scan without its table and stray points; the table's plane (find_dominant_plane)
+    into found["table"] if given."""
+    if found is not None:
+        found["table"] = softhd.find_dominant_plane(scan, distance=plane * L)
     off_table = softhd.remove_dominant_plane(scan, distance=plane * L)
     kept = scan[off_table]
     inliers = softhd.remove_statistical_outliers(kept, k=20, ratio=2.0)
@@ -182,6 +189,9 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         off = rotation_error(pose["matrix"][:3, :3], P_true)
         log(f"joint: starting from a calibrated camera's pose: the true one rotated by {deg:g} deg "
             f"about a random axis and moved by {frac:g} L ({off:.3f} deg)")
+    elif a.start == "fixture":  # the table's tilt and height from the fixture (section 8.12)
+        pose = softhd.align(nodes, scan, distance="scan_to_body", fixture=a.fixture,
+                            table=a.found["table"])
     else:
         pose = softhd.align(nodes, scan, distance="scan_to_body")
     log(f"joint: align {pose['status']}, rotation error "
@@ -226,6 +236,9 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         j["mesh"]["file"] = os.path.join(ROOT, "data/meshes/finger.msh")
         j["target"] = {"kind": "cloud", "file": scan_file, "frame": "camera", "pose": pose_file,
                        "distance": a.distance, "surface": True, "cap": cap}
+        if a.fixture_constraint:  # the projection keeps the start's tilt and height
+            j["target"]["fixture"] = {"normal": [float(x) for x in a.fixture[0]],
+                                      "offset": float(a.fixture[1])}
         if a.pose_uncertainty:
             j["target"]["pose_uncertainty"] = {"degrees": a.pose_uncertainty[0],
                                                "length": a.pose_uncertainty[1] * L}
@@ -283,10 +296,12 @@ def main():
     ap.add_argument("--pose-move", type=float, default=None,
                     help="--joint: the pose's move limit as a fraction of the control's")
     ap.add_argument("--algorithm", default=None, help="--joint: the optimiser (default mma)")
-    ap.add_argument("--start", choices=["align", "ladder", "true", "perturbed"], default="align",
+    ap.add_argument("--start", choices=["align", "ladder", "true", "perturbed", "fixture"],
+                    default="align",
                     help="--joint: the start pose: align's at rest, ladder_align's (against bodies "
                          "under uniform controls), (a diagnostic) the true one, or a calibrated "
-                         "camera's (the true one off by 3 deg about a random axis and 0.02 L)")
+                         "camera's (the true one off by 3 deg about a random axis and 0.02 L), "
+                         "or align's at rest with the fixture (the table's tilt and height)")
     ap.add_argument("--method", choices=["exact", "tree"], default=None,
                     help="--joint: the distance's pair sums (softhd.optimise's method; default "
                          "tree)")
@@ -299,6 +314,9 @@ def main():
                     help="--joint: the start pose's uncertainty (the target's pose_uncertainty: "
                          "degrees, and a length as a fraction of L); with --pose-method "
                          "projection")
+    ap.add_argument("--fixture-constraint", action="store_true",
+                    help="--pose-method projection: the target's \"fixture\" (the table under "
+                         "the finger): the pose found keeps the start pose's tilt and height")
     ap.add_argument("--pose-method", choices=["joint", "projection"], default=None,
                     help="--joint: how the pose is refined (softhd.optimise's pose_method; "
                          "default joint)")
@@ -336,7 +354,9 @@ def main():
     log(f"view: {len(scan)} points in the camera's frame: {info['kept'] - info['table']} of the "
         f"body, {info['table']} of the table, {info['outliers']} outliers; L = {L:.4g}")
 
-    scan = clean_scan(scan, L, log, a.plane)
+    a.found = {}
+    a.fixture = synthetic_scan.table_plane(deformed)  # the table in the body's frame
+    scan = clean_scan(scan, L, log, a.plane, a.found)
     areas = softhd.area_weights(scan, "delaunay")
     u = np.zeros_like(nodes)
     a.truth = truth
@@ -380,7 +400,7 @@ def main():
     log(f"(L = {L:.4g}; at rest: rms {node_errors(nodes, 0 * u, truth)[1]:.4g})")
     if a.joint:
         log(f"RESULT seed {a.seed} view {a.view} start {a.start} method "
-            f"{a.pose_method or 'joint'} pose_move {a.pose_move} hold "
+            f"{a.pose_method or 'joint'}{' fixture' if a.fixture_constraint else ''} pose_move {a.pose_move} hold "
             f"{'all' if a.hold_all else 'first' if a.hold_first else 'none'}: node rms "
             f"{s_rms:.4g} ({s_rms / L * 100:.3g} % L, {s_rms / c_rms:.2f}x clean), pose "
             f"{a.final_pose[0]:.3f} deg {a.final_pose[1] * 100:.3g} % L, optimise "

@@ -106,7 +106,8 @@ double CoverageScore::value(const Pose& Q) const {
 }
 
 size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double size,
-                        const AlignOptions& options, std::vector<LocalResult>* refined) {
+                        const AlignOptions& options, const FixtureConstraint* fixture,
+                        std::vector<LocalResult>* refined) {
   std::vector<LocalResult>& r = *refined;
   if (r.size() < 2) return 0;
   std::vector<double> score(r.size());
@@ -121,7 +122,7 @@ size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double s
       for (size_t k = 0; k < r.size(); ++k) {
         int iterations = 0;
         fitted[k] = nearest_refinement(nearest, body.points(), scan.points(), r[k].pose.inverse(),
-                                       serial, size, &iterations);
+                                       serial, fixture, size, &iterations);
       }
       for (size_t k = 0; k < r.size(); ++k) r[k].pose = fitted[k].inverse();
     }
