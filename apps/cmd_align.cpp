@@ -74,6 +74,11 @@ options:
                     --table (required) on this one, so only the rotation about the table's
                     normal (--rotations angles in the global start) and the shift along it
                     are searched and refined; rigid only (docs/formulation.md section 8.12)
+  --clamp B1,B2,B3,S1,S2,S3
+                    with --fixture, the clamp's side: B the direction from the body's centre
+                    to its clamped end (body frame), S the direction that end is seen in
+                    (scan frame, e.g. -1,0,0: the image's left); poses that turn B more than
+                    90 degrees from S (on the table) are not tried
   --inlier F        overlap threshold as a fraction of L, 0 < F < 1 (default 0.01)
   --threads T       OpenMP threads (default: all)
   --json            print pose.json's object instead of the one-line summary
@@ -215,6 +220,21 @@ int run_align(const std::vector<std::string>& tokens) {
     throw UsageError("--score-cap must be > 0, got " + std::to_string(o.score_truncation));
   const std::optional<std::string> fixture = args.value("--fixture");
   if (fixture) o.fixture = parse_fixture(*fixture);
+  if (const std::optional<std::string> clamp = args.value("--clamp")) {
+    if (!fixture) throw UsageError("--clamp is the fixture's clamp side: give --fixture");
+    std::vector<double> v;
+    std::stringstream in(*clamp);
+    for (std::string item; std::getline(in, item, ',');) v.push_back(parse_number(item, "--clamp"));
+    if (v.size() != 6)
+      throw UsageError("--clamp must be 6 numbers B1,B2,B3,S1,S2,S3, got '" + *clamp + "'");
+    o.fixture->clamp = Eigen::Vector3d(v[0], v[1], v[2]);
+    o.fixture->clamp_seen = Eigen::Vector3d(v[3], v[4], v[5]);
+    try {
+      o.fixture->validate();
+    } catch (const InvalidArgument& e) {
+      throw UsageError(std::string("--clamp: ") + e.what());
+    }
+  }
   const std::optional<std::string> table = args.value("--table");
   const double table_distance = table ? parse_number(*table, "--table") : 0.0;
   if (table && !(table_distance > 0.0))

@@ -15,8 +15,13 @@ scan_to_body, against the body at rest (the scene's mesh nodes), three ways:
   fixture:      the fixture (synthetic.table_plane of the deformed body: the table 1 % L under
                 its lowest point, normal +z) and the table found in the scan; the pose keeps
                 the table's tilt and height throughout,
-  fixture+free: the fixture's pose as the only start (global_start=False) of an unconstrained
+  fixture+clamp: the fixture and the clamp's side: the base (x = 0) seen from the body's centre
+                in the camera's frame, rounded to the nearest of the image's left, right, up or
+                down (a user's hint: "the clamp is on the left"),
+  fixture+clamp, free: that pose as the only start (global_start=False) of an unconstrained
                 refinement: the fixture used as a start, not as a constraint,
+  ladder+fixture+clamp: fixture+clamp against the body under the uniform controls 0, -2.5, -5,
+                -10, -20 (studies/track_scan.py's ladder), the lowest rho kept,
 
 and, as a reference for what the data allow, "fixture, true body": the fixture against the true
 deformed body's nodes (the scene mesh's nodes at m*). Prints one line per alignment: the rotation
@@ -55,6 +60,10 @@ def errors(P, P_true, scan, L, table):
     return rotation_error(P[:3, :3], P_true), shift / L, tilt
 
 
+METHODS = ("free", "fixture", "fixture+clamp", "fixture+clamp, free", "ladder+fixture+clamp",
+           "fixture, true body")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     ap.add_argument("--seeds", type=int, nargs="+", default=list(range(1, 9)))
@@ -73,6 +82,10 @@ def main():
     normal, offset = synthetic.table_plane(deformed)
     fixture = (normal, offset)
     log(f"fixture: the table n.x = {offset:.4g}, n = {normal} (body frame)")
+    ladder = []  # the body under uniform controls 0, -2.5, -5, -10, -20 (track_scan.ladder_align)
+    for m in (0.0, -2.5, -5.0, -10.0, -20.0):
+        u = scene.forward(np.full(scene.num_controls, m)).displacements
+        ladder.append((m, nodes + u))
     rows = []
     for view in a.views:
         for seed in a.seeds:
@@ -83,6 +96,13 @@ def main():
             off = softhd.remove_dominant_plane(scan, distance=a.plane * L)
             kept = scan[off]
             kept = kept[softhd.remove_statistical_outliers(kept, k=20, ratio=2.0)]
+            # The clamp's side: the base (x = 0) seen from the body's centre, in the camera's
+            # frame, rounded to the nearest of the image's left, right, up, down (a user's hint).
+            seen = P_true[:3, :3].T @ np.array([-1.0, 0.0, 0.0])
+            k = int(np.argmax(np.abs(seen[:2])))
+            hint = np.zeros(3)
+            hint[k] = np.sign(seen[k])
+            clamp = (np.array([-1.0, 0.0, 0.0]), hint)
             runs = {}
             t = time.time()
             runs["free"] = softhd.align(nodes, kept, distance="scan_to_body")
@@ -92,20 +112,34 @@ def main():
                                            table=table)
             runs["fixture"]["wall"] = time.time() - t
             t = time.time()
-            runs["fixture+free"] = softhd.align(nodes, kept, distance="scan_to_body",
-                                                global_start=False,
-                                                initial=runs["fixture"]["matrix"])
-            runs["fixture+free"]["wall"] = time.time() - t + runs["fixture"]["wall"]
+            runs["fixture+clamp"] = softhd.align(nodes, kept, distance="scan_to_body",
+                                                 fixture=fixture, table=table, clamp=clamp)
+            runs["fixture+clamp"]["wall"] = time.time() - t
+            t = time.time()
+            runs["fixture+clamp, free"] = softhd.align(nodes, kept, distance="scan_to_body",
+                                                       global_start=False,
+                                                       initial=runs["fixture+clamp"]["matrix"])
+            runs["fixture+clamp, free"]["wall"] = time.time() - t + runs["fixture+clamp"]["wall"]
+            t = time.time()
+            best = None
+            for m, body in ladder:  # the lowest rho over the ladder (track_scan.ladder_align)
+                r = softhd.align(body, kept, distance="scan_to_body", fixture=fixture,
+                                 table=table, clamp=clamp)
+                if best is None or r["rho"] < best["rho"]:
+                    best = dict(r, m=m)
+            runs["ladder+fixture+clamp"] = best
+            best["wall"] = time.time() - t
             t = time.time()
             runs["fixture, true body"] = softhd.align(true_body, kept, distance="scan_to_body",
-                                                      fixture=fixture, table=table)
+                                                      fixture=fixture, table=table, clamp=clamp)
             runs["fixture, true body"]["wall"] = time.time() - t
             for name, r in runs.items():
                 rot, shift, tilt = errors(r["matrix"], P_true, kept, L, table)
                 rows.append((view, seed, name, rot, shift, tilt, r["wall"], r["overlap"]))
-                log(f"{view} seed {seed} {name:18s}: rotation {rot:8.3f} deg, centroid "
+                log(f"{view} seed {seed} {name:21s}: rotation {rot:8.3f} deg, centroid "
                     f"{100 * shift:7.3f} % L, table tilt {tilt:8.3g} deg, overlap "
-                    f"{r['overlap']:.3f}, {r['wall']:.1f} s")
+                    f"{r['overlap']:.3f}, {r['wall']:.1f} s"
+                    + (f", ladder m = {r['m']:g}" if "m" in r else ""))
     if a.csv:
         with open(a.csv, "w") as f:
             f.write("view,seed,method,rotation_deg,centroid_error_L,table_tilt_deg,seconds,"
@@ -113,13 +147,13 @@ def main():
             for r in rows:
                 f.write(",".join(str(x) for x in r) + "\n")
     log("")
-    log("view  method              median rot  max rot  < 2 deg  < 10 deg  median centroid (% L)")
+    log("view  method                 median rot  max rot  < 2 deg  < 10 deg  median centroid (% L)")
     for view in a.views:
-        for name in ("free", "fixture", "fixture+free", "fixture, true body"):
+        for name in METHODS:
             sel = [r for r in rows if r[0] == view and r[2] == name]
             rot = np.array([r[3] for r in sel])
             sh = np.array([r[4] for r in sel])
-            log(f"{view:5s} {name:18s} {np.median(rot):10.2f} {rot.max():8.2f} "
+            log(f"{view:5s} {name:21s} {np.median(rot):10.2f} {rot.max():8.2f} "
                 f"{(rot < 2).sum():4d}/{len(sel)} {(rot < 10).sum():5d}/{len(sel)} "
                 f"{100 * np.median(sh):10.3f}")
 

@@ -31,8 +31,10 @@ the same run against the clean, complete target in the body's frame).
    as the start; --hold-first: the first stage with pose_move 0.001 (the pose nearly held while
    the control bends; --hold-all: every stage so); --distance visible: the joint runs' distance (the camera the pose's).
    --start fixture: align against the body at rest with the fixture (the table under the
-   finger, known in the body's frame: synthetic.table_plane) and the table the clean-up found
-   in the scan: the pose keeps the table's tilt and height (docs/formulation.md section 8.12).
+   finger, known in the body's frame: synthetic.table_plane), the table the clean-up found
+   in the scan, and the clamp's side (the base seen on the image's left, right, top or bottom,
+   from the true pose rounded to the nearest): the pose keeps the table's tilt and height
+   (docs/formulation.md section 8.12); --fixture-constraint: so does the projection's.
    --start perturbed: a calibrated camera's pose (the true one rotated by 3 degrees about a
    random axis through the body's centre and moved by 0.02 L; also the crop's pose);
    --pose-method projection: the pose found inside every evaluation (docs/formulation.md
@@ -190,8 +192,14 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         log(f"joint: starting from a calibrated camera's pose: the true one rotated by {deg:g} deg "
             f"about a random axis and moved by {frac:g} L ({off:.3f} deg)")
     elif a.start == "fixture":  # the table's tilt and height from the fixture (section 8.12)
+        # The clamp's side: the base (x = 0) seen from the body's centre in the camera's frame,
+        # rounded to the nearest of the image's left, right, up, down (a user's hint).
+        seen = P_true[:3, :3].T @ np.array([-1.0, 0.0, 0.0])
+        k = int(np.argmax(np.abs(seen[:2])))
+        hint = np.zeros(3)
+        hint[k] = np.sign(seen[k])
         pose = softhd.align(nodes, scan, distance="scan_to_body", fixture=a.fixture,
-                            table=a.found["table"])
+                            table=a.found["table"], clamp=(np.array([-1.0, 0.0, 0.0]), hint))
     else:
         pose = softhd.align(nodes, scan, distance="scan_to_body")
     log(f"joint: align {pose['status']}, rotation error "

@@ -379,9 +379,10 @@ PointCloud with_table(const PointCloud& body, double z_table, const Pose& P) {
 
 // The fixture (formulation §8.12): an exact copy of a bent body on a table, turned about the
 // table's normal by any of 8 angles after a fixed tilt and shift, its table found by RANSAC in
-// the scan and removed: align with the fixture recovers the pose to rounding (the exact pairs
-// of the constrained nearest-point fit; asserted to 1e-9), and every pose keeps the table's
-// tilt and height to rounding (asserted to 1e-12).
+// the scan and removed: align with the fixture (every other angle with the clamp's side too)
+// recovers the pose to rounding (the exact pairs of the constrained nearest-point fit; observed
+// 4e-16 to 2e-15 rad, asserted to 1e-9), and every pose keeps the table's tilt and height to
+// rounding (asserted to 1e-12).
 TEST(AlignFixture, BentBodyRecoveredAtAnyAngleAboutTheTable) {
   const PointCloud body = bent_bar();
   const double L = body_size(body);
@@ -400,6 +401,14 @@ TEST(AlignFixture, BentBodyRecoveredAtAnyAngleAboutTheTable) {
     o.table = find_dominant_plane(raw, plane);
     const PointCloud scan = select(raw, remove_dominant_plane(raw, plane));
     EXPECT_EQ(scan.size(), (body.size() + 1) / 2);
+    // Odd angles with the clamp's side: arm 1's end x = 0 (−x), seen where P⁻¹ shows it, the
+    // direction turned by 60° about the table as a user's coarse hint would be.
+    o.fixture->clamp = k % 2 ? Eigen::Vector3d(-1.0, 0.0, 0.0) : Eigen::Vector3d::Zero();
+    o.fixture->clamp_seen =
+        k % 2 ? Eigen::Vector3d(P.R.transpose() *
+                                Eigen::AngleAxisd(M_PI / 3, Eigen::Vector3d::UnitZ()).matrix() *
+                                o.fixture->clamp)
+              : Eigen::Vector3d::Zero();
     const AlignSummary s = align(body, scan, o);
     EXPECT_LT(rotation_angle_between(s.pose.R, P.R), 1e-9) << "angle " << k;
     EXPECT_LT((s.pose.t - P.t).norm(), 1e-9 * L) << "angle " << k;
@@ -439,6 +448,15 @@ TEST(AlignFixture, ConstrainedFitAndProjection) {
   EXPECT_LT(std::abs(c.scan_normal().dot(on.t) - c.scan_offset() + c.body_offset()), 1e-14);
   const Pose same = c.project(Q, Eigen::Vector3d(0.5, 0.5, 0.5));
   EXPECT_LT((same.matrix() - Q.matrix()).norm(), 1e-14);
+  // The clamp's side: allowed while R_Q clamp, on the table, is within 90° of clamp_seen.
+  EXPECT_TRUE(c.allows(Q));  // no side given
+  Fixture sided = f;
+  sided.clamp = Eigen::Vector3d(1.0, 0.0, 0.0);
+  const Eigen::Vector3d seen = Q.R * sided.clamp;
+  for (double sign : {1.0, -1.0}) {
+    sided.clamp_seen = sign * seen;
+    EXPECT_EQ(FixtureConstraint(sided, table, y).allows(Q), sign > 0);
+  }
   // The tangent: 3 orthonormal twists, ω along n_s.
   const Eigen::MatrixXd B = c.tangent();
   EXPECT_LT((B.transpose() * B - Eigen::Matrix3d::Identity()).norm(), 1e-15 * 10);
@@ -469,6 +487,14 @@ TEST(AlignFixture, BadInputRefusedNamingTheField) {
                                       "table normal has zero length");
   o.table->normal = Eigen::VectorXd::Unit(2, 1);  // a 2D plane
   test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "table");
+  o.table->normal = Eigen::Vector3d::UnitZ();
+  o.fixture->clamp = Eigen::Vector3d::UnitX();  // without clamp_seen
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "fixture.clamp and");
+  o.fixture->clamp = Eigen::Vector3d::UnitZ();  // along the normal
+  o.fixture->clamp_seen = Eigen::Vector3d::UnitX();
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "fixture.clamp is along");
+  o.fixture->clamp_seen = Eigen::Vector3d(std::nan(""), 0.0, 0.0);
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "fixture.clamp_seen");
 }
 
 }  // namespace

@@ -180,7 +180,7 @@ def hausdorff_nearest(X, Y, *, fields=False, threads=0):
 def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, scale_max=2.0,
           distance="symmetric", cap=0.0, eps=None, alpha=4.0, beta=4.0, gamma=2.0,
           global_start=True, initial=None, rotations=48, refine_points=1000, inlier=0.01,
-          threads=0, score="coverage", keep=4, fixture=None, table=None):
+          threads=0, score="coverage", keep=4, fixture=None, table=None, clamp=None):
     """The pose that takes ``scan`` (M, 3), in the camera's frame, onto ``body`` (N, 3)
     (docs/formulation.md section 8, as ``softhd align``): y -> s R y + t minimising rho over a
     twist, after a global start over ``rotations`` grid rotations (unless ``global_start`` is
@@ -205,6 +205,9 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
     ``normal`` and ``offset`` before the table is removed; its sign is free) is required, and
     every pose tried keeps the table's tilt and height: only the rotation about the table's
     normal (``rotations`` angles in the global start) and the shift along it are searched.
+    clamp: with ``fixture``, the clamp's side as a pair (direction in the body's frame from its
+    centre to its clamped end, the direction that end is seen in the scan's frame): poses that
+    turn the one more than 90 degrees from the other (on the table) are not tried.
 
     Returns a dict: ``matrix`` (4, 4), ``twist`` (7,: omega, v, sigma with R = exp([omega]x),
     t = v, s = e^sigma), ``scale``, ``rho``, ``overlap`` (fraction of scan points within the
@@ -227,7 +230,9 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
                     initial=init, rotations=int(rotations),
                     refine_points=int(refine_points), inlier=float(inlier),
                     threads=int(threads), score=str(score), keep=int(keep),
-                    fixture=_plane4(fixture, "fixture"), table=_plane4(table, "table"))
+                    fixture=_plane4(fixture, "fixture"), table=_plane4(table, "table"),
+                    clamp=None if clamp is None else _as_float64(
+                        _np.concatenate([_np.ravel(clamp[0]), _np.ravel(clamp[1])]), "clamp"))
     d["twist"] = d["twist"].reshape(7)
     d["residuals"] = d["residuals"].reshape(-1)
     return d

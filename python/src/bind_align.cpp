@@ -14,7 +14,8 @@ py::dict align_clouds(const Array& body, const std::optional<Array>& body_volume
                       double alpha, double beta, double gamma, bool global_start,
                       const std::optional<Array>& initial, int rotations, int refine_points,
                       double inlier, int threads, const std::string& score, int keep,
-                      const std::optional<Array>& fixture, const std::optional<Array>& table) {
+                      const std::optional<Array>& fixture, const std::optional<Array>& table,
+                      const std::optional<Array>& clamp) {
   check_cloud(body, body_volumes, "body");
   check_cloud(scan, std::nullopt, "scan");
   scan::AlignOptions o;
@@ -47,6 +48,16 @@ py::dict align_clouds(const Array& body, const std::optional<Array>& body_volume
   if (fixture) {
     const Eigen::Vector4d f = plane(*fixture, "fixture");
     o.fixture = scan::Fixture{f.head<3>(), f[3]};
+  }
+  if (clamp) {
+    if (clamp->ndim() != 1 || clamp->shape(0) != 6)
+      throw InvalidArgument(
+          "clamp must be 6 numbers (its direction in the body's frame, then in "
+          "the scan's)");
+    if (!o.fixture) throw InvalidArgument("clamp is the fixture's clamp side: give fixture");
+    const Eigen::Map<const Eigen::Matrix<double, 6, 1>> c(clamp->data());
+    o.fixture->clamp = c.head<3>();
+    o.fixture->clamp_seen = c.tail<3>();
   }
   if (table) {
     const Eigen::Vector4d f = plane(*table, "table");
@@ -87,7 +98,7 @@ void bind_align(py::module_& m) {
         py::arg("scale_max"), py::arg("distance"), py::arg("cap"), py::arg("eps"), py::arg("alpha"),
         py::arg("beta"), py::arg("gamma"), py::arg("global_start"), py::arg("initial"),
         py::arg("rotations"), py::arg("refine_points"), py::arg("inlier"), py::arg("threads"),
-        py::arg("score"), py::arg("keep"), py::arg("fixture"), py::arg("table"));
+        py::arg("score"), py::arg("keep"), py::arg("fixture"), py::arg("table"), py::arg("clamp"));
 }
 
 }  // namespace softhd::python

@@ -299,13 +299,23 @@ scan::Fixture read_fixture(const Scene& scene, const nlohmann::json& t, scan::Po
   if (!j.is_object())
     throw InvalidArgument(key + " must be {\"normal\": [n1, n2, n3], \"offset\": d}, got " +
                           j.dump());
-  io::check_keys(j, "scene " + scene.source, "target.fixture", {"normal", "offset"});
+  io::check_keys(j, "scene " + scene.source, "target.fixture",
+                 {"normal", "offset", "clamp", "clamp_seen"});
   scan::Fixture f;
   const nlohmann::json n = j.contains("normal") ? j["normal"] : nlohmann::json();
   if (!n.is_array() || n.size() != 3 ||
       !std::all_of(n.begin(), n.end(), [](const nlohmann::json& v) { return v.is_number(); }))
     throw InvalidArgument(key + ".normal must be 3 numbers, got " + n.dump());
   for (int k = 0; k < 3; ++k) f.normal[k] = n[static_cast<size_t>(k)].get<double>();
+  for (const char* name : {"clamp", "clamp_seen"}) {
+    if (!j.contains(name)) continue;
+    const nlohmann::json& c = j[name];
+    if (!c.is_array() || c.size() != 3 ||
+        !std::all_of(c.begin(), c.end(), [](const nlohmann::json& v) { return v.is_number(); }))
+      throw InvalidArgument(key + "." + name + " must be 3 numbers, got " + c.dump());
+    Eigen::Vector3d& d = std::string(name) == "clamp" ? f.clamp : f.clamp_seen;
+    for (int k = 0; k < 3; ++k) d[k] = c[static_cast<size_t>(k)].get<double>();
+  }
   const nlohmann::json d = j.contains("offset") ? j["offset"] : nlohmann::json();
   if (!d.is_number()) throw InvalidArgument(key + ".offset must be a number, got " + d.dump());
   f.offset = d.get<double>();

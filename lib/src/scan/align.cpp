@@ -113,13 +113,17 @@ std::vector<Pose> starting_poses(const Eigen::MatrixXd& body, const Eigen::Matri
 }
 
 /// The starting poses with a fixture: `count` angles 2πk/count about the table's normal, the
-/// body's centroid over the scan's along the table, at the fixture's height.
+/// body's centroid over the scan's along the table, at the fixture's height; with a clamp side,
+/// those on its side only.
 std::vector<Pose> fixture_starts(const Eigen::MatrixXd& body, const Eigen::MatrixXd& scan,
                                  int count, const FixtureConstraint& fixture) {
   const Eigen::Vector3d cb = body.colwise().mean().transpose(),
                         cs = scan.colwise().mean().transpose();
   std::vector<Pose> out;
-  for (int k = 0; k < count; ++k) out.push_back(fixture.start(2.0 * M_PI * k / count, cb, cs));
+  for (int k = 0; k < count; ++k) {
+    const Pose Q = fixture.start(2.0 * M_PI * k / count, cb, cs);
+    if (fixture.allows(Q)) out.push_back(Q);  // the clamp's side
+  }
   return out;
 }
 
@@ -142,6 +146,9 @@ std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& sc
                 [&](size_t i) { found[i] = detail::minimise_pose(coarse, starts[i], st); });
   std::vector<double> score(found.size());
   for (size_t k = 0; k < found.size(); ++k) score[k] = found[k].rho;
+  if (fixture != nullptr)  // the clamp's side: poses on the other side are not kept
+    for (size_t k = 0; k < found.size(); ++k)
+      if (!fixture->allows(found[k].pose)) score[k] = INFINITY;
   if (o.score == CandidateScore::coverage) {  // rank by the coverage score instead
     const detail::CoverageScore coverage(body.points(), scan.points(), L, o.score_truncation,
                                          o.threads);

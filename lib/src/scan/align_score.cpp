@@ -131,6 +131,9 @@ size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double s
     for (size_t k = 0; k < r.size(); ++k)
       if (std::isfinite(score[k])) score[k] = coverage.value(r[k].pose);
   }
+  if (fixture != nullptr)  // the clamp's side (all on the wrong side: the first)
+    for (size_t k = 0; k < r.size(); ++k)
+      if (!fixture->allows(r[k].pose)) score[k] = INFINITY;
   size_t best = 0;
   for (size_t k = 1; k < r.size(); ++k)
     if (score[k] < score[best]) best = k;

@@ -27,6 +27,15 @@ void Fixture::validate() const {
   if (!normal.allFinite()) throw InvalidArgument("fixture.normal is not finite");
   if (!(normal.norm() > 0.0)) throw InvalidArgument("fixture.normal has zero length");
   if (!std::isfinite(offset)) throw InvalidArgument("fixture.offset is not finite");
+  if (!clamp.allFinite()) throw InvalidArgument("fixture.clamp is not finite");
+  if (!clamp_seen.allFinite()) throw InvalidArgument("fixture.clamp_seen is not finite");
+  if ((clamp.squaredNorm() > 0.0) != (clamp_seen.squaredNorm() > 0.0))
+    throw InvalidArgument(
+        "fixture.clamp and fixture.clamp_seen go together (the clamp's direction in the body's "
+        "frame and where it is seen in the scan's)");
+  const Eigen::Vector3d n = normal.normalized();
+  if (has_clamp() && (clamp - n.dot(clamp) * n).norm() <= 1e-6 * clamp.norm())
+    throw InvalidArgument("fixture.clamp is along the table's normal: it tells no side");
 }
 
 Eigen::Matrix3d rotation_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -57,6 +66,8 @@ FixtureConstraint::FixtureConstraint(const Fixture& fixture, const Plane& table,
   db_ = fixture.offset / bn;
   ns_ = Eigen::Vector3d(table.normal) / tn;
   ds_ = table.offset / tn;
+  clamp_ = fixture.clamp;
+  seen_ = fixture.clamp_seen;
   // The body is on the table's upper side: the median height of the scan's points is > 0.
   if (scan.rows() > 0) {
     std::vector<double> h(static_cast<size_t>(scan.rows()));
@@ -68,6 +79,13 @@ FixtureConstraint::FixtureConstraint(const Fixture& fixture, const Plane& table,
       ds_ = -ds_;
     }
   }
+}
+
+bool FixtureConstraint::allows(const Pose& Q) const {
+  if (!(clamp_.squaredNorm() > 0.0)) return true;
+  // a = (I − n_s n_sᵀ) R_Q clamp, b = (I − n_s n_sᵀ) clamp_seen: allowed if a·b ≥ 0.
+  const Eigen::Vector3d a = Q.R * clamp_, b = seen_;
+  return a.dot(b) - a.dot(ns_) * b.dot(ns_) >= 0.0;
 }
 
 Pose FixtureConstraint::project(const Pose& Q, const Eigen::Vector3d& centre) const {

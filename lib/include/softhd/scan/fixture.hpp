@@ -20,9 +20,19 @@ namespace softhd::scan {
 struct Fixture {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< the table's normal (body frame), ≠ 0
   double offset = 0.0;                                ///< n·x on the table (a length × |n|)
-  /// Throws InvalidArgument naming `fixture.normal` (zero length, not finite) or
-  /// `fixture.offset` (not finite).
+  /// Optional, the clamp's side: a direction in the body's frame from its centre towards its
+  /// clamped end (the finger clamped at x = 0: (−1, 0, 0)); zero (default): no side given.
+  Eigen::Vector3d clamp = Eigen::Vector3d::Zero();
+  /// With `clamp`: the direction the clamped end is seen in, in the scan's frame (e.g. the
+  /// image's left, (−1, 0, 0) for a camera whose x points right). A pose that turns `clamp`
+  /// more than 90° from it, both projected onto the table, is not tried: the side resolves the
+  /// half turn about the table's normal that a smooth body's view leaves open.
+  Eigen::Vector3d clamp_seen = Eigen::Vector3d::Zero();
+  /// Throws InvalidArgument naming `fixture.normal` (zero length, not finite),
+  /// `fixture.offset` (not finite), `fixture.clamp` or `fixture.clamp_seen` (not finite, one
+  /// zero and the other not, `clamp` along the normal).
   void validate() const;
+  bool has_clamp() const { return clamp.squaredNorm() > 0.0; }  ///< a clamp side is given
 };
 
 /// The pose's constraint from a fixture and the scan's table: poses P (scan → body) with
@@ -51,6 +61,9 @@ class FixtureConstraint {
   /// constrained height.
   Pose start(double angle, const Eigen::Vector3d& body_centre,
              const Eigen::Vector3d& scan_centre) const;
+  /// False if the fixture has a clamp side and Q (body → scan frame) turns `clamp` more than 90°
+  /// from `clamp_seen`, both projected onto the scan's table (true without a clamp side).
+  bool allows(const Pose& Q) const;
   /// An orthonormal basis (6 × 3) of the twists (L ω, v) in align's scaled variables that keep
   /// the constraint: ω along n_s, v along the table.
   Eigen::MatrixXd tangent() const;
@@ -63,6 +76,7 @@ class FixtureConstraint {
  private:
   Eigen::Vector3d nb_, ns_;
   double db_ = 0.0, ds_ = 0.0;
+  Eigen::Vector3d clamp_ = Eigen::Vector3d::Zero(), seen_ = Eigen::Vector3d::Zero();
 };
 
 /// An orthonormal basis (6 × 3) of the twists (L ω, v) (align's scaled variables, applied on the
