@@ -5,7 +5,8 @@ the same run against the clean, complete target in the body's frame).
     PYTHONPATH=build/python /usr/bin/python3 studies/track_scan.py [--seed S] [--view full|half]
         [--max-iter N] [--rounds K] [--out DIR] [--clean-rms R]
         [--joint [--staged] [--start align|ladder|true|perturbed|fixture] [--cap-stages K]
-                 [--first-eps F] [--algorithm A] [--pose-method joint|projection]]
+                 [--first-eps F] [--algorithm A] [--pose-method joint|projection]
+                 [--fixture-constraint]]
 
 1. The view. The finger of data/scenes/finger.json, deformed by m*(X) = -1.5 X3 on a 2x finer
    mesh (data/targets/finger_target.ply), is seen by a synthetic depth camera

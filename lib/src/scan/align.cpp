@@ -172,6 +172,23 @@ std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& sc
   return kept;
 }
 
+/// The global start's candidates and the user's start, which competes with them (none: the
+/// identity; with a fixture, moved onto its constraint about the body's centroid).
+std::vector<Pose> all_candidates(const PointCloud& body, const PointCloud& scan, double L,
+                                 const AlignOptions& options, const FixtureConstraint* fixture,
+                                 int* starts) {
+  std::vector<Pose> candidates;
+  if (options.global_start) candidates = global_candidates(body, scan, L, options, fixture, starts);
+  if (options.initial) candidates.push_back(options.initial->inverse());
+  if (candidates.empty()) candidates.push_back(Pose());
+  if (fixture != nullptr && (options.initial || !options.global_start)) {
+    Pose& Q = candidates.back();
+    const Eigen::Vector3d c = Q.R * body.points().colwise().mean().transpose() + Q.t;
+    Q = fixture->project(Q, c);
+  }
+  return candidates;
+}
+
 /// Residuals (true nearest distances of the moved scan), overlap (the fraction within
 /// inlier_distance × L) and the rmse of those residuals.
 void report_nearest(const detail::NearestPoints& nearest, const PointCloud& scan,
@@ -301,19 +318,8 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
   if (options.fixture) constraint.emplace(*options.fixture, *options.table, scan.points());
   const FixtureConstraint* fixture = constraint ? &*constraint : nullptr;
 
-  // The global start's candidates and the user's start, which competes with them (with a
-  // fixture: moved onto its constraint about the body's centroid).
-  std::vector<Pose> candidates;
   AlignSummary out;
-  if (options.global_start)
-    candidates = global_candidates(body, scan, L, options, fixture, &out.starts);
-  if (options.initial) candidates.push_back(options.initial->inverse());
-  if (candidates.empty()) candidates.push_back(Pose());
-  if (fixture != nullptr && (options.initial || !options.global_start)) {
-    Pose& Q = candidates.back();
-    const Eigen::Vector3d c = Q.R * body.points().colwise().mean().transpose() + Q.t;
-    Q = fixture->project(Q, c);
-  }
+  const std::vector<Pose> candidates = all_candidates(body, scan, L, options, fixture, &out.starts);
   out.candidates = static_cast<int>(candidates.size());
 
   // Refinement: continuation in ε (a hundredth of L, then the user's) on the refine level.
