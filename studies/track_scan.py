@@ -4,7 +4,7 @@ the same run against the clean, complete target in the body's frame).
 
     PYTHONPATH=build/python /usr/bin/python3 studies/track_scan.py [--seed S] [--view full|half]
         [--max-iter N] [--rounds K] [--out DIR] [--clean-rms R]
-        [--joint [--staged] [--start align|ladder|true|perturbed|fixture] [--cap-stages K]
+        [--joint [--staged] [--start align|ladder|true|perturbed|fixture|ladder-fixture] [--cap-stages K]
                  [--first-eps F] [--algorithm A] [--pose-method joint|projection]
                  [--fixture-constraint]]
 
@@ -36,6 +36,7 @@ the same run against the clean, complete target in the body's frame).
    in the scan, and the clamp's side (the base seen on the image's left, right, top or bottom,
    from the true pose rounded to the nearest): the pose keeps the table's tilt and height
    (docs/formulation.md section 8.12); --fixture-constraint: so does the projection's.
+   --start ladder-fixture: ladder_align with the fixture and the clamp's side.
    --start perturbed: a calibrated camera's pose (the true one rotated by 3 degrees about a
    random axis through the body's centre and moved by 0.02 L; also the crop's pose);
    --pose-method projection: the pose found inside every evaluation (docs/formulation.md
@@ -139,10 +140,11 @@ def probe(scene, scan_file, P_start, P_true, out, log):
             log(f"probe: rho at {label}, {name}: {r.rho_start:.4g}")
 
 
-def ladder_align(scene, scan, P_true, log, fractions=(0.0, 0.125, 0.25, 0.5, 1.0)):
+def ladder_align(scene, scan, P_true, log, fractions=(0.0, 0.125, 0.25, 0.5, 1.0), **fixture):
     """align against the body under uniform controls between the initial control and the bound
     farthest from it (the finger: m = 0, -2.5, -5, -10, -20), keeping the pose of lowest rho
-    (the scan's one-sided distance); returns (align's dict, that uniform control)."""
+    (the scan's one-sided distance); returns (align's dict, that uniform control). `fixture`:
+    align's fixture, table and clamp, if given."""
     lo, hi = scene.control_bounds
     m0 = float(np.mean(scene.control_initial))
     far = float(np.min(lo)) if abs(np.min(lo) - m0) >= abs(np.max(hi) - m0) else float(np.max(hi))
@@ -150,7 +152,7 @@ def ladder_align(scene, scan, P_true, log, fractions=(0.0, 0.125, 0.25, 0.5, 1.0
     for f in fractions:
         m = np.full(scene.num_controls, m0 + f * (far - m0))
         body = scene.mesh.nodes + scene.forward(m).displacements
-        pose = softhd.align(body, scan, distance="scan_to_body")
+        pose = softhd.align(body, scan, distance="scan_to_body", **fixture)
         log(f"ladder: m = {m[0]:.4g}: rho {pose['rho']:.4g}, rotation error "
             f"{rotation_error(pose['matrix'][:3, :3], P_true):.2f} deg")
         if best is None or pose["rho"] < best[0]["rho"]:
@@ -192,15 +194,19 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         off = rotation_error(pose["matrix"][:3, :3], P_true)
         log(f"joint: starting from a calibrated camera's pose: the true one rotated by {deg:g} deg "
             f"about a random axis and moved by {frac:g} L ({off:.3f} deg)")
-    elif a.start == "fixture":  # the table's tilt and height from the fixture (section 8.12)
+    elif a.start in ("fixture", "ladder-fixture"):  # the table's tilt and height (section 8.12)
         # The clamp's side: the base (x = 0) seen from the body's centre in the camera's frame,
         # rounded to the nearest of the image's left, right, up, down (a user's hint).
         seen = P_true[:3, :3].T @ np.array([-1.0, 0.0, 0.0])
         k = int(np.argmax(np.abs(seen[:2])))
         hint = np.zeros(3)
         hint[k] = np.sign(seen[k])
-        pose = softhd.align(nodes, scan, distance="scan_to_body", fixture=a.fixture,
-                            table=a.found["table"], clamp=(np.array([-1.0, 0.0, 0.0]), hint))
+        fixture = dict(fixture=a.fixture, table=a.found["table"],
+                       clamp=(np.array([-1.0, 0.0, 0.0]), hint))
+        if a.start == "fixture":
+            pose = softhd.align(nodes, scan, distance="scan_to_body", **fixture)
+        else:
+            pose, initial = ladder_align(scene, scan, P_true, log, **fixture)
     else:
         pose = softhd.align(nodes, scan, distance="scan_to_body")
     log(f"joint: align {pose['status']}, rotation error "
@@ -305,12 +311,14 @@ def main():
     ap.add_argument("--pose-move", type=float, default=None,
                     help="--joint: the pose's move limit as a fraction of the control's")
     ap.add_argument("--algorithm", default=None, help="--joint: the optimiser (default mma)")
-    ap.add_argument("--start", choices=["align", "ladder", "true", "perturbed", "fixture"],
+    ap.add_argument("--start",
+                    choices=["align", "ladder", "true", "perturbed", "fixture", "ladder-fixture"],
                     default="align",
                     help="--joint: the start pose: align's at rest, ladder_align's (against bodies "
                          "under uniform controls), (a diagnostic) the true one, or a calibrated "
                          "camera's (the true one off by 3 deg about a random axis and 0.02 L), "
-                         "or align's at rest with the fixture (the table's tilt and height)")
+                         "or align's at rest with the fixture (the table's tilt and height), or "
+                         "ladder_align's with the fixture")
     ap.add_argument("--method", choices=["exact", "tree"], default=None,
                     help="--joint: the distance's pair sums (softhd.optimise's method; default "
                          "tree)")
