@@ -393,6 +393,8 @@ TEST(AlignFixture, BentBodyRecoveredAtAnyAngleAboutTheTable) {
   plane.distance = 0.01;
   AlignOptions o = fast_options();
   o.fixture = fixture;
+  o.rotations = 12;       // angles about the table's normal (every 30°): enough for an exact copy
+  o.refine_points = 300;  // the refinement's clouds; the nearest-point finish takes every point
   for (int k = 0; k < 8; ++k) {
     Pose turn;  // about the table's normal (z) by 2πk/8 + 0.3
     turn.R = Eigen::AngleAxisd(2.0 * M_PI * k / 8 + 0.3, Eigen::Vector3d::UnitZ()).matrix();
