@@ -36,7 +36,8 @@ SCAN: a 3D cloud file.
 options:
   --out DIR         write DIR/pose.txt (4x4 matrix), DIR/pose.json (matrix, twist,
                     scale, rho, overlap, rmse, the global start's starts and the
-                    candidates refined, the refinement's points of body and scan, ...),
+                    candidates refined, the refinement's points of body and scan, the
+                    table and the fixture if given, ...),
                     DIR/aligned.ply (the moved scan) and
                     DIR/residuals.csv (each scan point's true nearest distance to the body)
   --similarity      also find a scale s (default: a rigid motion, s = 1)
@@ -138,6 +139,17 @@ nlohmann::json summary_json(const scan::AlignSummary& s, const scan::AlignOption
   j["starts"] = s.starts;
   j["candidates"] = s.candidates;
   j["refine_points"] = {s.refine_body_points, s.refine_scan_points};
+  if (o.table)  // --table: the plane removed from the scan (its frame)
+    j["table"] = {{"normal", {o.table->normal[0], o.table->normal[1], o.table->normal[2]}},
+                  {"offset", o.table->offset},
+                  {"inliers", o.table->inliers}};
+  if (o.fixture) {
+    const scan::Fixture& f = *o.fixture;
+    j["fixture"] = {{"normal", {f.normal[0], f.normal[1], f.normal[2]}}, {"offset", f.offset}};
+    if (f.has_clamp())
+      j["fixture"]["clamp"] = {f.clamp[0],      f.clamp[1],      f.clamp[2],
+                               f.clamp_seen[0], f.clamp_seen[1], f.clamp_seen[2]};
+  }
   return j;
 }
 
