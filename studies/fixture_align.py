@@ -27,6 +27,8 @@ and, as a reference for what the data allow, "fixture, true body": the fixture a
 deformed body's nodes (the scene mesh's nodes at m*). Prints one line per alignment: the rotation
 error (degrees), the error at the scan's centroid (a fraction of L), the tilt of the table's
 normal after the pose (degrees) and the seconds; then a table of the medians and counts.
+--tilt DEG and --height F give the fixture an error (its normal turned by DEG about x, its offset
+moved by F L), with --only-fixture: the fixture + clamp runs only.
 """
 
 import argparse
@@ -70,6 +72,12 @@ def main():
     ap.add_argument("--views", nargs="+", default=["full", "half"])
     ap.add_argument("--plane", type=float, default=0.02, help="the table's threshold, x L")
     ap.add_argument("--csv", default=None)
+    ap.add_argument("--tilt", type=float, default=0.0,
+                    help="the fixture's error: its normal turned by this many degrees about x")
+    ap.add_argument("--height", type=float, default=0.0,
+                    help="the fixture's error: its offset moved by this fraction of L")
+    ap.add_argument("--only-fixture", action="store_true",
+                    help="only the fixture + clamp runs (at rest and the true body)")
     a = ap.parse_args()
     log = lambda s: print(s, flush=True)  # noqa: E731
 
@@ -80,10 +88,13 @@ def main():
     fine_rest = fine.nodes
     true_body = synthetic.matched_nodes(nodes, fine_rest, deformed)
     normal, offset = synthetic.table_plane(deformed)
+    th = np.radians(a.tilt)  # a fixture known with an error
+    normal = np.array([0.0, -np.sin(th), np.cos(th)])
+    offset += a.height * synthetic.body_size(deformed)
     fixture = (normal, offset)
     log(f"fixture: the table n.x = {offset:.4g}, n = {normal} (body frame)")
     ladder = []  # the body under uniform controls 0, -2.5, -5, -10, -20 (track_scan.ladder_align)
-    for m in (0.0, -2.5, -5.0, -10.0, -20.0):
+    for m in () if a.only_fixture else (0.0, -2.5, -5.0, -10.0, -20.0):
         u = scene.forward(np.full(scene.num_controls, m)).displacements
         ladder.append((m, nodes + u))
     rows = []
@@ -104,17 +115,30 @@ def main():
             hint[k] = np.sign(seen[k])
             clamp = (np.array([-1.0, 0.0, 0.0]), hint)
             runs = {}
-            t = time.time()
-            runs["free"] = softhd.align(nodes, kept, distance="scan_to_body")
-            runs["free"]["wall"] = time.time() - t
-            t = time.time()
-            runs["fixture"] = softhd.align(nodes, kept, distance="scan_to_body", fixture=fixture,
-                                           table=table)
-            runs["fixture"]["wall"] = time.time() - t
+            if not a.only_fixture:
+                t = time.time()
+                runs["free"] = softhd.align(nodes, kept, distance="scan_to_body")
+                runs["free"]["wall"] = time.time() - t
+                t = time.time()
+                runs["fixture"] = softhd.align(nodes, kept, distance="scan_to_body",
+                                               fixture=fixture, table=table)
+                runs["fixture"]["wall"] = time.time() - t
             t = time.time()
             runs["fixture+clamp"] = softhd.align(nodes, kept, distance="scan_to_body",
                                                  fixture=fixture, table=table, clamp=clamp)
             runs["fixture+clamp"]["wall"] = time.time() - t
+            if a.only_fixture:
+                t = time.time()
+                runs["fixture, true body"] = softhd.align(
+                    true_body, kept, distance="scan_to_body", fixture=fixture, table=table,
+                    clamp=clamp)
+                runs["fixture, true body"]["wall"] = time.time() - t
+                for name, r in runs.items():
+                    rot, shift, tilt = errors(r["matrix"], P_true, kept, L, table)
+                    rows.append((view, seed, name, rot, shift, tilt, r["wall"], r["overlap"]))
+                    log(f"{view} seed {seed} {name:21s}: rotation {rot:8.3f} deg, centroid "
+                        f"{100 * shift:7.3f} % L")
+                continue
             t = time.time()
             runs["fixture+clamp, free"] = softhd.align(nodes, kept, distance="scan_to_body",
                                                        global_start=False,
@@ -151,6 +175,8 @@ def main():
     for view in a.views:
         for name in METHODS:
             sel = [r for r in rows if r[0] == view and r[2] == name]
+            if not sel:
+                continue
             rot = np.array([r[3] for r in sel])
             sh = np.array([r[4] for r in sel])
             log(f"{view:5s} {name:21s} {np.median(rot):10.2f} {rot.max():8.2f} "
