@@ -171,7 +171,8 @@ def main():
             for r in rows:
                 f.write(",".join(str(x) for x in r) + "\n")
     log("")
-    log("view  method                 median rot  max rot  < 2 deg  < 10 deg  median centroid (% L)")
+    log("view  method                 median rot  max rot  < 2 deg  < 10 deg  "
+        "median centroid (% L)")
     for view in a.views:
         for name in METHODS:
             sel = [r for r in rows if r[0] == view and r[2] == name]

@@ -4,7 +4,8 @@ the same run against the clean, complete target in the body's frame).
 
     PYTHONPATH=build/python /usr/bin/python3 studies/track_scan.py [--seed S] [--view full|half]
         [--max-iter N] [--rounds K] [--out DIR] [--clean-rms R]
-        [--joint [--staged] [--start align|ladder|true|perturbed|fixture|ladder-fixture] [--cap-stages K]
+        [--joint [--staged] [--start align|ladder|true|perturbed|fixture|ladder-fixture]
+                 [--cap-stages K]
                  [--first-eps F] [--algorithm A] [--pose-method joint|projection]
                  [--fixture-constraint]]
 
@@ -417,7 +418,8 @@ def main():
     log(f"(L = {L:.4g}; at rest: rms {node_errors(nodes, 0 * u, truth)[1]:.4g})")
     if a.joint:
         log(f"RESULT seed {a.seed} view {a.view} start {a.start} method "
-            f"{a.pose_method or 'joint'}{' fixture' if a.fixture_constraint else ''} pose_move {a.pose_move} hold "
+            f"{a.pose_method or 'joint'}{' fixture' if a.fixture_constraint else ''} "
+            f"pose_move {a.pose_move} hold "
             f"{'all' if a.hold_all else 'first' if a.hold_first else 'none'}: node rms "
             f"{s_rms:.4g} ({s_rms / L * 100:.3g} % L, {s_rms / c_rms:.2f}x clean), pose "
             f"{a.final_pose[0]:.3f} deg {a.final_pose[1] * 100:.3g} % L, optimise "

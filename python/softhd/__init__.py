@@ -41,7 +41,8 @@ from ._core import (DistanceResult, Error, FileError, ForwardResult, InvalidArgu
                     Mesh, NumericalError, OptimiseResult, ResourceError, Scene)
 
 __all__ = ["distance", "align", "hausdorff_nearest", "Target", "read_cloud", "write_cloud", "read_mesh",
-           "crop_to_box", "remove_statistical_outliers", "remove_dominant_plane", "find_dominant_plane", "area_weights",
+           "crop_to_box", "remove_statistical_outliers", "remove_dominant_plane",
+           "find_dominant_plane", "area_weights",
            "visible_points",
            "Scene", "Mesh", "optimise", "optimise_defaults", "DistanceResult", "ForwardResult",
            "OptimiseResult",
@@ -200,9 +201,10 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
     "coverage".
 
     fixture: the table the body sits on, in the body's frame, as 4 numbers (n1, n2, n3, d),
-    a pair (normal, d) or a dict with "normal" and "offset": the plane n.x = d, n pointing towards the body (docs/formulation.md section 8.12); with
-    it, ``table`` (the same table found in the scan, e.g. ``find_dominant_plane(scan, ...)``'s
-    ``normal`` and ``offset`` before the table is removed; its sign is free) is required, and
+    a pair (normal, d) or a dict with "normal" and "offset": the plane n.x = d, n pointing
+    towards the body (docs/formulation.md section 8.12); with it, ``table`` (the same table
+    found in the scan, e.g. ``find_dominant_plane(scan, ...)``'s ``normal`` and ``offset``
+    before the table is removed; its sign is free) is required, and
     every pose tried keeps the table's tilt and height: only the rotation about the table's
     normal (``rotations`` angles in the global start) and the shift along it are searched.
     clamp: with ``fixture``, the clamp's side as a pair (direction in the body's frame from its
