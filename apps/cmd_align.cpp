@@ -16,6 +16,7 @@
 #include "softhd/io/cloud_io.hpp"
 #include "softhd/parallel.hpp"
 #include "softhd/scan/align.hpp"
+#include "softhd/scan/cleanup.hpp"
 
 namespace softhd::cli {
 
@@ -35,7 +36,8 @@ SCAN: a 3D cloud file.
 options:
   --out DIR         write DIR/pose.txt (4x4 matrix), DIR/pose.json (matrix, twist,
                     scale, rho, overlap, rmse, the global start's starts and the
-                    candidates refined, the refinement's points of body and scan, ...),
+                    candidates refined, the refinement's points of body and scan, the
+                    table and the fixture if given, ...),
                     DIR/aligned.ply (the moved scan) and
                     DIR/residuals.csv (each scan point's true nearest distance to the body)
   --similarity      also find a scale s (default: a rigid motion, s = 1)
@@ -64,6 +66,20 @@ options:
                     scan's image) to the scan; it tells a flipped one-sided view from the
                     true one. rho: rho itself (for a scan not in its camera's frame)
   --score-cap F     coverage score: nearest distances capped at F L (default 0.05)
+  --table T         find the table in the scan (the dominant plane within T, a length:
+                    RANSAC as a scene's "clean": {"plane": T}) and remove its points
+                    before aligning; nothing is removed if it holds under 10 % of them
+  --fixture N1,N2,N3,D
+                    the table's plane n.x = D in the body's frame (n pointing towards the
+                    body; need not be a unit vector): the pose keeps the table found by
+                    --table (required) on this one, so only the rotation about the table's
+                    normal (--rotations angles in the global start) and the shift along it
+                    are searched and refined; rigid only (docs/formulation.md section 8.12)
+  --clamp B1,B2,B3,S1,S2,S3
+                    with --fixture, the clamp's side: B the direction from the body's centre
+                    to its clamped end (body frame), S the direction that end is seen in
+                    (scan frame, e.g. -1,0,0: the image's left); poses that turn B more than
+                    90 degrees from S (on the table) are not tried
   --inlier F        overlap threshold as a fraction of L, 0 < F < 1 (default 0.01)
   --threads T       OpenMP threads (default: all)
   --json            print pose.json's object instead of the one-line summary
@@ -72,7 +88,9 @@ options:
 exit status: 0 done; 1 numerical failure; 2 bad input or refused (one line on stderr
 names the file, line or flag): a pose file that is not a 4x4 scaled rotation, NaN
 coordinates, scale bounds that exclude 1, a 2D cloud, a body or scan whose points do not
-span a plane (a single point, coincident or collinear points fix no pose).
+span a plane (a single point, coincident or collinear points fix no pose), a --fixture
+that is not 4 finite numbers or has a zero normal, --fixture without --table or with
+--similarity, a scan with no table plane for --fixture.
 )";
 
 bool is_scene(const std::string& path) {
@@ -121,7 +139,53 @@ nlohmann::json summary_json(const scan::AlignSummary& s, const scan::AlignOption
   j["starts"] = s.starts;
   j["candidates"] = s.candidates;
   j["refine_points"] = {s.refine_body_points, s.refine_scan_points};
+  if (o.table)  // --table: the plane removed from the scan (its frame)
+    j["table"] = {{"normal", {o.table->normal[0], o.table->normal[1], o.table->normal[2]}},
+                  {"offset", o.table->offset},
+                  {"inliers", o.table->inliers}};
+  if (o.fixture) {
+    const scan::Fixture& f = *o.fixture;
+    j["fixture"] = {{"normal", {f.normal[0], f.normal[1], f.normal[2]}}, {"offset", f.offset}};
+    if (f.has_clamp())
+      j["fixture"]["clamp"] = {f.clamp[0],      f.clamp[1],      f.clamp[2],
+                               f.clamp_seen[0], f.clamp_seen[1], f.clamp_seen[2]};
+  }
   return j;
+}
+
+/// The fixture of --fixture N1,N2,N3,D (UsageError naming the flag).
+scan::Fixture parse_fixture(const std::string& text) {
+  std::vector<double> v;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) v.push_back(parse_number(item, "--fixture"));
+  if (v.size() != 4 || text.empty() || text.back() == ',')
+    throw UsageError(
+        "--fixture must be 4 numbers N1,N2,N3,D (the table's plane n.x = D in the "
+        "body's frame), got '" +
+        text + "'");
+  scan::Fixture f{Eigen::Vector3d(v[0], v[1], v[2]), v[3]};
+  if (!(f.normal.norm() > 0.0)) throw UsageError("--fixture: the normal has zero length");
+  return f;
+}
+
+/// --table: the scan's dominant plane within `distance`, removed from *scan; into o->table
+/// when it holds at least 10 % of the points, else (with a fixture) refused naming the file.
+void remove_table(PointCloud* scan, double distance, const std::string& path,
+                  scan::AlignOptions* o) {
+  scan::PlaneRemoval removal;
+  removal.distance = distance;
+  const scan::Plane plane = scan::find_dominant_plane(*scan, removal);
+  const Eigen::Index n = scan->size();
+  if (static_cast<double>(plane.inliers) < removal.min_fraction * static_cast<double>(n)) {
+    if (o->fixture)
+      throw InvalidArgument(path +
+                            ": no table plane for --fixture: the largest plane within --table " +
+                            std::to_string(distance) + " holds " + std::to_string(plane.inliers) +
+                            " of " + std::to_string(n) + " points (fewer than 10 %)");
+    return;
+  }
+  o->table = plane;
+  *scan = scan::select(*scan, scan::remove_dominant_plane(*scan, removal));
 }
 
 void write_residuals(const std::string& path, const PointCloud& moved, const Eigen::VectorXd& r) {
@@ -166,6 +230,31 @@ int run_align(const std::vector<std::string>& tokens) {
   o.score_truncation = args.number("--score-cap", o.score_truncation);
   if (!(o.score_truncation > 0.0))
     throw UsageError("--score-cap must be > 0, got " + std::to_string(o.score_truncation));
+  const std::optional<std::string> fixture = args.value("--fixture");
+  if (fixture) o.fixture = parse_fixture(*fixture);
+  if (const std::optional<std::string> clamp = args.value("--clamp")) {
+    if (!fixture) throw UsageError("--clamp is the fixture's clamp side: give --fixture");
+    std::vector<double> v;
+    std::stringstream in(*clamp);
+    for (std::string item; std::getline(in, item, ',');) v.push_back(parse_number(item, "--clamp"));
+    if (v.size() != 6)
+      throw UsageError("--clamp must be 6 numbers B1,B2,B3,S1,S2,S3, got '" + *clamp + "'");
+    o.fixture->clamp = Eigen::Vector3d(v[0], v[1], v[2]);
+    o.fixture->clamp_seen = Eigen::Vector3d(v[3], v[4], v[5]);
+    try {
+      o.fixture->validate();
+    } catch (const InvalidArgument& e) {
+      throw UsageError(std::string("--clamp: ") + e.what());
+    }
+  }
+  const std::optional<std::string> table = args.value("--table");
+  const double table_distance = table ? parse_number(*table, "--table") : 0.0;
+  if (table && !(table_distance > 0.0))
+    throw UsageError("--table must be > 0 (a length), got " + *table);
+  if (fixture && !table)
+    throw UsageError("--fixture needs --table T (the table is found in the scan within T)");
+  if (fixture && o.kind == scan::PoseKind::similarity)
+    throw UsageError("--fixture needs a rigid alignment (a scale would change the table's height)");
   o.inlier_distance = args.number("--inlier", o.inlier_distance);
   if (!(o.inlier_distance > 0.0 && o.inlier_distance < 1.0))
     throw UsageError("--inlier must be in (0, 1) (a fraction of the body size L), got " +
@@ -199,11 +288,12 @@ int run_align(const std::vector<std::string>& tokens) {
                      std::to_string(o.scale_max));
 
   const PointCloud body = read_body(files[0]);
-  const PointCloud scan = read_cloud(files[1]);
+  PointCloud scan = read_cloud(files[1]);
   require_3d(body, files[0]);
   require_3d(scan, files[1]);
   check_coordinates(body, files[0]);
   check_coordinates(scan, files[1]);
+  if (table) remove_table(&scan, table_distance, files[1], &o);
   scan::check_fixes_pose(body, files[0]);
   scan::check_fixes_pose(scan, files[1]);
   const double L = scan::body_size(body);

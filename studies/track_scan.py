@@ -4,8 +4,10 @@ the same run against the clean, complete target in the body's frame).
 
     PYTHONPATH=build/python /usr/bin/python3 studies/track_scan.py [--seed S] [--view full|half]
         [--max-iter N] [--rounds K] [--out DIR] [--clean-rms R]
-        [--joint [--staged] [--start align|ladder|true|perturbed] [--cap-stages K]
-                 [--first-eps F] [--algorithm A] [--pose-method joint|projection]]
+        [--joint [--staged] [--start align|ladder|true|perturbed|fixture|ladder-fixture]
+                 [--cap-stages K]
+                 [--first-eps F] [--algorithm A] [--pose-method joint|projection]
+                 [--fixture-constraint]]
 
 1. The view. The finger of data/scenes/finger.json, deformed by m*(X) = -1.5 X3 on a 2x finer
    mesh (data/targets/finger_target.ply), is seen by a synthetic depth camera
@@ -30,6 +32,12 @@ the same run against the clean, complete target in the body's frame).
    the initial control and its far bound (ladder_align), the lowest rho kept, with that control
    as the start; --hold-first: the first stage with pose_move 0.001 (the pose nearly held while
    the control bends; --hold-all: every stage so); --distance visible: the joint runs' distance (the camera the pose's).
+   --start fixture: align against the body at rest with the fixture (the table under the
+   finger, known in the body's frame: synthetic.table_plane), the table the clean-up found
+   in the scan, and the clamp's side (the base seen on the image's left, right, top or bottom,
+   from the true pose rounded to the nearest): the pose keeps the table's tilt and height
+   (docs/formulation.md section 8.12); --fixture-constraint: so does the projection's.
+   --start ladder-fixture: ladder_align with the fixture and the clamp's side.
    --start perturbed: a calibrated camera's pose (the true one rotated by 3 degrees about a
    random axis through the body's centre and moved by 0.02 L; also the crop's pose);
    --pose-method projection: the pose found inside every evaluation (docs/formulation.md
@@ -93,7 +101,11 @@ def true_nodes(scene_nodes, fine_deformed=None):
 node_errors = synthetic_scan.node_errors
 
 
-def clean_scan(scan, L, log, plane=0.01):
+def clean_scan(scan, L, log, plane=0.01, found=None):
+    """The scan without its table and stray points; the table's plane (find_dominant_plane)
+    into found["table"] if given."""
+    if found is not None:
+        found["table"] = softhd.find_dominant_plane(scan, distance=plane * L)
     off_table = softhd.remove_dominant_plane(scan, distance=plane * L)
     kept = scan[off_table]
     inliers = softhd.remove_statistical_outliers(kept, k=20, ratio=2.0)
@@ -129,10 +141,11 @@ def probe(scene, scan_file, P_start, P_true, out, log):
             log(f"probe: rho at {label}, {name}: {r.rho_start:.4g}")
 
 
-def ladder_align(scene, scan, P_true, log, fractions=(0.0, 0.125, 0.25, 0.5, 1.0)):
+def ladder_align(scene, scan, P_true, log, fractions=(0.0, 0.125, 0.25, 0.5, 1.0), **fixture):
     """align against the body under uniform controls between the initial control and the bound
     farthest from it (the finger: m = 0, -2.5, -5, -10, -20), keeping the pose of lowest rho
-    (the scan's one-sided distance); returns (align's dict, that uniform control)."""
+    (the scan's one-sided distance); returns (align's dict, that uniform control). `fixture`:
+    align's fixture, table and clamp, if given."""
     lo, hi = scene.control_bounds
     m0 = float(np.mean(scene.control_initial))
     far = float(np.min(lo)) if abs(np.min(lo) - m0) >= abs(np.max(hi) - m0) else float(np.max(hi))
@@ -140,7 +153,7 @@ def ladder_align(scene, scan, P_true, log, fractions=(0.0, 0.125, 0.25, 0.5, 1.0
     for f in fractions:
         m = np.full(scene.num_controls, m0 + f * (far - m0))
         body = scene.mesh.nodes + scene.forward(m).displacements
-        pose = softhd.align(body, scan, distance="scan_to_body")
+        pose = softhd.align(body, scan, distance="scan_to_body", **fixture)
         log(f"ladder: m = {m[0]:.4g}: rho {pose['rho']:.4g}, rotation error "
             f"{rotation_error(pose['matrix'][:3, :3], P_true):.2f} deg")
         if best is None or pose["rho"] < best[0]["rho"]:
@@ -182,6 +195,19 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         off = rotation_error(pose["matrix"][:3, :3], P_true)
         log(f"joint: starting from a calibrated camera's pose: the true one rotated by {deg:g} deg "
             f"about a random axis and moved by {frac:g} L ({off:.3f} deg)")
+    elif a.start in ("fixture", "ladder-fixture"):  # the table's tilt and height (section 8.12)
+        # The clamp's side: the base (x = 0) seen from the body's centre in the camera's frame,
+        # rounded to the nearest of the image's left, right, up, down (a user's hint).
+        seen = P_true[:3, :3].T @ np.array([-1.0, 0.0, 0.0])
+        k = int(np.argmax(np.abs(seen[:2])))
+        hint = np.zeros(3)
+        hint[k] = np.sign(seen[k])
+        fixture = dict(fixture=a.fixture, table=a.found["table"],
+                       clamp=(np.array([-1.0, 0.0, 0.0]), hint))
+        if a.start == "fixture":
+            pose = softhd.align(nodes, scan, distance="scan_to_body", **fixture)
+        else:
+            pose, initial = ladder_align(scene, scan, P_true, log, **fixture)
     else:
         pose = softhd.align(nodes, scan, distance="scan_to_body")
     log(f"joint: align {pose['status']}, rotation error "
@@ -226,6 +252,9 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         j["mesh"]["file"] = os.path.join(ROOT, "data/meshes/finger.msh")
         j["target"] = {"kind": "cloud", "file": scan_file, "frame": "camera", "pose": pose_file,
                        "distance": a.distance, "surface": True, "cap": cap}
+        if a.fixture_constraint:  # the projection keeps the start's tilt and height
+            j["target"]["fixture"] = {"normal": [float(x) for x in a.fixture[0]],
+                                      "offset": float(a.fixture[1])}
         if a.pose_uncertainty:
             j["target"]["pose_uncertainty"] = {"degrees": a.pose_uncertainty[0],
                                                "length": a.pose_uncertainty[1] * L}
@@ -283,10 +312,14 @@ def main():
     ap.add_argument("--pose-move", type=float, default=None,
                     help="--joint: the pose's move limit as a fraction of the control's")
     ap.add_argument("--algorithm", default=None, help="--joint: the optimiser (default mma)")
-    ap.add_argument("--start", choices=["align", "ladder", "true", "perturbed"], default="align",
+    ap.add_argument("--start",
+                    choices=["align", "ladder", "true", "perturbed", "fixture", "ladder-fixture"],
+                    default="align",
                     help="--joint: the start pose: align's at rest, ladder_align's (against bodies "
                          "under uniform controls), (a diagnostic) the true one, or a calibrated "
-                         "camera's (the true one off by 3 deg about a random axis and 0.02 L)")
+                         "camera's (the true one off by 3 deg about a random axis and 0.02 L), "
+                         "or align's at rest with the fixture (the table's tilt and height), or "
+                         "ladder_align's with the fixture")
     ap.add_argument("--method", choices=["exact", "tree"], default=None,
                     help="--joint: the distance's pair sums (softhd.optimise's method; default "
                          "tree)")
@@ -299,6 +332,9 @@ def main():
                     help="--joint: the start pose's uncertainty (the target's pose_uncertainty: "
                          "degrees, and a length as a fraction of L); with --pose-method "
                          "projection")
+    ap.add_argument("--fixture-constraint", action="store_true",
+                    help="--pose-method projection: the target's \"fixture\" (the table under "
+                         "the finger): the pose found keeps the start pose's tilt and height")
     ap.add_argument("--pose-method", choices=["joint", "projection"], default=None,
                     help="--joint: how the pose is refined (softhd.optimise's pose_method; "
                          "default joint)")
@@ -336,7 +372,9 @@ def main():
     log(f"view: {len(scan)} points in the camera's frame: {info['kept'] - info['table']} of the "
         f"body, {info['table']} of the table, {info['outliers']} outliers; L = {L:.4g}")
 
-    scan = clean_scan(scan, L, log, a.plane)
+    a.found = {}
+    a.fixture = synthetic_scan.table_plane(deformed)  # the table in the body's frame
+    scan = clean_scan(scan, L, log, a.plane, a.found)
     areas = softhd.area_weights(scan, "delaunay")
     u = np.zeros_like(nodes)
     a.truth = truth
@@ -380,7 +418,8 @@ def main():
     log(f"(L = {L:.4g}; at rest: rms {node_errors(nodes, 0 * u, truth)[1]:.4g})")
     if a.joint:
         log(f"RESULT seed {a.seed} view {a.view} start {a.start} method "
-            f"{a.pose_method or 'joint'} pose_move {a.pose_move} hold "
+            f"{a.pose_method or 'joint'}{' fixture' if a.fixture_constraint else ''} "
+            f"pose_move {a.pose_move} hold "
             f"{'all' if a.hold_all else 'first' if a.hold_first else 'none'}: node rms "
             f"{s_rms:.4g} ({s_rms / L * 100:.3g} % L, {s_rms / c_rms:.2f}x clean), pose "
             f"{a.final_pose[0]:.3f} deg {a.final_pose[1] * 100:.3g} % L, optimise "

@@ -263,10 +263,10 @@ TEST(Align, CoverageScoreTellsAFlippedHalfViewApart) {
   // coverage score (after each candidate's nearest-point fit) the true pose.
   o.score = CandidateScore::rho;
   std::vector<detail::LocalResult> copy = refined;
-  EXPECT_EQ(detail::choose_candidate(body, scan, L, o, &copy), 1u);
+  EXPECT_EQ(detail::choose_candidate(body, scan, L, o, nullptr, &copy), 1u);
   o.score = CandidateScore::coverage;
   copy = refined;
-  const size_t chosen = detail::choose_candidate(body, scan, L, o, &copy);
+  const size_t chosen = detail::choose_candidate(body, scan, L, o, nullptr, &copy);
   EXPECT_EQ(chosen, 0u);
   EXPECT_LT(rotation_angle_between(copy[chosen].pose.R, P.inverse().R), 1e-3);
   EXPECT_LT((copy[chosen].pose.t - P.inverse().t).norm(), 1e-3 * L);
@@ -353,6 +353,150 @@ TEST(Align, InitialCompetesWithTheGlobalStart) {
   o.initial = P;
   const AlignSummary s = align(body, scan, o);
   EXPECT_LT((s.pose.matrix() - P.matrix()).norm(), 1e-12);
+}
+
+/// bent_bar() on a table 0.05 under its lowest point, {z = z_min − 0.05}: the fixture.
+Fixture bent_bar_fixture(const PointCloud& body) {
+  Fixture f;
+  f.normal = Eigen::Vector3d(0.0, 0.0, 2.0);  // not a unit vector: the plane is n·x = offset
+  f.offset = 2.0 * (body.points().col(2).minCoeff() - 0.05);
+  return f;
+}
+
+/// Every other point of `body` and a grid of the table {z = z_table} under it (spacing 0.05,
+/// the body's footprint inflated by 0.3), moved into the camera's frame by P⁻¹.
+PointCloud with_table(const PointCloud& body, double z_table, const Pose& P) {
+  std::vector<Eigen::Vector3d> p;
+  for (Eigen::Index i = 0; i < body.size(); i += 2) p.push_back(body.points().row(i).transpose());
+  const Eigen::Vector3d lo = body.points().colwise().minCoeff(),
+                        hi = body.points().colwise().maxCoeff();
+  for (double x = lo.x() - 0.3; x <= hi.x() + 0.3; x += 0.05)
+    for (double y = lo.y() - 0.3; y <= hi.y() + 0.3; y += 0.05) p.emplace_back(x, y, z_table);
+  Eigen::MatrixXd m(static_cast<Eigen::Index>(p.size()), 3);
+  for (size_t i = 0; i < p.size(); ++i) m.row(static_cast<Eigen::Index>(i)) = p[i].transpose();
+  return PointCloud(apply_points(P.inverse(), m));
+}
+
+// The fixture (formulation §8.12): an exact copy of a bent body on a table, turned about the
+// table's normal by any of 8 angles after a fixed tilt and shift, its table found by RANSAC in
+// the scan and removed: align with the fixture (every other angle with the clamp's side too)
+// recovers the pose to rounding (the exact pairs of the constrained nearest-point fit; observed
+// 4e-16 to 2e-15 rad, asserted to 1e-9), and every pose keeps the table's tilt and height to
+// rounding (asserted to 1e-12).
+TEST(AlignFixture, BentBodyRecoveredAtAnyAngleAboutTheTable) {
+  const PointCloud body = bent_bar();
+  const double L = body_size(body);
+  const Fixture fixture = bent_bar_fixture(body);
+  std::mt19937_64 gen(11);
+  const Pose G = random_pose(gen);  // the tilt and shift of the camera
+  PlaneRemoval plane;
+  plane.distance = 0.01;
+  AlignOptions o = fast_options();
+  o.fixture = fixture;
+  o.rotations = 12;       // angles about the table's normal (every 30°): enough for an exact copy
+  o.refine_points = 300;  // the refinement's clouds; the nearest-point finish takes every point
+  for (int k = 0; k < 8; ++k) {
+    Pose turn;  // about the table's normal (z) by 2πk/8 + 0.3
+    turn.R = Eigen::AngleAxisd(2.0 * M_PI * k / 8 + 0.3, Eigen::Vector3d::UnitZ()).matrix();
+    const Pose P = compose(turn, G);
+    const PointCloud raw = with_table(body, fixture.offset / 2.0, P);
+    o.table = find_dominant_plane(raw, plane);
+    const PointCloud scan = select(raw, remove_dominant_plane(raw, plane));
+    EXPECT_EQ(scan.size(), (body.size() + 1) / 2);
+    // Odd angles with the clamp's side: arm 1's end x = 0 (−x), seen where P⁻¹ shows it, the
+    // direction turned by 60° about the table as a user's coarse hint would be.
+    o.fixture->clamp = k % 2 ? Eigen::Vector3d(-1.0, 0.0, 0.0) : Eigen::Vector3d::Zero();
+    o.fixture->clamp_seen =
+        k % 2 ? Eigen::Vector3d(P.R.transpose() *
+                                Eigen::AngleAxisd(M_PI / 3, Eigen::Vector3d::UnitZ()).matrix() *
+                                o.fixture->clamp)
+              : Eigen::Vector3d::Zero();
+    const AlignSummary s = align(body, scan, o);
+    EXPECT_LT(rotation_angle_between(s.pose.R, P.R), 1e-9) << "angle " << k;
+    EXPECT_LT((s.pose.t - P.t).norm(), 1e-9 * L) << "angle " << k;
+    // The constraint: R n_s = n_b and n_b·t = d_b − d_s.
+    const FixtureConstraint c(fixture, *o.table, scan.points());
+    EXPECT_LT((s.pose.R * c.scan_normal() - c.body_normal()).norm(), 1e-12);
+    EXPECT_LT(std::abs(c.body_normal().dot(s.pose.t) - c.body_offset() + c.scan_offset()),
+              1e-12 * L);
+  }
+}
+
+// The constrained least-squares fit (FixtureConstraint::fit) of exact pairs gives back a pose
+// on the constraint to rounding; pairs off it by a rotation about the table's normal and a
+// shift along the table are the same problem; and project() puts any pose on the constraint.
+TEST(AlignFixture, ConstrainedFitAndProjection) {
+  std::mt19937_64 gen(3);
+  Fixture f;
+  f.normal = Eigen::Vector3d(0.3, -0.2, 1.0);
+  f.offset = -0.4;
+  Plane table;
+  table.normal = Eigen::Vector3d(-0.5, 0.8, 0.1);  // its sign is turned towards the points
+  table.offset = 0.7;
+  const Eigen::MatrixXd y = Eigen::MatrixXd::Random(40, 3);  // Eigen's fixed generator
+  const FixtureConstraint c(f, table, y);
+  // A pose Q on the constraint: start() at some angle, its inverse P the scan → body pose.
+  const Pose Q = c.start(1.1, Eigen::Vector3d(0.2, 0.1, -0.3), Eigen::Vector3d(1.0, 2.0, 3.0));
+  EXPECT_LT((Q.R * c.body_normal() - c.scan_normal()).norm(), 1e-15 * 10);
+  EXPECT_LT(std::abs(c.scan_normal().dot(Q.t) - c.scan_offset() + c.body_offset()), 1e-14);
+  const Pose P = Q.inverse();
+  const Pose fitted = c.fit(y, apply_points(P, y));
+  EXPECT_LT(rotation_angle_between(fitted.R, P.R), 1e-13);
+  EXPECT_LT((fitted.t - P.t).norm(), 1e-13);
+  // project(): a random pose ends on the constraint; one already on it stays.
+  const Pose off = random_pose(gen);
+  const Pose on = c.project(off, Eigen::Vector3d(0.5, 0.5, 0.5));
+  EXPECT_LT((on.R * c.body_normal() - c.scan_normal()).norm(), 1e-14);
+  EXPECT_LT(std::abs(c.scan_normal().dot(on.t) - c.scan_offset() + c.body_offset()), 1e-14);
+  const Pose same = c.project(Q, Eigen::Vector3d(0.5, 0.5, 0.5));
+  EXPECT_LT((same.matrix() - Q.matrix()).norm(), 1e-14);
+  // The clamp's side: allowed while R_Q clamp, on the table, is within 90° of clamp_seen.
+  EXPECT_TRUE(c.allows(Q));  // no side given
+  Fixture sided = f;
+  sided.clamp = Eigen::Vector3d(1.0, 0.0, 0.0);
+  const Eigen::Vector3d seen = Q.R * sided.clamp;
+  for (double sign : {1.0, -1.0}) {
+    sided.clamp_seen = sign * seen;
+    EXPECT_EQ(FixtureConstraint(sided, table, y).allows(Q), sign > 0);
+  }
+  // The tangent: 3 orthonormal twists, ω along n_s.
+  const Eigen::MatrixXd B = c.tangent();
+  EXPECT_LT((B.transpose() * B - Eigen::Matrix3d::Identity()).norm(), 1e-15 * 10);
+}
+
+TEST(AlignFixture, BadInputRefusedNamingTheField) {
+  const PointCloud body = asymmetric_body(60, 8);
+  AlignOptions o;
+  o.fixture = Fixture{};
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "table");
+  Plane table;
+  table.normal = Eigen::Vector3d::UnitZ();
+  o.table = table;
+  o.fixture->normal.setZero();
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); },
+                                      "fixture.normal has zero length");
+  o.fixture->normal = Eigen::Vector3d(0.0, std::nan(""), 1.0);
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "fixture.normal");
+  o.fixture = Fixture{};
+  o.fixture->offset = std::nan("");
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "fixture.offset");
+  o.fixture = Fixture{};
+  o.kind = PoseKind::similarity;
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "rigid");
+  o.kind = PoseKind::rigid;
+  o.table->normal = Eigen::Vector3d::Zero();
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); },
+                                      "table normal has zero length");
+  o.table->normal = Eigen::VectorXd::Unit(2, 1);  // a 2D plane
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "table");
+  o.table->normal = Eigen::Vector3d::UnitZ();
+  o.fixture->clamp = Eigen::Vector3d::UnitX();  // without clamp_seen
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "fixture.clamp and");
+  o.fixture->clamp = Eigen::Vector3d::UnitZ();  // along the normal
+  o.fixture->clamp_seen = Eigen::Vector3d::UnitX();
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "fixture.clamp is along");
+  o.fixture->clamp_seen = Eigen::Vector3d(std::nan(""), 0.0, 0.0);
+  test::expect_error<InvalidArgument>([&] { align(body, body, o); }, "fixture.clamp_seen");
 }
 
 }  // namespace

@@ -276,6 +276,26 @@ TEST_F(Cli, AlignRecoversAMovedCopyAndRefusesBadInput) {
                    "--scale-max must be >= 1");
   expect_bad_input("align " + good + " " + write("flat.txt", "0 0\n1 1\n") + out, "align takes 3D");
   expect_bad_input("align " + good + " " + good, "--out DIR is required");
+  // --fixture (the table in the body's frame) and --table (the scan's, found by RANSAC).
+  expect_bad_input("align " + good + " " + good + out + " --fixture 0,0,0,1 --table 0.1",
+                   "--fixture: the normal has zero length");
+  expect_bad_input("align " + good + " " + good + out + " --fixture 0,0,1,nan --table 0.1",
+                   "--fixture: nan is not a finite double");
+  expect_bad_input("align " + good + " " + good + out + " --fixture 0,0,1 --table 0.1",
+                   "--fixture must be 4 numbers");
+  expect_bad_input("align " + good + " " + good + out + " --fixture 0,0,1,0",
+                   "--fixture needs --table T");
+  expect_bad_input("align " + good + " " + good + out + " --fixture 0,0,1,0 --table 0",
+                   "--table must be > 0");
+  expect_bad_input("align " + good + " " + good + out + " --fixture 0,0,1,0 --table 1 --similarity",
+                   "--fixture needs a rigid alignment");
+  std::string scattered;  // 40 points of which no plane holds 10 % within 1e-9
+  for (int i = 0; i < 40; ++i)
+    scattered += xyz_line(
+        Eigen::Vector3d(std::sin(1.3 * i), std::cos(2.1 * i + 0.4), std::sin(0.7 * i * i)));
+  expect_bad_input("align " + good + " " + write("scattered.txt", scattered) + out +
+                       " --fixture 0,0,1,0 --table 1e-9",
+                   "scattered.txt: no table plane for --fixture");
 }
 
 // align --inlier F: the overlap's threshold is F times the body size L (pose.json's

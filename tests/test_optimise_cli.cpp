@@ -773,6 +773,14 @@ TEST_F(OptimiseCli, CameraFrameTargetRefinesThePoseWithTheControl) {
            {"pose_uncertainty",
             {{"degrees", 1}, {"length", 0.01}},
             "target.pose_uncertainty bounds the pose found by projection: give --pose-method "
+            "projection"},
+           {"fixture",
+            {{"normal", {0, 0, 0}}, {"offset", 0}},
+            "target.fixture.normal has zero length"},
+           // a valid fixture keeps the projection's tilt: refused with the joint method
+           {"fixture",
+            {{"normal", {0, 0, 1}}, {"offset", 0}},
+            "target.fixture constrains the pose found by projection: give --pose-method "
             "projection"}}) {
     nlohmann::json t = seen;
     t[key] = value;

@@ -50,6 +50,59 @@ softhd::Scene scene_with(const std::string& target) {
                              testing::TempDir() + "/scan_scene.json");
 }
 
+// "fixture" (docs/formulation.md §8.12): the table in the body's frame; the scan's table is the
+// plane of "clean": {"plane": D}, found as the clean-up's plane step finds it; the objective's
+// inner pose keeps the table (pose_table_normal). Bad values refused naming the key.
+TEST(ScanScene, FixtureKeys) {
+  const std::string file = write_scan();
+  const std::string head =
+      R"({"kind": "cloud", "file": "scan_scene.ply", "frame": "camera", "clean": {"plane": 0.01}, )";
+  const softhd::Scene s = scene_with(head + R"("fixture": {"normal": [0, 0, 2], "offset": -0.1}})");
+  const SceneTarget t = scene_target(s, s.body.make_mesh());
+  ASSERT_TRUE(t.fixture && t.table);
+  EXPECT_EQ(t.fixture->normal, Eigen::Vector3d(0, 0, 2));
+  EXPECT_EQ(t.fixture->offset, -0.1);
+  scan::PlaneRemoval plane;
+  plane.distance = 0.01;
+  const scan::Plane expected = scan::find_dominant_plane(read_cloud(file), plane);
+  EXPECT_EQ(t.table->normal, expected.normal);
+  EXPECT_EQ(t.table->offset, expected.offset);
+  EXPECT_EQ(t.cloud.size(), 3860 - expected.inliers);  // that plane's points removed
+  EXPECT_GE(expected.inliers, 3000);                   // the table's
+  ShapeObjectiveOptions o;
+  apply_target_settings(t, &o);
+  ASSERT_TRUE(o.pose_table_normal);
+  EXPECT_EQ(*o.pose_table_normal, Eigen::Vector3d(0, 0, 2));
+  auto refuses = [&](const std::string& rest, const std::string& message) {
+    const softhd::Scene bad = scene_with(rest + "}");
+    expect_error<Error>([&] { scene_target(bad, bad.body.make_mesh()); }, message);
+  };
+  refuses(head + R"("fixture": {"normal": [0, 0, 0], "offset": 0})",
+          "target.fixture.normal has zero length");
+  refuses(head + R"("fixture": {"normal": [0, 0, "NaN"], "offset": 0})",
+          "target.fixture.normal must be 3 numbers");
+  refuses(head + R"("fixture": {"normal": [0, 0, 1], "offset": "NaN"})",
+          "target.fixture.offset must be a number");
+  refuses(head + R"("fixture": {"normal": [0, 0, 1], "offset": 0, "side": 1})",
+          "unknown key 'side'");
+  refuses(head + R"("align": "similarity", "fixture": {"normal": [0, 0, 1], "offset": 0})",
+          "target.fixture needs \"align\": \"rigid\"");
+  refuses(R"({"kind": "cloud", "file": "scan_scene.ply", "frame": "camera",
+              "fixture": {"normal": [0, 0, 1], "offset": 0})",
+          "target.fixture needs the table found in the scan");
+  refuses(R"({"kind": "cloud", "file": "scan_scene.ply",
+              "fixture": {"normal": [0, 0, 1], "offset": 0})",
+          "target.fixture is for a cloud in the camera's frame");
+  // No table: 40 scattered points, of which no plane holds 10 % (4) within 1e-9.
+  Eigen::MatrixXd scattered(40, 3);
+  for (int i = 0; i < 40; ++i)
+    scattered.row(i) << std::sin(1.3 * i), std::cos(2.1 * i + 0.4), std::sin(0.7 * i * i);
+  write_ply_cloud(testing::TempDir() + "/scan_scene_scattered.ply", PointCloud(scattered));
+  refuses(R"({"kind": "cloud", "file": "scan_scene_scattered.ply", "frame": "camera",
+              "clean": {"plane": 1e-9}, "fixture": {"normal": [0, 0, 1], "offset": 0})",
+          "target.fixture: no table plane in");
+}
+
 TEST(ScanScene, CleansAndWeighsInTheDocumentedOrder) {
   const std::string file = write_scan();
   const softhd::Scene s = scene_with(

@@ -560,5 +560,49 @@ TEST_F(PoseProjection, TheUncertaintyBoundsTheTwist) {
   expect_error<InvalidArgument>([&] { o.validate(); }, "pose_bound bounds the pose found by");
 }
 
+// The fixture's table normal n_b in the projection (docs/formulation.md §8.12): the inner
+// minimisation turns the body only about the table's normal and shifts it only along the table.
+// A start that differs from the truth by such a motion (0.08 rad about z and (0.05, −0.03))
+// gives the truth back to rounding; from a start tilted off it (perturbed()), the pose found
+// keeps the start's tilt R_Q n_b and height n_s·t_Q to rounding while ρ̃ falls.
+TEST_F(PoseProjection, TheTableNormalKeepsTheStartsTiltAndHeight) {
+  ShapeObjectiveOptions o = projection_options(G.inverse(), 1e-13);
+  ShapeObjectiveOptions in_body = o;
+  in_body.pose.reset();
+  in_body.pose_method = PoseMethod::joint;
+  ShapeObjective B(A, space, HausdorffTarget(bent_target(), o.hausdorff), in_body);
+  ASSERT_EQ(B.evaluate(m0, false).status, EvaluationStatus::ok);
+  const PointCloud seen = G.apply(B.moving_cloud().at(B.state_path().last_state().u), false);
+  const Eigen::Vector3d n(0.0, 0.0, 2.0);  // the table's normal, not a unit vector
+  o.pose_table_normal = n;
+  scan::Pose turn;  // body frame: about z through (1, 0.2, 0), then along the table
+  turn.R = Eigen::AngleAxisd(0.08, Eigen::Vector3d::UnitZ()).matrix();
+  turn.t = Eigen::Vector3d(1.0, 0.2, 0.0) - turn.R * Eigen::Vector3d(1.0, 0.2, 0.0) +
+           Eigen::Vector3d(0.05, -0.03, 0.0);
+  o.pose = scan::compose(turn, G.inverse());
+  ShapeObjective J(A, space, HausdorffTarget(seen, o.hausdorff), o);
+  const ShapeEvaluation e = J.evaluate(m0, false);
+  ASSERT_EQ(e.status, EvaluationStatus::ok) << e.failure;
+  const scan::Pose P = pose_at(J, e.pose_twist), truth = G.inverse();
+  EXPECT_LT(scan::rotation_angle_between(P.R, truth.R), 1e-12);
+  EXPECT_LT((P.t - truth.t).norm(), 1e-11);
+  o.pose = perturbed(G);  // tilted: the truth is off the start's constraint
+  ShapeObjective K(A, space, HausdorffTarget(seen, o.hausdorff), o);
+  const ShapeEvaluation k = K.evaluate(m0, false);
+  const scan::Pose Q0 = o.pose->inverse(), Q = pose_at(K, k.pose_twist).inverse();
+  const Eigen::Vector3d ns = Q0.R * n.normalized();
+  EXPECT_LT((Q.R * n.normalized() - ns).norm(), 1e-13);
+  EXPECT_LT(std::abs(ns.dot(Q.t) - ns.dot(Q0.t)), 1e-12);
+  ShapeObjectiveOptions zero = o;  // ρ̃ at the start pose itself
+  zero.pose_bound = PoseBound{1e-300, 1e-300};
+  ShapeObjective Z(A, space, HausdorffTarget(seen, o.hausdorff), zero);
+  EXPECT_LT(k.J, Z.evaluate(m0, false).J);
+  o.pose_table_normal = Eigen::Vector3d::Zero();
+  expect_error<InvalidArgument>([&] { o.validate(); }, "pose_table_normal must be finite");
+  o.pose_table_normal = n;
+  o.pose_method = PoseMethod::joint;
+  expect_error<InvalidArgument>([&] { o.validate(); }, "pose_table_normal constrains the pose");
+}
+
 }  // namespace
 }  // namespace softhd::test

@@ -41,11 +41,24 @@ from ._core import (DistanceResult, Error, FileError, ForwardResult, InvalidArgu
                     Mesh, NumericalError, OptimiseResult, ResourceError, Scene)
 
 __all__ = ["distance", "align", "hausdorff_nearest", "Target", "read_cloud", "write_cloud", "read_mesh",
-           "crop_to_box", "remove_statistical_outliers", "remove_dominant_plane", "area_weights",
+           "crop_to_box", "remove_statistical_outliers", "remove_dominant_plane",
+           "find_dominant_plane", "area_weights",
            "visible_points",
            "Scene", "Mesh", "optimise", "optimise_defaults", "DistanceResult", "ForwardResult",
            "OptimiseResult",
            "Iteration", "Error", "InvalidArgument", "FileError", "ResourceError", "NumericalError"]
+
+
+def _plane4(p, name):
+    """None, or a plane n.x = d as the 4 numbers (n1, n2, n3, d), from a dict with ``normal``
+    and ``offset`` (find_dominant_plane's), a pair (normal, offset) or 4 numbers."""
+    if p is None:
+        return None
+    if isinstance(p, dict):
+        p = (p["normal"], p["offset"])
+    if len(p) == 2:
+        p = _np.concatenate([_np.ravel(_np.asarray(p[0], dtype=float)), [float(p[1])]])
+    return _as_float64(_np.ravel(p), name)
 
 
 def _as_float64(a, name):
@@ -168,7 +181,7 @@ def hausdorff_nearest(X, Y, *, fields=False, threads=0):
 def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, scale_max=2.0,
           distance="symmetric", cap=0.0, eps=None, alpha=4.0, beta=4.0, gamma=2.0,
           global_start=True, initial=None, rotations=48, refine_points=1000, inlier=0.01,
-          threads=0, score="coverage", keep=4):
+          threads=0, score="coverage", keep=4, fixture=None, table=None, clamp=None):
     """The pose that takes ``scan`` (M, 3), in the camera's frame, onto ``body`` (N, 3)
     (docs/formulation.md section 8, as ``softhd align``): y -> s R y + t minimising rho over a
     twist, after a global start over ``rotations`` grid rotations (unless ``global_start`` is
@@ -186,6 +199,17 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
     cover the body's side it shows and lie on the body) or "rho" (rho itself, for a scan not
     in its camera's frame). The retired spelling "visible" raises InvalidArgument naming
     "coverage".
+
+    fixture: the table the body sits on, in the body's frame, as 4 numbers (n1, n2, n3, d),
+    a pair (normal, d) or a dict with "normal" and "offset": the plane n.x = d, n pointing
+    towards the body (docs/formulation.md section 8.12); with it, ``table`` (the same table
+    found in the scan, e.g. ``find_dominant_plane(scan, ...)``'s ``normal`` and ``offset``
+    before the table is removed; its sign is free) is required, and
+    every pose tried keeps the table's tilt and height: only the rotation about the table's
+    normal (``rotations`` angles in the global start) and the shift along it are searched.
+    clamp: with ``fixture``, the clamp's side as a pair (direction in the body's frame from its
+    centre to its clamped end, the direction that end is seen in the scan's frame): poses that
+    turn the one more than 90 degrees from the other (on the table) are not tried.
 
     Returns a dict: ``matrix`` (4, 4), ``twist`` (7,: omega, v, sigma with R = exp([omega]x),
     t = v, s = e^sigma), ``scale``, ``rho``, ``overlap`` (fraction of scan points within the
@@ -207,7 +231,10 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
                     beta=float(beta), gamma=float(gamma), global_start=bool(global_start),
                     initial=init, rotations=int(rotations),
                     refine_points=int(refine_points), inlier=float(inlier),
-                    threads=int(threads), score=str(score), keep=int(keep))
+                    threads=int(threads), score=str(score), keep=int(keep),
+                    fixture=_plane4(fixture, "fixture"), table=_plane4(table, "table"),
+                    clamp=None if clamp is None else _as_float64(
+                        _np.concatenate([_np.ravel(clamp[0]), _np.ravel(clamp[1])]), "clamp"))
     d["twist"] = d["twist"].reshape(7)
     d["residuals"] = d["residuals"].reshape(-1)
     return d
@@ -243,6 +270,14 @@ def remove_dominant_plane(points, distance, iterations=1000, min_fraction=0.1, s
     removed if the plane holds fewer than min_fraction of the points."""
     return _core.remove_dominant_plane(_as_float64(points, "points"), float(distance),
                                        int(iterations), float(min_fraction), int(seed))
+
+
+def find_dominant_plane(points, distance, iterations=1000, min_fraction=0.1, seed=1):
+    """The dominant plane of (M, 3) points (as remove_dominant_plane finds it): a dict with
+    ``normal`` (unit; its largest component positive), ``offset`` (n.x = offset on the plane)
+    and ``inliers`` (the points within ``distance`` of it)."""
+    return _core.find_dominant_plane(_as_float64(points, "points"), float(distance),
+                                     int(iterations), float(min_fraction), int(seed))
 
 
 def area_weights(points, method="knn", neighbours=12):

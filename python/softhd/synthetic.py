@@ -5,7 +5,7 @@ camera's frame, with the true pose (camera frame -> body frame):
   1. a random camera: direction uniform on the upper half sphere (z > 0.2: a table lies under
      the body) around the body's centre, at `distance` times the body's size L, looking at
      the centre (random roll);
-  2. optionally a table: a plane under the body (its lowest z minus L/100) over its
+  2. optionally a table: a plane under the body (its lowest z minus L/100, table_plane) over its
      footprint inflated 1.3 times, a jittered triangulated grid of about half as many points
      as the body;
   3. visibility by softhd.visible_points, the library's ray cast (docs/formulation.md section
@@ -74,6 +74,15 @@ def box_surface(shape):
     return np.vstack(tri).astype(np.int64)
 
 
+def table_plane(body):
+    """(normal, offset) of the table view(..., table=True) puts under `body`: the plane
+    z = offset, offset = the body's lowest z minus 1 % of its size L, normal (0, 0, 1) (towards
+    the body). A fixture that holds the body over a table at a known height, in the body's
+    frame: softhd.align's ``fixture``."""
+    body = np.asarray(body, dtype=float)
+    return np.array([0.0, 0.0, 1.0]), float(body[:, 2].min() - 0.01 * body_size(body))
+
+
 def table_surface(rng, body, L, count):
     """(points, triangles): a jittered n x n grid (n^2 >= count) in the plane under the body,
     triangles facing up (+z)."""
@@ -86,7 +95,7 @@ def table_surface(rng, body, L, count):
     p = np.empty((n * n, 3))
     p[:, 0] = (mid[0] - half[0] + 2 * half[0] * u).ravel()
     p[:, 1] = (mid[1] - half[1] + 2 * half[1] * v).ravel()
-    p[:, 2] = lo[2] - 0.01 * L
+    p[:, 2] = table_plane(body)[1]
     idx = np.arange(n * n).reshape(n, n)  # idx[i, j]: x index i, y index j
     a, b, c, d = idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]
     tri = np.vstack([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])

@@ -13,7 +13,9 @@ py::dict align_clouds(const Array& body, const std::optional<Array>& body_volume
                       const std::string& distance, double cap, std::optional<double> eps,
                       double alpha, double beta, double gamma, bool global_start,
                       const std::optional<Array>& initial, int rotations, int refine_points,
-                      double inlier, int threads, const std::string& score, int keep) {
+                      double inlier, int threads, const std::string& score, int keep,
+                      const std::optional<Array>& fixture, const std::optional<Array>& table,
+                      const std::optional<Array>& clamp) {
   check_cloud(body, body_volumes, "body");
   check_cloud(scan, std::nullopt, "scan");
   scan::AlignOptions o;
@@ -36,6 +38,30 @@ py::dict align_clouds(const Array& body, const std::optional<Array>& body_volume
     if (initial->ndim() != 2 || initial->shape(0) != 4 || initial->shape(1) != 4)
       throw InvalidArgument("initial must be a (4, 4) array");
     o.initial = scan::Pose::from_matrix(Eigen::Map<const RowMatrix>(initial->data(), 4, 4));
+  }
+  // A plane as 4 numbers (n1, n2, n3, offset): n·x = offset.
+  const auto plane = [](const Array& a, const char* name) {
+    if (a.ndim() != 1 || a.shape(0) != 4)
+      throw InvalidArgument(std::string(name) + " must be 4 numbers (the normal, the offset)");
+    return Eigen::Vector4d(a.data()[0], a.data()[1], a.data()[2], a.data()[3]);
+  };
+  if (fixture) {
+    const Eigen::Vector4d f = plane(*fixture, "fixture");
+    o.fixture = scan::Fixture{f.head<3>(), f[3]};
+  }
+  if (clamp) {
+    if (clamp->ndim() != 1 || clamp->shape(0) != 6)
+      throw InvalidArgument(
+          "clamp must be 6 numbers (its direction in the body's frame, then in "
+          "the scan's)");
+    if (!o.fixture) throw InvalidArgument("clamp is the fixture's clamp side: give fixture");
+    const Eigen::Map<const Eigen::Matrix<double, 6, 1>> c(clamp->data());
+    o.fixture->clamp = c.head<3>();
+    o.fixture->clamp_seen = c.tail<3>();
+  }
+  if (table) {
+    const Eigen::Vector4d f = plane(*table, "table");
+    o.table = scan::Plane{Eigen::VectorXd(f.head<3>()), f[3], 0};
   }
   const PointCloud B = make_cloud(body, body_volumes), S = make_cloud(scan, std::nullopt);
   o.distance.params.epsilon = eps ? *eps : 1e-3 * scan::body_size(B);  // None: L/1000
@@ -72,7 +98,7 @@ void bind_align(py::module_& m) {
         py::arg("scale_max"), py::arg("distance"), py::arg("cap"), py::arg("eps"), py::arg("alpha"),
         py::arg("beta"), py::arg("gamma"), py::arg("global_start"), py::arg("initial"),
         py::arg("rotations"), py::arg("refine_points"), py::arg("inlier"), py::arg("threads"),
-        py::arg("score"), py::arg("keep"));
+        py::arg("score"), py::arg("keep"), py::arg("fixture"), py::arg("table"), py::arg("clamp"));
 }
 
 }  // namespace softhd::python

@@ -65,6 +65,28 @@ py::array_t<std::int64_t> plane(const Array& points, double distance, int iterat
   return to_indices(kept);
 }
 
+py::dict find_plane(const Array& points, double distance, int iterations, double min_fraction,
+                    std::uint64_t seed) {
+  check_cloud(points, std::nullopt, "points");
+  scan::PlaneRemoval options;
+  options.distance = distance;
+  options.iterations = iterations;
+  options.min_fraction = min_fraction;
+  options.seed = seed;
+  scan::Plane found;
+  {
+    py::gil_scoped_release release;
+    found = scan::find_dominant_plane(make_cloud(points, std::nullopt), options);
+  }
+  py::dict d;
+  py::array_t<double> normal(found.normal.size());
+  Eigen::Map<Eigen::VectorXd>(normal.mutable_data(), found.normal.size()) = found.normal;
+  d["normal"] = normal;
+  d["offset"] = found.offset;
+  d["inliers"] = found.inliers;
+  return d;
+}
+
 py::array_t<double> areas(const Array& points, const std::string& method, int neighbours) {
   check_cloud(points, std::nullopt, "points");
   const scan::AreaEstimate estimate = scan::area_estimate_from_string(method);
@@ -124,6 +146,8 @@ void bind_scan(py::module_& m) {
   m.def("remove_statistical_outliers", &outliers, py::arg("points").noconvert(), py::arg("k"),
         py::arg("ratio"));
   m.def("remove_dominant_plane", &plane, py::arg("points").noconvert(), py::arg("distance"),
+        py::arg("iterations"), py::arg("min_fraction"), py::arg("seed"));
+  m.def("find_dominant_plane", &find_plane, py::arg("points").noconvert(), py::arg("distance"),
         py::arg("iterations"), py::arg("min_fraction"), py::arg("seed"));
   m.def("area_weights", &areas, py::arg("points").noconvert(), py::arg("method"),
         py::arg("neighbours"));

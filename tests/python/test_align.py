@@ -86,3 +86,34 @@ def test_bad_input_refused(rng):
         softhd.align(np.ones((4, 3)), body)
     with pytest.raises(softhd.InvalidArgument, match="initial pose has scale 2"):
         softhd.align(body, body, initial=np.diag([2.0, 2.0, 2.0, 1.0]))
+
+
+def test_fixture_keeps_the_table_and_recovers_a_turn_about_it(rng):
+    """The fixture (docs/formulation.md section 8.12): the body on a table z = -0.05, every other
+    body point and the table moved into the camera's frame by a turn about the table's normal
+    after a tilt; the table found by find_dominant_plane and removed: align with the fixture
+    (and the clamp's side, seen where it is) gives the pose back and keeps the table's tilt."""
+    body = body_cloud(rng, 300)
+    g = np.stack(np.meshgrid(np.linspace(-0.3, 1.3, 30), np.linspace(-0.3, 0.9, 25)), -1)
+    table = np.column_stack([g.reshape(-1, 2), np.full(g.shape[0] * g.shape[1], -0.05)])
+    c, s = np.cos(2.5), np.sin(2.5)
+    turn = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    R, t = turn @ random_rotation(rng), rng.normal(size=3)  # P: x = R y + t
+    raw = (np.vstack([body[::2], table]) - t) @ R
+    plane = softhd.find_dominant_plane(raw, distance=0.01)
+    assert plane["inliers"] == len(table)
+    scan = raw[softhd.remove_dominant_plane(raw, distance=0.01)]
+    assert len(scan) == len(body[::2])
+    clamp = (np.array([-1.0, 0, 0]), R.T @ np.array([-1.0, 0, 0]))
+    r = softhd.align(body, scan, fixture=([0, 0, 1], -0.05), table=plane, clamp=clamp)
+    M = r["matrix"]
+    assert angle(M[:3, :3], R) < 1e-9
+    assert np.linalg.norm(M[:3, 3] - t) < 1e-9
+    n = np.asarray(plane["normal"]) * np.sign(np.median(scan @ plane["normal"] - plane["offset"]))
+    assert np.linalg.norm(M[:3, :3] @ n - [0, 0, 1]) < 1e-12
+    with pytest.raises(softhd.InvalidArgument, match="fixture needs the scan's table plane"):
+        softhd.align(body, scan, fixture=([0, 0, 1], -0.05))
+    with pytest.raises(softhd.InvalidArgument, match="fixture.normal has zero length"):
+        softhd.align(body, scan, fixture=([0, 0, 0], -0.05), table=plane)
+    with pytest.raises(softhd.InvalidArgument, match="clamp is the fixture's clamp side"):
+        softhd.align(body, scan, table=plane, clamp=clamp)

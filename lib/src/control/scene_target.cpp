@@ -3,6 +3,7 @@
 
 #include "softhd/control/scene_target.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -141,12 +142,26 @@ std::optional<scan::AreaEstimate> parse_weights(const Scene& scene, const nlohma
 
 // read → crop (to the body's box, inflated) → plane → outliers → weights; what each step
 // did and what the reader skipped go into `description`.
+// With "fixture" (and no "pose"): the table, the plane the clean-up's plane step removes, into
+// *table (refused if it holds under min_fraction of the points: no table to hold the pose on).
 PointCloud read_scan(const Scene& scene, const nlohmann::json& t, const std::string& file,
-                     std::string& description) {
+                     std::string& description, std::optional<scan::Plane>* table) {
   std::vector<std::string> notes;
   PointCloud cloud = read_cloud(file, scene.body.dim(), &notes);
   check_coordinates(cloud, file);
   const scan::ScanCleanup clean = parse_clean(scene, t);
+  if (t.contains("fixture") && !t.contains("pose") && clean.plane && cloud.dim() == 3) {
+    scan::PlaneRemoval removal;  // as clean_scan's plane step (no crop in the camera's frame)
+    removal.distance = *clean.plane;
+    const scan::Plane plane = scan::find_dominant_plane(cloud, removal);
+    if (static_cast<double>(plane.inliers) <
+        removal.min_fraction * static_cast<double>(cloud.size()))
+      throw InvalidArgument(scene.source + ": target.fixture: no table plane in " + file +
+                            " within target.clean.plane " + decimal(*clean.plane) +
+                            ": the largest plane holds " + std::to_string(plane.inliers) + " of " +
+                            std::to_string(cloud.size()) + " points (fewer than 10 %)");
+    *table = plane;
+  }
   const std::optional<scan::AreaEstimate> weights = parse_weights(scene, t);
   std::vector<scan::CleanupStep> steps;
   const Eigen::Index read = cloud.size();
@@ -163,13 +178,13 @@ PointCloud read_scan(const Scene& scene, const nlohmann::json& t, const std::str
 }
 
 SceneTarget cloud_target(const Scene& scene, const fe::Mesh& mesh, const nlohmann::json& t,
-                         double memory_limit) {
+                         double memory_limit, std::optional<scan::Plane>* table) {
   if (!t.contains("file") || !t["file"].is_string())
     throw InvalidArgument(scene.source + ": target.file must be a path string");
   const fs::path dir = fs::path(scene.source).parent_path();
   const fs::path f = (dir / t["file"].get<std::string>()).lexically_normal();
   std::string description = "cloud file " + f.string();
-  const PointCloud cloud = read_scan(scene, t, f.string(), description);
+  const PointCloud cloud = read_scan(scene, t, f.string(), description, table);
   if (!t.contains("solved_on")) return {cloud, std::nullopt, description, {}};
   if (t.contains("clean") || t.contains("weights"))
     throw InvalidArgument(scene.source +
@@ -272,8 +287,54 @@ struct FrameKeys {
   scan::PoseKind align = scan::PoseKind::rigid;
   std::optional<scan::Pose> pose;
   std::optional<PoseBound> uncertainty;
+  std::optional<scan::Fixture> fixture;
   std::string description;
 };
+
+// "fixture": {"normal": [n1, n2, n3], "offset": d}, the table n·x = d in the body's frame; without
+// "pose" the table is found in the scan by "clean": {"plane": D}, which must be given.
+scan::Fixture read_fixture(const Scene& scene, const nlohmann::json& t, scan::PoseKind kind) {
+  const nlohmann::json& j = t["fixture"];
+  const std::string key = scene.source + ": target.fixture";
+  if (!j.is_object())
+    throw InvalidArgument(key + " must be {\"normal\": [n1, n2, n3], \"offset\": d}, got " +
+                          j.dump());
+  io::check_keys(j, "scene " + scene.source, "target.fixture",
+                 {"normal", "offset", "clamp", "clamp_seen"});
+  scan::Fixture f;
+  const nlohmann::json n = j.contains("normal") ? j["normal"] : nlohmann::json();
+  if (!n.is_array() || n.size() != 3 ||
+      !std::all_of(n.begin(), n.end(), [](const nlohmann::json& v) { return v.is_number(); }))
+    throw InvalidArgument(key + ".normal must be 3 numbers, got " + n.dump());
+  for (int k = 0; k < 3; ++k) f.normal[k] = n[static_cast<size_t>(k)].get<double>();
+  for (const char* name : {"clamp", "clamp_seen"}) {
+    if (!j.contains(name)) continue;
+    const nlohmann::json& c = j[name];
+    if (!c.is_array() || c.size() != 3 ||
+        !std::all_of(c.begin(), c.end(), [](const nlohmann::json& v) { return v.is_number(); }))
+      throw InvalidArgument(key + "." + name + " must be 3 numbers, got " + c.dump());
+    Eigen::Vector3d& d = std::string(name) == "clamp" ? f.clamp : f.clamp_seen;
+    for (int k = 0; k < 3; ++k) d[k] = c[static_cast<size_t>(k)].get<double>();
+  }
+  const nlohmann::json d = j.contains("offset") ? j["offset"] : nlohmann::json();
+  if (!d.is_number()) throw InvalidArgument(key + ".offset must be a number, got " + d.dump());
+  f.offset = d.get<double>();
+  try {
+    f.validate();
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(scene.source + ": target." + e.what());
+  }
+  if (kind != scan::PoseKind::rigid)
+    throw InvalidArgument(key +
+                          " needs \"align\": \"rigid\" (a scale would change the table's "
+                          "height)");
+  const bool plane = t.contains("clean") && t["clean"].is_object() && t["clean"].contains("plane");
+  if (!t.contains("pose") && !plane)
+    throw InvalidArgument(key +
+                          " needs the table found in the scan: give \"clean\": {\"plane\": "
+                          "D} (or a \"pose\" whose tilt and height it keeps)");
+  return f;
+}
 
 // A rigid start pose has scale 1; a similarity's lies within the pose bounds (PoseBounds).
 void check_start_scale(const Scene& scene, const scan::Pose& pose, scan::PoseKind kind,
@@ -321,7 +382,7 @@ FrameKeys read_frame_keys(const Scene& scene, const nlohmann::json& t) {
     target->frame = name == "camera" ? TargetFrame::camera : TargetFrame::body;
   }
   const bool camera = target->frame == TargetFrame::camera;
-  for (const char* key : {"align", "pose", "pose_uncertainty"})
+  for (const char* key : {"align", "pose", "pose_uncertainty", "fixture"})
     if (t.contains(key) && !camera)
       throw InvalidArgument(scene.source + ": target." + key +
                             " is for a cloud in the camera's frame (give \"frame\": \"camera\")");
@@ -364,6 +425,10 @@ FrameKeys read_frame_keys(const Scene& scene, const nlohmann::json& t) {
                             "\"pose\": FILE)");
     target->description += "; camera frame, start pose by align";
   }
+  if (t.contains("fixture")) {
+    target->fixture = read_fixture(scene, t, target->align);
+    target->description += "; the fixture's table";
+  }
   return keys;
 }
 
@@ -389,6 +454,8 @@ scan::Pose start_pose(const SceneTarget& target, const fe::Assembler& assembler,
   a.kind = target.align;
   a.form.sides = target.distance.sides == Sides::symmetric ? Sides::symmetric : Sides::scan_to_body;
   a.threads = threads;
+  a.fixture = target.fixture;
+  a.table = target.table;
   return scan::align(body, target.cloud, a).pose;
 }
 
@@ -403,6 +470,7 @@ void apply_target_settings(const SceneTarget& target, ShapeObjectiveOptions* opt
   }
   if (target.frame == TargetFrame::camera) options->pose_kind = target.align;
   options->pose_bound = target.pose_uncertainty;
+  if (target.fixture) options->pose_table_normal = target.fixture->normal;
 }
 
 DistanceForm target_form(const TargetDistance& distance, const ShapeObjective& objective) {
@@ -446,18 +514,21 @@ SceneTarget scene_target(const Scene& scene, const fe::Mesh& mesh, double memory
                      {"kind", "angle", "cells", "distance", "cap", "cap_q", "surface", "camera",
                       "quadrature"});
     if (kind == "cloud")
-      io::check_keys(
-          t, where, "target",
-          {"kind", "file", "solved_on", "clean", "weights", "distance", "cap", "cap_q",
-           "quadrature", "surface", "camera", "frame", "align", "pose", "pose_uncertainty"});
+      io::check_keys(t, where, "target",
+                     {"kind", "file", "solved_on", "clean", "weights", "distance", "cap", "cap_q",
+                      "quadrature", "surface", "camera", "frame", "align", "pose",
+                      "pose_uncertainty", "fixture"});
     // The frame's keys before the scan is read and cleaned.
     const FrameKeys frame = kind == "cloud" ? read_frame_keys(scene, t) : FrameKeys{};
+    std::optional<scan::Plane> table;
     SceneTarget st = kind == "arc" ? arc_target(scene, mesh, t, memory_limit)
-                                   : cloud_target(scene, mesh, t, memory_limit);
+                                   : cloud_target(scene, mesh, t, memory_limit, &table);
     st.frame = frame.frame;
     st.align = frame.align;
     st.pose = frame.pose;
     st.pose_uncertainty = frame.uncertainty;
+    st.fixture = frame.fixture;
+    st.table = table;
     st.description += frame.description;
     st.distance = target_distance(scene, t, st.frame == TargetFrame::camera);
     read_view_keys(scene, t, &st);

@@ -12,6 +12,7 @@
 #include "softhd/fe/geometry.hpp"
 #include "softhd/fe/state_solver.hpp"
 #include "softhd/scan/align.hpp"
+#include "softhd/scan/fixture.hpp"
 
 namespace softhd {
 
@@ -168,6 +169,8 @@ struct ShapeObjective::Impl {
     st.first_step = 1e-3;    // from the last evaluation's optimum: a small first step
     st.max_backtracks = 20;  // a step 2^-20 of BFGS's that does not decrease ρ̃: at its minimum
     if (options.pose_bound) st.feasible = [this](const scan::Pose& Q) { return bounded(Q); };
+    if (options.pose_table_normal)  // the start's tilt and height kept (§8.12)
+      st.subspace = scan::table_tangent(pose->start().R * options.pose_table_normal->normalized());
     const scan::LocalPoseResult r = scan::minimise_pose(rho, pose->at(warm_twist), st);
     *iterations = r.iterations;
     return pose->twist_of(r.pose);
@@ -254,6 +257,13 @@ void ShapeObjectiveOptions::validate() const {
   if (!(pose_tolerance > 0.0 && pose_tolerance < 1.0))
     throw InvalidArgument("pose_tolerance must be in (0, 1) (a fraction of L)");
   if (pose_iterations < 1) throw InvalidArgument("pose_iterations must be >= 1");
+  if (pose_table_normal) {
+    if (!pose || pose_method != PoseMethod::projection)
+      throw InvalidArgument(
+          "pose_table_normal constrains the pose found by projection (pose.method projection)");
+    if (!pose_table_normal->allFinite() || !(pose_table_normal->norm() > 0.0))
+      throw InvalidArgument("pose_table_normal must be finite and of nonzero length");
+  }
   if (pose_bound) {
     if (pose_method != PoseMethod::projection)
       throw InvalidArgument(

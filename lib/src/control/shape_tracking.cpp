@@ -295,6 +295,9 @@ RunFingerprint run_fingerprint(const ShapeObjective& objective, const Eigen::Vec
     if (so.pose_bound)
       f["pose"] += " bound " + exact_text(so.pose_bound->rotation) + " " +
                    exact_text(so.pose_bound->translation);
+    if (const std::optional<Eigen::Vector3d>& n = so.pose_table_normal)
+      f["pose"] += " table normal " + exact_text((*n)[0]) + " " + exact_text((*n)[1]) + " " +
+                   exact_text((*n)[2]);
   }
   f["checkpoint"] = "every " + std::to_string(options.checkpoint_every) + " iterations";
   const BoundedOptimizerOptions& o = options.optimizer;

@@ -72,6 +72,9 @@ void check_against_scene(const Scene& scene, const fe::ControlSpace& control,
     throw InvalidArgument(
         "target.pose_uncertainty bounds the pose found by projection: give pose.method "
         "projection");
+  if (target.fixture && o.pose.method != PoseMethod::projection)
+    throw InvalidArgument(
+        "target.fixture constrains the pose found by projection: give pose.method projection");
   if (o.pose.method == PoseMethod::projection && o.pose.move != 1.0)
     throw InvalidArgument(
         "pose.move is the joint pose's move limit; with pose.method projection the optimiser "

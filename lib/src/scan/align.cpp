@@ -78,8 +78,9 @@ detail::PoseObjective make_level(const PointCloud& body, const PointCloud& scan,
 }
 
 detail::LocalSettings local_settings(const AlignOptions& o, double L, int iterations,
-                                     double tolerance) {
+                                     double tolerance, const FixtureConstraint* fixture) {
   detail::LocalSettings st;
+  if (fixture != nullptr) st.subspace = fixture->tangent();  // the table's 3 free variables
   st.max_iterations = iterations;
   st.step_tolerance = tolerance;
   st.size = L;
@@ -111,22 +112,43 @@ std::vector<Pose> starting_poses(const Eigen::MatrixXd& body, const Eigen::Matri
   return out;
 }
 
+/// The starting poses with a fixture: `count` angles 2πk/count about the table's normal, the
+/// body's centroid over the scan's along the table, at the fixture's height; with a clamp side,
+/// those on its side only.
+std::vector<Pose> fixture_starts(const Eigen::MatrixXd& body, const Eigen::MatrixXd& scan,
+                                 int count, const FixtureConstraint& fixture) {
+  const Eigen::Vector3d cb = body.colwise().mean().transpose(),
+                        cs = scan.colwise().mean().transpose();
+  std::vector<Pose> out;
+  for (int k = 0; k < count; ++k) {
+    const Pose Q = fixture.start(2.0 * M_PI * k / count, cb, cs);
+    if (fixture.allows(Q)) out.push_back(Q);  // the clamp's side
+  }
+  return out;
+}
+
 /// Global start: every starting pose minimised briefly on the coarse level (in parallel over
 /// the poses), then the `keep` best that differ by more than 10° or L/10. `tried`: the count
 /// of starting poses.
 std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& scan, double L,
-                                    const AlignOptions& o, int* tried) {
+                                    const AlignOptions& o, const FixtureConstraint* fixture,
+                                    int* tried) {
   const detail::PoseObjective coarse =
       make_level(body, scan, o.coarse_points, o.coarse_epsilon * L, 1, o);
-  const std::vector<Pose> starts = starting_poses(body.points(), scan.points(), o.rotations);
+  const std::vector<Pose> starts =
+      fixture != nullptr ? fixture_starts(body.points(), scan.points(), o.rotations, *fixture)
+                         : starting_poses(body.points(), scan.points(), o.rotations);
   *tried = static_cast<int>(starts.size());
-  const detail::LocalSettings st = local_settings(o, L, 20, 1e-4);
+  const detail::LocalSettings st = local_settings(o, L, 20, 1e-4, fixture);
   std::vector<detail::LocalResult> found(starts.size());
   const int n = static_cast<int>(starts.size());
   parallel_each(n, o.threads,
                 [&](size_t i) { found[i] = detail::minimise_pose(coarse, starts[i], st); });
   std::vector<double> score(found.size());
   for (size_t k = 0; k < found.size(); ++k) score[k] = found[k].rho;
+  if (fixture != nullptr)  // the clamp's side: poses on the other side are not kept
+    for (size_t k = 0; k < found.size(); ++k)
+      if (!fixture->allows(found[k].pose)) score[k] = INFINITY;
   if (o.score == CandidateScore::coverage) {  // rank by the coverage score instead
     const detail::CoverageScore coverage(body.points(), scan.points(), L, o.score_truncation,
                                          o.threads);
@@ -148,6 +170,23 @@ std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& sc
     if (static_cast<int>(kept.size()) >= o.keep) break;
   }
   return kept;
+}
+
+/// The global start's candidates and the user's start, which competes with them (none: the
+/// identity; with a fixture, moved onto its constraint about the body's centroid).
+std::vector<Pose> all_candidates(const PointCloud& body, const PointCloud& scan, double L,
+                                 const AlignOptions& options, const FixtureConstraint* fixture,
+                                 int* starts) {
+  std::vector<Pose> candidates;
+  if (options.global_start) candidates = global_candidates(body, scan, L, options, fixture, starts);
+  if (options.initial) candidates.push_back(options.initial->inverse());
+  if (candidates.empty()) candidates.push_back(Pose());
+  if (fixture != nullptr && (options.initial || !options.global_start)) {
+    Pose& Q = candidates.back();
+    const Eigen::Vector3d c = Q.R * body.points().colwise().mean().transpose() + Q.t;
+    Q = fixture->project(Q, c);
+  }
+  return candidates;
 }
 
 /// Residuals (true nearest distances of the moved scan), overlap (the fraction within
@@ -192,6 +231,14 @@ void AlignOptions::validate() const {
           "distance visible is not supported (align has no camera model; use scan_to_body for "
           "a partial view)");
   form.validate(form.camera_mask.size() > 0 ? form.camera_mask.size() : 1);
+  if (fixture) {
+    fixture->validate();
+    require(table.has_value(),
+            "fixture needs the scan's table plane (table: the dominant plane found in the scan)");
+    require(kind == PoseKind::rigid,
+            "fixture needs a rigid alignment (a scale would change the table's height)");
+    require(rotations >= 1, "rotations must be >= 1 with a fixture (the angles about the table)");
+  }
   if (initial) {
     require(initial->R.allFinite() && initial->t.allFinite() && std::isfinite(initial->s) &&
                 initial->s > 0.0,
@@ -267,12 +314,12 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
   options.validate();
   const double L = body_size(body);
 
-  // The global start's candidates and the user's start, which competes with them.
-  std::vector<Pose> candidates;
+  std::optional<FixtureConstraint> constraint;
+  if (options.fixture) constraint.emplace(*options.fixture, *options.table, scan.points());
+  const FixtureConstraint* fixture = constraint ? &*constraint : nullptr;
+
   AlignSummary out;
-  if (options.global_start) candidates = global_candidates(body, scan, L, options, &out.starts);
-  if (options.initial) candidates.push_back(options.initial->inverse());
-  if (candidates.empty()) candidates.push_back(Pose());
+  const std::vector<Pose> candidates = all_candidates(body, scan, L, options, fixture, &out.starts);
   out.candidates = static_cast<int>(candidates.size());
 
   // Refinement: continuation in ε (a hundredth of L, then the user's) on the refine level.
@@ -294,7 +341,7 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
         static_cast<double>(nb) * static_cast<double>(ns) > 4e6 ? options.threads : 1;
     const bool spread = candidates.size() > 1;
     const detail::LocalSettings st =
-        local_settings(options, L, options.max_iterations, options.tolerance);
+        local_settings(options, L, options.max_iterations, options.tolerance, fixture);
     std::vector<detail::LocalResult> refined(candidates.size());
     {
       // Several candidates are compared on smaller clouds (candidate_points each).
@@ -307,7 +354,7 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
           static_cast<int>(candidates.size()), spread ? options.threads : 1,
           [&](size_t k) { refined[k] = detail::minimise_pose(first, candidates[k], st); });
     }
-    const size_t best = detail::choose_candidate(body, scan, L, options, &refined);
+    const size_t best = detail::choose_candidate(body, scan, L, options, fixture, &refined);
     out.iterations = refined[best].iterations;
     // The best on the refinement clouds: at the first ε again if it was compared on
     // smaller clouds, then at the others.
@@ -325,7 +372,7 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
   if (options.nearest_iterations > 0) {
     int it = 0;
     out.pose = detail::nearest_refinement(nearest, body.points(), scan.points(), out.pose, options,
-                                          L, &it);
+                                          fixture, L, &it);
     out.iterations += it;
   }
   report_nearest(nearest, scan, options, L, &out);

@@ -82,8 +82,10 @@ class CoverageScore {
 /// The refined candidate (Q: body → scan frame) align() continues from: the lowest ρ̃ (score
 /// rho), or (score coverage) the lowest CoverageScore after each candidate is taken by
 /// nearest_refinement (its pose replaced by the fitted one); ties: the first.
+/// With a fixture (not null), the nearest-point fits keep its constraint.
 size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double size,
-                        const AlignOptions& options, std::vector<LocalResult>* refined);
+                        const AlignOptions& options, const FixtureConstraint* fixture,
+                        std::vector<LocalResult>* refined);
 
 /// The least-squares pose (rigid, or a similarity with s clamped to [s_min, s_max]) taking
 /// the rows `from` onto the rows `to` (Kabsch/Umeyama via the SVD of the cross-covariance).
@@ -92,9 +94,10 @@ Pose fit_pose(const Eigen::MatrixXd& from, const Eigen::MatrixXd& to, bool simil
 
 /// Iterated nearest-point fit of the scan onto the body (P the scan's pose): pairs each moved
 /// scan point with its nearest body point, keeps the pairs within 3× the median distance and
-/// fits the pose to them (fit_pose), until the pose stops changing.
+/// fits the pose to them (fit_pose; with a fixture, not null, FixtureConstraint::fit), until the
+/// pose stops changing.
 Pose nearest_refinement(const NearestPoints& body, const Eigen::MatrixXd& body_points,
                         const Eigen::MatrixXd& scan, Pose P, const AlignOptions& options,
-                        double size, int* iterations);
+                        const FixtureConstraint* fixture, double size, int* iterations);
 
 }  // namespace softhd::scan::detail

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <utility>
 
 #include "align_internal.hpp"
@@ -106,11 +107,21 @@ LocalPoseResult minimise_pose(const PoseFunction& objective, const Pose& start,
   out.pose = clamp_scale(start, st);
   Eigen::VectorXd g(n), g_new(n);
   Eigen::Vector3d c, c_new;
+  // Steps in the span of st.subspace (B, orthonormal): g ← B Bᵀ g, H = B Bᵀ at a (re)start;
+  // the BFGS update of H with s and y in that span keeps H = B Bᵀ H B Bᵀ.
+  const bool reduced = st.subspace.size() > 0;
+  if (reduced && (st.subspace.rows() != n || st.subspace.cols() > n))
+    throw InternalError("minimise_pose: subspace must have " + std::to_string(n) + " rows");
+  const Eigen::MatrixXd I = reduced ? Eigen::MatrixXd(st.subspace * st.subspace.transpose())
+                                    : Eigen::MatrixXd(Eigen::MatrixXd::Identity(n, n));
+  const auto in_span = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
+    return reduced ? Eigen::VectorXd(I * v) : v;
+  };
   double f = objective(out.pose, &g, &c);
-  g = scale_gradient(g, L);
+  g = in_span(scale_gradient(g, L));
   // Inverse-Hessian estimate in u; the first step moves points by about first_step × L at most.
   const double first = st.first_step * L;
-  Eigen::MatrixXd H = Eigen::MatrixXd::Identity(n, n) * (first / std::max(g.norm(), 1e-300));
+  Eigen::MatrixXd H = I * (first / std::max(g.norm(), 1e-300));
   bool fresh = true;
   for (out.iterations = 0; out.iterations < st.max_iterations; ++out.iterations) {
     Eigen::VectorXd p = -H * g;
@@ -126,7 +137,7 @@ LocalPoseResult minimise_pose(const PoseFunction& objective, const Pose& start,
         out.converged = g.allFinite();
         break;
       }
-      H = Eigen::MatrixXd::Identity(n, n) * (first / std::max(g.norm(), 1e-300));
+      H = I * (first / std::max(g.norm(), 1e-300));
       fresh = true;
       --out.iterations;
       continue;
@@ -154,11 +165,11 @@ LocalPoseResult minimise_pose(const PoseFunction& objective, const Pose& start,
       out.converged = true;
       break;
     }
-    g_new = scale_gradient(g_new, L);
+    g_new = in_span(scale_gradient(g_new, L));
     const Eigen::VectorXd y = g_new - g;
     const double sy = s.dot(y);
     if (sy > 1e-12 * s.norm() * y.norm()) {  // BFGS update of the inverse Hessian
-      if (fresh) H = Eigen::MatrixXd::Identity(n, n) * (sy / y.squaredNorm());
+      if (fresh) H = I * (sy / y.squaredNorm());
       const double r = 1.0 / sy;
       const Eigen::MatrixXd V = Eigen::MatrixXd::Identity(n, n) - r * y * s.transpose();
       H = V.transpose() * H * V + r * s * s.transpose();

@@ -106,7 +106,8 @@ double CoverageScore::value(const Pose& Q) const {
 }
 
 size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double size,
-                        const AlignOptions& options, std::vector<LocalResult>* refined) {
+                        const AlignOptions& options, const FixtureConstraint* fixture,
+                        std::vector<LocalResult>* refined) {
   std::vector<LocalResult>& r = *refined;
   if (r.size() < 2) return 0;
   std::vector<double> score(r.size());
@@ -121,7 +122,7 @@ size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double s
       for (size_t k = 0; k < r.size(); ++k) {
         int iterations = 0;
         fitted[k] = nearest_refinement(nearest, body.points(), scan.points(), r[k].pose.inverse(),
-                                       serial, size, &iterations);
+                                       serial, fixture, size, &iterations);
       }
       for (size_t k = 0; k < r.size(); ++k) r[k].pose = fitted[k].inverse();
     }
@@ -130,6 +131,9 @@ size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double s
     for (size_t k = 0; k < r.size(); ++k)
       if (std::isfinite(score[k])) score[k] = coverage.value(r[k].pose);
   }
+  if (fixture != nullptr)  // the clamp's side (all on the wrong side: the first)
+    for (size_t k = 0; k < r.size(); ++k)
+      if (!fixture->allows(r[k].pose)) score[k] = INFINITY;
   size_t best = 0;
   for (size_t k = 1; k < r.size(); ++k)
     if (score[k] < score[best]) best = k;

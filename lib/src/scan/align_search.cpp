@@ -76,7 +76,7 @@ Pose fit_pose(const Eigen::MatrixXd& from, const Eigen::MatrixXd& to, bool simil
 
 Pose nearest_refinement(const NearestPoints& body, const Eigen::MatrixXd& body_points,
                         const Eigen::MatrixXd& scan, Pose P, const AlignOptions& options,
-                        double size, int* iterations) {
+                        const FixtureConstraint* fixture, double size, int* iterations) {
   const bool similarity = options.kind == PoseKind::similarity;
   std::vector<Eigen::Index> index;
   Eigen::VectorXd dist;
@@ -95,7 +95,9 @@ Pose nearest_refinement(const NearestPoints& body, const Eigen::MatrixXd& body_p
       from.row(k) = scan.row(pairs[static_cast<size_t>(k)]);
       to.row(k) = body_points.row(index[static_cast<size_t>(pairs[static_cast<size_t>(k)])]);
     }
-    const Pose next = fit_pose(from, to, similarity, options.scale_min, options.scale_max);
+    const Pose next = fixture != nullptr
+                          ? fixture->fit(from, to)
+                          : fit_pose(from, to, similarity, options.scale_min, options.scale_max);
     const double change = rotation_angle_between(next.R, P.R) * size + (next.t - P.t).norm() +
                           std::abs(next.s - P.s) * size;
     P = next;

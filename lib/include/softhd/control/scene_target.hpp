@@ -47,6 +47,7 @@
 #include "softhd/hausdorff.hpp"
 #include "softhd/point_cloud.hpp"
 #include "softhd/scan/align.hpp"
+#include "softhd/scan/fixture.hpp"
 #include "softhd/scan/pose.hpp"
 
 namespace softhd {
@@ -80,6 +81,12 @@ struct SceneTarget {
   std::optional<scan::Pose> pose = std::nullopt;         ///< "pose": the start (camera frame)
   /// "pose_uncertainty": {"degrees", "length"} of "pose" (the projection's PoseBound).
   std::optional<PoseBound> pose_uncertainty = std::nullopt;
+  /// "fixture": {"normal", "offset"}, the table in the body's frame (docs/formulation.md
+  /// §8.12): the start pose by align keeps it on `table`, and the projection's pose keeps the
+  /// start's tilt and height.
+  std::optional<scan::Fixture> fixture = std::nullopt;
+  /// The table found in the scan by "clean": {"plane": D} (its frame), with "fixture".
+  std::optional<scan::Plane> table = std::nullopt;
   /// The target as a body with cells, its nodes where the target is (the cell-integrated
   /// distance, docs/formulation.md §2.8): an arc's sampling grid as hexahedra whose nodes T
   /// maps (the samples are their centres), a solved_on target's source mesh with the file's

@@ -109,6 +109,12 @@ struct ShapeObjectiveOptions {
   int pose_iterations = 100;
   /// projection: the inner minimisation keeps ξ within this bound (none: unbounded).
   std::optional<PoseBound> pose_bound;
+  /// projection: the fixture's table normal n_b in the body's frame (docs/formulation.md §8.12;
+  /// not necessarily a unit vector). The inner minimisation then turns the body only about the
+  /// table's normal and shifts it only along the table, keeping the start pose's tilt and
+  /// height (ω along n_s = R₀ n_b, v ⊥ n_s, R₀ the start's rotation body → scan frame:
+  /// scan::table_tangent). None (default): all 6 twist variables.
+  std::optional<Eigen::Vector3d> pose_table_normal;
   /// Keep what ShapeObjective::hessian_product needs at each evaluation with the gradient (the
   /// distance's second-order quantities, HausdorffRequest::hessian_points). False (default):
   /// evaluations pay nothing for it. Needs reference volumes and no pose.

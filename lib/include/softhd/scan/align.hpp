@@ -13,6 +13,8 @@
 #include <string>
 
 #include "softhd/hausdorff.hpp"
+#include "softhd/scan/cleanup.hpp"  // Plane: the scan's table
+#include "softhd/scan/fixture.hpp"
 #include "softhd/scan/pose.hpp"
 #include "softhd/scan/pose_map.hpp"  // PoseKind: what align() may change
 
@@ -57,6 +59,16 @@ struct AlignOptions {
   int nearest_iterations = 50;     ///< final nearest-point refinement iterations (0: none)
   double inlier_distance = 0.01;   ///< the overlap's threshold as a fraction of L, in (0, 1)
   int threads = 0;                 ///< as HausdorffOptions::threads
+  /// The fixture (docs/formulation.md §8.12): the table in the body's frame. With it (and
+  /// `table`), every pose tried keeps the table's tilt and height: the global start turns the
+  /// body about the table's normal (`rotations` angles, evenly spaced) and slides it along the
+  /// table, and the refinement and the nearest-point finish move only those 3 variables.
+  /// Rigid alignments only. None: the pose is free.
+  std::optional<Fixture> fixture;
+  /// The scan's table in its own frame (find_dominant_plane of the scan before the table is
+  /// removed); required with `fixture`, its normal's sign free (turned towards the scan's
+  /// points).
+  std::optional<Plane> table;
   /// Throws InvalidArgument naming the first invalid field.
   void validate() const;
 };
@@ -120,6 +132,10 @@ struct LocalPoseSettings {
   /// poses, e.g. a bound on the twist from a calibrated pose); every trial is replaced by it and
   /// the step taken is the twist from the current pose to it. The start must be feasible.
   std::function<Pose(const Pose&)> feasible;
+  /// If not empty: an orthonormal basis (n × k, its columns) of the scaled twists
+  /// u = (L ω, v[, L σ]) the steps may take (a constraint's tangent, FixtureConstraint::tangent):
+  /// the gradient is projected onto its span, so every step stays in it.
+  Eigen::MatrixXd subspace;
 };
 
 /// What minimise_pose found.
