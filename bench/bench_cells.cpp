@@ -102,28 +102,9 @@ PointCloud collocation_cloud(const HexCells& b, bool nodes) {
   return PointCloud(p, v);
 }
 
-// The box `lower` + [0, size] meshed by n[0] · n[1] · n[2] hexahedra (Gmsh's corner order).
+// The box `lower` + [0, size] meshed by n[0] · n[1] · n[2] hexahedra.
 HexCells box_cells(const Eigen::Vector3d& lower, const Eigen::Vector3d& size, const int n[3]) {
-  const int m[3] = {n[0] + 1, n[1] + 1, n[2] + 1};
-  HexCells b;
-  b.nodes.resize(m[0] * m[1] * m[2], 3);
-  for (int k = 0; k < m[2]; ++k)
-    for (int j = 0; j < m[1]; ++j)
-      for (int i = 0; i < m[0]; ++i) {
-        const int idx[3] = {i, j, k};
-        for (int d = 0; d < 3; ++d)
-          b.nodes((k * m[1] + j) * m[0] + i, d) = lower[d] + size[d] * idx[d] / n[d];
-      }
-  constexpr int kCorner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
-                                 {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-  b.cells.resize(n[0] * n[1] * n[2], 8);
-  for (int k = 0; k < n[2]; ++k)
-    for (int j = 0; j < n[1]; ++j)
-      for (int i = 0; i < n[0]; ++i)
-        for (int c = 0; c < 8; ++c)
-          b.cells((k * n[1] + j) * n[0] + i, c) =
-              ((k + kCorner[c][2]) * m[1] + j + kCorner[c][1]) * m[0] + i + kCorner[c][0];
-  return b;
+  return detail::hex_box(lower, size, Eigen::Vector3i(n[0], n[1], n[2]));
 }
 
 // One pair of bodies: the cell ρ̃ and both collocations.

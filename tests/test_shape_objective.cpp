@@ -433,16 +433,20 @@ class PoseProjection : public ::testing::Test {
   const fe::ControlSpace space{A.mesh(), A.geometry(), fe::ControlKind::kVertex};
   const scan::Pose G = camera_motion();
   Eigen::VectorXd m0, dm;
+  // The body's moving cloud at m0 in its own frame (o's distance, no pose).
+  PointCloud body_at_m0(const ShapeObjectiveOptions& o) const {
+    ShapeObjectiveOptions in_body = o;
+    in_body.pose.reset();
+    in_body.pose_method = PoseMethod::joint;
+    ShapeObjective B(A, space, HausdorffTarget(bent_target(), o.hausdorff), in_body);
+    EXPECT_EQ(B.evaluate(m0, false).status, EvaluationStatus::ok);
+    return B.moving_cloud().at(B.state_path().last_state().u);
+  }
 };
 
 TEST_F(PoseProjection, RecoversTheMotionOfAnExactlyMovedCopyOfTheBody) {
   const ShapeObjectiveOptions o = projection_options(perturbed(G), 1e-13);
-  ShapeObjectiveOptions in_body = o;  // the body's moving cloud at m0, in its own frame
-  in_body.pose.reset();
-  in_body.pose_method = PoseMethod::joint;
-  ShapeObjective B(A, space, HausdorffTarget(bent_target(), o.hausdorff), in_body);
-  ASSERT_EQ(B.evaluate(m0, false).status, EvaluationStatus::ok);
-  const PointCloud X = B.moving_cloud().at(B.state_path().last_state().u);
+  const PointCloud X = body_at_m0(o);
   ShapeObjective J(A, space, HausdorffTarget(G.apply(X, false), o.hausdorff), o);
   EXPECT_EQ(pose_variables(J), 0);  // the optimiser sees the control alone
   const ShapeEvaluation e = J.evaluate(m0, true);
@@ -527,12 +531,7 @@ TEST_F(PoseProjection, RefusesATwistASimilarityAndABadTolerance) {
 // §8.11 has the measurement.)
 TEST_F(PoseProjection, TheUncertaintyBoundsTheTwist) {
   ShapeObjectiveOptions o = projection_options(perturbed(G), 1e-13);
-  ShapeObjectiveOptions in_body = o;
-  in_body.pose.reset();
-  in_body.pose_method = PoseMethod::joint;
-  ShapeObjective B(A, space, HausdorffTarget(bent_target(), o.hausdorff), in_body);
-  ASSERT_EQ(B.evaluate(m0, false).status, EvaluationStatus::ok);
-  const PointCloud seen = G.apply(B.moving_cloud().at(B.state_path().last_state().u), false);
+  const PointCloud seen = G.apply(body_at_m0(o), false);
   o.pose_bound = PoseBound{0.02, 0.01};
   ShapeObjective J(A, space, HausdorffTarget(seen, o.hausdorff), o);
   const ShapeEvaluation e = J.evaluate(m0, true);
@@ -567,12 +566,7 @@ TEST_F(PoseProjection, TheUncertaintyBoundsTheTwist) {
 // keeps the start's tilt R_Q n_b and height n_s·t_Q to rounding while ρ̃ falls.
 TEST_F(PoseProjection, TheTableNormalKeepsTheStartsTiltAndHeight) {
   ShapeObjectiveOptions o = projection_options(G.inverse(), 1e-13);
-  ShapeObjectiveOptions in_body = o;
-  in_body.pose.reset();
-  in_body.pose_method = PoseMethod::joint;
-  ShapeObjective B(A, space, HausdorffTarget(bent_target(), o.hausdorff), in_body);
-  ASSERT_EQ(B.evaluate(m0, false).status, EvaluationStatus::ok);
-  const PointCloud seen = G.apply(B.moving_cloud().at(B.state_path().last_state().u), false);
+  const PointCloud seen = G.apply(body_at_m0(o), false);
   const Eigen::Vector3d n(0.0, 0.0, 2.0);  // the table's normal, not a unit vector
   o.pose_table_normal = n;
   scan::Pose turn;  // body frame: about z through (1, 0.2, 0), then along the table

@@ -60,29 +60,10 @@ static PointCloud collocation_cloud(const Eigen::Vector3d& lo, double side, int 
   return PointCloud(p, v);
 }
 
-// The box [0, 10] × [0, 2] × [0, 0.1] meshed by nx · ny · nz hexahedra (Gmsh's corner order).
+// The box [0, 10] × [0, 2] × [0, 0.1] meshed by nx · ny · nz hexahedra.
 static HexCells plate_cells(int nx, int ny, int nz) {
-  const double size[3] = {10.0, 2.0, 0.1};
-  const int n[3] = {nx, ny, nz};
-  HexCells b;
-  const int mx = nx + 1, my = ny + 1, mz = nz + 1;
-  b.nodes.resize(mx * my * mz, 3);
-  for (int k = 0; k < mz; ++k)
-    for (int j = 0; j < my; ++j)
-      for (int i = 0; i < mx; ++i) {
-        const int idx[3] = {i, j, k};
-        for (int d = 0; d < 3; ++d) b.nodes((k * my + j) * mx + i, d) = size[d] * idx[d] / n[d];
-      }
-  const int sign[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
-                          {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-  b.cells.resize(nx * ny * nz, 8);
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i)
-        for (int c = 0; c < 8; ++c)
-          b.cells((k * ny + j) * nx + i, c) =
-              ((k + sign[c][2]) * my + j + sign[c][1]) * mx + i + sign[c][0];
-  return b;
+  return detail::hex_box(Eigen::Vector3d::Zero(), Eigen::Vector3d(10, 2, 0.1),
+                         Eigen::Vector3i(nx, ny, nz));
 }
 
 // The nodes of a hexahedral body with lumped volumes (an eighth of each cell's, the cells

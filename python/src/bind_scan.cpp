@@ -49,14 +49,20 @@ py::array_t<std::int64_t> outliers(const Array& points, int k, double ratio) {
   return to_indices(kept);
 }
 
-py::array_t<std::int64_t> plane(const Array& points, double distance, int iterations,
-                                double min_fraction, std::uint64_t seed) {
-  check_cloud(points, std::nullopt, "points");
+scan::PlaneRemoval plane_options(double distance, int iterations, double min_fraction,
+                                 std::uint64_t seed) {
   scan::PlaneRemoval options;
   options.distance = distance;
   options.iterations = iterations;
   options.min_fraction = min_fraction;
   options.seed = seed;
+  return options;
+}
+
+py::array_t<std::int64_t> plane(const Array& points, double distance, int iterations,
+                                double min_fraction, std::uint64_t seed) {
+  check_cloud(points, std::nullopt, "points");
+  const scan::PlaneRemoval options = plane_options(distance, iterations, min_fraction, seed);
   std::vector<Eigen::Index> kept;
   {
     py::gil_scoped_release release;
@@ -68,11 +74,7 @@ py::array_t<std::int64_t> plane(const Array& points, double distance, int iterat
 py::dict find_plane(const Array& points, double distance, int iterations, double min_fraction,
                     std::uint64_t seed) {
   check_cloud(points, std::nullopt, "points");
-  scan::PlaneRemoval options;
-  options.distance = distance;
-  options.iterations = iterations;
-  options.min_fraction = min_fraction;
-  options.seed = seed;
+  const scan::PlaneRemoval options = plane_options(distance, iterations, min_fraction, seed);
   scan::Plane found;
   {
     py::gil_scoped_release release;

@@ -163,25 +163,32 @@ TriangleSurface hex_boundary(const HexCells& body, std::vector<int>* point_node)
   return s;
 }
 
-HexCells hex_cube(const Eigen::Vector3d& lo, double side, int n) {
-  if (n < 1) throw InvalidArgument("hex cube: n must be >= 1");
+HexCells hex_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& size, const Eigen::Vector3i& n) {
+  if (n.minCoeff() < 1) throw InvalidArgument("hex box: the cell counts must be >= 1");
   HexCells b;
-  const int m = n + 1;
-  b.nodes.resize(m * m * m, 3);
-  for (int k = 0; k < m; ++k)
-    for (int j = 0; j < m; ++j)
-      for (int i = 0; i < m; ++i)
-        b.nodes.row((k * m + j) * m + i) = lo.transpose() + side / n * Eigen::RowVector3d(i, j, k);
-  b.cells.resize(n * n * n, 8);
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
+  const Eigen::Vector3i m = n.array() + 1;
+  b.nodes.resize(m.prod(), 3);
+  for (int k = 0; k < m[2]; ++k)
+    for (int j = 0; j < m[1]; ++j)
+      for (int i = 0; i < m[0]; ++i)
+        for (int d = 0; d < 3; ++d)
+          b.nodes((k * m[1] + j) * m[0] + i, d) =
+              lo[d] + size[d] * Eigen::Vector3i(i, j, k)[d] / n[d];
+  b.cells.resize(n.prod(), 8);
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i)
         for (int c = 0; c < 8; ++c) {
           const int ii = i + (kSign[c][0] > 0), jj = j + (kSign[c][1] > 0),
                     kk = k + (kSign[c][2] > 0);
-          b.cells((k * n + j) * n + i, c) = (kk * m + jj) * m + ii;
+          b.cells((k * n[1] + j) * n[0] + i, c) = (kk * m[1] + jj) * m[0] + ii;
         }
   return b;
+}
+
+HexCells hex_cube(const Eigen::Vector3d& lo, double side, int n) {
+  if (n < 1) throw InvalidArgument("hex cube: n must be >= 1");
+  return hex_box(lo, Eigen::Vector3d::Constant(side), Eigen::Vector3i::Constant(n));
 }
 
 double enclosed_volume(const TriangleSurface& s) {

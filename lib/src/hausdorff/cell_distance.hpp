@@ -40,7 +40,9 @@ struct HexCells {
   Eigen::Matrix<int, Eigen::Dynamic, 8> cells;  ///< C by 8 node ids
 };
 
-/// The cube [lo, lo + side]³ meshed by n³ hexahedra (tests and measurements).
+/// The box lo + [0, size] meshed by n[0] · n[1] · n[2] hexahedra (tests and measurements).
+HexCells hex_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& size, const Eigen::Vector3i& n);
+/// The cube [lo, lo + side]³ meshed by n³ hexahedra.
 HexCells hex_cube(const Eigen::Vector3d& lo, double side, int n);
 
 /// The outer rule's parameters (defaults: the study's, docs/formulation.md §2.8).
