@@ -33,3 +33,19 @@ def test_optimise_live(source_dir, tmp_path):
     assert "\r  iteration    3" in err  # the live line, rewritten in place
     assert "the iteration limit was reached after 3 iterations" in out
     assert "shape error" in out
+
+
+def test_convergence_plot_without_a_floor(source_dir, tmp_path):
+    """scripts/plot_convergence.py draws a run whose summary has no self floor (quadrature cells
+    against a large target skip it: null in summary.json) or no matched floor."""
+    pytest.importorskip("matplotlib")
+    (tmp_path / "history.csv").write_text(
+        "iteration,rho,projected_gradient_norm,seconds,level\n1,0.5,1.0,0.1,0\n2,0.3,0.5,0.2,0\n")
+    (tmp_path / "summary.json").write_text(
+        '{"floor_matched": 0.15, "floor_self": null, "termination": "the iteration limit"}')
+    script = os.path.join(source_dir, "scripts", "plot_convergence.py")
+    p = subprocess.run([sys.executable, "-c", "import runpy, sys; sys.argv = ['x']; "
+                        f"m = runpy.run_path({script!r}); m['main']({str(tmp_path)!r})"],
+                       capture_output=True, text=True, env={**os.environ, "MPLBACKEND": "Agg"})
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert (tmp_path / "convergence.png").stat().st_size > 1000
