@@ -47,44 +47,60 @@ CellForm::CellForm(const fe::Mesh& body, const fe::Mesh& target, const CellDista
 
 CellForm::~CellForm() = default;
 
-/// ρ̃ = ((A² + B²)/2)^(1/2) from A^4 (the target's cells against the body) and B^4 (the body's
-/// cells against the target); ∂ρ̃/∂A^4 = 1/(8 ρ̃ √(A^4)), likewise B. The body's points get
-/// B's outer gradient and A's source bars (through the body's J, sd and |Ω_X|).
-CellRho CellForm::evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad) const {
+// The body at X + u: its hexahedra, boundary (with each surface point's node), J and signed
+// distance, built once per evaluation.
+struct CellForm::Deformed {
+  HexCells x;
+  std::vector<int> node;
+  TriangleSurface surface;
+  std::unique_ptr<BodyIntegral> j;
+  std::unique_ptr<SurfaceDistance> sd;
+};
+
+CellForm::Deformed CellForm::deformed(const Eigen::VectorXd& u) const {
   const Eigen::Index n = body_.num_nodes();
   if (u.size() != 3 * n)
     throw InvalidArgument("CellForm: u has " + std::to_string(u.size()) + " values, expected " +
                           std::to_string(3 * n));
-  const Eigen::MatrixXd U = u.reshaped(3, n).transpose();
-  const HexCells x = hex_cells(body_cells_, body_.nodes + U);
-  std::vector<int> node_x;
-  const TriangleSurface sx = hex_boundary(x, &node_x);
-  const BodyIntegral jx(sx, body_integral_options(options_));
-  const SurfaceDistance dx(sx);
+  Deformed d;
+  d.x = hex_cells(body_cells_, body_.nodes + u.reshaped(3, n).transpose());
+  d.surface = hex_boundary(d.x, &d.node);
+  d.j = std::make_unique<BodyIntegral>(d.surface, body_integral_options(options_));
+  d.sd = std::make_unique<SurfaceDistance>(d.surface);
+  return d;
+}
+
+/// ρ̃ = ((A² + B²)/2)^(1/2) from A^4 (the target's cells against the body) and B^4 (the body's
+/// cells against the target); ∂ρ̃/∂A^4 = 1/(8 ρ̃ √(A^4)), likewise B. The body's points get
+/// B's outer gradient and A's source bars (through the body's J, sd and |Ω_X|).
+CellRho CellForm::rho(const Deformed& d, Eigen::VectorXd* grad) const {
   CellRho r;
   OuterMeanGradient ga, gb;
-  r.a = directed_outer_mean(target_, jx, dx, enclosed_volume(sx), options_, grad ? &ga : nullptr);
-  r.b = directed_outer_mean(x, *target_j_, *target_sd_, target_volume_, options_,
+  r.a = directed_outer_mean(target_, *d.j, *d.sd, enclosed_volume(d.surface), options_,
+                            grad ? &ga : nullptr);
+  r.b = directed_outer_mean(d.x, *target_j_, *target_sd_, target_volume_, options_,
                             grad ? &gb : nullptr);
   double ca = 0.0, cb = 0.0;
   combine_means(&r, &ca, &cb);
   if (!grad) return r;
   Eigen::MatrixXd points = cb * gb.outer;  // ∂ρ̃/∂(the body's hexahedron points)
-  add_source_bars(ga, ca, sx, node_x, &points);
+  add_source_bars(ga, ca, d.surface, d.node, &points);
   const Eigen::MatrixXd nodes = body_cells_.map.transpose() * points;  // mapᵀ: N by 3
   *grad = nodes.transpose().reshaped();                                // node-major
   return r;
 }
 
+CellRho CellForm::evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad) const {
+  return rho(deformed(u), grad);
+}
+
 CellForm::Fields CellForm::fields(const Eigen::VectorXd& u, const Eigen::MatrixXd& moving,
                                   const Eigen::MatrixXd& target_points) const {
+  const Deformed d = deformed(u);
   Fields f;
-  f.rho = evaluate(u);
-  const Eigen::MatrixXd U = u.reshaped(3, body_.num_nodes()).transpose();
-  const TriangleSurface sx = hex_boundary(hex_cells(body_cells_, body_.nodes + U));
-  const BodyIntegral jx(sx, body_integral_options(options_));
+  f.rho = rho(d, nullptr);
   f.moving = d_tilde(*target_j_, target_volume_, options_.epsilon, moving);
-  f.target = d_tilde(jx, enclosed_volume(sx), options_.epsilon, target_points);
+  f.target = d_tilde(*d.j, enclosed_volume(d.surface), options_.epsilon, target_points);
   return f;
 }
 

@@ -48,6 +48,10 @@ class CellForm {
   long body_hexahedra() const { return static_cast<long>(body_cells_.cells.rows()); }
 
  private:
+  struct Deformed;
+  Deformed deformed(const Eigen::VectorXd& u) const;
+  CellRho rho(const Deformed& d, Eigen::VectorXd* grad) const;
+
   const fe::Mesh& body_;
   fe::HexDecomposition body_cells_;
   CellDistanceOptions options_;
