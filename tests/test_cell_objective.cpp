@@ -135,6 +135,89 @@ TEST(CellObjective, FieldsAreTheContinuumDTilde) {
   EXPECT_DOUBLE_EQ(f.rho, e.rho);
 }
 
+// Against a scan's surface (scan_to_body, no target cells): ρ̃ = A over the target's points with
+// their volumes as weights, the body's J continuum; its gradient in m by the adjoint, checked by
+// the Taylor remainder (observed order ≥ 1.9, as the two-body form's).
+TEST(CellObjective, ScanSurfaceTaylorRemainderIsSecondOrder) {
+  const Plate p;
+  ShapeObjectiveOptions o = p.cells_options();
+  o.target_cells.reset();
+  o.form.sides = Sides::scan_to_body;
+  o.tikhonov_mass = 1e-12;
+  o.hausdorff.params.epsilon = 0.03;
+  ShapeObjective J = p.objective(o);
+  EXPECT_EQ(J.cell_counts().second, 0);
+  const Eigen::MatrixXd P = p.space.positions(p.A.mesh());
+  const Eigen::VectorXd m0 = -2e4 * (1.0 + P.col(2).array() / 0.25).matrix();
+  Eigen::VectorXd dm = random_cloud(static_cast<int>(m0.size()), 2, 7).points().col(0);
+  dm.array() -= 0.5;
+  dm *= 2e4;
+  const ShapeEvaluation e0 = J.evaluate(m0, true);
+  ASSERT_EQ(e0.status, EvaluationStatus::ok) << e0.failure;
+  EXPECT_DOUBLE_EQ(e0.rho, e0.A);  // scan_to_body: ρ̃ = A
+  const double slope = e0.gradient.dot(dm);
+  ASSERT_GT(std::fabs(slope), 0.0);
+  std::vector<double> r;
+  for (double h = 0.4; h > 0.4 / 20; h /= 2) {
+    const ShapeEvaluation e = J.evaluate(m0 + h * dm, false);
+    ASSERT_EQ(e.status, EvaluationStatus::ok) << e.failure;
+    r.push_back(std::fabs(e.J - e0.J - h * slope));
+  }
+  for (size_t k = 0; k + 1 < r.size(); ++k)
+    EXPECT_GE(std::log2(r[k] / r[k + 1]), 1.9) << "steps " << k << ", " << k + 1;
+  expect_error<InvalidArgument>([&] { J.cell_rho(nullptr); }, "no self floor");
+}
+
+// A scan of the box's top face z = 0.5 (the body at rest, [0, 2] × [0, 1] × [0, 0.5]) at four
+// densities, each point carrying its square's area, so A^4 is the midpoint rule of the surface
+// integral of the body's continuum d̃^4. Two checks independent of the code:
+// - every point's J lies between the top face's half-space profile at the surface,
+//   J₀ = P_ε(0) = 2π/(3ε), less Σ_{other faces} π/(d_f + ε) (the half-spaces beyond them), and J₀;
+// - what the rule misses is the layer at the face's edges: at s ≫ ε from a side face the
+//   quarter-space beyond it is missing, J ≈ J₀ − π/(2s), so d̃^4 ≈ d₀^4 (1 + π/(2 s J₀)), whose
+//   integral grows as ln(1/h): each halving of h adds (edge length / area) d₀^4 π ln2 / (2 J₀) to
+//   A^4, i.e. A grows by (6/2)(3ε/4) ln2 / 4 = (9/16) ε ln 2 = 3.9e-4 of itself. The increments
+//   must be that (within 10 %: corners and O(ε/h) terms), not the sampling's (collocation moves by
+//   tens of percent between such densities, docs/formulation.md §2.8).
+TEST(CellObjective, ScanSurfaceMeanMovesWithDensityOnlyByItsEdgeLayer) {
+  const Plate p;
+  const double eps = 1e-3, pi = std::acos(-1.0);
+  std::vector<double> a;
+  for (int n : {4, 8, 16, 32}) {
+    Eigen::MatrixXd y(2 * n * n, 3);
+    double lo4 = 0.0, hi4 = 0.0;  // bounds on A^4 = mean of d̃^4 (d̃ falls as J grows)
+    for (int i = 0; i < 2 * n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const Eigen::Vector3d q((i + 0.5) / n, (j + 0.5) / n, 0.5);
+        y.row(i * n + j) = q.transpose();
+        const double lack = pi / (q[0] + eps) + pi / (2 - q[0] + eps) + pi / (q[1] + eps) +
+                            pi / (1 - q[1] + eps) + pi / (0.5 + eps);
+        const double j_hi = 2 * pi / (3 * eps), j_lo = j_hi - lack;  // |Ω| = 1
+        lo4 += std::pow(std::pow(j_hi, -0.25) - eps, 4) / (2.0 * n * n);
+        hi4 += std::pow(std::pow(j_lo, -0.25) - eps, 4) / (2.0 * n * n);
+      }
+    HausdorffOptions h;
+    h.params.epsilon = eps;
+    ShapeObjectiveOptions o = p.cells_options();
+    o.target_cells.reset();
+    o.form.sides = Sides::scan_to_body;
+    o.hausdorff.params.epsilon = eps;
+    ShapeObjective J(
+        p.A, p.space,
+        HausdorffTarget(PointCloud(y, Eigen::VectorXd::Constant(y.rows(), 1.0 / (n * n))), h), o);
+    const ShapeEvaluation e = J.evaluate(Eigen::VectorXd::Zero(p.space.size()), false);
+    ASSERT_EQ(e.status, EvaluationStatus::ok) << e.failure;
+    const double a4 = std::pow(e.A, 4);
+    EXPECT_GE(a4, lo4 * (1 - 1e-12)) << n;
+    EXPECT_LE(a4, hi4 * (1 + 1e-12)) << n;
+    a.push_back(e.A);
+  }
+  const double layer = 9.0 / 16.0 * eps * std::log(2.0);
+  for (size_t k = 0; k + 1 < a.size(); ++k)
+    EXPECT_NEAR((a[k + 1] - a[k]) / a[k], layer, 0.1 * layer) << "densities " << k;
+  std::printf("A at 4, 8, 16, 32 points per unit: %.9g %.9g %.9g %.9g\n", a[0], a[1], a[2], a[3]);
+}
+
 // What the cell form does not do yet is refused, naming the field; the point-cloud API refuses
 // quadrature cells (point clouds have no cells).
 TEST(CellObjective, RefusesWhatItCannotDo) {
@@ -153,7 +236,8 @@ TEST(CellObjective, RefusesWhatItCannotDo) {
   refused([](ShapeObjectiveOptions& o) { o.hausdorff.params.alpha = 2; }, "params.alpha");
   refused([](ShapeObjectiveOptions& o) { o.hausdorff.params.beta = 2; }, "params.beta");
   refused([](ShapeObjectiveOptions& o) { o.hausdorff.params.gamma = 1; }, "params.gamma");
-  refused([](ShapeObjectiveOptions& o) { o.form.sides = Sides::scan_to_body; }, "form.sides");
+  // scan_to_body integrates over the scan's surface (its points), not over target cells.
+  refused([](ShapeObjectiveOptions& o) { o.form.sides = Sides::scan_to_body; }, "target_cells");
   refused([](ShapeObjectiveOptions& o) { o.form.cap.c = 0.1; }, "form.cap");
   refused([](ShapeObjectiveOptions& o) { o.second_order = true; }, "second_order");
   refused([](ShapeObjectiveOptions& o) { o.pose = scan::Pose(); }, "pose");

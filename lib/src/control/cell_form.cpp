@@ -1,6 +1,9 @@
 #include "cell_form.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <numeric>
 #include <string>
 
 #include "../common/surface_bvh.hpp"
@@ -30,7 +33,59 @@ Eigen::VectorXd d_tilde(const BodyIntegral& j, double volume, double epsilon,
   return v;
 }
 
+// Morton's interleaving of three 10-bit integers: ordering points by it keeps consecutive rows
+// close together, as BodyIntegral's grouped traversal wants.
+std::uint32_t morton(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+  std::uint32_t key = 0;
+  for (int b = 0; b < 10; ++b)
+    key |= ((x >> b) & 1u) << (3 * b) | ((y >> b) & 1u) << (3 * b + 1) |
+           ((z >> b) & 1u) << (3 * b + 2);
+  return key;
+}
+
+// The rows of `points` (M by 3) in Morton order on a 1024³ grid over their bounding box.
+std::vector<Eigen::Index> by_place(const Eigen::MatrixXd& points) {
+  const Eigen::RowVector3d lo = points.colwise().minCoeff();
+  const double span = std::max((points.colwise().maxCoeff() - lo).maxCoeff(), 1e-300);
+  std::vector<std::uint32_t> key(static_cast<std::size_t>(points.rows()));
+  for (Eigen::Index k = 0; k < points.rows(); ++k) {
+    const Eigen::RowVector3d c = (points.row(k) - lo) / span * 1023.0;
+    key[static_cast<std::size_t>(k)] =
+        morton(static_cast<std::uint32_t>(c[0]), static_cast<std::uint32_t>(c[1]),
+               static_cast<std::uint32_t>(c[2]));
+  }
+  std::vector<Eigen::Index> order(key.size());
+  std::iota(order.begin(), order.end(), Eigen::Index{0});
+  std::stable_sort(order.begin(), order.end(), [&key](Eigen::Index a, Eigen::Index b) {
+    return key[static_cast<std::size_t>(a)] < key[static_cast<std::size_t>(b)];
+  });
+  return order;
+}
+
 }  // namespace
+
+CellForm::CellForm(const fe::Mesh& body, const Eigen::MatrixXd& points,
+                   const Eigen::VectorXd& weights, const CellDistanceOptions& options)
+    : body_(body), options_(options) {
+  check_3d(body, "body");
+  options_.validate();
+  if (points.cols() != 3 || points.rows() == 0 || weights.size() != points.rows())
+    throw InvalidArgument(
+        "quadrature cells: the scan's surface needs M > 0 points in 3D and M "
+        "surface weights");
+  if (!(weights.minCoeff() >= 0.0 && weights.sum() > 0.0))
+    throw InvalidArgument(
+        "quadrature cells: the scan's surface weights must be ≥ 0 with a "
+        "positive sum");
+  body_cells_ = fe::hex_decomposition(body);
+  const std::vector<Eigen::Index> order = by_place(points);
+  scan_points_.resize(points.rows(), 3);
+  scan_weights_.resize(points.rows());
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    scan_points_.row(static_cast<Eigen::Index>(k)) = points.row(order[k]);
+    scan_weights_[static_cast<Eigen::Index>(k)] = weights[order[k]];
+  }
+}
 
 CellForm::CellForm(const fe::Mesh& body, const fe::Mesh& target, const CellDistanceOptions& options)
     : body_(body), options_(options) {
@@ -66,7 +121,7 @@ CellForm::Deformed CellForm::deformed(const Eigen::VectorXd& u) const {
   d.x = hex_cells(body_cells_, body_.nodes + u.reshaped(3, n).transpose());
   d.surface = hex_boundary(d.x, &d.node);
   d.j = std::make_unique<BodyIntegral>(d.surface, body_integral_options(options_));
-  d.sd = std::make_unique<SurfaceDistance>(d.surface);
+  if (!surface()) d.sd = std::make_unique<SurfaceDistance>(d.surface);  // the outer rule's
   return d;
 }
 
@@ -74,6 +129,7 @@ CellForm::Deformed CellForm::deformed(const Eigen::VectorXd& u) const {
 /// cells against the target); ∂ρ̃/∂A^4 = 1/(8 ρ̃ √(A^4)), likewise B. The body's points get
 /// B's outer gradient and A's source bars (through the body's J, sd and |Ω_X|).
 CellRho CellForm::rho(const Deformed& d, Eigen::VectorXd* grad) const {
+  if (surface()) return scan_rho(d, grad);
   CellRho r;
   OuterMeanGradient ga, gb;
   r.a = directed_outer_mean(target_, *d.j, *d.sd, enclosed_volume(d.surface), options_,
@@ -90,6 +146,22 @@ CellRho CellForm::rho(const Deformed& d, Eigen::VectorXd* grad) const {
   return r;
 }
 
+/// Against a scan's surface: ρ̃ = A = (A^4)^(1/4), ∂ρ̃/∂A^4 = 1/(4 A³); the body's points get
+/// A's source bars (through its J and |Ω_X|).
+CellRho CellForm::scan_rho(const Deformed& d, Eigen::VectorXd* grad) const {
+  CellRho r;
+  OuterMeanGradient ga;
+  r.a = directed_point_mean(scan_points_, scan_weights_, *d.j, enclosed_volume(d.surface),
+                            options_.epsilon, grad ? &ga : nullptr);
+  r.rho = std::sqrt(std::sqrt(r.a.mean));
+  if (!grad) return r;
+  Eigen::MatrixXd points = Eigen::MatrixXd::Zero(d.x.nodes.rows(), 3);
+  add_source_bars(ga, 1.0 / (4.0 * r.rho * r.rho * r.rho), d.surface, d.node, &points);
+  const Eigen::MatrixXd nodes = body_cells_.map.transpose() * points;  // mapᵀ: N by 3
+  *grad = nodes.transpose().reshaped();                                // node-major
+  return r;
+}
+
 CellRho CellForm::evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad) const {
   return rho(deformed(u), grad);
 }
@@ -99,7 +171,7 @@ CellForm::Fields CellForm::fields(const Eigen::VectorXd& u, const Eigen::MatrixX
   const Deformed d = deformed(u);
   Fields f;
   f.rho = rho(d, nullptr);
-  f.moving = d_tilde(*target_j_, target_volume_, options_.epsilon, moving);
+  if (!surface()) f.moving = d_tilde(*target_j_, target_volume_, options_.epsilon, moving);
   f.target = d_tilde(*d.j, enclosed_volume(d.surface), options_.epsilon, target_points);
   return f;
 }
@@ -107,6 +179,8 @@ CellForm::Fields CellForm::fields(const Eigen::VectorXd& u, const Eigen::MatrixX
 // The target against itself: both directed means are the same one, A^4 over its cells against
 // its own J, sd and |Ω| (built once), so ρ̃ = ((A² + A²)/2)^(1/2) = (A^4)^(1/4).
 double CellForm::self_rho() const {
+  if (surface())
+    throw InvalidArgument("quadrature cells: a scan's surface has no cells, hence no self floor");
   const double a4 =
       directed_outer_mean(target_, *target_j_, *target_sd_, target_volume_, options_).mean;
   return std::sqrt(std::sqrt(a4));

@@ -5,6 +5,9 @@
 //     ρ̃ = ((A² + B²)/2)^(1/2),  A^4 over the target's cells against the body,
 //                               B^4 over the body's cells against the target,
 //
+// or, against a scan's surface (points with surface weights; the form scan_to_body), ρ̃ = A with
+// A^4 = (1/W) Σ_j w_j d̃_X(y_j)^4 against the body's continuum J (directed_point_mean),
+//
 // and dρ̃/du = mapᵀ ∂ρ̃/∂(hexahedron points) (node-major), the body's hexahedra being
 // points = map · (X + u) (fe::hex_decomposition). The body's decomposition and the target's
 // hexahedra, boundary, J, signed distance and volume are built once; the body's J and signed
@@ -26,6 +29,10 @@ class CellForm {
   /// `body` must outlive the form; `target` has its nodes where the target is. Throws
   /// InvalidArgument for a 2D mesh or invalid options.
   CellForm(const fe::Mesh& body, const fe::Mesh& target, const CellDistanceOptions& options);
+  /// Against a scan's surface: `points` (M by 3) with their surface weights (M, sum > 0); ρ̃ = A
+  /// (scan → body). Throws InvalidArgument for a 2D body, mismatched sizes or invalid options.
+  CellForm(const fe::Mesh& body, const Eigen::MatrixXd& points, const Eigen::VectorXd& weights,
+           const CellDistanceOptions& options);
   ~CellForm();
 
   /// ρ̃ (and its directed means) of the body at X + u (u node-major, num_nodes × 3 values);
@@ -33,8 +40,9 @@ class CellForm {
   CellRho evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad = nullptr) const;
 
   /// Per-point fields of the continuum distance (docs/formulation.md §2.8):
-  /// d̃ = (J/|Ω|)^(−1/4) − ε at `moving` (N by 3) against the target's J, and at `target_points`
-  /// (M by 3) against the body's at X + u; with ρ̃, A, B of evaluate().
+  /// d̃ = (J/|Ω|)^(−1/4) − ε at `moving` (N by 3) against the target's J (empty against a scan's
+  /// surface, which bounds no volume), and at `target_points` (M by 3) against the body's at
+  /// X + u; with ρ̃, A, B of evaluate().
   struct Fields {
     CellRho rho;
     Eigen::VectorXd moving, target;
@@ -42,8 +50,11 @@ class CellForm {
   Fields fields(const Eigen::VectorXd& u, const Eigen::MatrixXd& moving,
                 const Eigen::MatrixXd& target_points) const;
 
-  /// ρ̃ of the target's cells against themselves (the self floor).
+  /// ρ̃ of the target's cells against themselves (the self floor); InvalidArgument against a
+  /// scan's surface (it has no cells: no self floor).
   double self_rho() const;
+  /// True against a scan's surface (the second constructor).
+  bool surface() const { return scan_points_.rows() > 0; }
   const HexCells& target() const { return target_; }
   long body_hexahedra() const { return static_cast<long>(body_cells_.cells.rows()); }
 
@@ -51,6 +62,7 @@ class CellForm {
   struct Deformed;
   Deformed deformed(const Eigen::VectorXd& u) const;
   CellRho rho(const Deformed& d, Eigen::VectorXd* grad) const;
+  CellRho scan_rho(const Deformed& d, Eigen::VectorXd* grad) const;
 
   const fe::Mesh& body_;
   fe::HexDecomposition body_cells_;
@@ -59,6 +71,8 @@ class CellForm {
   std::unique_ptr<BodyIntegral> target_j_;
   std::unique_ptr<SurfaceDistance> target_sd_;
   double target_volume_ = 0.0;
+  Eigen::MatrixXd scan_points_;   // against a scan's surface: its points, ordered by place
+  Eigen::VectorXd scan_weights_;  // and their surface weights
 };
 
 }  // namespace softhd::detail

@@ -74,11 +74,15 @@ void check_cells_quadrature(const ShapeObjectiveOptions& o) {
     throw InvalidArgument(std::string("quadrature cells: only the paper's exponents, not yet "
                                       "other values of ") +
                           field);
-  if (o.form.sides != Sides::symmetric)
+  // symmetric: the target's cells; scan_to_body: the scan's surface (its points and weights).
+  if (o.form.sides == Sides::visible)
     throw InvalidArgument(
-        "form.sides: quadrature cells supports the symmetric distance only "
-        "(not yet " +
-        to_string(o.form.sides) + ")");
+        "form.sides: quadrature cells supports the symmetric and scan_to_body distances "
+        "(not yet visible)");
+  if (o.form.sides == Sides::scan_to_body && o.target_cells)
+    throw InvalidArgument(
+        "target_cells: quadrature cells with scan_to_body integrates over the scan's surface "
+        "(its points and surface weights), not over target cells");
   if (o.form.cap.c != 0.0) throw InvalidArgument("form.cap: quadrature cells has no cap (not yet)");
   if (o.camera) throw InvalidArgument("camera: quadrature cells has no camera (not yet)");
   if (o.pose) throw InvalidArgument("pose: quadrature cells has no pose (not yet)");
@@ -86,9 +90,10 @@ void check_cells_quadrature(const ShapeObjectiveOptions& o) {
     throw InvalidArgument(
         "second_order: quadrature cells has no Hessian-vector product (optimiser.algorithm "
         "newton) yet");
-  if (!o.target_cells)
+  if (!o.target_cells && o.form.sides == Sides::symmetric)
     throw InvalidArgument(
-        "target_cells: quadrature cells needs the target's cells (a target with a mesh)");
+        "target_cells: quadrature cells needs the target's cells (a target with a mesh), or "
+        "the scan_to_body distance against a scan's surface");
 }
 
 /// The cell rule's options from the distance's: ε, threads, and with method tree J's tree
@@ -123,8 +128,12 @@ struct ShapeObjective::Impl {
         path(a, c, make_solver(options.newton), options.newton, options.warm_start_states,
              options.coarse_correction_iterations) {
     if (options.hausdorff.quadrature == Quadrature::cells)
-      cells = std::make_unique<detail::CellForm>(a.mesh(), *options.target_cells,
-                                                 cell_options(options.hausdorff));
+      cells = options.target_cells
+                  ? std::make_unique<detail::CellForm>(a.mesh(), *options.target_cells,
+                                                       cell_options(options.hausdorff))
+                  : std::make_unique<detail::CellForm>(a.mesh(), target.cloud().points(),
+                                                       target.cloud().volumes(),
+                                                       cell_options(options.hausdorff));
     if (options.pose) {
       // Q₀ = P₀⁻¹ (body → camera) and the twist's centre c = Q₀(centroid of the rest cloud).
       const scan::Pose start_inverse = options.pose->inverse();
@@ -378,6 +387,7 @@ double ShapeObjective::cell_rho(const Eigen::VectorXd* u) const {
 }
 std::pair<long, long> ShapeObjective::cell_counts() const {
   if (!impl_->cells) return {0, 0};
+  if (impl_->cells->surface()) return {impl_->cells->body_hexahedra(), 0};
   return {impl_->cells->body_hexahedra(), static_cast<long>(impl_->cells->target().cells.rows())};
 }
 const HausdorffTarget& ShapeObjective::target() const { return impl_->target; }
@@ -409,6 +419,12 @@ HausdorffResult ShapeObjective::fields(const Eigen::VectorXd& u, const Eigen::Ve
     r.B = std::sqrt(std::sqrt(f.rho.b.mean));
     r.field_moving = f.moving;
     r.field_target = f.target;
+    if (impl_->cells->surface()) {  // a surface bounds no volume: the body's field collocated
+      HausdorffRequest req;
+      req.fields = true;
+      req.form = impl_->form(u, impl_->camera_at(x));
+      r.field_moving = impl_->target.evaluate(impl_->moved(u, x), req).field_moving;
+    }
     return r;
   }
   HausdorffRequest req;

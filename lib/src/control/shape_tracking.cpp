@@ -446,7 +446,8 @@ ShapeTrackingSummary track_shape(ShapeObjective& objective, const Eigen::VectorX
   // twice the body's hexahedra (it then costs about two evaluations; bending's 8×: 687 s).
   const std::pair<long, long> hexahedra = objective.cell_counts();
   const bool cells = hexahedra.first > 0;
-  const bool self_floor = cells ? hexahedra.second <= 2 * hexahedra.first
+  // (none against a scan's surface, which has no cells: hexahedra.second = 0).
+  const bool self_floor = cells ? hexahedra.second > 0 && hexahedra.second <= 2 * hexahedra.first
                                 : m_points * m_points <= options.self_floor_max_pairs;
   const FloorRequests floors = floor_requests(objective, map_displacement);
   const auto self_rho = [&] {

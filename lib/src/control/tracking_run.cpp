@@ -208,17 +208,28 @@ Quadrature run_quadrature(const TrackingRunOptions& options, const SceneTarget& 
 }
 
 /// With quadrature cells: the objective's cell form against the target's cells, one level only;
-/// a target without cells falls back to collocation, said in its description.
+/// with the distance scan_to_body and a target without cells, against the scan's surface (its
+/// points with their weights); another target without cells falls back to collocation. Each
+/// said in the target's description.
 void apply_quadrature(const TrackingRunOptions& options, SceneTarget* target,
                       ShapeObjectiveOptions* so) {
   if (run_quadrature(options, *target) != Quadrature::cells) return;
-  if (!target->cells) {
+  const Sides sides = options.distance.form ? options.distance.form->sides : target->distance.sides;
+  const bool scan_surface = !target->cells && sides == Sides::scan_to_body;
+  if (!target->cells && !scan_surface) {
     target->description += "; quadrature cells: the target has no cells, collocation instead";
     return;
   }
   if (options.levels.count > 1)
     throw InvalidArgument("levels: quadrature cells runs on one level (levels 1; not yet more)");
   so->hausdorff.quadrature = Quadrature::cells;
+  if (scan_surface) {
+    so->form.sides = Sides::scan_to_body;
+    target->description +=
+        "; quadrature cells: the body's cells against the scan's points "
+        "and their weights";
+    return;
+  }
   so->target_cells = std::make_shared<const fe::Mesh>(*target->cells);
   target->description += "; quadrature cells";
 }

@@ -122,6 +122,14 @@ OuterMean directed_outer_mean(const HexCells& outer, const BodyIntegral& source_
                               const CellDistanceOptions& options,
                               OuterMeanGradient* grad = nullptr);
 
+/// A^4 = (1/W) Σ_j w_j d̃_X(y_j)^4 of weighted points (a scan's surface by its surface weights,
+/// W = Σ_j w_j > 0) against a source body's J and |Ω_X| (surface_mean.cpp); with grad, its source
+/// bars through J and |Ω_X| (grad->outer empty: the points are fixed). OuterMean::volume is W.
+/// InvalidArgument for points that are not M by 3 with M weights, M = 0, or W ≤ 0.
+OuterMean directed_point_mean(const Eigen::MatrixXd& points, const Eigen::VectorXd& weights,
+                              const BodyIntegral& source_j, double source_volume, double epsilon,
+                              OuterMeanGradient* grad = nullptr);
+
 /// ρ̃ of two hexahedral bodies (α = β = 4, γ = 2), and its two directed means.
 struct CellRho {
   double rho = 0.0;

@@ -64,9 +64,12 @@ struct ShapeObjectiveOptions {
   /// α, β, γ, ε, method, threads, and the quadrature: collocation (default; the moving cloud
   /// against the target's points) or cells (docs/formulation.md §2.8: ρ̃ of the body's cells,
   /// deformed by u, against target_cells; particles and volumes then play no part, and the
-  /// target's points only serve fields()). Cells need target_cells and a 3D body, and do not
-  /// yet support α, β, γ other than 4, 4, 2, a form other than the symmetric one without a
-  /// cap, a camera, a pose, or second_order (InvalidArgument naming the field).
+  /// target's points only serve fields()). Cells need a 3D body and, for the symmetric form,
+  /// target_cells; with form.sides scan_to_body and no target_cells the scan is a surface: the
+  /// body's continuum J at its points, averaged with their volumes as surface weights
+  /// (docs/formulation.md §2.8, "A scan's surface against the body's cells"). They do not yet
+  /// support α, β, γ other than 4, 4, 2, the visible form, a cap, a camera, a pose, or
+  /// second_order (InvalidArgument naming the field).
   HausdorffOptions hausdorff;
   Particles particles = Particles::nodes;                ///< moving cloud: nodes (paper)
   ParticleVolumes volumes = ParticleVolumes::reference;  ///< paper's simplification
@@ -252,7 +255,8 @@ class ShapeObjective {
   /// displacement *u against the target's cells (the matched floor, u the known map), or, with
   /// u null, of the target's cells against themselves (the self floor).
   double cell_rho(const Eigen::VectorXd* u) const;
-  /// Quadrature cells: the hexahedra of the body and of the target ({0, 0} with collocation).
+  /// Quadrature cells: the hexahedra of the body and of the target ({0, 0} with collocation;
+  /// the target's 0 against a scan's surface, whose cell_rho(nullptr) is refused).
   std::pair<long, long> cell_counts() const;
 
   /// The target with its trees.
