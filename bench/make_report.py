@@ -508,9 +508,10 @@ def section_time_to_floor(rows):
             "run's start on the user's mesh may already be below k: it is not counted). `pg to "
             "k`: the first such iteration at which the projected-gradient norm fell to k × its "
             "value at the first iteration on the user's mesh; `pg end` that ratio at the end. "
-            "`CG/step`: newton's CG iterations per Newton step. The last rows run newton on one "
-            "level on the plate at three resolutions (mesh independence: the Newton iterations "
-            "to the gradient goal should not grow with the mesh). Goals: bending ≤ 1.01× within "
+            "`CG/step`: newton's CG iterations per Newton step. Run with `--mesh-independence` "
+            "(not by `make bench`), rows follow that run newton on one level on the plate at "
+            "three resolutions (the Newton iterations to the gradient goal should not grow with "
+            "the mesh). Goals: bending ≤ 1.01× within "
             "40 s and the projected gradient ≤ 1e-4 × within 120 s; finger ≤ 1.01× within 20 s; "
             "torsion ≤ 1.5× within 30 s.\n\n")
     out = []

@@ -95,15 +95,15 @@ if [ $quick -eq 1 ]; then
 else
   run kernel "$b/bench_kernel" --n 20000 --repeats 5 --csv "$out/kernel.csv"
   # The Hausdorff ladder (one run per size; a (method, tau, mode) stops growing when its next
-  # size is predicted over 10 s) and the goal cases of issue 13 (goals() above).
+  # size is predicted over 6 s) and the goal cases of issue 13 (goals() above).
   run hausdorff sh -c "'$b/bench_hausdorff' --min-n 1e3 --max-n 1e6 --exact-max 3.2e4 \
-    --budget 10 --repeats 1 --csv '$out/hausdorff_ladder.csv' && '$here/scripts/run_benchmarks.sh' \
+    --budget 6 --repeats 1 --csv '$out/hausdorff_ladder.csv' && '$here/scripts/run_benchmarks.sh' \
     --goals-only '$b' '$out/hausdorff_goals.csv'"
   run resolution "$b/bench_resolution" --csv "$out/resolution.csv"
   run control "$b/bench_control" --csv "$out/control.csv"
-  run stability "$b/bench_stability" --csv "$out/stability.csv"
-  # Issue 31's goals: softhd optimise on bending (default levels, then --levels 1) and torsion,
-  # one run at a time, each from its own clock (about 10 minutes on 2 cores).
+  run stability "$b/bench_stability" --max-iter 25 --csv "$out/stability.csv"
+  # softhd optimise on bending, torsion and the finger with MMA and newton, one run at a time,
+  # each from its own clock (about 12 minutes on 2 cores; --mesh-independence adds 12 more).
   run time_to_floor /usr/bin/python3 "$here/bench/bench_time_to_floor.py" "$build" \
     --csv "$out/time_to_floor.csv"
   # softhd forward against FEniCS (skipped, with a line, without python3-dolfin).
@@ -111,12 +111,12 @@ else
     --repeats 3 --csv "$out/forward_fenics.csv"
   # The Gmsh finger's state solve against FEniCS on the same tetrahedra (FEniCS skipped, with a
   # line, without python3-dolfin); its optimisation is in time_to_floor.
-  run finger /usr/bin/python3 "$here/bench/bench_finger.py" "$build" --repeats 2 \
+  run finger /usr/bin/python3 "$here/bench/bench_finger.py" "$build" --repeats 1 \
     --csv "$out/finger.csv"
   # softhd align against Open3D's FPFH + RANSAC + ICP (issue 32; Open3D skipped, with a
-  # line, without python3-open3d): 40 poses x 2 views (100 took 21 minutes, a third of the
+  # line, without python3-open3d): 30 poses x 2 views (100 took 21 minutes, a third of the
   # hour make bench may take; its wall time in docs/bench/align.meta).
-  align_bench --poses 40 --distance scan_to_body
+  align_bench --poses 30 --distance scan_to_body
   # The Python module: overhead over C++ and HausdorffLoss against plain PyTorch (issue 14).
   python_bench --n 10000 --torch-n 10000 --repeats 5
   # The distance integrated over cells against collocation: the cubes and the plate against
