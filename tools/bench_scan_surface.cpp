@@ -1,0 +1,140 @@
+// A scan's surface against the body (docs/formulation.md §2.8, "A scan's surface against the
+// body's cells"): ρ̃ of the one-sided form scan_to_body at the true shape, the scan an exact,
+// noise-free sampling of the deformed body's surface at several densities, with the body
+// integrated over its cells (quadrature cells) and collocated at its boundary nodes (the scan
+// runs' moving cloud, deformed volumes). The true shape is the scene target's known map (the
+// finger: the 2× finer solve of m* = −1.5 X₃ at the body's nodes); the surface sampled is the
+// one the cell form integrates (its hexahedra's boundary at X + u). Points are uniform in area
+// (seeded), each weighted area / count; density f gives f² × the body's boundary nodes.
+//
+//   bench_scan_surface SCENE [THREADS [TOL [SEED [F...]]]]
+//
+// TOL (default 1e-4): the tree's tolerance for both quadratures (cells: J's, with the loop's
+// rules when ≥ 3.7e-5). F default 0.5 1 2 4. Prints one line per density.
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "control/cell_form.hpp"
+#include "fe/hex_decomposition.hpp"
+#include "hausdorff/cell_distance.hpp"
+#include "softhd/control/moving_cloud.hpp"
+#include "softhd/control/scene.hpp"
+#include "softhd/control/scene_target.hpp"
+#include "softhd/error.hpp"
+#include "softhd/fe/boundary.hpp"
+#include "softhd/hausdorff.hpp"
+
+using namespace softhd;
+
+namespace {
+
+double now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// `count` points uniform in area on `s` (triangle by its area, then uniform barycentric).
+Eigen::MatrixXd sample_surface(const TriangleSurface& s, long count, unsigned seed) {
+  std::vector<double> area(static_cast<std::size_t>(s.triangles.rows()));
+  for (Eigen::Index t = 0; t < s.triangles.rows(); ++t) {
+    const Eigen::RowVector3d a = s.points.row(s.triangles(t, 0)),
+                             b = s.points.row(s.triangles(t, 1)),
+                             c = s.points.row(s.triangles(t, 2));
+    area[static_cast<std::size_t>(t)] = 0.5 * (b - a).cross(c - a).norm();
+  }
+  std::mt19937_64 rng(seed);
+  std::discrete_distribution<long> pick(area.begin(), area.end());
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  Eigen::MatrixXd y(count, 3);
+  for (long k = 0; k < count; ++k) {
+    const long t = pick(rng);
+    double r1 = u01(rng), r2 = u01(rng);
+    if (r1 + r2 > 1.0) r1 = 1.0 - r1, r2 = 1.0 - r2;
+    y.row(k) = (1 - r1 - r2) * s.points.row(s.triangles(t, 0)) +
+               r1 * s.points.row(s.triangles(t, 1)) + r2 * s.points.row(s.triangles(t, 2));
+  }
+  return y;
+}
+
+double total_area(const TriangleSurface& s) {
+  double a = 0.0;
+  for (Eigen::Index t = 0; t < s.triangles.rows(); ++t) {
+    const Eigen::RowVector3d p = s.points.row(s.triangles(t, 0)),
+                             q = s.points.row(s.triangles(t, 1)),
+                             r = s.points.row(s.triangles(t, 2));
+    a += 0.5 * (q - p).cross(r - p).norm();
+  }
+  return a;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: bench_scan_surface SCENE [THREADS [TOL [SEED [F...]]]]\n");
+    return 2;
+  }
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  try {
+    const Scene scene = load_scene(argv[1]);
+    const fe::Assembler A = scene.body.make_assembler();
+    const fe::Mesh& mesh = A.mesh();
+    const SceneTarget target = scene_target(scene, mesh);
+    if (!target.map_displacement || mesh.dim != 3) {
+      std::fprintf(stderr, "%s: needs a 3D scene whose target has a known map\n", argv[1]);
+      return 2;
+    }
+    const int threads = argc > 2 ? std::atoi(argv[2]) : 0;
+    const double tol = argc > 3 ? std::atof(argv[3]) : 1e-4;
+    const unsigned seed = argc > 4 ? static_cast<unsigned>(std::atoi(argv[4])) : 1u;
+    std::vector<double> densities;
+    for (int k = 5; k < argc; ++k) densities.push_back(std::atof(argv[k]));
+    if (densities.empty()) densities = {0.5, 1.0, 2.0, 4.0};
+
+    const Eigen::VectorXd& u = *target.map_displacement;  // node-major
+    const Eigen::Index n = mesh.num_nodes();
+    const fe::HexDecomposition d = fe::hex_decomposition(mesh);
+    const detail::HexCells cells{d.map * (mesh.nodes + u.reshaped(3, n).transpose()), d.cells};
+    const TriangleSurface surface = detail::hex_boundary(cells);
+    const MovingCloud moving(A, Particles::boundary, ParticleVolumes::deformed, true);
+    const PointCloud body = moving.at(u);
+    const double area = total_area(surface);
+
+    HausdorffOptions h;
+    h.method = Method::tree;
+    h.tolerance = tol;
+    h.threads = threads;
+    detail::CellDistanceOptions c;
+    c.epsilon = h.params.epsilon;
+    c.threads = threads;
+    c.tolerance = tol;
+    if (tol >= 3.7e-5) c.j_near_ratio = 2.0, c.j_angle_points = 8;
+    HausdorffRequest req;
+    req.form.sides = Sides::scan_to_body;
+    std::printf("scene %s: %ld boundary nodes, surface area %.6g, tree tolerance %g, seed %u\n",
+                argv[1], static_cast<long>(body.size()), area, tol, seed);
+    std::printf("density points  rho_cells  s_cells  rho_collocation  s_collocation\n");
+    for (double f : densities) {
+      const long count = std::max(1L, static_cast<long>(f * f * static_cast<double>(body.size())));
+      const Eigen::MatrixXd y = sample_surface(surface, count, seed);
+      const Eigen::VectorXd w = Eigen::VectorXd::Constant(count, area / static_cast<double>(count));
+      double t0 = now();
+      const detail::CellForm form(mesh, y, w, c);
+      const double rho_cells = form.evaluate(u).rho;
+      const double s_cells = now() - t0;
+      t0 = now();
+      const double rho_coll = hausdorff(body, PointCloud(y, w), h, req).rho;
+      const double s_coll = now() - t0;
+      std::printf("%7.3g %7ld  %.7f  %7.2f  %.7f  %7.3f\n", f, count, rho_cells, s_cells, rho_coll,
+                  s_coll);
+    }
+  } catch (const Error& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
+  }
+  return 0;
+}
