@@ -291,6 +291,16 @@ TEST(CellObjective, TheRunsFloorsAreTheCellForms) {
   const TrackingRunSummary c = TrackingRun(s, o).run();
   EXPECT_NE(c.target.find("the target has no cells, collocation instead"), std::string::npos)
       << c.target;
+  // The one-sided distance takes that cloud as a scan's surface: the body's cells against its
+  // points; no self floor (a surface has no cells).
+  TargetDistance one_sided;
+  one_sided.sides = Sides::scan_to_body;
+  o.distance.form = one_sided;
+  const TrackingRunSummary v = TrackingRun(s, o).run();
+  EXPECT_NE(v.target.find("the body's cells against the scan's points"), std::string::npos)
+      << v.target;
+  EXPECT_FALSE(v.floor_self.has_value());
+  EXPECT_TRUE(std::isfinite(v.rho_final) && v.rho_final > 0.0);
 }
 
 }  // namespace

@@ -5,12 +5,15 @@
 // runs' moving cloud, deformed volumes). The true shape is the scene target's known map (the
 // finger: the 2× finer solve of m* = −1.5 X₃ at the body's nodes); the surface sampled is the
 // one the cell form integrates (its hexahedra's boundary at X + u). Points are uniform in area
-// (seeded), each weighted area / count; density f gives f² × the body's boundary nodes.
+// (seeded), each weighted area / count; density f gives f² × the body's boundary nodes per area of
+// its whole boundary (the body's boundary spacing / f).
 //
-//   bench_scan_surface SCENE [THREADS [TOL [SEED [F...]]]]
+//   bench_scan_surface [--top] SCENE [THREADS [TOL [SEED [F...]]]]
 //
-// TOL (default 1e-4): the tree's tolerance for both quadratures (cells: J's, with the loop's
-// rules when ≥ 3.7e-5). F default 0.5 1 2 4. Prints one line per density.
+// --top: a one-sided view, the triangles whose outward normal has a positive z component only
+// (seen from above, without occlusion). TOL (default 1e-4): the tree's tolerance for both
+// quadratures (cells: J's, with the loop's rules when ≥ 3.7e-5). F default 0.5 1 2 4. Prints one
+// line per density.
 
 #include <chrono>
 #include <cstdio>
@@ -35,6 +38,22 @@ namespace {
 
 double now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// The triangles of `s` whose outward normal has a positive z component (a view from above).
+TriangleSurface top_view(const TriangleSurface& s) {
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index t = 0; t < s.triangles.rows(); ++t) {
+    const Eigen::RowVector3d a = s.points.row(s.triangles(t, 0));
+    const Eigen::RowVector3d b = s.points.row(s.triangles(t, 1));
+    const Eigen::RowVector3d c = s.points.row(s.triangles(t, 2));
+    if ((b - a).cross(c - a)[2] > 0.0) keep.push_back(t);
+  }
+  TriangleSurface v = s;
+  v.triangles.resize(static_cast<Eigen::Index>(keep.size()), 3);
+  for (std::size_t k = 0; k < keep.size(); ++k)
+    v.triangles.row(static_cast<Eigen::Index>(k)) = s.triangles.row(keep[k]);
+  return v;
 }
 
 // `count` points uniform in area on `s` (triangle by its area, then uniform barycentric).
@@ -74,8 +93,10 @@ double total_area(const TriangleSurface& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const bool top = argc > 1 && std::string(argv[1]) == "--top";
+  if (top) --argc, ++argv;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_scan_surface SCENE [THREADS [TOL [SEED [F...]]]]\n");
+    std::fprintf(stderr, "usage: bench_scan_surface [--top] SCENE [THREADS [TOL [SEED [F...]]]]\n");
     return 2;
   }
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
@@ -99,7 +120,8 @@ int main(int argc, char** argv) {
     const Eigen::Index n = mesh.num_nodes();
     const fe::HexDecomposition d = fe::hex_decomposition(mesh);
     const detail::HexCells cells{d.map * (mesh.nodes + u.reshaped(3, n).transpose()), d.cells};
-    const TriangleSurface surface = detail::hex_boundary(cells);
+    const TriangleSurface whole = detail::hex_boundary(cells);
+    const TriangleSurface surface = top ? top_view(whole) : whole;
     const MovingCloud moving(A, Particles::boundary, ParticleVolumes::deformed, true);
     const PointCloud body = moving.at(u);
     const double area = total_area(surface);
@@ -115,11 +137,14 @@ int main(int argc, char** argv) {
     if (tol >= 3.7e-5) c.j_near_ratio = 2.0, c.j_angle_points = 8;
     HausdorffRequest req;
     req.form.sides = Sides::scan_to_body;
-    std::printf("scene %s: %ld boundary nodes, surface area %.6g, tree tolerance %g, seed %u\n",
-                argv[1], static_cast<long>(body.size()), area, tol, seed);
+    std::printf("scene %s: %ld boundary nodes, %s surface area %.6g, tree tolerance %g, seed %u\n",
+                argv[1], static_cast<long>(body.size()), top ? "top view's" : "whole", area, tol,
+                seed);
     std::printf("density points  rho_cells  s_cells  rho_collocation  s_collocation\n");
     for (double f : densities) {
-      const long count = std::max(1L, static_cast<long>(f * f * static_cast<double>(body.size())));
+      // f² × the boundary nodes per area of the whole boundary: spacing / f
+      const double per_area = static_cast<double>(body.size()) / total_area(whole);
+      const long count = std::max(1L, static_cast<long>(f * f * per_area * area));
       const Eigen::MatrixXd y = sample_surface(surface, count, seed);
       const Eigen::VectorXd w = Eigen::VectorXd::Constant(count, area / static_cast<double>(count));
       double t0 = now();
