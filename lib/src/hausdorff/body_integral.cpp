@@ -18,35 +18,7 @@
 
 namespace softhd::detail {
 
-using namespace body;
-
-namespace {
-
-void validate(const BodyIntegralOptions& o) {
-  if (!(o.epsilon > 0.0) || !std::isfinite(o.epsilon))
-    throw InvalidArgument("body integral: epsilon must be finite and > 0, got " +
-                          decimal(o.epsilon));
-  if (!(o.alpha > 0.0) || !std::isfinite(o.alpha))
-    throw InvalidArgument("body integral: alpha must be finite and > 0, got " + decimal(o.alpha));
-  if (!(o.near_ratio >= 1.0) || !std::isfinite(o.near_ratio))
-    throw InvalidArgument("body integral: near_ratio must be finite and >= 1, got " +
-                          decimal(o.near_ratio));
-  if (o.angle_points < 2 || o.angle_points > 64)
-    throw InvalidArgument("body integral: angle_points must be in [2, 64], got " +
-                          std::to_string(o.angle_points));
-  if (!(o.panel_width > 0.0) || !std::isfinite(o.panel_width))
-    throw InvalidArgument("body integral: panel_width must be finite and > 0, got " +
-                          decimal(o.panel_width));
-  if (!(o.tolerance >= 0.0 && o.tolerance < 1.0))
-    throw InvalidArgument("body integral: tolerance must be in [0, 1), got " +
-                          decimal(o.tolerance));
-  if (o.tolerance > 0.0 && o.alpha != 4.0)
-    throw InvalidArgument(
-        "body integral: tolerance > 0 needs alpha = 4 (the tree's expansions), "
-        "got alpha " +
-        decimal(o.alpha));
-  check_threads(o.threads);
-}
+namespace body {
 
 // The geometry of one triangle (area2 = 2 × its area > 0).
 Triangle make_triangle(const double v[3][3], double near_ratio, double* area2) {
@@ -95,6 +67,38 @@ Triangle make_triangle(const double v[3][3], double near_ratio, double* area2) {
   place(far_rule(), kFarPoints, t.qx, t.qy, t.qz, t.wq);
   place(coarse_rule(), kCoarsePoints, t.cx, t.cy, t.cz, t.cw);
   return t;
+}
+
+}  // namespace body
+
+using namespace body;
+
+namespace {
+
+void validate(const BodyIntegralOptions& o) {
+  if (!(o.epsilon > 0.0) || !std::isfinite(o.epsilon))
+    throw InvalidArgument("body integral: epsilon must be finite and > 0, got " +
+                          decimal(o.epsilon));
+  if (!(o.alpha > 0.0) || !std::isfinite(o.alpha))
+    throw InvalidArgument("body integral: alpha must be finite and > 0, got " + decimal(o.alpha));
+  if (!(o.near_ratio >= 1.0) || !std::isfinite(o.near_ratio))
+    throw InvalidArgument("body integral: near_ratio must be finite and >= 1, got " +
+                          decimal(o.near_ratio));
+  if (o.angle_points < 2 || o.angle_points > 64)
+    throw InvalidArgument("body integral: angle_points must be in [2, 64], got " +
+                          std::to_string(o.angle_points));
+  if (!(o.panel_width > 0.0) || !std::isfinite(o.panel_width))
+    throw InvalidArgument("body integral: panel_width must be finite and > 0, got " +
+                          decimal(o.panel_width));
+  if (!(o.tolerance >= 0.0 && o.tolerance < 1.0))
+    throw InvalidArgument("body integral: tolerance must be in [0, 1), got " +
+                          decimal(o.tolerance));
+  if (o.tolerance > 0.0 && o.alpha != 4.0)
+    throw InvalidArgument(
+        "body integral: tolerance > 0 needs alpha = 4 (the tree's expansions), "
+        "got alpha " +
+        decimal(o.alpha));
+  check_threads(o.threads);
 }
 
 // Throws InvalidArgument unless the triangles (3 corners each) close up with one orientation:

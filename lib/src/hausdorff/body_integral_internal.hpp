@@ -35,6 +35,10 @@ inline double distance2(const Triangle& t, const double* y) {
   return dx * dx + dy * dy + dz * dz;
 }
 
+// The geometry of one triangle with corners v, its rules' points (body_integral.cpp); twin not
+// set; area2 = 2 × its area (0: degenerate).
+Triangle make_triangle(const double v[3][3], double near_ratio, double* area2);
+
 // ---- The polar rule (body_integral_polar.cpp).
 
 // Signed distance of y's foot to edge e's line (> 0 on the triangle's side), its ends along

@@ -15,18 +15,20 @@ namespace {
 // kernels' series in ε/r up to there.
 constexpr double kTreeX = 0.05;
 
-// C_H: the remainder of the second-order expansion of n·d H(|d|) (α = 4) is at most
-// C_H ρ³/z⁶ per unit area, z = |p − y| − ρ ≥ ε/kTreeX. With x = ε/r, H = (1/3) Σ_{m=1}^{3}
-// r^−4 (1 + x)^−m = Σ_k a_k ε^k r^−(4+k), |a_k| ≤ (1/3) Σ_m C(m+k−1, k); each term
-// d r^−(4+k) = −∇ r^−(2+k)/(2 + k), and the order-2 remainder of n·∇f at s is
-// D⁴f(ξ)[n, s, s, s]/6, by polarisation at most max_u |D⁴f[u⁴]| |s|³/6, and for f = r^−2λ the
-// Gegenbauer expansion |z + t u|^−2λ = Σ_n C_n^λ(cos) tⁿ |z|^−(2λ+n), |C_n^λ| ≤ C(n + 2λ − 1, n),
-// gives |D⁴f[u⁴]| ≤ 4! C(5 + k, 4)/|z|^(6+k). So C_H = Σ_k |a_k| kTreeX^k 4 C(5+k, 4)/(2 + k).
-// C_K likewise for the scalar k = (r + ε)^−4 = Σ_k C(k+3, 3)(−ε)^k r^−(4+k) at order 2:
-// D³f[s³]/6 ≤ C(6 + k, 3) |s|³/|z|^(7+k), so C_K = Σ_k C(k+3, 3) C(6+k, 3) kTreeX^k. The solid
-// angle's n·d/r³ = −n·∇(1/r): 4 ρ³/z⁵ (Legendre, |P_4| ≤ 1).
+// C_H: the remainder of the second-order expansion of n·d H(|d|) (α = 4) at s = x − p is at
+// most C_H |s|³/z⁶, z = |p − y| − ρ ≥ ε/kTreeX, so a cluster's at most C_H ∫|s|³ dA/z⁶. With
+// x = ε/r, H = (1/3) Σ_{m=1}^{3} r^−4 (1 + x)^−m = Σ_k a_k ε^k r^−(4+k),
+// |a_k| ≤ (1/3) Σ_m C(m+k−1, k); each term d r^−(4+k) = −∇ r^−(2+k)/(2 + k), and the order-2
+// remainder of n·∇f at s is D⁴f(ξ)[n, s, s, s]/6, by polarisation at most max_u |D⁴f[u⁴]| |s|³/6,
+// and for f = r^−2λ the Gegenbauer expansion |z + t u|^−2λ = Σ_n C_n^λ(cos) tⁿ |z|^−(2λ+n),
+// |C_n^λ| ≤ C(n + 2λ − 1, n), gives |D⁴f[u⁴]| ≤ 4! C(5 + k, 4)/|z|^(6+k). So
+// C_H(x) = Σ_k |a_k| x^k 4 C(5+k, 4)/(2 + k), x = ε/z. C_K likewise for the scalar
+// k = (r + ε)^−4 = Σ_k C(k+3, 3)(−ε)^k r^−(4+k) at order 2: D³f[s³]/6 ≤ C(6 + k, 3) |s|³/|z|^(7+k),
+// so C_K(x) = Σ_k C(k+3, 3) C(6+k, 3) x^k. Both are power series with coefficients ≥ 0, so
+// convex: on [0, kTreeX] below their chords, C(x) ≤ C(0) + (C(kTreeX) − C(0)) x/kTreeX (C_H(0) =
+// 10, C_K(0) = 20). The solid angle's n·d/r³ = −n·∇(1/r): 4 |s|³/z⁵ (Legendre, |P_4| ≤ 1).
 struct TreeConstants {
-  double c_h = 0.0, c_k = 0.0;
+  double c_h0 = 0.0, c_h = 0.0, c_k0 = 0.0, c_k = 0.0;  // C(0) and C(kTreeX)
   TreeConstants() {
     auto binom = [](int n, int k) {
       double c = 1.0;
@@ -39,6 +41,8 @@ struct TreeConstants {
       c_h += a * xk * 4.0 * binom(5 + k, 4) / (2.0 + k);
       c_k += binom(k + 3, 3) * binom(6 + k, 3) * xk;
     }
+    c_h0 = 4.0 * binom(5, 4) / 2.0;
+    c_k0 = binom(6, 3);
   }
 };
 
@@ -120,6 +124,7 @@ BodyIntegral::Cluster make_cluster(const std::vector<Triangle>& tris, const std:
   }
   for (int i = 0; i < 3; ++i) c.p[i] = p[i] / area;
   c.area = area;
+  double s4 = 0.0;  // ∫|s|⁴ dA
   for (int j = node.begin; j < node.end; ++j) {
     const Triangle& t = tris[order[j]];
     for (int a = 0; a < 3; ++a) {
@@ -129,7 +134,8 @@ BodyIntegral::Cluster make_cluster(const std::vector<Triangle>& tris, const std:
     c.reach = std::max(c.reach, std::sqrt(t.near2));
     for (int q = 0; q < kFarPoints; ++q) {
       const double sv[3] = {t.qx[q] - c.p[0], t.qy[q] - c.p[1], t.qz[q] - c.p[2]};
-      const double w = t.wq[q];
+      const double w = t.wq[q], ss = dot(sv, sv);
+      s4 += w * ss * ss;
       for (int i = 0; i < 3; ++i) {
         c.m0[i] += w * t.n[i];
         c.s1[i] += w * sv[i];
@@ -149,18 +155,23 @@ BodyIntegral::Cluster make_cluster(const std::vector<Triangle>& tris, const std:
       c.q[i] += 2.0 * c.m2[9 * j + 3 * j + i] + c.m2[9 * i + 4 * j];
     }
   }
+  // ∫|s|³ dA ≤ √(∫|s|² dA ∫|s|⁴ dA) (Cauchy–Schwarz; the moments exact), and ≤ ρ³ area
+  c.r3 = std::min(c.rho * c.rho * c.rho, std::sqrt(c.tr2 * s4) / area);
   return c;
 }
 
-// A cluster's remainder bounds per unit area at z = |p − y| − ρ (valid: z > 0, ε ≤ kTreeX z):
-// J's tail C_H ρ³/z⁶, the solid angle's 4 ρ³/z⁵, and with the gradient k's C_K ρ³/z⁷. Taken only
-// beyond its triangles' near radii (z ≥ reach, so |y − c_t| ≥ z: none of them near y): a triangle
-// near y is always summed one by one (cancelled_edges relies on it).
+// A cluster's remainder bounds per unit area at z = |p − y| − ρ (valid: z > 0, ε ≤ kTreeX z),
+// r3 ≥ (1/area) ∫|s|³ dA: J's tail C_H(ε/z) r3/z⁶, the solid angle's 4 r3/z⁵, and with the
+// gradient k's C_K(ε/z) r3/z⁷. Taken only beyond its triangles' near radii (z ≥ reach, so
+// |y − c_t| ≥ z: none of them near y): a triangle near y is always summed one by one
+// (cancelled_edges relies on it).
 Bounds cluster_bounds(const BodyIntegral::Cluster& c, double eps, double z, bool want_b) {
   if (!(z > 0.0 && eps <= kTreeX * z && z >= c.reach)) return {false, 0.0, 0.0, 0.0};
   const TreeConstants& tc = tree_constants();
-  const double r3 = c.rho * c.rho * c.rho, z2 = z * z, z5 = z2 * z2 * z;
-  return {true, tc.c_h * r3 / (z5 * z), 4.0 * r3 / z5, want_b ? tc.c_k * r3 / (z5 * z2) : 0.0};
+  const double x = eps / (kTreeX * z);  // ε/z as a fraction of kTreeX, ≤ 1
+  const double c_h = tc.c_h0 + (tc.c_h - tc.c_h0) * x, c_k = tc.c_k0 + (tc.c_k - tc.c_k0) * x;
+  const double r3 = c.r3, z2 = z * z, z5 = z2 * z2 * z;
+  return {true, c_h * r3 / (z5 * z), 4.0 * r3 / z5, want_b ? c_k * r3 / (z5 * z2) : 0.0};
 }
 
 // Whether a cluster at z, its bounds e there, enters by its expansions under the budget
