@@ -10,13 +10,14 @@
 //                                       gradient and the surface product by the tree (tolerance
 //                                       1e-2, also with near_ratio 2 and angle_points 8; 1e-6)
 //                                       against all pairs and collocation's tree at that tolerance
-//   bench_body_integral cells [THREADS [REPS [OUT]]]  J, J and its gradient, and the surface
+//   bench_body_integral cells [THREADS [REPS [OUT [TOL]]]]  J, J and its gradient, and the surface
 //                                       product (weights 1) at the 2×2×2 Gauss points of the
 //                                       10 × 2 × 0.1 plate's 100 × 10 × 4 hexahedra (the cell
 //                                       distance's samples) against the plate's own boundary, by
-//                                       the tree at 1e-2 (near_ratio 2, angle_points 8; then the
-//                                       defaults): seconds, REPS repeats; OUT: J, the gradient
-//                                       and the product's rows written there (raw doubles)
+//                                       the tree at TOL, 1e-2 (0: all pairs, the first only;
+//                                       near_ratio 2, angle_points 8; then the defaults): seconds,
+//                                       REPS repeats; OUT: J (value only), J, the gradient and the
+//                                       product's rows at near_ratio 2 written there (raw doubles)
 #include <Eigen/Core>
 #include <chrono>
 #include <cstdio>
@@ -237,7 +238,7 @@ detail::HexCells plate_cells(int nx, int ny, int nz) {
                          Eigen::Vector3i(nx, ny, nz));
 }
 
-void cells(int threads, int reps, const char* out) {
+void cells(int threads, int reps, const char* out, double tol) {
   const detail::HexCells plate = plate_cells(100, 10, 4);
   const TriangleSurface surf = detail::hex_boundary(plate);
   std::vector<detail::cell_rule::Cell> cs;
@@ -259,9 +260,10 @@ void cells(int threads, int reps, const char* out) {
   Eigen::MatrixXd G, V;
   for (int rep = 0; rep < reps; ++rep)
     for (const Config& cf : {Config{2.0, 8}, Config{4.0, 12}}) {
+      if (tol == 0.0 && cf.near_ratio != 2.0) continue;  // all pairs: the reference of OUT only
       BodyIntegralOptions o;
       o.threads = threads;
-      o.tolerance = 1e-2;
+      o.tolerance = tol;
       o.near_ratio = cf.near_ratio;
       o.angle_points = cf.angle_points;
       const BodyIntegral b(surf, o);
@@ -274,9 +276,9 @@ void cells(int threads, int reps, const char* out) {
       V = b.surface_vjp(y, w);
       const double t3 = now();
       std::printf(
-          "rep %d, tau 1e-2, near_ratio %.0f, angle_points %d: J %.3f s, J+grad %.3f s, vjp %.3f s "
+          "rep %d, tau %.0e, near_ratio %.0f, angle_points %d: J %.3f s, J+grad %.3f s, vjp %.3f s "
           "| mean J %.9g, max |J(value) - J(value+grad)|/J %.1e\n",
-          rep, cf.near_ratio, cf.angle_points, t1 - t0, t2 - t1, t3 - t2, J.mean(),
+          rep, tol, cf.near_ratio, cf.angle_points, t1 - t0, t2 - t1, t3 - t2, J.mean(),
           ((J1 - J).array() / J.array()).abs().maxCoeff());
       std::fflush(stdout);
       if (out && rep == 0 && cf.near_ratio == 2.0) {
@@ -296,7 +298,7 @@ int main(int argc, char** argv) {
   if (what != "accuracy" && what != "plate" && what != "cost" && what != "cells") {
     std::fprintf(stderr,
                  "usage: bench_body_integral accuracy FILE | plate | cost [THREADS] | cells "
-                 "[THREADS [REPS [OUT]]]\n");
+                 "[THREADS [REPS [OUT [TOL]]]]\n");
     return 2;
   }
   if (what == "accuracy") {
@@ -341,7 +343,7 @@ int main(int argc, char** argv) {
   }
   if (what == "cells")
     cells(argc > 2 ? std::atoi(argv[2]) : 1, argc > 3 ? std::atoi(argv[3]) : 1,
-          argc > 4 ? argv[4] : nullptr);
+          argc > 4 ? argv[4] : nullptr, argc > 5 ? std::atof(argv[5]) : 1e-2);
   if (what == "cost") {
     const int threads = argc > 2 ? std::atoi(argv[2]) : 1;
     cost(SOFTHD_SOURCE_DIR "/data/scenes/bending.json", threads);

@@ -127,6 +127,7 @@ class BodyIntegral {
   struct Cluster {
     double p[3];     // the area-weighted centroid
     double rho;      // the largest |v − p| over its triangles' corners
+    double r3;       // √(∫|s|² ∫|s|⁴)/area ≥ ∫|s|³ dA/area, ≤ ρ³
     double reach;    // the largest near radius (near_ratio · R_t) of its triangles
     double area;     // Σ A_t
     double m0[3];    // M0
