@@ -8,14 +8,22 @@
 // (seeded), each weighted area / count; density f gives f² × the body's boundary nodes per area of
 // its whole boundary (the body's boundary spacing / f).
 //
-//   bench_scan_surface [--top] SCENE [THREADS [TOL [SEED [F...]]]]
+//   bench_scan_surface [--top] [--pose-bias SIGMA] SCENE [THREADS [TOL [SEED [F...]]]]
+//
+// --pose-bias SIGMA: instead, the pose's bias of each quadrature: the scan at the first density
+// (default 1) with Gaussian noise of SIGMA × L on every coordinate (L the body's bounding-box
+// diagonal; 0: none), rotated about the body's centroid by θ = −0.8°, −0.6°, …, 0.8° about each
+// axis; per axis ρ̃ at each θ and the minimiser of the parabola through the three lowest (the
+// true pose is θ = 0: the minimiser is the data term's bias along that rotation).
 //
 // --top: a one-sided view, the triangles whose outward normal has a positive z component only
 // (seen from above, without occlusion). TOL (default 1e-4): the tree's tolerance for both
 // quadratures (cells: J's, with the loop's rules when ≥ 3.7e-5). F default 0.5 1 2 4. Prints one
 // line per density.
 
+#include <Eigen/Geometry>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
@@ -92,9 +100,48 @@ double total_area(const TriangleSurface& s) {
 
 }  // namespace
 
+// The minimiser of the parabola through the lowest value of `f` (at `t`) and its neighbours.
+double parabola_minimum(const std::vector<double>& t, const std::vector<double>& f) {
+  std::size_t k = 0;
+  for (std::size_t i = 1; i < f.size(); ++i)
+    if (f[i] < f[k]) k = i;
+  if (k == 0 || k + 1 == f.size()) return t[k];  // at an end: no bracket
+  const double a = f[k - 1], b = f[k], c = f[k + 1], h = t[k + 1] - t[k];
+  return t[k] + 0.5 * h * (a - c) / (a - 2 * b + c);
+}
+
+// Per axis, ρ̃ (cells, collocation) of the scan rotated by θ about `centre`, and the minimisers.
+void pose_bias(const fe::Mesh& mesh, const Eigen::VectorXd& u, const PointCloud& body,
+               const Eigen::MatrixXd& y, const Eigen::VectorXd& w, const Eigen::Vector3d& centre,
+               const detail::CellDistanceOptions& c, const HausdorffOptions& h,
+               const HausdorffRequest& req) {
+  const double deg = std::acos(-1.0) / 180.0;
+  std::vector<double> theta;
+  for (int k = -4; k <= 4; ++k) theta.push_back(0.2 * k);
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<double> cells, coll;
+    for (double t : theta) {
+      const Eigen::Matrix3d R = Eigen::AngleAxisd(t * deg, Eigen::Vector3d::Unit(axis)).matrix();
+      const Eigen::MatrixXd yr =
+          ((y.rowwise() - centre.transpose()) * R.transpose()).rowwise() + centre.transpose();
+      cells.push_back(detail::CellForm(mesh, yr, w, c).evaluate(u).rho);
+      coll.push_back(hausdorff(body, PointCloud(yr, w), h, req).rho);
+      std::printf("axis %d theta %+.1f deg: cells %.8f collocation %.8f\n", axis, t, cells.back(),
+                  coll.back());
+    }
+    std::printf("axis %d: minimiser cells %+.4f deg, collocation %+.4f deg\n", axis,
+                parabola_minimum(theta, cells), parabola_minimum(theta, coll));
+  }
+}
+
 int main(int argc, char** argv) {
   const bool top = argc > 1 && std::string(argv[1]) == "--top";
   if (top) --argc, ++argv;
+  double bias_sigma = -1.0;  // < 0: the density table
+  if (argc > 2 && std::string(argv[1]) == "--pose-bias") {
+    bias_sigma = std::atof(argv[2]);
+    argc -= 2, argv += 2;
+  }
   if (argc < 2) {
     std::fprintf(stderr, "usage: bench_scan_surface [--top] SCENE [THREADS [TOL [SEED [F...]]]]\n");
     return 2;
@@ -140,6 +187,22 @@ int main(int argc, char** argv) {
     std::printf("scene %s: %ld boundary nodes, %s surface area %.6g, tree tolerance %g, seed %u\n",
                 argv[1], static_cast<long>(body.size()), top ? "top view's" : "whole", area, tol,
                 seed);
+    if (bias_sigma >= 0.0) {
+      const double per_area = static_cast<double>(body.size()) / total_area(whole);
+      const double f = argc > 5 ? densities[0] : 1.0;  // the first F given, else 1
+      const long count = std::max(1L, static_cast<long>(f * f * per_area * area));
+      Eigen::MatrixXd y = sample_surface(surface, count, seed);
+      const Eigen::RowVector3d lo = body.points().colwise().minCoeff();
+      const double L = (body.points().colwise().maxCoeff() - lo).norm();
+      std::mt19937_64 rng(seed + 1000u);
+      std::normal_distribution<double> noise(0.0, bias_sigma * L);
+      for (Eigen::Index k = 0; k < y.size(); ++k) y.data()[k] += noise(rng);
+      const Eigen::VectorXd w = Eigen::VectorXd::Constant(count, area / static_cast<double>(count));
+      std::printf("pose bias: %ld points (density %g), noise %g L (L = %g)\n", count, f, bias_sigma,
+                  L);
+      pose_bias(mesh, u, body, y, w, body.points().colwise().mean().transpose(), c, h, req);
+      return 0;
+    }
     std::printf("density points  rho_cells  s_cells  rho_collocation  s_collocation\n");
     for (double f : densities) {
       // f² × the boundary nodes per area of the whole boundary: spacing / f
