@@ -67,8 +67,9 @@ options:
   --quadrature Q     collocation | cells: where the distance is integrated (default: the
                      scene target's "quadrature", else collocation); cells: over the
                      body's cells and the target's (an arc, or a cloud with solved_on;
-                     other targets fall back to collocation), one level, the symmetric
-                     form with the default alpha beta gamma, not with --algorithm newton
+                     with scan_to_body, a cloud's points as a surface with its weights;
+                     other targets fall back to collocation), one level, the default
+                     alpha beta gamma, no cap, not with --algorithm newton
   --distance F       symmetric | scan_to_body: the distance's form (docs/formulation.md
                      section 8; default: the scene target's "distance", else symmetric);
                      --distance, --cap or --cap-q replace the target's form as a whole

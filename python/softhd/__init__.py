@@ -378,7 +378,8 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     product of J, or with hessian "gauss_newton" its positive semi-definite part (``--hessian``).
     quadrature: "collocation" or "cells" (``--quadrature``; None: the scene target's
     "quadrature", else collocation): cells integrates the distance over the body's cells and the
-    target's (an arc, or a cloud with "solved_on"; a target without cells falls back to
+    target's (an arc, or a cloud with "solved_on"; with the distance "scan_to_body", a cloud's
+    points as a surface with their weights; any other target without cells falls back to
     collocation, as its description says), on one level, not with algorithm "newton".
     """
     points = vols = file = None
