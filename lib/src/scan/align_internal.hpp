@@ -106,10 +106,9 @@ Pose fit_pose(const Eigen::MatrixXd& from, const Eigen::MatrixXd& to, bool simil
               double s_max);
 
 /// Iterated nearest-point fit of the scan onto the body (P the scan's pose): pairs each moved
-/// scan point with its nearest body point (with the body's surface, not null: its closest point
-/// of the surface), keeps the pairs within 3× the median distance and fits the pose to them
-/// (fit_pose; with a fixture, not null, FixtureConstraint::fit), until the pose stops changing.
-/// With the surface and no fixture: surface_refinement.
+/// scan point with its nearest body point, keeps the pairs within 3× the median distance and
+/// fits the pose to them (fit_pose; with a fixture, not null, FixtureConstraint::fit), until the
+/// pose stops changing. With the body's surface (not null): surface_refinement.
 Pose nearest_refinement(const NearestPoints& body, const Eigen::MatrixXd& body_points,
                         const BodySurface* surface, const Eigen::MatrixXd& scan, Pose P,
                         const AlignOptions& options, const FixtureConstraint* fixture, double size,
@@ -119,9 +118,12 @@ Pose nearest_refinement(const NearestPoints& body, const Eigen::MatrixXd& body_p
 /// on Σ_j sd(P y_j)² over the pairs within 3× the median distance (sd the signed distance to
 /// the surface, its gradient n̂_j the face normal at the closest point), a twist about the
 /// pairs' centroid per step, halved until the trimmed sum decreases, until a step moves no
-/// point more than tolerance × size (at most nearest_iterations steps).
+/// point more than tolerance × size (at most nearest_iterations steps). With a fixture (not
+/// null) the twist is kept in table_tangent(n_b): a turn about the table's normal and a shift
+/// along it, so every pose keeps the constraint.
 Pose surface_refinement(const BodySurface& surface, const Eigen::MatrixXd& scan, Pose P,
-                        const AlignOptions& options, double size, int* iterations);
+                        const AlignOptions& options, const FixtureConstraint* fixture, double size,
+                        int* iterations);
 
 /// The mean over the scan's points of min(d(P y_j, surface), cap) (the true distance).
 double mean_surface_distance(const BodySurface& surface, const Eigen::MatrixXd& scan, const Pose& P,

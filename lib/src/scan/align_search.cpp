@@ -123,7 +123,8 @@ double trimmed_squares(const std::vector<SignedDistance>& q, double keep) {
 /// σ (x_j − c)), so J_j = (((x_j − c) × n̂_j)/L, n̂_j, n̂_j·(x_j − c)/L) and u = −J⁺ sd (the
 /// least-squares solution of least norm: a surface that does not fix a motion leaves it be).
 Eigen::VectorXd gauss_newton_step(const Eigen::MatrixXd& x, const std::vector<SignedDistance>& q,
-                                  double keep, double L, bool similarity, Eigen::Vector3d* c) {
+                                  double keep, double L, bool similarity,
+                                  const Eigen::MatrixXd& subspace, Eigen::Vector3d* c) {
   const int n = similarity ? 7 : 6;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   Eigen::Index count = 0;
@@ -141,7 +142,9 @@ Eigen::VectorXd gauss_newton_step(const Eigen::MatrixXd& x, const std::vector<Si
     if (similarity) J(k, 6) = g.dot(a) / L;
     r[k++] = d.sd;
   }
-  return -J.completeOrthogonalDecomposition().solve(r);
+  if (subspace.size() == 0) return -J.completeOrthogonalDecomposition().solve(r);
+  // u = B z in the span of B's columns (the fixture's tangent): min |J B z + sd|².
+  return -subspace * Eigen::MatrixXd(J * subspace).completeOrthogonalDecomposition().solve(r);
 }
 
 }  // namespace
@@ -155,8 +158,12 @@ double mean_surface_distance(const BodySurface& surface, const Eigen::MatrixXd& 
 }
 
 Pose surface_refinement(const BodySurface& surface, const Eigen::MatrixXd& scan, Pose P,
-                        const AlignOptions& options, double size, int* iterations) {
+                        const AlignOptions& options, const FixtureConstraint* fixture, double size,
+                        int* iterations) {
   const bool similarity = options.kind == PoseKind::similarity;
+  // With a fixture, twists of P (on the left, body frame) that keep every height along n_b.
+  const Eigen::MatrixXd subspace =
+      fixture != nullptr ? table_tangent(fixture->body_normal()) : Eigen::MatrixXd();
   std::vector<SignedDistance> q = closest_of(surface, apply_points(P, scan), options.threads);
   for (*iterations = 0; *iterations < options.nearest_iterations; ++*iterations) {
     Eigen::VectorXd dist(static_cast<Eigen::Index>(q.size()));
@@ -164,7 +171,7 @@ Pose surface_refinement(const BodySurface& surface, const Eigen::MatrixXd& scan,
     const double keep = trimming_distance(dist, size), merit = trimmed_squares(q, keep);
     Eigen::Vector3d c;
     const Eigen::VectorXd u =
-        gauss_newton_step(apply_points(P, scan), q, keep, size, similarity, &c);
+        gauss_newton_step(apply_points(P, scan), q, keep, size, similarity, subspace, &c);
     // Halve the step until the trimmed sum does not increase (at most 30 times).
     bool accepted = false;
     double alpha = 1.0;
@@ -197,20 +204,13 @@ Pose nearest_refinement(const NearestPoints& body, const Eigen::MatrixXd& body_p
                         const BodySurface* surface, const Eigen::MatrixXd& scan, Pose P,
                         const AlignOptions& options, const FixtureConstraint* fixture, double size,
                         int* iterations) {
-  if (surface != nullptr && fixture == nullptr)
-    return surface_refinement(*surface, scan, P, options, size, iterations);
+  if (surface != nullptr)
+    return surface_refinement(*surface, scan, P, options, fixture, size, iterations);
   const bool similarity = options.kind == PoseKind::similarity;
   std::vector<Eigen::Index> index;
   Eigen::VectorXd dist;
-  std::vector<SignedDistance> q;
   for (*iterations = 0; *iterations < options.nearest_iterations; ++*iterations) {
-    if (surface != nullptr) {  // the closest points of the surface
-      q = closest_of(*surface, apply_points(P, scan), options.threads);
-      dist.resize(static_cast<Eigen::Index>(q.size()));
-      for (size_t j = 0; j < q.size(); ++j) dist[static_cast<Eigen::Index>(j)] = std::abs(q[j].sd);
-    } else {
-      body.nearest(apply_points(P, scan), &index, &dist, options.threads);
-    }
+    body.nearest(apply_points(P, scan), &index, &dist, options.threads);
     const double keep = trimming_distance(dist, size);
     std::vector<Eigen::Index> pairs;
     for (Eigen::Index j = 0; j < scan.rows(); ++j)
@@ -220,8 +220,7 @@ Pose nearest_refinement(const NearestPoints& body, const Eigen::MatrixXd& body_p
     for (Eigen::Index k = 0; k < from.rows(); ++k) {
       const auto j = static_cast<size_t>(pairs[static_cast<size_t>(k)]);
       from.row(k) = scan.row(static_cast<Eigen::Index>(j));
-      to.row(k) = surface != nullptr ? Eigen::RowVector3d(q[j].closest.point.transpose())
-                                     : Eigen::RowVector3d(body_points.row(index[j]));
+      to.row(k) = body_points.row(index[j]);
     }
     const Pose next = fixture != nullptr
                           ? fixture->fit(from, to)
