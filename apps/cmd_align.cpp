@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "softhd/control/pose_file.hpp"
 #include "softhd/control/scene.hpp"
+#include "softhd/fe/boundary.hpp"
 #include "softhd/fe/cloud.hpp"
 #include "softhd/io/atomic_file.hpp"
 #include "softhd/io/cloud_io.hpp"
@@ -80,6 +81,12 @@ options:
                     to its clamped end (body frame), S the direction that end is seen in
                     (scan frame, e.g. -1,0,0: the image's left); poses that turn B more than
                     90 degrees from S (on the table) are not tried
+  --surface         the body's surface is the scene mesh's boundary (a scene body only):
+                    the nearest-point fits pair each scan point with its closest point of
+                    the surface (not the nearest node), the finish fits the pose
+                    point-to-plane to convergence, and the residuals are distances to the
+                    surface; a scan sampled anywhere on it, rigidly moved, is recovered to
+                    rounding (without it, only to the nodes' spacing)
   --inlier F        overlap threshold as a fraction of L, 0 < F < 1 (default 0.01)
   --threads T       OpenMP threads (default: all)
   --json            print pose.json's object instead of the one-line summary
@@ -99,11 +106,24 @@ bool is_scene(const std::string& path) {
   return ext == ".json";
 }
 
-/// The body: a scene's mesh nodes with their reference volumes, or a cloud file.
-PointCloud read_body(const std::string& path) {
-  if (!is_scene(path)) return read_cloud(path);
+/// The body: a scene's mesh nodes with their reference volumes, or a cloud file. With
+/// `triangles` (not null; a scene only): the mesh's boundary triangles over its node ids.
+PointCloud read_body(const std::string& path, Eigen::Matrix<int, Eigen::Dynamic, 3>* triangles) {
+  if (!is_scene(path)) {
+    if (triangles != nullptr)
+      throw UsageError("--surface needs a scene file as the body (its mesh's boundary), got '" +
+                       path + "'");
+    return read_cloud(path);
+  }
   const softhd::Scene scene = softhd::load_scene(path);
   const fe::Assembler assembler = scene.body.make_assembler();
+  if (triangles != nullptr) {  // surface point ids → node ids
+    const fe::BoundaryFacets b = fe::boundary_facets(assembler.mesh());
+    *triangles = b.triangles;
+    for (Eigen::Index t = 0; t < triangles->rows(); ++t)
+      for (int c = 0; c < 3; ++c)
+        (*triangles)(t, c) = b.nodes[static_cast<size_t>(b.triangles(t, c))];
+  }
   return fe::deformed_cloud(assembler, Eigen::VectorXd::Zero(assembler.dofs().num_dofs),
                             fe::CloudPoints::kNodes, fe::CloudVolumes::kReference);
 }
@@ -139,6 +159,7 @@ nlohmann::json summary_json(const scan::AlignSummary& s, const scan::AlignOption
   j["starts"] = s.starts;
   j["candidates"] = s.candidates;
   j["refine_points"] = {s.refine_body_points, s.refine_scan_points};
+  j["surface_triangles"] = o.body_triangles.rows();  // --surface: the body's boundary (0: none)
   if (o.table)  // --table: the plane removed from the scan (its frame)
     j["table"] = {{"normal", {o.table->normal[0], o.table->normal[1], o.table->normal[2]}},
                   {"offset", o.table->offset},
@@ -261,6 +282,7 @@ int run_align(const std::vector<std::string>& tokens) {
                      std::to_string(o.inlier_distance));
   o.threads = static_cast<int>(args.integer("--threads", 0, 0, kMaxThreads));
   const bool json = args.flag("--json");
+  const bool surface = args.flag("--surface");
   const std::vector<std::string> files = args.finish();
   if (files.size() != 2)
     throw UsageError("expected SCENE_OR_CLOUD and SCAN, got " + std::to_string(files.size()) +
@@ -287,7 +309,7 @@ int run_align(const std::vector<std::string>& tokens) {
     throw UsageError("--scale-max must be >= 1 (the bounds must include 1), got " +
                      std::to_string(o.scale_max));
 
-  const PointCloud body = read_body(files[0]);
+  const PointCloud body = read_body(files[0], surface ? &o.body_triangles : nullptr);
   PointCloud scan = read_cloud(files[1]);
   require_3d(body, files[0]);
   require_3d(scan, files[1]);

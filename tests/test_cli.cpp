@@ -298,6 +298,54 @@ TEST_F(Cli, AlignRecoversAMovedCopyAndRefusesBadInput) {
                    "scattered.txt: no table plane for --fixture");
 }
 
+// align --surface: the body's surface is the scene mesh's boundary, so a scan of points on
+// that surface (not its nodes: a grid over each face, between the nodes), rigidly moved, is put
+// back to rounding from a start 10 degrees off (the point-to-plane finish); without --surface
+// only to the nodes' spacing. A cloud body has no surface: exit 2 naming --surface.
+TEST_F(Cli, AlignSurfaceRecoversPointsBetweenTheNodes) {
+  const std::string scene = write("box.json", R"({
+  "mesh": { "type": "box", "lower": [0, 0, 0], "upper": [1, 0.6, 0.3], "cells": [3, 2, 1], "order": 1 },
+  "material": { "model": "mooney_rivlin", "a": 1e5, "b": 2e4, "c": 3e5 },
+  "fibers": [1, 0, 0],
+  "clamp": ["x0"],
+  "control": { "space": "vertex", "lower": -1e5, "upper": 0, "initial": 0 }
+})");
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.17, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Vector3d t(0.05, -0.1, 0.02), upper(1.0, 0.6, 0.3);
+  std::ostringstream scan;
+  scan.precision(17);
+  for (int a = 0; a < 3; ++a)  // the box's 6 faces, a 7 × 7 grid of points on each
+    for (double side : {0.0, 1.0})
+      for (int i = 0; i < 7; ++i)
+        for (int j = 0; j < 7; ++j) {
+          Eigen::Vector3d x;
+          x[a] = side * upper[a];
+          x[(a + 1) % 3] = (i + 0.37) / 7.0 * upper[(a + 1) % 3];
+          x[(a + 2) % 3] = (j + 0.61) / 7.0 * upper[(a + 2) % 3];
+          const Eigen::Vector3d y = R.transpose() * (x - t);  // P⁻¹ x
+          scan << y.x() << ' ' << y.y() << ' ' << y.z() << '\n';
+        }
+  const std::string clouds = scene + " " + write("box_scan.txt", scan.str());
+  const std::string flags = " --no-global --threads 2 --json";
+  const nlohmann::json with = align_json(clouds, flags + " --surface");
+  const nlohmann::json without = align_json(clouds, flags);
+  const auto error = [&](const nlohmann::json& j) -> double {
+    if (!j.contains("matrix")) return INFINITY;
+    Eigen::Matrix3d M;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) M(r, c) = j["matrix"][r][c].get<double>();
+    return scan::rotation_angle_between(M, R);
+  };
+  EXPECT_LT(error(with), 1e-9);
+  EXPECT_GT(error(without), 1e-6);
+  EXPECT_EQ(with.value("surface_triangles", -1), 2 * (2 * 3 * 2 + 2 * 3 * 1 + 2 * 2 * 1));
+  EXPECT_EQ(without.value("surface_triangles", -1), 0);
+  expect_bad_input("align " + write("pts.txt", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n") + " " +
+                       clouds.substr(clouds.find(' ') + 1) + " --out " + path("bad") + " --surface",
+                   "--surface needs a scene file");
+}
+
 // align --inlier F: the overlap's threshold is F times the body size L (pose.json's
 // inlier_distance / body_size), and a wider threshold counts at least as many scan points in.
 TEST_F(Cli, AlignInlierIsAFractionOfTheBodySize) {

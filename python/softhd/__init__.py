@@ -181,7 +181,8 @@ def hausdorff_nearest(X, Y, *, fields=False, threads=0):
 def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, scale_max=2.0,
           distance="symmetric", cap=0.0, eps=None, alpha=4.0, beta=4.0, gamma=2.0,
           global_start=True, initial=None, rotations=48, refine_points=1000, inlier=0.01,
-          threads=0, score="coverage", keep=4, fixture=None, table=None, clamp=None):
+          threads=0, score="coverage", keep=4, fixture=None, table=None, clamp=None,
+          body_triangles=None):
     """The pose that takes ``scan`` (M, 3), in the camera's frame, onto ``body`` (N, 3)
     (docs/formulation.md section 8, as ``softhd align``): y -> s R y + t minimising rho over a
     twist, after a global start over ``rotations`` grid rotations (unless ``global_start`` is
@@ -211,6 +212,13 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
     centre to its clamped end, the direction that end is seen in the scan's frame): poses that
     turn the one more than 90 degrees from the other (on the table) are not tried.
 
+    body_triangles: the body's surface, (T, 3) integer ids into ``body``'s rows, outward and
+    closed (e.g. ``Mesh.boundary_triangles`` with ``body`` the mesh's nodes in the body's
+    configuration): every nearest-point fit then pairs a scan point with its closest point of
+    the surface, and the finish fits the pose point-to-plane to convergence, so a scan sampled
+    anywhere on that surface and rigidly moved is recovered to rounding (not only a copy of the
+    body's points); ``residuals``, ``overlap`` and ``rmse`` are then distances to the surface.
+
     Returns a dict: ``matrix`` (4, 4), ``twist`` (7,: omega, v, sigma with R = exp([omega]x),
     t = v, s = e^sigma), ``scale``, ``rho``, ``overlap`` (fraction of scan points within the
     inlier distance of the body), ``inlier_distance``, ``rmse`` (of those points' true
@@ -234,7 +242,9 @@ def align(body, scan, body_volumes=None, *, similarity=False, scale_min=0.5, sca
                     threads=int(threads), score=str(score), keep=int(keep),
                     fixture=_plane4(fixture, "fixture"), table=_plane4(table, "table"),
                     clamp=None if clamp is None else _as_float64(
-                        _np.concatenate([_np.ravel(clamp[0]), _np.ravel(clamp[1])]), "clamp"))
+                        _np.concatenate([_np.ravel(clamp[0]), _np.ravel(clamp[1])]), "clamp"),
+                    body_triangles=None if body_triangles is None else _triangles(
+                        body_triangles, "body_triangles"))
     d["twist"] = d["twist"].reshape(7)
     d["residuals"] = d["residuals"].reshape(-1)
     return d
@@ -284,6 +294,13 @@ def area_weights(points, method="knn", neighbours=12):
     """(N,) estimated surface areas of a 3D scan (lengths of a 2D curve): "knn" (pi r_k^2 / k)
     or "delaunay" (the tangent-plane Voronoi cell); docs/formulation.md section 8.9."""
     return _core.area_weights(_as_float64(points, "points"), str(method), int(neighbours))
+
+
+def _triangles(triangles, name):
+    tri = _np.asarray(triangles)
+    if tri.size and tri.dtype.kind not in "iu":
+        raise TypeError(f"{name} must hold integers, got dtype {tri.dtype}")
+    return _np.ascontiguousarray(tri, dtype=_np.int64).reshape(-1, 3)
 
 
 def visible_points(points, triangles, camera, tolerance=1e-6):

@@ -1,5 +1,9 @@
 // softhd._core.align: the pose of a scan (softhd/scan/align.hpp), returned as a dict.
 
+#include <cstdint>
+#include <limits>
+#include <string>
+
 #include "common.hpp"
 #include "softhd/error.hpp"
 #include "softhd/scan/align.hpp"
@@ -15,7 +19,8 @@ py::dict align_clouds(const Array& body, const std::optional<Array>& body_volume
                       const std::optional<Array>& initial, int rotations, int refine_points,
                       double inlier, int threads, const std::string& score, int keep,
                       const std::optional<Array>& fixture, const std::optional<Array>& table,
-                      const std::optional<Array>& clamp) {
+                      const std::optional<Array>& clamp,
+                      const std::optional<py::array_t<std::int64_t>>& body_triangles) {
   check_cloud(body, body_volumes, "body");
   check_cloud(scan, std::nullopt, "scan");
   scan::AlignOptions o;
@@ -63,6 +68,21 @@ py::dict align_clouds(const Array& body, const std::optional<Array>& body_volume
     const Eigen::Vector4d f = plane(*table, "table");
     o.table = scan::Plane{Eigen::VectorXd(f.head<3>()), f[3], 0};
   }
+  if (body_triangles) {  // ids into the body's rows (their range checked by align)
+    const auto& t = *body_triangles;
+    if (t.ndim() != 2 || t.shape(1) != 3)
+      throw InvalidArgument("body_triangles must be a (T, 3) integer array");
+    o.body_triangles.resize(t.shape(0), 3);
+    auto v = t.unchecked<2>();
+    for (py::ssize_t i = 0; i < t.shape(0); ++i)
+      for (py::ssize_t c = 0; c < 3; ++c) {
+        const std::int64_t k = v(i, c);
+        if (k < 0 || k > std::numeric_limits<int>::max())
+          throw InvalidArgument("body_triangles: a triangle names point " + std::to_string(k) +
+                                ", outside 0.." + std::to_string(body.shape(0) - 1));
+        o.body_triangles(i, c) = static_cast<int>(k);
+      }
+  }
   const PointCloud B = make_cloud(body, body_volumes), S = make_cloud(scan, std::nullopt);
   o.distance.params.epsilon = eps ? *eps : 1e-3 * scan::body_size(B);  // None: L/1000
   scan::AlignSummary s;
@@ -98,7 +118,8 @@ void bind_align(py::module_& m) {
         py::arg("scale_max"), py::arg("distance"), py::arg("cap"), py::arg("eps"), py::arg("alpha"),
         py::arg("beta"), py::arg("gamma"), py::arg("global_start"), py::arg("initial"),
         py::arg("rotations"), py::arg("refine_points"), py::arg("inlier"), py::arg("threads"),
-        py::arg("score"), py::arg("keep"), py::arg("fixture"), py::arg("table"), py::arg("clamp"));
+        py::arg("score"), py::arg("keep"), py::arg("fixture"), py::arg("table"), py::arg("clamp"),
+        py::arg("body_triangles"));
 }
 
 }  // namespace softhd::python

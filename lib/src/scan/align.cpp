@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <memory>
 #include <numeric>
 #include <string>
 
@@ -132,7 +133,7 @@ std::vector<Pose> fixture_starts(const Eigen::MatrixXd& body, const Eigen::Matri
 /// of starting poses.
 std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& scan, double L,
                                     const AlignOptions& o, const FixtureConstraint* fixture,
-                                    int* tried) {
+                                    const detail::BodySurface* surface, int* tried) {
   const detail::PoseObjective coarse =
       make_level(body, scan, o.coarse_points, o.coarse_epsilon * L, 1, o);
   const std::vector<Pose> starts =
@@ -151,7 +152,7 @@ std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& sc
       if (!fixture->allows(found[k].pose)) score[k] = INFINITY;
   if (o.score == CandidateScore::coverage) {  // rank by the coverage score instead
     const detail::CoverageScore coverage(body.points(), scan.points(), L, o.score_truncation,
-                                         o.threads);
+                                         o.threads, surface);
     for (size_t k = 0; k < found.size(); ++k)
       if (std::isfinite(score[k])) score[k] = coverage.value(found[k].pose);
   }
@@ -176,9 +177,10 @@ std::vector<Pose> global_candidates(const PointCloud& body, const PointCloud& sc
 /// identity; with a fixture, moved onto its constraint about the body's centroid).
 std::vector<Pose> all_candidates(const PointCloud& body, const PointCloud& scan, double L,
                                  const AlignOptions& options, const FixtureConstraint* fixture,
-                                 int* starts) {
+                                 const detail::BodySurface* surface, int* starts) {
   std::vector<Pose> candidates;
-  if (options.global_start) candidates = global_candidates(body, scan, L, options, fixture, starts);
+  if (options.global_start)
+    candidates = global_candidates(body, scan, L, options, fixture, surface, starts);
   if (options.initial) candidates.push_back(options.initial->inverse());
   if (candidates.empty()) candidates.push_back(Pose());
   if (fixture != nullptr && (options.initial || !options.global_start)) {
@@ -189,12 +191,22 @@ std::vector<Pose> all_candidates(const PointCloud& body, const PointCloud& scan,
   return candidates;
 }
 
-/// Residuals (true nearest distances of the moved scan), overlap (the fraction within
-/// inlier_distance × L) and the rmse of those residuals.
-void report_nearest(const detail::NearestPoints& nearest, const PointCloud& scan,
-                    const AlignOptions& options, double L, AlignSummary* out) {
-  std::vector<Eigen::Index> index;
-  nearest.nearest(apply_points(out->pose, scan.points()), &index, &out->residuals, options.threads);
+/// Residuals (true nearest distances of the moved scan to the body's points, or to its
+/// surface when it has one), overlap (the fraction within inlier_distance × L) and the rmse of
+/// those residuals.
+void report_nearest(const detail::NearestPoints& nearest, const detail::BodySurface* surface,
+                    const PointCloud& scan, const AlignOptions& options, double L,
+                    AlignSummary* out) {
+  const Eigen::MatrixXd moved = apply_points(out->pose, scan.points());
+  if (surface != nullptr) {
+    const auto q = surface->at_rows(moved, resolve_threads(options.threads));
+    out->residuals.resize(moved.rows());
+    for (Eigen::Index j = 0; j < moved.rows(); ++j)
+      out->residuals[j] = std::abs(q[static_cast<size_t>(j)].sd);
+  } else {
+    std::vector<Eigen::Index> index;
+    nearest.nearest(moved, &index, &out->residuals, options.threads);
+  }
   out->inlier_distance = options.inlier_distance * L;
   double sum2 = 0.0;
   Eigen::Index inliers = 0;
@@ -317,9 +329,11 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
   std::optional<FixtureConstraint> constraint;
   if (options.fixture) constraint.emplace(*options.fixture, *options.table, scan.points());
   const FixtureConstraint* fixture = constraint ? &*constraint : nullptr;
+  const std::unique_ptr<detail::BodySurface> surface = detail::make_body_surface(body, options);
 
   AlignSummary out;
-  const std::vector<Pose> candidates = all_candidates(body, scan, L, options, fixture, &out.starts);
+  const std::vector<Pose> candidates =
+      all_candidates(body, scan, L, options, fixture, surface.get(), &out.starts);
   out.candidates = static_cast<int>(candidates.size());
 
   // Refinement: continuation in ε (a hundredth of L, then the user's) on the refine level.
@@ -354,7 +368,8 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
           static_cast<int>(candidates.size()), spread ? options.threads : 1,
           [&](size_t k) { refined[k] = detail::minimise_pose(first, candidates[k], st); });
     }
-    const size_t best = detail::choose_candidate(body, scan, L, options, fixture, &refined);
+    const size_t best =
+        detail::choose_candidate(body, scan, L, options, fixture, surface.get(), &refined);
     out.iterations = refined[best].iterations;
     // The best on the refinement clouds: at the first ε again if it was compared on
     // smaller clouds, then at the others.
@@ -371,11 +386,11 @@ AlignSummary align(const PointCloud& body, const PointCloud& scan, const AlignOp
   const detail::NearestPoints nearest(body.points());
   if (options.nearest_iterations > 0) {
     int it = 0;
-    out.pose = detail::nearest_refinement(nearest, body.points(), scan.points(), out.pose, options,
-                                          fixture, L, &it);
+    out.pose = detail::nearest_refinement(nearest, body.points(), surface.get(), scan.points(),
+                                          out.pose, options, fixture, L, &it);
     out.iterations += it;
   }
-  report_nearest(nearest, scan, options, L, &out);
+  report_nearest(nearest, surface.get(), scan, options, L, &out);
   {  // ρ̃ at the final pose, on the refine level at the user's ε
     const detail::PoseObjective final_level =
         make_level(body, scan, options.refine_points, options.distance.params.epsilon,

@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "../common/surface_bvh.hpp"
 #include "../hausdorff/nearest_index.hpp"
 #include "softhd/hausdorff.hpp"
 #include "softhd/scan/align.hpp"
@@ -55,6 +56,14 @@ std::vector<Eigen::Index> subsample(Eigen::Index rows, Eigen::Index count, unsig
 /// matrix must outlive it).
 using NearestPoints = softhd::detail::NearestIndex;
 
+/// The body's surface (AlignOptions::body_triangles over the body's points): closest points,
+/// their distances and the surface's normals there (its hierarchy built once).
+using BodySurface = softhd::detail::SurfaceDistance;
+
+/// The body's surface of `options` (null if it has no triangles); InvalidArgument naming
+/// body_triangles for triangles that do not name the body's points or do not close a surface.
+std::unique_ptr<BodySurface> make_body_surface(const PointCloud& body, const AlignOptions& options);
+
 /// The score align() chooses its candidate by (docs/formulation.md §8.5): with the camera at
 /// the scan frame's origin, the body points a pose Q puts nearest the camera in their pixel
 /// (over the pixels that hold scan points) should lie on the scan, and every scan point on
@@ -63,8 +72,9 @@ using NearestPoints = softhd::detail::NearestIndex;
 /// trees built once); no gradient (it only ranks local minima).
 class CoverageScore {
  public:
+  /// With a surface (not null; it must outlive the score), d(y_j, Q(B)) is the distance to it.
   CoverageScore(const Eigen::MatrixXd& body, const Eigen::MatrixXd& scan, double size,
-                double truncation, int threads);
+                double truncation, int threads, const BodySurface* surface = nullptr);
   double value(const Pose& Q) const;
 
  private:
@@ -73,6 +83,7 @@ class CoverageScore {
   double size_, truncation_;
   int threads_;
   NearestPoints body_tree_, scan_tree_;
+  const BodySurface* surface_ = nullptr;
   Eigen::Vector3d e1_, e2_, e3_;
   double pixel_ = 1.0, depth_tolerance_ = 0.0, lo_u_ = 0.0, lo_v_ = 0.0;
   Eigen::Index nu_ = 0, nv_ = 0;
@@ -82,10 +93,12 @@ class CoverageScore {
 /// The refined candidate (Q: body → scan frame) align() continues from: the lowest ρ̃ (score
 /// rho), or (score coverage) the lowest CoverageScore after each candidate is taken by
 /// nearest_refinement (its pose replaced by the fitted one); ties: the first.
-/// With a fixture (not null), the nearest-point fits keep its constraint.
+/// With a fixture (not null), the nearest-point fits keep its constraint. With the body's
+/// surface (not null), every candidate is fitted (to the surface), and score rho compares the
+/// scan's mean distance to the surface, each capped at score_truncation × L, instead of ρ̃.
 size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double size,
                         const AlignOptions& options, const FixtureConstraint* fixture,
-                        std::vector<LocalResult>* refined);
+                        const BodySurface* surface, std::vector<LocalResult>* refined);
 
 /// The least-squares pose (rigid, or a similarity with s clamped to [s_min, s_max]) taking
 /// the rows `from` onto the rows `to` (Kabsch/Umeyama via the SVD of the cross-covariance).
@@ -95,9 +108,25 @@ Pose fit_pose(const Eigen::MatrixXd& from, const Eigen::MatrixXd& to, bool simil
 /// Iterated nearest-point fit of the scan onto the body (P the scan's pose): pairs each moved
 /// scan point with its nearest body point, keeps the pairs within 3× the median distance and
 /// fits the pose to them (fit_pose; with a fixture, not null, FixtureConstraint::fit), until the
-/// pose stops changing.
+/// pose stops changing. With the body's surface (not null): surface_refinement.
 Pose nearest_refinement(const NearestPoints& body, const Eigen::MatrixXd& body_points,
-                        const Eigen::MatrixXd& scan, Pose P, const AlignOptions& options,
-                        const FixtureConstraint* fixture, double size, int* iterations);
+                        const BodySurface* surface, const Eigen::MatrixXd& scan, Pose P,
+                        const AlignOptions& options, const FixtureConstraint* fixture, double size,
+                        int* iterations);
+
+/// The point-to-plane fit of the scan onto the body's surface (P the scan's pose), Gauss–Newton
+/// on Σ_j sd(P y_j)² over the pairs within 3× the median distance (sd the signed distance to
+/// the surface, its gradient n̂_j the face normal at the closest point), a twist about the
+/// pairs' centroid per step, halved until the trimmed sum decreases, until a step moves no
+/// point more than tolerance × size (at most nearest_iterations steps). With a fixture (not
+/// null) the twist is kept in table_tangent(n_b): a turn about the table's normal and a shift
+/// along it, so every pose keeps the constraint.
+Pose surface_refinement(const BodySurface& surface, const Eigen::MatrixXd& scan, Pose P,
+                        const AlignOptions& options, const FixtureConstraint* fixture, double size,
+                        int* iterations);
+
+/// The mean over the scan's points of min(d(P y_j, surface), cap) (the true distance).
+double mean_surface_distance(const BodySurface& surface, const Eigen::MatrixXd& scan, const Pose& P,
+                             double cap, int threads);
 
 }  // namespace softhd::scan::detail

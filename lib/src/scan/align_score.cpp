@@ -12,14 +12,15 @@
 namespace softhd::scan::detail {
 
 CoverageScore::CoverageScore(const Eigen::MatrixXd& body, const Eigen::MatrixXd& scan, double size,
-                             double truncation, int threads)
+                             double truncation, int threads, const BodySurface* surface)
     : body_(body),
       scan_(scan),
       size_(size),
       truncation_(truncation),
       threads_(threads),
       body_tree_(body_),
-      scan_tree_(scan_) {
+      scan_tree_(scan_),
+      surface_(surface) {
   // The image: the camera at the origin looking at the scan's centroid (e3), pinhole
   // coordinates (p·e1, p·e2)/(p·e3); pixels of width L/n at the centroid's depth,
   // n = clamp(√N_body / 1.5, 8, 200) (a few body points per pixel on a surface).
@@ -100,19 +101,25 @@ double CoverageScore::value(const Pose& Q) const {
     body_side = d.cwiseMin(c).mean();
   }
   // d(y_j, Q(B)) = d(P y_j, B)·s_Q with P = Q⁻¹ (the body's tree is in its own frame).
-  body_tree_.nearest(apply_points(Q.inverse(), scan_), &index, &d, threads_);
-  const double scan_side = (d * Q.s).cwiseMin(c).mean();
+  double scan_side = 0.0;
+  if (surface_ != nullptr) {
+    scan_side = mean_surface_distance(*surface_, scan_, Q.inverse(), c / Q.s, threads_) * Q.s;
+  } else {
+    body_tree_.nearest(apply_points(Q.inverse(), scan_), &index, &d, threads_);
+    scan_side = (d * Q.s).cwiseMin(c).mean();
+  }
   return 0.5 * (scan_side + body_side) / Lq;
 }
 
 size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double size,
                         const AlignOptions& options, const FixtureConstraint* fixture,
-                        std::vector<LocalResult>* refined) {
+                        const BodySurface* surface, std::vector<LocalResult>* refined) {
   std::vector<LocalResult>& r = *refined;
   if (r.size() < 2) return 0;
   std::vector<double> score(r.size());
   for (size_t k = 0; k < r.size(); ++k) score[k] = r[k].rho;
-  if (options.score == CandidateScore::coverage) {
+  const bool coverage = options.score == CandidateScore::coverage;
+  if (coverage || surface != nullptr) {
     if (options.nearest_iterations > 0) {
       const NearestPoints nearest(body.points());
       AlignOptions serial = options;
@@ -121,15 +128,22 @@ size_t choose_candidate(const PointCloud& body, const PointCloud& scan, double s
 #pragma omp parallel for schedule(dynamic) num_threads(resolve_threads(options.threads))
       for (size_t k = 0; k < r.size(); ++k) {
         int iterations = 0;
-        fitted[k] = nearest_refinement(nearest, body.points(), scan.points(), r[k].pose.inverse(),
-                                       serial, fixture, size, &iterations);
+        fitted[k] = nearest_refinement(nearest, body.points(), surface, scan.points(),
+                                       r[k].pose.inverse(), serial, fixture, size, &iterations);
       }
       for (size_t k = 0; k < r.size(); ++k) r[k].pose = fitted[k].inverse();
     }
-    const CoverageScore coverage(body.points(), scan.points(), size, options.score_truncation,
-                                 options.threads);
+  }
+  if (coverage) {
+    const CoverageScore S(body.points(), scan.points(), size, options.score_truncation,
+                          options.threads, surface);
     for (size_t k = 0; k < r.size(); ++k)
-      if (std::isfinite(score[k])) score[k] = coverage.value(r[k].pose);
+      if (std::isfinite(score[k])) score[k] = S.value(r[k].pose);
+  } else if (surface != nullptr) {  // rho with a surface: the scan's distance to it
+    for (size_t k = 0; k < r.size(); ++k)
+      if (std::isfinite(score[k]))
+        score[k] = mean_surface_distance(*surface, scan.points(), r[k].pose.inverse(),
+                                         options.score_truncation * size, options.threads);
   }
   if (fixture != nullptr)  // the clamp's side (all on the wrong side: the first)
     for (size_t k = 0; k < r.size(); ++k)

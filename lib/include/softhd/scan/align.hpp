@@ -57,8 +57,17 @@ struct AlignOptions {
   int max_iterations = 200;        ///< refinement iterations (per level)
   double tolerance = 1e-10;        ///< stop when a step moves no point more than this × L
   int nearest_iterations = 50;     ///< final nearest-point refinement iterations (0: none)
-  double inlier_distance = 0.01;   ///< the overlap's threshold as a fraction of L, in (0, 1)
-  int threads = 0;                 ///< as HausdorffOptions::threads
+  /// The body's surface: outward triangles over the body's points (rows of `body`; e.g. a
+  /// mesh's boundary triangles over its nodes, in the configuration the body is given in),
+  /// closed and consistently oriented, no triangle of zero area. Empty (the default): the body
+  /// is its points alone. With it, every nearest-point fit pairs a scan point with its closest
+  /// point of the surface instead of the nearest body point, and the finish is the
+  /// point-to-plane Gauss–Newton fit to convergence on every scan point (docs/formulation.md
+  /// §8.5): a scan sampled anywhere on that surface, rigidly moved, is recovered to rounding;
+  /// the residuals, overlap and rmse are distances to the surface.
+  Eigen::Matrix<int, Eigen::Dynamic, 3> body_triangles;
+  double inlier_distance = 0.01;  ///< the overlap's threshold as a fraction of L, in (0, 1)
+  int threads = 0;                ///< as HausdorffOptions::threads
   /// The fixture (docs/formulation.md §8.12): the table in the body's frame. With it (and
   /// `table`), every pose tried keeps the table's tilt and height: the global start turns the
   /// body about the table's normal (`rotations` angles, evenly spaced) and slides it along the
