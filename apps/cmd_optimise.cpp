@@ -59,7 +59,9 @@ options:
                      boundary, 3D: the boundary nodes with their facet areas, which a
                      target block's "surface": true selects)
   --volumes V        reference | deformed particle volumes (default {volumes})
-  --alpha A --beta B --gamma G --eps E   functional parameters (default {alpha} {beta} {gamma} {eps})
+  --alpha A --beta B --gamma G --eps E   functional parameters (default {alpha} {beta} {gamma} {eps};
+                     beta 0: automatic, 4 for the symmetric distance, 2 for scan_to_body
+                     and visible)
   --method M         exact | tree: the distance's pair sums (default {method}; it sums
                      exactly wherever its far field would not be cheaper)
   --tol T            tree: relative error bound on every kernel sum (default {tol},

@@ -4,16 +4,18 @@ the same run against the clean, complete target in the body's frame).
 
     PYTHONPATH=build/python /usr/bin/python3 studies/track_scan.py [--seed S] [--view full|half]
         [--max-iter N] [--rounds K] [--out DIR] [--clean-rms R]
-        [--joint [--staged] [--start align|ladder|true|perturbed|fixture|ladder-fixture]
+        [--noise SIGMA] [--outliers F] [--beta B]
+        [--joint [--staged]
+                 [--start align|ladder|true|exact|perturbed|fixture|ladder-fixture]
                  [--cap-stages K]
                  [--first-eps F] [--algorithm A] [--pose-method joint|projection]
                  [--fixture-constraint]]
 
 1. The view. The finger of data/scenes/finger.json, deformed by m*(X) = -1.5 X3 on a 2x finer
    mesh (data/targets/finger_target.ply), is seen by a synthetic depth camera
-   (softhd.synthetic): the points the camera sees, noise 0.5 % of the body's size L,
-   3 % outliers, a table plane under the finger, a random camera pose. The scan is in the
-   camera's frame.
+   (softhd.synthetic): the points the camera sees, noise 0.5 % of the body's size L
+   (--noise), 3 % outliers (--outliers), a table plane under the finger, a random camera pose.
+   The scan is in the camera's frame. The noise of one seed is the same draw scaled by --noise.
 2. Clean-up, in the camera's frame: the table (softhd.remove_dominant_plane) and the stray
    points (softhd.remove_statistical_outliers); the scan's density falls with the distance
    from the camera, so its points get estimated areas (softhd.area_weights, "delaunay").
@@ -38,6 +40,12 @@ the same run against the clean, complete target in the body's frame).
    from the true pose rounded to the nearest): the pose keeps the table's tilt and height
    (docs/formulation.md section 8.12); --fixture-constraint: so does the projection's.
    --start ladder-fixture: ladder_align with the fixture and the clamp's side.
+   --start exact: the true pose exactly held (the data term alone measured): the scan moved by
+   the true pose, cropped, and given as a body-frame target, with the camera's position in the
+   body's frame ("camera") for --distance visible; no pose variables.
+   --beta B: the distance's exponent beta of the means A and B (softhd.optimise's beta;
+   default the library's: 2 for the scan forms, 4 for the symmetric one; before the scan
+   forms' default was measured, docs/formulation.md §8.11, every run here used 4).
    --start perturbed: a calibrated camera's pose (the true one rotated by 3 degrees about a
    random axis through the body's centre and moved by 0.02 L; also the crop's pose);
    --pose-method projection: the pose found inside every evaluation (docs/formulation.md
@@ -180,6 +188,45 @@ def perturbed_pose(P_true, scan, L, seed, degrees=3.0, fraction=0.02):
     return E @ P_true
 
 
+def exact_pose_run(scene, scan, areas, P_true, L, a, log):
+    """The data term alone: the (cropped) scan moved by the true pose into the body's frame, a
+    body-frame scene target with the camera's position there (the visible distance) and the
+    --cap-factor rule, --cap-stages runs of --max-iter iterations with the cap re-made from each
+    run's state; no pose variable. Returns the displacements and the moved scan."""
+    R, t = P_true[:3, :3], P_true[:3, 3]
+    moved = scan @ R.T + t
+    out = os.path.abspath(a.out)
+    scan_file = os.path.join(out, "scan_body_frame.ply")
+    softhd.write_cloud(scan_file, moved, areas)
+    cap, initial = {"quantile": 0.9, "factor": a.cap_factor}, None
+    for stage in range(1, a.cap_stages + 1):
+        with open(os.path.join(ROOT, "data/scenes/finger.json")) as f:
+            j = json.load(f)
+        j["mesh"]["file"] = os.path.join(ROOT, "data/meshes/finger.msh")
+        j["target"] = {"kind": "cloud", "file": scan_file, "surface": True}
+        if a.cap_factor > 0:  # --cap-factor 0: no cap
+            j["target"]["cap"] = cap
+        if a.distance == "visible":  # the camera sits at the scan frame's origin: P_true's t
+            j["target"]["camera"] = [float(x) for x in t]
+        else:
+            j["target"]["distance"] = a.distance
+        path = os.path.join(out, "exact_scene.json")
+        with open(path, "w") as f:
+            json.dump(j, f, indent=1)
+        r = softhd.optimise(softhd.Scene.load(path), max_iter=a.max_iter, algorithm=a.algorithm,
+                            initial=initial, method=a.method, beta=a.beta)
+        a.seconds += r.seconds
+        log(f"exact pose stage {stage}: optimise {r.iterations} iterations, {r.seconds:.1f} s, "
+            f"{r.termination}; rho {r.rho_start:.4g} -> {r.rho_final:.4g}; node error rms "
+            f"{node_errors(scene.mesh.nodes, r.displacements, a.truth)[1]:.4g}")
+        d = softhd.distance(scene.mesh.nodes + r.displacements, moved, distance="scan_to_body",
+                            fields=True)
+        cap = a.cap_factor * float(np.quantile(d.field_target, 0.9))
+        initial = r.control
+    a.final_pose = (0.0, 0.0)
+    return r.displacements, (moved, areas)
+
+
 def joint_run(scene, scan, areas, P_true, L, a, log):
     """align at rest, the crop with that pose, then one optimise with the pose refined jointly
     (a scene target in the camera's frame); returns the displacements and the scan moved by the
@@ -195,6 +242,8 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         off = rotation_error(pose["matrix"][:3, :3], P_true)
         log(f"joint: starting from a calibrated camera's pose: the true one rotated by {deg:g} deg "
             f"about a random axis and moved by {frac:g} L ({off:.3f} deg)")
+    elif a.start == "exact":  # the true pose, held exactly below (a body-frame target)
+        pose = {"matrix": P_true, "status": "given", "overlap": float("nan")}
     elif a.start in ("fixture", "ladder-fixture"):  # the table's tilt and height (section 8.12)
         # The clamp's side: the base (x = 0) seen from the body's centre in the camera's frame,
         # rounded to the nearest of the image's left, right, up, down (a user's hint).
@@ -245,6 +294,8 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
     P, cap = pose["matrix"], {"quantile": 0.9, "factor": a.cap_factor}
     if a.probe:
         probe(scene, scan_file, P, P_true, out, log)
+    if a.start == "exact":
+        return exact_pose_run(scene, scan, areas, P_true, L, a, log)
     for stage in range(1, a.cap_stages + 1):
         np.savetxt(pose_file, P, fmt="%.17g")
         with open(os.path.join(ROOT, "data/scenes/finger.json")) as f:
@@ -265,7 +316,7 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         move = 1e-3 if a.hold_all or (stage == 1 and a.hold_first) else a.pose_move
         r = softhd.optimise(softhd.Scene.load(path), max_iter=a.max_iter, algorithm=a.algorithm,
                             initial=initial, eps=eps, pose_move=move, pose_method=a.pose_method,
-                            method=a.method)
+                            method=a.method, beta=a.beta)
         a.seconds += r.seconds
         P = r.pose
         centre = scan.mean(0)  # the pose's error where the body is (the camera is 3 L away)
@@ -313,10 +364,12 @@ def main():
                     help="--joint: the pose's move limit as a fraction of the control's")
     ap.add_argument("--algorithm", default=None, help="--joint: the optimiser (default mma)")
     ap.add_argument("--start",
-                    choices=["align", "ladder", "true", "perturbed", "fixture", "ladder-fixture"],
+                    choices=["align", "ladder", "true", "exact", "perturbed", "fixture",
+                             "ladder-fixture"],
                     default="align",
                     help="--joint: the start pose: align's at rest, ladder_align's (against bodies "
-                         "under uniform controls), (a diagnostic) the true one, or a calibrated "
+                         "under uniform controls), (a diagnostic) the true one, the true one "
+                         "exactly held (exact: a body-frame target), or a calibrated "
                          "camera's (the true one off by 3 deg about a random axis and 0.02 L), "
                          "or align's at rest with the fixture (the table's tilt and height), or "
                          "ladder_align's with the fixture")
@@ -344,7 +397,8 @@ def main():
     ap.add_argument("--distance", choices=["scan_to_body", "visible"], default="scan_to_body",
                     help="--joint: the joint run's distance (visible: the camera is the pose's)")
     ap.add_argument("--cap-factor", type=float, default=3.0,
-                    help="--joint: the cap is this times the 90 %% quantile of the distances")
+                    help="--joint: the cap is this times the 90 %% quantile of the distances "
+                         "(--start exact: 0 for no cap)")
     ap.add_argument("--hold-first", action="store_true",
                     help="--joint: the first stage with pose_move 0.001 (the pose nearly held)")
     ap.add_argument("--hold-all", action="store_true",
@@ -355,6 +409,14 @@ def main():
                          "(default 0.4; 0.1 cut the bent tip off, see the docstring)")
     ap.add_argument("--plane", type=float, default=0.01,
                     help="the table's plane threshold, a fraction of L")
+    ap.add_argument("--noise", type=float, default=0.005,
+                    help="the view's noise, a standard deviation as a fraction of L "
+                         "(default 0.005)")
+    ap.add_argument("--outliers", type=float, default=0.03,
+                    help="the view's outliers, a fraction of its points (default 0.03)")
+    ap.add_argument("--beta", type=float, default=None,
+                    help="the distance's beta (softhd.optimise's; default the library's: 2 "
+                         "for scan_to_body and visible)")
     ap.add_argument("--out", default="results/track_scan")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -366,7 +428,7 @@ def main():
     deformed, _ = softhd.read_cloud(os.path.join(ROOT, "data/targets/finger_target.ply"))
     fine = softhd.read_mesh(os.path.join(ROOT, "data/meshes/finger_fine.msh"), order=2)
     scan, P_true, info = synthetic_scan.view(deformed, fine.boundary_triangles, a.seed, a.view,
-                                             noise=0.005, outliers=0.03, table=True)
+                                             noise=a.noise, outliers=a.outliers, table=True)
     L = info["size"]
     softhd.write_cloud(os.path.join(a.out, "scan.ply"), scan)
     log(f"view: {len(scan)} points in the camera's frame: {info['kept'] - info['table']} of the "
@@ -394,7 +456,7 @@ def main():
         rest = softhd.distance(body, target[0], distance="scan_to_body", fields=True)
         cap = 3.0 * float(np.quantile(rest.field_target, 0.9))
         r = softhd.optimise(scene, target, max_iter=a.max_iter, distance="scan_to_body", cap=cap,
-                            particles="boundary", volumes="deformed")
+                            particles="boundary", volumes="deformed", beta=a.beta)
         u = r.displacements
         e_max, e_rms = node_errors(nodes, u, truth)
         log(f"round {k}: optimise {r.iterations} iterations, {r.seconds:.1f} s, cap {cap:.3g}, "
@@ -419,6 +481,8 @@ def main():
     if a.joint:
         log(f"RESULT seed {a.seed} view {a.view} start {a.start} method "
             f"{a.pose_method or 'joint'}{' fixture' if a.fixture_constraint else ''} "
+            f"noise {a.noise:g} outliers {a.outliers:g} beta {a.beta or 'default'} cap "
+            f"{a.cap_factor:g} "
             f"pose_move {a.pose_move} hold "
             f"{'all' if a.hold_all else 'first' if a.hold_first else 'none'}: node rms "
             f"{s_rms:.4g} ({s_rms / L * 100:.3g} % L, {s_rms / c_rms:.2f}x clean), pose "

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -435,6 +436,52 @@ TEST(RunFields, EveryFieldChangesTheFingerprintOrIsDeclaredFree) {
     }
   }
   EXPECT_EQ(all.size(), tracking_run_fields().size()) << "a variant of a field the table lacks";
+}
+
+// The β a fingerprint records ("alpha … beta B gamma …", B in C's %a, which strtod reads).
+double fingerprint_beta(const RunFingerprint& f) {
+  const std::string& d = f.at("distance");
+  const std::size_t at = d.find(" beta ");
+  EXPECT_NE(at, std::string::npos) << d;
+  return std::strtod(d.c_str() + at + 6, nullptr);
+}
+
+// β 0 (the default) is automatic: the paper's 4 for the symmetric distance, 2 for the scan
+// forms, on every level; a β given is used for every form. The run's objective is what the
+// fingerprint records (the β its distance is evaluated with).
+TEST(RunFields, TheScanFormsTakeBetaTwoUnlessBetaIsGiven) {
+  EXPECT_EQ(TrackingRunOptions{}.distance.params.beta, 0.0);
+  for (const double given : {0.0, 3.0}) {
+    for (const auto sides : {softhd::Sides::symmetric, softhd::Sides::scan_to_body}) {
+      TrackingRunOptions o = base_options(Group::levels);  // two levels
+      o.distance.params.beta = given;
+      o.distance.form.emplace().sides = sides;
+      const double expected = given != 0.0                        ? given
+                              : sides == softhd::Sides::symmetric ? 4.0
+                                                                  : softhd::kScanFormBeta;
+      const std::vector<RunFingerprint> f = fingerprints(Group::levels, o);
+      ASSERT_EQ(f.size(), 2u);
+      for (const RunFingerprint& level : f)
+        EXPECT_EQ(fingerprint_beta(level), expected) << softhd::to_string(sides) << " " << given;
+    }
+  }
+  EXPECT_EQ(softhd::kScanFormBeta, 2.0);
+  // The target block's form (distance.form unset), on both levels; a target block's camera
+  // (with its visible form, as the scene's reader sets it).
+  const softhd::Scene scene = box_scene("[6, 1, 2]");
+  const softhd::fe::Assembler a = scene.body.make_assembler();
+  const softhd::fe::ControlSpace c = scene.body.make_control_space(a);
+  for (const bool camera : {false, true}) {
+    TrackingRunOptions o = base_options(camera ? Group::single : Group::levels);
+    softhd::SceneTarget target = softhd::tracking_target(scene, a.mesh(), o);
+    target.distance.sides = camera ? softhd::Sides::visible : softhd::Sides::scan_to_body;
+    if (camera) target.camera = Eigen::Vector3d(3.0, 0.5, 20.0);
+    const std::vector<RunFingerprint> f =
+        TrackingRun(scene, a, c, std::move(target), o).fingerprints();
+    ASSERT_EQ(f.size(), camera ? 1u : 2u);
+    for (const RunFingerprint& level : f)
+      EXPECT_EQ(fingerprint_beta(level), softhd::kScanFormBeta) << "camera " << camera;
+  }
 }
 
 }  // namespace

@@ -362,7 +362,9 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     """Finds the fiber tension m within the scene's bounds whose equilibrium best matches the
     target: the run ``softhd optimise`` makes (the library's TrackingRun), with its options and
     its defaults for every option left None (:func:`optimise_defaults` lists them, e.g. method
-    "tree" with tol 1e-2, move_limit 0.1, coarse_levels "auto" (0: none; ``--coarse-levels``):
+    "tree" with tol 1e-2, move_limit 0.1, beta 0: automatic, 4 for the symmetric distance and
+    2 for scan_to_body and visible, as ``--beta``; coarse_levels "auto" (0: none;
+    ``--coarse-levels``):
     the state solves' coarse start, two-level starts on the coarse level (a box with half the
     cells, a mesh file of order 2 as P1/Q1 on its vertices), levels 0:
     automatic, where the target has a known map (an arc, a manufactured state) 1 + every coarser

@@ -230,7 +230,7 @@ def test_defaults_are_the_command_line_tools(cli_help):
             assert given == expected, name
         else:
             assert float(given) == expected, name
-    m = re.search(r"functional parameters \(default (\S+) (\S+) (\S+) (\S+)\)", text)
+    m = re.search(r"functional parameters \(default (\S+) (\S+) (\S+) ([^\s;)]+)[;)]", text)
     assert [float(v) for v in m.groups()] == [defaults[k] for k in ("alpha", "beta", "gamma",
                                                                    "eps")]
 

@@ -51,6 +51,15 @@ fe::MeshHierarchy level_hierarchy(const fe::Body& body, int levels) {
 
 }  // namespace
 
+double run_beta(const TrackingRunOptions& options, const SceneTarget& target) {
+  // The sides the run's form will have: the options' form replaces the target block's, and
+  // the target's camera makes it visible (apply_target_settings; a conflict is set_form's).
+  const Sides sides = target.camera           ? Sides::visible
+                      : options.distance.form ? options.distance.form->sides
+                                              : target.distance.sides;
+  return options.distance.beta_for(sides);
+}
+
 void apply_target_form(ShapeObjective& objective, SceneTarget& target) {
   const TargetDistance& d = target.distance;
   // Nothing to set for the plain form, unless a camera made the objective's visible (then a
@@ -76,6 +85,7 @@ std::vector<std::unique_ptr<CoarseProblem>> coarse_problems(const Scene& scene,
     o.distance.tolerance = std::max(options.distance.tolerance, options.levels.coarse_tolerance);
   ShapeObjectiveOptions so = o.objective();
   apply_target_settings(target, &so);  // the user's target's view on every level
+  so.hausdorff.params.beta = run_beta(options, target);
   const fe::MeshHierarchy hierarchy = level_hierarchy(scene.body, options.levels.count);
   const SceneTarget* finer_target = &target;
   for (int level = 1; level < options.levels.count; ++level) {

@@ -29,6 +29,10 @@ struct CoarseProblem {
   std::unique_ptr<ShapeObjective> objective;
 };
 
+/// β of the run against `target`: options.distance.beta_for the sides of the run's form
+/// (options.distance.form's, else the target block's; visible with the target's camera).
+double run_beta(const TrackingRunOptions& options, const SceneTarget& target);
+
 /// Sets the objective's distance form from the target block's (target_form; nothing for the
 /// default symmetric form without a cap) and appends it to the target's description.
 void apply_target_form(ShapeObjective& objective, SceneTarget& target);

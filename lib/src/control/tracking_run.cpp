@@ -163,9 +163,16 @@ void TrackingRunOptions::validate() const {
   tracking().validate();
 }
 
+double TrackingRunOptions::Distance::beta_for(Sides sides) const {
+  if (params.beta != 0.0) return params.beta;  // as given (validated by the objective)
+  return sides == Sides::symmetric ? 4.0 : kScanFormBeta;
+}
+
 ShapeObjectiveOptions TrackingRunOptions::objective() const {
   ShapeObjectiveOptions o;
   o.hausdorff.params = distance.params;
+  o.hausdorff.params.beta =
+      distance.beta_for(distance.form ? distance.form->sides : Sides::symmetric);
   o.hausdorff.method = distance.method;
   o.hausdorff.tolerance = distance.tolerance;
   o.hausdorff.threads = threads;
@@ -270,6 +277,7 @@ struct TrackingRun::Impl {
                             "D but the scene's body is " + std::to_string(scene.body.dim()) + "D");
     ShapeObjectiveOptions so = options.objective();
     apply_target_settings(target, &so);
+    so.hausdorff.params.beta = detail::run_beta(options, target);
     apply_quadrature(options, &target, &so);
     if (target.frame == TargetFrame::camera) {  // the pose joins the control (§8.10)
       if (options.levels.count > 1)

@@ -40,6 +40,13 @@ std::string to_string(CoarseLevel level);
 /// The CoarseLevel named by to_string; throws InvalidArgument naming `state.coarse_levels`.
 CoarseLevel coarse_level_from_string(const std::string& name);
 
+/// β of the scan forms (Sides::scan_to_body, Sides::visible) in a tracking run whose β is
+/// automatic (TrackingRunOptions::Distance::params.beta 0): 2. Measured on noisy depth views
+/// of the bent finger with the pose known, it gave a node error 0.23–0.94 × that of the
+/// paper's 4 on every view and noise level, 0–1 % of the body's size (docs/formulation.md
+/// §8.11, "β against the noise").
+inline constexpr double kScanFormBeta = 2.0;
+
 /// Settings of one tracking run, grouped by concern. The defaults are those of
 /// `softhd optimise` and of Python's `softhd.optimise` (written here only); the flag and the
 /// keyword of each field are in tracking_run_fields() (softhd/control/run_fields.hpp).
@@ -68,7 +75,10 @@ struct TrackingRunOptions {
   struct Distance {
     Particles particles = Particles::nodes;                ///< nodes
     ParticleVolumes volumes = ParticleVolumes::reference;  ///< reference
-    HausdorffParams params;                                ///< α, β, γ, ε (4, 4, 2, 1e-3)
+    /// α, β, γ, ε (4, 0, 2, 1e-3). β 0 (the default) is automatic (beta_for): the paper's 4
+    /// for the symmetric distance, kScanFormBeta (2) for scan_to_body and visible; any other
+    /// β is used for every form.
+    HausdorffParams params{4.0, 0.0, 2.0, 1e-3};
     /// The pair sums (tree, the default): the tree sums exactly wherever its far field would
     /// not be cheaper.
     Method method = Method::tree;
@@ -87,6 +97,10 @@ struct TrackingRunOptions {
     /// one level (levels.count 0 chooses 1) with the paper's α, β, γ, the symmetric form, no
     /// cap, no pose, and not with the newton algorithm (not yet).
     std::optional<Quadrature> quadrature;
+
+    /// β of a distance with these sides: params.beta, or if it is 0 the automatic value (4
+    /// for Sides::symmetric, kScanFormBeta for the scan forms).
+    double beta_for(Sides sides) const;
   };
   /// The Tikhonov terms of the objective (ShapeObjectiveOptions).
   struct Tikhonov {
@@ -181,7 +195,8 @@ struct TrackingRunOptions {
   /// Throws InvalidArgument naming the first invalid field by its path (e.g.
   /// "levels.refined_move_limit"; those of the objective and the optimiser included).
   void validate() const;
-  /// The objective's options these settings give.
+  /// The objective's options these settings give; β for distance.form's sides (symmetric
+  /// without one: TrackingRun sets it again for the target's form, run_beta).
   ShapeObjectiveOptions objective() const;
   /// track_shape's options these settings give: the optimiser's, the checkpoint schedule, and
   /// with output.folder the checkpoint file and resume (TrackingRun::run adds the fingerprint).
