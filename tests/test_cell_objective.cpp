@@ -336,7 +336,7 @@ TEST(CellObjective, TheRunsFloorsAreTheCellForms) {
   const TrackingRunSummary v = TrackingRun(s, o).run();
   EXPECT_NE(v.target.find("the body's cells against the scan's points"), std::string::npos)
       << v.target;
-  EXPECT_FALSE(v.floor_self.has_value());
+  EXPECT_FALSE(v.floor_self.has_value());  // and the automatic β is the cell form's 4, not 2
   EXPECT_TRUE(std::isfinite(v.rho_final) && v.rho_final > 0.0);
 }
 

@@ -230,6 +230,9 @@ void apply_quadrature(const TrackingRunOptions& options, SceneTarget* target,
   if (options.levels.count > 1)
     throw InvalidArgument("levels: quadrature cells runs on one level (levels 1; not yet more)");
   so->hausdorff.quadrature = Quadrature::cells;
+  // An automatic β is the cell form's only one, the paper's 4 (the scan forms' 2 is
+  // collocation's, measured there); a β given is the user's, refused by the objective if not 4.
+  if (options.distance.params.beta == 0.0) so->hausdorff.params.beta = 4.0;
   if (scan_surface) {
     so->form.sides = Sides::scan_to_body;
     target->description +=
