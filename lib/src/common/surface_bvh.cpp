@@ -126,6 +126,15 @@ TrianglePoint closest_on_triangle(const Eigen::Vector3d& y, const Eigen::Vector3
   return p;
 }
 
+SurfacePoint nearest_of(const TriangleSurface& s, int t, const Eigen::Vector3d& y) {
+  SurfacePoint p;
+  p.triangle = t;
+  p.where = closest_on_triangle(y, corner(s, t, 0), corner(s, t, 1), corner(s, t, 2));
+  p.point = point_of(s, t, p.where.lambda);
+  p.distance2 = (y - p.point).squaredNorm();
+  return p;
+}
+
 SurfacePoint closest_point(const TriangleSurface& s, const Bvh& bvh, const Eigen::Vector3d& y) {
   SurfacePoint best;
   if (bvh.order.empty()) return best;
@@ -144,17 +153,8 @@ SurfacePoint closest_point(const TriangleSurface& s, const Bvh& bvh, const Eigen
       continue;
     }
     for (int j = n.begin; j < n.end; ++j) {
-      const int t = bvh.order[j];
-      const TrianglePoint p =
-          closest_on_triangle(y, corner(s, t, 0), corner(s, t, 1), corner(s, t, 2));
-      const Eigen::Vector3d x = point_of(s, t, p.lambda);
-      const double d2 = (y - x).squaredNorm();
-      if (d2 < best.distance2) {
-        best.triangle = t;
-        best.where = p;
-        best.point = x;
-        best.distance2 = d2;
-      }
+      const SurfacePoint p = nearest_of(s, bvh.order[j], y);
+      if (p.distance2 < best.distance2) best = p;
     }
   }
   return best;
@@ -248,6 +248,11 @@ SurfaceDistance::SurfaceDistance(TriangleSurface s) : s_(std::move(s)) {
     i = j;
   }
   bvh_ = build_bvh(s_);
+  double longest = 0.0;
+  for (Eigen::Index t = 0; t < T; ++t)
+    for (int k = 0; k < 3; ++k)
+      longest = std::max(longest, (corner(s_, t, (k + 1) % 3) - corner(s_, t, k)).norm());
+  bvh_scale_ = s_.points.cwiseAbs().maxCoeff() + longest;
 }
 
 Eigen::Vector3d SurfaceDistance::pseudo_normal(int t, const TrianglePoint& p) const {
@@ -268,8 +273,12 @@ SignedDistance SurfaceDistance::at(const Eigen::Vector3d& y) const {
 }
 
 SignedDistance SurfaceDistance::unchecked_at(const Eigen::Vector3d& y) const {
+  return signed_at(y, closest_point(s_, bvh_, y));
+}
+
+SignedDistance SurfaceDistance::signed_at(const Eigen::Vector3d& y, const SurfacePoint& c) const {
   SignedDistance q;
-  q.closest = closest_point(s_, bvh_, y);
+  q.closest = c;
   const Eigen::Vector3d r = y - q.closest.point,
                         n = pseudo_normal(q.closest.triangle, q.closest.where);
   const double d = std::sqrt(q.closest.distance2);
@@ -313,6 +322,48 @@ Eigen::MatrixXd SurfaceDistance::pullback(const std::vector<SignedDistance>& q,
             (w[static_cast<Eigen::Index>(k)] * c.where.lambda[a]) * q[k].gradient.transpose();
   }
   return g;
+}
+
+SurfaceDistance::Candidates SurfaceDistance::candidates(const Eigen::Vector3d& centre,
+                                                        double radius) const {
+  if (!(radius >= 0.0) || !std::isfinite(radius))
+    throw InvalidArgument("SurfaceDistance::candidates: radius must be finite and >= 0");
+  if (!centre.allFinite())
+    throw InvalidArgument("SurfaceDistance::candidates: centre is not finite");
+  Candidates c;
+  c.centre = centre;
+  c.radius = radius;
+  // a relative 1e-6 more than asked: the acceptance test at(y, c) uses `radius` itself
+  c.triangles = unchecked_within(centre, radius * (1.0 + 1e-6) + 1e-6 * bvh_scale_);
+  return c;
+}
+
+SignedDistance SurfaceDistance::at(const Eigen::Vector3d& y, const Candidates& c) const {
+  if (!y.allFinite()) throw InvalidArgument("SurfaceDistance::at: y is not finite");
+  // The nearest candidate and the next nearest computed d2, each triangle as closest_point
+  // computes it (nearest_of, the same bits).
+  SurfacePoint best;
+  double second = std::numeric_limits<double>::infinity();
+  for (const int t : c.triangles) {
+    const SurfacePoint p = nearest_of(s_, t, y);
+    if (p.distance2 < best.distance2) {
+      second = best.distance2;
+      best = p;
+    } else {
+      second = std::min(second, p.distance2);
+    }
+  }
+  // Settled when (a) every other candidate is farther by more than rounding can move a
+  // computed d2 (closest_point then returns `best` whatever its order), and (b) the ball's
+  // boundary is farther from y than best (by a relative 1e-6): a triangle outside the ball
+  // is at least radius − |y − centre| away.
+  constexpr double u = std::numeric_limits<double>::epsilon();
+  const double d = std::sqrt(best.distance2), e = 64.0 * u * (bvh_scale_ + d);
+  const double slack = 2.0 * e * d + e * e + 16.0 * u * best.distance2;
+  const double reach = c.radius - (y - c.centre).norm();
+  if (best.triangle >= 0 && second > best.distance2 + slack && d * (1.0 + 1e-6) + e < reach)
+    return signed_at(y, best);
+  return unchecked_at(y);
 }
 
 std::vector<int> SurfaceDistance::within(const Eigen::Vector3d& y, double r) const {
