@@ -334,7 +334,22 @@ SurfaceDistance::Candidates SurfaceDistance::candidates(const Eigen::Vector3d& c
   c.centre = centre;
   c.radius = radius;
   // a relative 1e-6 more than asked: the acceptance test at(y, c) uses `radius` itself
-  c.triangles = unchecked_within(centre, radius * (1.0 + 1e-6) + 1e-6 * bvh_scale_);
+  const std::vector<int> found =
+      unchecked_within(centre, radius * (1.0 + 1e-6) + 1e-6 * bvh_scale_);
+  std::vector<std::pair<double, int>> by_distance;
+  std::vector<Eigen::Vector3d> lo(found.size()), hi(found.size());
+  for (size_t i = 0; i < found.size(); ++i) {
+    const int t = found[i];
+    lo[i] = corner(s_, t, 0).cwiseMin(corner(s_, t, 1)).cwiseMin(corner(s_, t, 2));
+    hi[i] = corner(s_, t, 0).cwiseMax(corner(s_, t, 1)).cwiseMax(corner(s_, t, 2));
+    by_distance.emplace_back(box_distance2(centre, lo[i], hi[i]), static_cast<int>(i));
+  }
+  std::sort(by_distance.begin(), by_distance.end());  // found is ascending: ties by id
+  for (const auto& [d2, i] : by_distance) {
+    c.triangles.push_back(found[static_cast<size_t>(i)]);
+    for (int k = 0; k < 3; ++k) c.boxes.push_back(lo[static_cast<size_t>(i)][k]);
+    for (int k = 0; k < 3; ++k) c.boxes.push_back(hi[static_cast<size_t>(i)][k]);
+  }
   return c;
 }
 
@@ -342,10 +357,21 @@ SignedDistance SurfaceDistance::at(const Eigen::Vector3d& y, const Candidates& c
   if (!y.allFinite()) throw InvalidArgument("SurfaceDistance::at: y is not finite");
   // The nearest candidate and the next nearest computed d2, each triangle as closest_point
   // computes it (nearest_of, the same bits).
+  // A candidate whose box is farther than √best by a relative 1e-6 (plus 1e-9 of the scale)
+  // is skipped: its computed d2 exceeds best by more than the rounding the test (a) allows,
+  // so it is neither the nearest nor within rounding of it.
   SurfacePoint best;
   double second = std::numeric_limits<double>::infinity();
-  for (const int t : c.triangles) {
-    const SurfacePoint p = nearest_of(s_, t, y);
+  const double floor2 = 1e-18 * bvh_scale_ * bvh_scale_;
+  for (size_t i = 0; i < c.triangles.size(); ++i) {
+    const double* b = c.boxes.data() + 6 * i;
+    double box2 = 0.0;  // Σ_k max(lo_k − y_k, 0, y_k − hi_k)²
+    for (int k = 0; k < 3; ++k) {
+      const double g = std::max({b[k] - y[k], 0.0, y[k] - b[3 + k]});
+      box2 += g * g;
+    }
+    if (box2 > best.distance2 * (1.0 + 1e-6) + floor2) continue;
+    const SurfacePoint p = nearest_of(s_, c.triangles[i], y);
     if (p.distance2 < best.distance2) {
       second = best.distance2;
       best = p;

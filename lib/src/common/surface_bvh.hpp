@@ -161,7 +161,9 @@ class SurfaceDistance {
   struct Candidates {
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     double radius = 0.0;
-    std::vector<int> triangles;  ///< ascending ids
+    /// nearest the centre first (their boxes' distances; ties: ascending ids)
+    std::vector<int> triangles;
+    std::vector<double> boxes;  ///< 6 per triangle: its box's lo (x, y, z), then hi
   };
   /// InvalidArgument unless centre is finite and radius ≥ 0.
   Candidates candidates(const Eigen::Vector3d& centre, double radius) const;
