@@ -83,10 +83,6 @@ inline Eigen::Vector3d corner(const TriangleSurface& s, Eigen::Index t, int k) {
   return s.points.row(s.triangles(t, k)).transpose();
 }
 
-/// The closest point of triangle t of s to y, its point and squared distance (closest_point's
-/// per-triangle step).
-SurfacePoint nearest_of(const TriangleSurface& s, int t, const Eigen::Vector3d& y);
-
 /// The closest point of s to y: branch and bound over the hierarchy (the nearer child first,
 /// a box pruned when its distance is not below the best so far). Of equally close triangles,
 /// the first met (deterministic).
