@@ -2,8 +2,9 @@
 // closest points and radius queries against all triangles tried one by one (a closest-point
 // routine written here, independently of the library's region test), the signed distance
 // against the unit cube's and an L-shaped prism's analytic values and an icosphere's
-// faceting bound, its derivatives against central differences (observed order printed), and
-// determinism over threads.
+// faceting bound, its derivatives against central differences (observed order printed),
+// queries from a ball's candidates against the full search (bit for bit), and determinism over
+// threads.
 
 #include <gtest/gtest.h>
 
@@ -251,6 +252,64 @@ TEST(SurfaceBvh, RadiusQueryEqualsBruteForce) {
       }
     }
   }
+}
+
+// The same query, bit for bit: triangle, barycentric λ, feature, point, d², sd and ∂sd/∂y.
+void expect_same(const SignedDistance& a, const SignedDistance& b, const std::string& where) {
+  ASSERT_EQ(a.closest.triangle, b.closest.triangle) << where;
+  ASSERT_EQ(a.closest.where.feature, b.closest.where.feature) << where;
+  ASSERT_EQ(a.closest.where.corner, b.closest.where.corner) << where;
+  ASSERT_TRUE((a.closest.where.lambda.array() == b.closest.where.lambda.array()).all()) << where;
+  ASSERT_TRUE((a.closest.point.array() == b.closest.point.array()).all()) << where;
+  ASSERT_EQ(a.closest.distance2, b.closest.distance2) << where;
+  ASSERT_EQ(a.sd, b.sd) << where;
+  ASSERT_TRUE((a.gradient.array() == b.gradient.array()).all()) << where;
+}
+
+// The points of segments (the outer rule's lines) from their candidates (the ball about the
+// middle of radius max(|sd|) at the ends + length, as cell_rule::line_candidates builds it; a
+// ball too small; a ball elsewhere) against the full search, bit for bit, and against all
+// triangles. The FE cube's segments run along the grid through its vertices and edges, where
+// several triangles tie.
+TEST(SurfaceBvh, CandidateQueriesEqualTheFullSearch) {
+  std::mt19937 rng(71);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  for (const TriangleSurface& s : surfaces()) {
+    const SurfaceDistance sd(s);
+    const Eigen::Vector3d lo = s.points.colwise().minCoeff(), hi = s.points.colwise().maxCoeff();
+    for (int line = 0; line < 120; ++line) {
+      Eigen::Vector3d a, b;
+      if (line % 3 == 0) {  // along a grid axis through grid coordinates (k/6 of the box)
+        const int axis = line % 9 / 3;
+        for (int k = 0; k < 3; ++k) a[k] = lo[k] + (hi[k] - lo[k]) * std::floor(7 * U(rng)) / 6;
+        b = a;
+        a[axis] = lo[axis] - 0.1, b[axis] = hi[axis] + 0.1;
+      } else {
+        for (int k = 0; k < 3; ++k) a[k] = lo[k] - 0.2 + (hi[k] - lo[k] + 0.4) * U(rng);
+        b = a + 0.3 * Eigen::Vector3d(U(rng) - 0.5, U(rng) - 0.5, U(rng) - 0.5);
+      }
+      const double s0 = sd.at(a).sd, s1 = sd.at(b).sd, length = (b - a).norm();
+      const Eigen::Vector3d m = 0.5 * (a + b);
+      const SurfaceDistance::Candidates balls[3] = {
+          sd.candidates(m, std::max(std::abs(s0), std::abs(s1)) + length),
+          sd.candidates(m, 0.1 * length), sd.candidates(m + Eigen::Vector3d(3, 0, 0), 0.5)};
+      for (int k = 0; k <= 24; ++k) {
+        const Eigen::Vector3d y = a + (b - a) * (k / 24.0);
+        const SignedDistance full = sd.at(y);
+        for (int c = 0; c < 3; ++c)
+          expect_same(sd.at(y, balls[c]), full,
+                      "line " + std::to_string(line) + ", point " + std::to_string(k) + ", ball " +
+                          std::to_string(c));
+        ASSERT_NEAR(std::abs(full.sd), (y - ref_closest(s, y)).norm(), 1e-13);
+      }
+    }
+  }
+  const SurfaceDistance cube(box_surface(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones(), 1));
+  softhd::test::expect_error<softhd::InvalidArgument>(
+      [&] { cube.candidates(Eigen::Vector3d::Zero(), -1.0); }, "radius must be");
+  softhd::test::expect_error<softhd::InvalidArgument>(
+      [&] { cube.at(Eigen::Vector3d(NAN, 0, 0), cube.candidates(Eigen::Vector3d::Zero(), 1.0)); },
+      "y is not finite");
 }
 
 // ---------------------------------------------------------------------------------------------

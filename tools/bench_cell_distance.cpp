@@ -106,8 +106,8 @@ static int plate(int threads, int argc, char** argv) {
     for (int rep = 0; rep < -reps; ++rep) {
       const double t0 = now();
       const detail::CellRho r = detail::cell_rho(x, y, loose);
-      std::printf("rep %d: cells, J tree, near_ratio %.1f, angle_points %d: rho %.9f %.3f s\n", rep,
-                  loose.j_near_ratio, loose.j_angle_points, r.rho, now() - t0);
+      std::printf("rep %d: cells, J tree, near_ratio %.1f, angle_points %d: rho %.17g %.3f s\n",
+                  rep, loose.j_near_ratio, loose.j_angle_points, r.rho, now() - t0);
     }
     return 0;
   }
@@ -267,7 +267,7 @@ static int rules(int threads, int argc, char** argv) {
       const double t = now() - t0;
       if (k == 0) first = r.rho;
       const double ref = b.ref > 0 ? b.ref : first;
-      std::printf("%-26s #%zu %-28s %.9f %+9.4f%% %8.3f s %9ld\n", b.name, k, argv[3 + k], r.rho,
+      std::printf("%-26s #%zu %-28s %.17g %+9.4f%% %8.3f s %9ld\n", b.name, k, argv[3 + k], r.rho,
                   100.0 * (r.rho / ref - 1.0), t, r.a.near_points + r.b.near_points);
       std::fflush(stdout);
     }

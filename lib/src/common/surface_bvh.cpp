@@ -126,6 +126,23 @@ TrianglePoint closest_on_triangle(const Eigen::Vector3d& y, const Eigen::Vector3
   return p;
 }
 
+namespace {
+
+// The closest point of triangle t of s to y, and its squared distance: closest_point's
+// per-triangle steps (the same expressions, written out there to keep its loop as fast), for
+// SurfaceDistance::at with candidates; test_surface_bvh checks both give the same bits.
+[[gnu::always_inline]] inline SurfacePoint nearest_of(const TriangleSurface& s, int t,
+                                                      const Eigen::Vector3d& y) {
+  SurfacePoint p;
+  p.triangle = t;
+  p.where = closest_on_triangle(y, corner(s, t, 0), corner(s, t, 1), corner(s, t, 2));
+  p.point = point_of(s, t, p.where.lambda);
+  p.distance2 = (y - p.point).squaredNorm();
+  return p;
+}
+
+}  // namespace
+
 SurfacePoint closest_point(const TriangleSurface& s, const Bvh& bvh, const Eigen::Vector3d& y) {
   SurfacePoint best;
   if (bvh.order.empty()) return best;
@@ -143,7 +160,7 @@ SurfacePoint closest_point(const TriangleSurface& s, const Bvh& bvh, const Eigen
       stack[top++] = left_first ? n.left : n.left + 1;
       continue;
     }
-    for (int j = n.begin; j < n.end; ++j) {
+    for (int j = n.begin; j < n.end; ++j) {  // nearest_of's steps, kept apart from best
       const int t = bvh.order[j];
       const TrianglePoint p =
           closest_on_triangle(y, corner(s, t, 0), corner(s, t, 1), corner(s, t, 2));
@@ -248,6 +265,11 @@ SurfaceDistance::SurfaceDistance(TriangleSurface s) : s_(std::move(s)) {
     i = j;
   }
   bvh_ = build_bvh(s_);
+  double longest = 0.0;
+  for (Eigen::Index t = 0; t < T; ++t)
+    for (int k = 0; k < 3; ++k)
+      longest = std::max(longest, (corner(s_, t, (k + 1) % 3) - corner(s_, t, k)).norm());
+  bvh_scale_ = s_.points.cwiseAbs().maxCoeff() + longest;
 }
 
 Eigen::Vector3d SurfaceDistance::pseudo_normal(int t, const TrianglePoint& p) const {
@@ -267,9 +289,10 @@ SignedDistance SurfaceDistance::at(const Eigen::Vector3d& y) const {
   return unchecked_at(y);
 }
 
-SignedDistance SurfaceDistance::unchecked_at(const Eigen::Vector3d& y) const {
+inline SignedDistance SurfaceDistance::signed_at(const Eigen::Vector3d& y,
+                                                 const SurfacePoint& c) const {
   SignedDistance q;
-  q.closest = closest_point(s_, bvh_, y);
+  q.closest = c;
   const Eigen::Vector3d r = y - q.closest.point,
                         n = pseudo_normal(q.closest.triangle, q.closest.where);
   const double d = std::sqrt(q.closest.distance2);
@@ -282,6 +305,10 @@ SignedDistance SurfaceDistance::unchecked_at(const Eigen::Vector3d& y) const {
   else
     q.gradient = sign * r / d;
   return q;
+}
+
+SignedDistance SurfaceDistance::unchecked_at(const Eigen::Vector3d& y) const {
+  return signed_at(y, closest_point(s_, bvh_, y));
 }
 
 std::vector<SignedDistance> SurfaceDistance::at_rows(const Eigen::MatrixXd& y, int threads) const {
@@ -313,6 +340,74 @@ Eigen::MatrixXd SurfaceDistance::pullback(const std::vector<SignedDistance>& q,
             (w[static_cast<Eigen::Index>(k)] * c.where.lambda[a]) * q[k].gradient.transpose();
   }
   return g;
+}
+
+SurfaceDistance::Candidates SurfaceDistance::candidates(const Eigen::Vector3d& centre,
+                                                        double radius) const {
+  if (!(radius >= 0.0) || !std::isfinite(radius))
+    throw InvalidArgument("SurfaceDistance::candidates: radius must be finite and >= 0");
+  if (!centre.allFinite())
+    throw InvalidArgument("SurfaceDistance::candidates: centre is not finite");
+  Candidates c;
+  c.centre = centre;
+  c.radius = radius;
+  // a relative 1e-6 more than asked: the acceptance test at(y, c) uses `radius` itself
+  const std::vector<int> found =
+      unchecked_within(centre, radius * (1.0 + 1e-6) + 1e-6 * bvh_scale_);
+  std::vector<std::pair<double, int>> by_distance;
+  std::vector<Eigen::Vector3d> lo(found.size()), hi(found.size());
+  for (size_t i = 0; i < found.size(); ++i) {
+    const int t = found[i];
+    lo[i] = corner(s_, t, 0).cwiseMin(corner(s_, t, 1)).cwiseMin(corner(s_, t, 2));
+    hi[i] = corner(s_, t, 0).cwiseMax(corner(s_, t, 1)).cwiseMax(corner(s_, t, 2));
+    by_distance.emplace_back(box_distance2(centre, lo[i], hi[i]), static_cast<int>(i));
+  }
+  std::sort(by_distance.begin(), by_distance.end());  // found is ascending: ties by id
+  for (const auto& [d2, i] : by_distance) {
+    c.triangles.push_back(found[static_cast<size_t>(i)]);
+    for (int k = 0; k < 3; ++k) c.boxes.push_back(lo[static_cast<size_t>(i)][k]);
+    for (int k = 0; k < 3; ++k) c.boxes.push_back(hi[static_cast<size_t>(i)][k]);
+  }
+  return c;
+}
+
+SignedDistance SurfaceDistance::at(const Eigen::Vector3d& y, const Candidates& c) const {
+  if (!y.allFinite()) throw InvalidArgument("SurfaceDistance::at: y is not finite");
+  // The nearest candidate and the next nearest computed d2, each triangle as closest_point
+  // computes it (nearest_of, the same bits).
+  // A candidate whose box is farther than √best by a relative 1e-6 (plus 1e-9 of the scale)
+  // is skipped: its computed d2 exceeds best by more than the rounding the test (a) allows,
+  // so it is neither the nearest nor within rounding of it.
+  SurfacePoint best;
+  double second = std::numeric_limits<double>::infinity();
+  const double floor2 = 1e-18 * bvh_scale_ * bvh_scale_;
+  for (size_t i = 0; i < c.triangles.size(); ++i) {
+    const double* b = c.boxes.data() + 6 * i;
+    double box2 = 0.0;  // Σ_k max(lo_k − y_k, 0, y_k − hi_k)²
+    for (int k = 0; k < 3; ++k) {
+      const double g = std::max({b[k] - y[k], 0.0, y[k] - b[3 + k]});
+      box2 += g * g;
+    }
+    if (box2 > best.distance2 * (1.0 + 1e-6) + floor2) continue;
+    const SurfacePoint p = nearest_of(s_, c.triangles[i], y);
+    if (p.distance2 < best.distance2) {
+      second = best.distance2;
+      best = p;
+    } else {
+      second = std::min(second, p.distance2);
+    }
+  }
+  // Settled when (a) every other candidate is farther by more than rounding can move a
+  // computed d2 (closest_point then returns `best` whatever its order), and (b) the ball's
+  // boundary is farther from y than best (by a relative 1e-6): a triangle outside the ball
+  // is at least radius − |y − centre| away.
+  constexpr double u = std::numeric_limits<double>::epsilon();
+  const double d = std::sqrt(best.distance2), e = 64.0 * u * (bvh_scale_ + d);
+  const double slack = 2.0 * e * d + e * e + 16.0 * u * best.distance2;
+  const double reach = c.radius - (y - c.centre).norm();
+  if (best.triangle >= 0 && second > best.distance2 + slack && d * (1.0 + 1e-6) + e < reach)
+    return signed_at(y, best);
+  return unchecked_at(y);
 }
 
 std::vector<int> SurfaceDistance::within(const Eigen::Vector3d& y, double r) const {

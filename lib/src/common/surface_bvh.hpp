@@ -150,10 +150,30 @@ class SurfaceDistance {
   explicit SurfaceDistance(TriangleSurface s);
 
   const TriangleSurface& surface() const { return s_; }
+
+  /// The triangles within `radius` of `centre` (a little more, for rounding): the candidates
+  /// for the closest triangle of the queries in that ball, e.g. the points of one line
+  /// (at(y, candidates)).
+  struct Candidates {
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    double radius = 0.0;
+    /// nearest the centre first (their boxes' distances; ties: ascending ids)
+    std::vector<int> triangles;
+    std::vector<double> boxes;  ///< 6 per triangle: its box's lo (x, y, z), then hi
+  };
+  /// InvalidArgument unless centre is finite and radius ≥ 0.
+  Candidates candidates(const Eigen::Vector3d& centre, double radius) const;
   const Bvh& bvh() const { return bvh_; }
 
   /// The signed distance at y (InvalidArgument unless y is finite).
   SignedDistance at(const Eigen::Vector3d& y) const;
+  /// The same as at(y), bit for bit, from the candidates where they settle it: their nearest
+  /// triangle is nearer than every other candidate by more than the rounding of a computed
+  /// squared distance, and nearer than the candidates' ball's boundary seen from y (so no
+  /// triangle outside the ball is as near); then at(y)'s branch and bound, which returns the
+  /// nearest triangle unless another is within rounding of it, would return it too. Else (a
+  /// tie within rounding, y too far out) at(y) itself. Cheap for many y in a small ball.
+  SignedDistance at(const Eigen::Vector3d& y, const Candidates& candidates) const;
   /// At every row of y (Q by 3), over `threads` OpenMP threads (0: max_threads()); each
   /// query is independent, so the results do not depend on the threads.
   std::vector<SignedDistance> at_rows(const Eigen::MatrixXd& y, int threads = 0) const;
@@ -175,7 +195,8 @@ class SurfaceDistance {
   Eigen::Vector3d pseudo_normal(int t, const TrianglePoint& p) const;
 
  private:
-  SignedDistance unchecked_at(const Eigen::Vector3d& y) const;                  // y finite
+  SignedDistance unchecked_at(const Eigen::Vector3d& y) const;                      // y finite
+  SignedDistance signed_at(const Eigen::Vector3d& y, const SurfacePoint& c) const;  // c closest
   std::vector<int> unchecked_within(const Eigen::Vector3d& y, double r) const;  // y finite, r ≥ 0
 
   TriangleSurface s_;
@@ -183,6 +204,7 @@ class SurfaceDistance {
   Eigen::MatrixXd face_normal_;    // T by 3, unit
   Eigen::MatrixXd edge_normal_;    // T by 3 rows per triangle: row 3t + k, the edge opposite k
   Eigen::MatrixXd vertex_normal_;  // N by 3: Σ θ n over the incident triangles
+  double bvh_scale_ = 0.0;         // max |coordinate| + the longest edge: the rounding's scale
 };
 
 }  // namespace softhd::detail

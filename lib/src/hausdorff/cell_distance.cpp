@@ -59,6 +59,7 @@ double near_cell(const Cell& c, const double f[8], const double g[8], const Surf
       cell_rule::line_ends(c, s, xi, axis, &line);
       cell_rule::line_rule(c, s, xi, axis, r.d0, r.q, r.px, r.pw, r.px, r.pw, &line, false);
       const std::vector<double>&lx = line.rule.x, &lw = line.rule.w;
+      const SurfaceDistance::Candidates near = cell_rule::line_candidates(c, s, xi, axis, line);
       for (std::size_t k = 0; k < lx.size(); ++k) {
         xi[axis] = lx[k];
         double x[3], det;
@@ -69,7 +70,8 @@ double near_cell(const Cell& c, const double f[8], const double g[8], const Surf
           r.exact->evaluate(Eigen::RowVector3d(x[0], x[1], x[2]), &v);
           j_y = v[0];
         } else {
-          j_y = model_j(halfspace_profile(signed_distance(s, x), r.eps), f, g, xi, r.hybrid);
+          j_y = model_j(halfspace_profile(cell_rule::sd_at(s, x, near).sd, r.eps), f, g, xi,
+                        r.hybrid);
         }
         sum += bw[i] * ew[j] * lw[k] * det * field4(j_y, r.volume, r.eps);
       }

@@ -230,12 +230,12 @@ void line_adjoint(const Cell& c, const SurfaceDistance& s, const double xi_line[
 // One point ξ of a near cell, weight W (the tensor rule's): term = W det F(J), J = P_ε(sd(y))
 // exp(φ(ξ)), y = x(ξ). Returns the term; adds the bars of the corners, f_s, |Ω_X| and the
 // source to bar, and ∂term/∂W, ∂term/∂ξ to *wbar, xibar.
-double point_adjoint(const Cell& c, const double f[8], const SurfaceDistance& s, const Rule& r,
-                     const double xi[3], double weight, CellBar* bar, double* wbar,
-                     double xibar[3]) {
+double point_adjoint(const Cell& c, const double f[8], const SurfaceDistance& s,
+                     const SurfaceDistance::Candidates& near, const Rule& r, const double xi[3],
+                     double weight, CellBar* bar, double* wbar, double xibar[3]) {
   double y[3], det;
   map_point(c, xi, y, &det);
-  const SignedDistance q = sd_at(s, y);
+  const SignedDistance q = sd_at(s, y, near);
   const double p = halfspace_profile(q.sd, r.eps), e = std::exp(interpolate(f, xi)), j = p * e;
   const Field4 F = field4_rates(j, r.volume, r.eps);
   const double term = weight * det * F.f;
@@ -272,10 +272,11 @@ double near_cell_adjoint(const Cell& c, const double f[8], const SurfaceDistance
       const std::vector<double>&lx = line.rule.x, &lw = line.rule.w;
       lxbar.assign(lx.size(), 0.0);
       lwbar.assign(lx.size(), 0.0);
+      const SurfaceDistance::Candidates near = line_candidates(c, s, xi, axis, line);
       for (std::size_t k = 0; k < lx.size(); ++k) {
         xi[axis] = lx[k];
         double wbar, pxi[3] = {0, 0, 0};
-        sum += point_adjoint(c, f, s, r, xi, tb.w[i] * te.w[j] * lw[k], bar, &wbar, pxi);
+        sum += point_adjoint(c, f, s, near, r, xi, tb.w[i] * te.w[j] * lw[k], bar, &wbar, pxi);
         bwbar[i] += wbar * te.w[j] * lw[k];  // W = w_b w_e w_l
         ewbar[j] += wbar * tb.w[i] * lw[k];
         lwbar[k] += wbar * tb.w[i] * te.w[j];

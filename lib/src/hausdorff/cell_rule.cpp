@@ -102,6 +102,17 @@ void line_ends(const Cell& c, const SurfaceDistance& s, const double xi_line[3],
                            (x1[2] - x0[2]) * (x1[2] - x0[2]));
 }
 
+SurfaceDistance::Candidates line_candidates(const Cell& c, const SurfaceDistance& s,
+                                            const double xi_line[3], int axis, const Line& line) {
+  double xi[3] = {xi_line[0], xi_line[1], xi_line[2]}, x0[3], x1[3];
+  xi[axis] = -1.0;
+  map_point(c, xi, x0, nullptr);
+  xi[axis] = 1.0;
+  map_point(c, xi, x1, nullptr);
+  const Eigen::Vector3d m(0.5 * (x0[0] + x1[0]), 0.5 * (x0[1] + x1[1]), 0.5 * (x0[2] + x1[2]));
+  return s.candidates(m, std::max(std::abs(line.s0.sd), std::abs(line.s1.sd)) + line.length);
+}
+
 void line_rule(const Cell& c, const SurfaceDistance& s, const double xi_line[3], int axis,
                double d0, double q, const std::vector<double>& gx, const std::vector<double>& gw,
                const std::vector<double>& fx, const std::vector<double>& fw, Line* line,

@@ -57,6 +57,12 @@ inline double signed_distance(const SurfaceDistance& s, const double x[3]) {
   return sd_at(s, x).sd;
 }
 
+// The same from a line's candidates (line_candidates): the same values, bit for bit.
+inline SignedDistance sd_at(const SurfaceDistance& s, const double x[3],
+                            const SurfaceDistance::Candidates& k) {
+  return s.at(Eigen::Vector3d(x[0], x[1], x[2]), k);
+}
+
 // d̃^4 = ((J/|Ω_X|)^(−1/4) − ε)^4.
 inline double field4(double j, double source_volume, double eps) {
   const double d = std::pow(j / source_volume, -0.25) - eps;
@@ -137,6 +143,13 @@ struct Line {
 
 // The line's ends (ξ_axis = ∓1): sd there and the length between them.
 void line_ends(const Cell& c, const SurfaceDistance& s, const double xi[3], int axis, Line* line);
+
+// The candidates for the closest triangles of the line's points (its ends known): the ball
+// about its middle m of radius max(|s0|, |s1|) + L. A point y of the line a from an end has
+// |sd(y)| ≤ |s_end| + a, so |sd(y)| ≤ max(|s0|, |s1|) + L/2 ≤ radius − |y − m|, the test of
+// SurfaceDistance::at(y, candidates) (which falls back on the full search where it fails).
+SurfaceDistance::Candidates line_candidates(const Cell& c, const SurfaceDistance& s,
+                                            const double xi[3], int axis, const Line& line);
 
 // The line's rule, its ends known: graded (first panel d0 physical, gx/gw per panel, ratio q)
 // towards the crossing when it lies within half a cell, else the plain points (fx, fw).
