@@ -120,22 +120,29 @@ def test_fixture_keeps_the_table_and_recovers_a_turn_about_it(rng):
         softhd.align(body, scan, table=plane, clamp=clamp)
 
 
+def bent_bar_surface(rng, count=300):
+    """(nodes, triangles, samples): a 1 x 0.2 x 0.1 bar's 11 x 3 x 3 grid bent by a cubic
+    (Jacobian determinant 1), its boundary triangles, and `count` points uniform in area on them."""
+    n = (11, 3, 3)
+    g = np.meshgrid(*[np.linspace(0, s, k) for s, k in zip((1.0, 0.2, 0.1), n)], indexing="ij")
+    nodes = np.stack([x.ravel() for x in g], 1)
+    nodes[:, 2] += 0.4 * nodes[:, 0] ** 3
+    tri = synthetic.box_surface(n)
+    a, b, c = (nodes[tri[:, k]] for k in range(3))
+    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    k = rng.choice(len(tri), count, p=area / area.sum())
+    r, w = np.sqrt(rng.random(count)), rng.random(count)
+    samples = a[k] * (1 - r)[:, None] + b[k] * (r * (1 - w))[:, None] + c[k] * (r * w)[:, None]
+    return nodes, tri, samples
+
+
 def test_surface_points_between_the_nodes_recovered_with_body_triangles():
     """A scan of points on a bent bar's surface but between its nodes (300 area-weighted
     samples), moved: with body_triangles the pose to rounding (asserted 1e-9, the finish's step
     tolerance 1e-10 L with room) and the residuals are distances to the surface (0); with the
     nodes alone only to their spacing. Bad triangles are refused naming the argument."""
-    n = (11, 3, 3)
-    g = np.meshgrid(*[np.linspace(0, s, k) for s, k in zip((1.0, 0.2, 0.1), n)], indexing="ij")
-    nodes = np.stack([x.ravel() for x in g], 1)
-    nodes[:, 2] += 0.4 * nodes[:, 0] ** 3  # bent by a cubic (Jacobian determinant 1)
-    tri = synthetic.box_surface(n)
     rng = np.random.default_rng(4)
-    a, b, c = (nodes[tri[:, k]] for k in range(3))
-    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    k = rng.choice(len(tri), 300, p=area / area.sum())
-    r, w = np.sqrt(rng.random(300)), rng.random(300)
-    samples = a[k] * (1 - r)[:, None] + b[k] * (r * (1 - w))[:, None] + c[k] * (r * w)[:, None]
+    nodes, tri, samples = bent_bar_surface(rng)
     R, t = random_rotation(rng), np.array([0.3, -0.2, 0.4])
     scan = (samples - t) @ R  # P^-1(y) = R^T (y - t)
     res = softhd.align(nodes, scan, body_triangles=tri, threads=2)
@@ -155,17 +162,8 @@ def test_surface_with_the_fixture_recovered_on_the_constraint():
     tilted: with the fixture and body_triangles the constrained point-to-plane fit recovers the
     pose to rounding (asserted 1e-9) and keeps the table's normal (asserted 1e-12); the fixture
     with the nodes alone does not (its pairs are nodes up to L/20 away)."""
-    n = (11, 3, 3)
-    g = np.meshgrid(*[np.linspace(0, s, k) for s, k in zip((1.0, 0.2, 0.1), n)], indexing="ij")
-    nodes = np.stack([x.ravel() for x in g], 1)
-    nodes[:, 2] += 0.4 * nodes[:, 0] ** 3
-    tri = synthetic.box_surface(n)
     rng = np.random.default_rng(1)
-    a, b, c = (nodes[tri[:, k]] for k in range(3))
-    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    k = rng.choice(len(tri), 300, p=area / area.sum())
-    r, w = np.sqrt(rng.random(300)), rng.random(300)
-    samples = a[k] * (1 - r)[:, None] + b[k] * (r * (1 - w))[:, None] + c[k] * (r * w)[:, None]
+    nodes, tri, samples = bent_bar_surface(rng)
     table = np.c_[rng.uniform(-0.2, 1.2, 300), rng.uniform(-0.2, 0.4, 300), np.full(300, -0.05)]
     th = 1.1
     turn = np.array([[np.cos(th), -np.sin(th), 0], [np.sin(th), np.cos(th), 0], [0, 0, 1]])
