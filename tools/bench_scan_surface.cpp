@@ -26,6 +26,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <numeric>
 #include <random>
 #include <string>
 #include <vector>
@@ -64,15 +65,21 @@ TriangleSurface top_view(const TriangleSurface& s) {
   return v;
 }
 
-// `count` points uniform in area on `s` (triangle by its area, then uniform barycentric).
-Eigen::MatrixXd sample_surface(const TriangleSurface& s, long count, unsigned seed) {
+// The area of every triangle of `s`.
+std::vector<double> triangle_areas(const TriangleSurface& s) {
   std::vector<double> area(static_cast<std::size_t>(s.triangles.rows()));
   for (Eigen::Index t = 0; t < s.triangles.rows(); ++t) {
-    const Eigen::RowVector3d a = s.points.row(s.triangles(t, 0)),
-                             b = s.points.row(s.triangles(t, 1)),
-                             c = s.points.row(s.triangles(t, 2));
+    const Eigen::RowVector3d a = s.points.row(s.triangles(t, 0));
+    const Eigen::RowVector3d b = s.points.row(s.triangles(t, 1));
+    const Eigen::RowVector3d c = s.points.row(s.triangles(t, 2));
     area[static_cast<std::size_t>(t)] = 0.5 * (b - a).cross(c - a).norm();
   }
+  return area;
+}
+
+// `count` points uniform in area on `s` (triangle by its area, then uniform barycentric).
+Eigen::MatrixXd sample_surface(const TriangleSurface& s, long count, unsigned seed) {
+  const std::vector<double> area = triangle_areas(s);
   std::mt19937_64 rng(seed);
   std::discrete_distribution<long> pick(area.begin(), area.end());
   std::uniform_real_distribution<double> u01(0.0, 1.0);
@@ -88,14 +95,8 @@ Eigen::MatrixXd sample_surface(const TriangleSurface& s, long count, unsigned se
 }
 
 double total_area(const TriangleSurface& s) {
-  double a = 0.0;
-  for (Eigen::Index t = 0; t < s.triangles.rows(); ++t) {
-    const Eigen::RowVector3d p = s.points.row(s.triangles(t, 0)),
-                             q = s.points.row(s.triangles(t, 1)),
-                             r = s.points.row(s.triangles(t, 2));
-    a += 0.5 * (q - p).cross(r - p).norm();
-  }
-  return a;
+  const std::vector<double> area = triangle_areas(s);
+  return std::accumulate(area.begin(), area.end(), 0.0);
 }
 
 }  // namespace
