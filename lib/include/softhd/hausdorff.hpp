@@ -39,7 +39,7 @@ void check_coordinates(const PointCloud& cloud, const std::string& which);
 /// Smallest ε the distance accepts (HausdorffParams::validate refuses less, naming this bound).
 /// 1/ε is the kernel's value at a coincident pair and the scale of the gradient terms: it
 /// overflows below ε = 1/DBL_MAX ≈ 5.6e-309, where the gradients of coincident clouds turn NaN
-/// (ε = 1e-320, issue 29); at 1e-300 it stays 1e8 below overflow. ε is a length, as the
+/// (at ε = 1e-320); at 1e-300 it stays 1e8 below overflow. ε is a length, as the
 /// coordinates: rescaled clouds (down to |x| ~ 1e-150) rescale ε along within the range.
 constexpr double kMinEpsilon = 1e-300;
 

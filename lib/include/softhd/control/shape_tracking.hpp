@@ -1,6 +1,6 @@
 #pragma once
 /// \file shape_tracking.hpp
-/// One shape-tracking run (docs/formulation.md §4, issue 5): the floors, the optimisation of J(m)
+/// One shape-tracking run (docs/formulation.md §4): the floors, the optimisation of J(m)
 /// on the bounded optimiser, per-iteration records with stage timings, and the true shape error
 /// where the target comes from a known map T. TrackingRun (tracking_run.hpp) sets a run up
 /// around it for the CLI, Python and the benchmarks.

@@ -61,7 +61,7 @@ struct NewtonOptions {
   /// Total load steps (successful or not) allowed in one solve.
   int max_load_steps = 400;
   /// Total Newton iterations allowed in one solve (a time budget for callers such as the
-  /// optimiser; the full-turn plate of issue 4 needs about 420). Checked between load
+  /// optimiser; a plate bent by a full turn needs about 420). Checked between load
   /// steps, so a solve may overrun it by up to max_iterations.
   int max_total_iterations = 3000;
   /// Linear solves with the tangent: PCG preconditioned by a kept Cholesky factorisation,
