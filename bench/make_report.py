@@ -287,7 +287,7 @@ def section_kernel(rows):
     return "".join(s)
 
 
-# The goals of issue 13 for the goal cases of scripts/run_benchmarks.sh: (case, alpha, tau)
+# The goals for the goal cases of scripts/run_benchmarks.sh: (case, alpha, tau)
 # -> (what is compared, the goal).
 GOALS = {("asym", 4, 1e-4): ("exact/tree", 20.0),
          ("room", 4, 1e-4): ("exact/tree", 30.0),
@@ -344,11 +344,11 @@ def section_goals(path):
         cases[-1][1].append(r)
     header = ["case", "N × M", "α", "τ", "exact s", "exact timed on", "tree s", "nearest s",
               "ratio", "wall", "CPU", "err_S (sample)", "goal", "met?"]
-    return ("### The goal cases of issue 13 (value + gradient, medians of %s interleaved runs)\n\n"
+    return ("### The goal cases (value + gradient, medians of %s interleaved runs)\n\n"
             % rows[0].get("repeats", "?") +
             ("`exact timed on` sample:K means the exact sums were timed on K target points and "
-            "scaled by M/K; `room` is a synthetic indoor scan standing in for the real one of "
-            "the issue. err_S is the largest relative error of the tree's kernel sums on 500 "
+            "scaled by M/K; `room` is a synthetic indoor scan standing in for a real "
+            "room scan. err_S is the largest relative error of the tree's kernel sums on 500 "
             "sampled points, against exact sums.\n\n"
              + table(header, [goal_row(rows) for _, rows in cases]) + "\n"))
 
@@ -380,7 +380,7 @@ def section_forward(rows):
         t = num(r, "solve_seconds")
         if code not in best or t < num(best[code], "solve_seconds"):
             best[code] = r
-    text = ("## Forward solve against FEniCS (issue 12)\n\n"
+    text = ("## Forward solve against FEniCS\n\n"
             "Torsion beam, Q2 50x4x2 (13 635 dofs), uniform m = -5e5 from rest; softhd as "
             "`softhd forward` runs by default (grid sequencing: the 25x2x1 mesh solved "
             "first, then Newton with PCG on a kept Cholesky factorisation on the fine mesh; "
@@ -408,7 +408,7 @@ def section_forward(rows):
 
 def section_finger(rows, out):
     """The Gmsh finger's state solve against FEniCS (bench/bench_finger.py)."""
-    text = ("## The Gmsh finger against FEniCS (issue 30)\n\n"
+    text = ("## The Gmsh finger against FEniCS\n\n"
             "`data/scenes/finger.json`'s body (P2 on the straight-sided tetrahedra of a "
             "first-order Gmsh file, two materials, clamped base) from rest under a uniform "
             "m, softhd (`softhd forward` as it runs by default: the P1 problem on the vertices "
@@ -449,8 +449,8 @@ def section_finger(rows, out):
 
 
 def section_python(rows):
-    """The Python module against C++ and plain PyTorch (bench/bench_python.py, issue 14)."""
-    text = ("## Python module (issue 14)\n\n"
+    """The Python module against C++ and plain PyTorch (bench/bench_python.py)."""
+    text = ("## Python module\n\n"
             "`softhd.distance` against the same `softhd::hausdorff` call from C++ (exact, value "
             "+ gradient; goal: overhead <= 5 %), and `softhd.torch.HausdorffLoss` value + "
             "backward against a plain PyTorch implementation of formulation.md §2 (float64, "
@@ -473,8 +473,8 @@ def section_python(rows):
 
 
 def section_align(rows):
-    """softhd align against Open3D (bench/bench_align.py, issue 32)."""
-    text = ("## Pose of a scan: softhd align against Open3D (issue 32)\n\n"
+    """softhd align against Open3D (bench/bench_align.py)."""
+    text = ("## Pose of a scan: softhd align against Open3D\n\n"
             "The deformed finger (data/targets/finger_target.ply, 4000 of its points as the "
             "body), random cameras (softhd.synthetic), views full and half (the left "
             "half of the image), 2000 visible points, noise 0.5 % of the body's size L, 3 % "
