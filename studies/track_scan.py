@@ -169,25 +169,6 @@ def ladder_align(scene, scan, P_true, log, fractions=(0.0, 0.125, 0.25, 0.5, 1.0
     return best
 
 
-def perturbed_pose(P_true, scan, L, seed, degrees=3.0, fraction=0.02):
-    """A calibrated camera's pose: the true pose P (scan -> body) followed by a rotation of
-    `degrees` (3) about a random axis through the body's centre and a shift of `fraction` (0.02)
-    L in a random direction (numpy's default_rng(1000 + seed): the same axis and direction
-    whatever the sizes)."""
-    rng = np.random.default_rng(1000 + seed)
-    axis = rng.normal(size=3)
-    axis /= np.linalg.norm(axis)
-    shift = rng.normal(size=3)
-    shift *= fraction * L / np.linalg.norm(shift)
-    th = np.radians(degrees)
-    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    R = np.eye(3) + np.sin(th) * K + (1 - np.cos(th)) * K @ K
-    c = P_true[:3, :3] @ scan.mean(0) + P_true[:3, 3]  # the body's centre (body frame)
-    E = np.eye(4)
-    E[:3, :3], E[:3, 3] = R, c - R @ c + shift
-    return E @ P_true
-
-
 def exact_pose_run(scene, scan, areas, P_true, L, a, log):
     """The data term alone: the (cropped) scan moved by the true pose into the body's frame, a
     body-frame scene target with the camera's position there (the visible distance) and the
@@ -237,7 +218,7 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         pose, initial = ladder_align(scene, scan, P_true, log)
     elif a.start == "perturbed":  # a calibrated camera's pose: also the crop's
         deg, frac = a.perturb
-        pose = {"matrix": perturbed_pose(P_true, scan, L, a.seed, deg, frac), "status": "given",
+        pose = {"matrix": synthetic_scan.perturbed_pose(P_true, scan.mean(0), L, a.seed, deg, frac), "status": "given",
                 "overlap": float("nan")}
         off = rotation_error(pose["matrix"][:3, :3], P_true)
         log(f"joint: starting from a calibrated camera's pose: the true one rotated by {deg:g} deg "

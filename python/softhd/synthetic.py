@@ -22,6 +22,9 @@ matched_nodes(nodes, fine_rest, fine_deformed) gives the true deformed positions
 mesh's nodes from a finer mesh that contains them (the reference of a node error), and
 node_errors(...) the largest and RMS distance to them.
 
+perturbed_pose(P_true, scan_centre, L, seed, degrees, fraction) stands for a calibrated camera's
+pose: the true one off by a rotation about a random axis through the body's centre and a shift.
+
 box_surface(shape) gives the boundary triangles of a structured grid of points (a box's
 nodes in NumPy's "ij" ravel order), for bodies made without a mesh.
 
@@ -162,6 +165,25 @@ def matched_nodes(nodes, fine_rest, fine_deformed):
     if gap > 1e-6 * body_size(fine_rest):
         raise ValueError(f"matched_nodes: the fine mesh does not hold the nodes (gap {gap:g})")
     return np.asarray(fine_deformed, dtype=float)[nearest]
+
+
+def perturbed_pose(P_true, scan_centre, size, seed, degrees=3.0, fraction=0.02):
+    """What a calibrated camera gives: the true pose P_true (camera -> body, 4x4) followed by a
+    rotation of `degrees` about a random axis through the body's centre (the camera-frame point
+    `scan_centre` moved by P_true) and a shift of `fraction` x `size` in a random direction
+    (numpy's default_rng(1000 + seed): the same axis and direction whatever the sizes)."""
+    rng = np.random.default_rng(1000 + seed)
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    shift = rng.normal(size=3)
+    shift *= fraction * size / np.linalg.norm(shift)
+    th = np.radians(degrees)
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    R = np.eye(3) + np.sin(th) * K + (1 - np.cos(th)) * K @ K  # Rodrigues
+    c = P_true[:3, :3] @ np.asarray(scan_centre, dtype=float) + P_true[:3, 3]
+    E = np.eye(4)
+    E[:3, :3], E[:3, 3] = R, c - R @ c + shift
+    return E @ P_true
 
 
 def node_errors(nodes, displacements, truth):

@@ -101,6 +101,28 @@ def test_visible_points_matches_a_brute_force_ray_test(rng):
         softhd.visible_points(box, tri.astype(float), [5.0, 5.0, 5.0])
 
 
+def test_perturbed_pose_is_off_by_the_angle_and_shift_asked(rng):
+    """A calibrated camera's stand-in: the rotation from the true pose is `degrees` exactly (the
+    angle of R Rtᵀ), the body's centre moves by exactly `fraction` x size (the rotation is about
+    it), and the same seed gives the same pose whatever the sizes."""
+    from softhd import synthetic
+    A = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    P = np.eye(4)
+    P[:3, :3], P[:3, 3] = A * np.sign(np.linalg.det(A)), rng.normal(size=3)
+    centre = rng.normal(size=3)
+    Q = synthetic.perturbed_pose(P, centre, 50.0, seed=4, degrees=2.5, fraction=0.01)
+    R, Rt = Q[:3, :3], P[:3, :3]
+    assert np.allclose(R.T @ R, np.eye(3), atol=1e-12) and np.linalg.det(R) > 0
+    angle = np.degrees(np.arccos(np.clip((np.trace(R @ Rt.T) - 1) / 2, -1, 1)))
+    assert abs(angle - 2.5) < 1e-9
+    moved = np.linalg.norm(R @ centre + Q[:3, 3] - Rt @ centre - P[:3, 3])
+    assert abs(moved - 0.5) < 1e-12 * 50
+    Q2 = synthetic.perturbed_pose(P, centre, 5.0, seed=4, degrees=1.0, fraction=0.02)
+    axis = lambda M: np.array([M[2, 1] - M[1, 2], M[0, 2] - M[2, 0], M[1, 0] - M[0, 1]])
+    a1, a2 = axis(R @ Rt.T), axis(Q2[:3, :3] @ Rt.T)
+    assert np.allclose(a1 / np.linalg.norm(a1), a2 / np.linalg.norm(a2), atol=1e-9)
+
+
 def test_synthetic_view_is_a_rigidly_moved_visible_subset(rng):
     """Without noise or outliers a view is the body's points the library's ray cast shows the
     camera, moved by the inverse of the pose it returns; with them, the counts and noise level
