@@ -184,12 +184,17 @@ void report_fit(const char* name, const scan::PoseFunction& f, const scan::Pose&
   double d0, s0, d1, s1;
   error(start, &d0, &s0);
   error(r.pose, &d1, &s1);
+  // Where the scan's centroid lands in the body's frame, relative to its true place (% L).
+  const Eigen::Vector3d moved =
+      100.0 / L *
+      (scan::apply_points(r.pose.inverse(), scan_centre.transpose()).row(0).transpose() -
+       scan_centre);
   const double at_truth = f(scan::Pose(), nullptr, nullptr);
   std::printf(
       "%-22s start %.3f deg %.3f %%L -> %.4f deg %.4f %%L  rho %.8g (true pose %.8g)  %d it %d ev "
-      "%s  %.2f s\n",
+      "%s  %.2f s; the scan's centroid moved by (%+.3f, %+.3f, %+.3f) %% L\n",
       name, d0, s0, d1, s1, r.rho, at_truth, r.iterations, r.evaluations,
-      r.converged ? "converged" : "limit", seconds);
+      r.converged ? "converged" : "limit", seconds, moved[0], moved[1], moved[2]);
 }
 
 // The 6-DOF fit with cells and collocation (β = 4 and 2) from the perturbed start.
