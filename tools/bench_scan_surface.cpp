@@ -24,8 +24,8 @@
 // step 1e-3 L, 20 halvings, step tolerance 1e-10 L, 200 iterations) with cells (the body moved by
 // the pose against the scan's surface, CellForm::posed_rho) and with collocation (β = 4, align's,
 // and β = 2, the tracking run's default for scan_to_body); per quadrature the final pose's
-// rotation error in degrees and its error at the scan's centroid in % of L, ρ̃, the iterations and
-// the seconds.
+// rotation error in degrees and its error at the scan's centroid in % of L, ρ̃ there and at the
+// true pose, the iterations, the seconds, and where the scan's centroid moved (x, y, z in % L).
 //
 // --top: a one-sided view, the triangles whose outward normal has a positive z component only
 // (seen from above, without occlusion). TOL (default 1e-4): the tree's tolerance for both
