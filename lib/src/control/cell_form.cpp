@@ -154,8 +154,8 @@ CellRho CellForm::scan_rho(const Deformed& d, const Eigen::MatrixXd& scan,
                            Eigen::VectorXd* grad) const {
   CellRho r;
   OuterMeanGradient ga;
-  r.a = directed_point_mean(scan, scan_weights_, *d.j, enclosed_volume(d.surface),
-                            options_.epsilon, grad ? &ga : nullptr);
+  r.a = directed_point_mean(scan, scan_weights_, *d.j, enclosed_volume(d.surface), options_.epsilon,
+                            grad ? &ga : nullptr);
   r.rho = std::sqrt(std::sqrt(r.a.mean));
   if (!grad) return r;
   Eigen::MatrixXd points = Eigen::MatrixXd::Zero(d.x.nodes.rows(), 3);
