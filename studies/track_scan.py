@@ -9,7 +9,7 @@ the same run against the clean, complete target in the body's frame).
                  [--start align|ladder|true|exact|perturbed|fixture|ladder-fixture]
                  [--cap-stages K]
                  [--first-eps F] [--algorithm A] [--pose-method joint|projection]
-                 [--fixture-constraint]]
+                 [--fixture-constraint] [--quadrature collocation|cells]]
 
 1. The view. The finger of data/scenes/finger.json, deformed by m*(X) = -1.5 X3 on a 2x finer
    mesh (data/targets/finger_target.ply), is seen by a synthetic depth camera
@@ -283,7 +283,9 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
             j = json.load(f)
         j["mesh"]["file"] = os.path.join(ROOT, "data/meshes/finger.msh")
         j["target"] = {"kind": "cloud", "file": scan_file, "frame": "camera", "pose": pose_file,
-                       "distance": a.distance, "surface": True, "cap": cap}
+                       "distance": a.distance, "surface": True}
+        if a.cap_factor > 0:  # --cap-factor 0: no cap (quadrature cells has none)
+            j["target"]["cap"] = cap
         if a.fixture_constraint:  # the projection keeps the start's tilt and height
             j["target"]["fixture"] = {"normal": [float(x) for x in a.fixture[0]],
                                       "offset": float(a.fixture[1])}
@@ -297,7 +299,7 @@ def joint_run(scene, scan, areas, P_true, L, a, log):
         move = 1e-3 if a.hold_all or (stage == 1 and a.hold_first) else a.pose_move
         r = softhd.optimise(softhd.Scene.load(path), max_iter=a.max_iter, algorithm=a.algorithm,
                             initial=initial, eps=eps, pose_move=move, pose_method=a.pose_method,
-                            method=a.method, beta=a.beta)
+                            method=a.method, beta=a.beta, quadrature=a.quadrature)
         a.seconds += r.seconds
         P = r.pose
         centre = scan.mean(0)  # the pose's error where the body is (the camera is 3 L away)
@@ -398,6 +400,9 @@ def main():
     ap.add_argument("--beta", type=float, default=None,
                     help="the distance's beta (softhd.optimise's; default the library's: 2 "
                          "for scan_to_body and visible)")
+    ap.add_argument("--quadrature", choices=["collocation", "cells"], default=None,
+                    help="--joint: softhd.optimise's quadrature (cells: scan_to_body, no cap, "
+                         "--pose-method projection; default the library's)")
     ap.add_argument("--out", default="results/track_scan")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -462,7 +467,8 @@ def main():
     if a.joint:
         log(f"RESULT seed {a.seed} view {a.view} start {a.start} method "
             f"{a.pose_method or 'joint'}{' fixture' if a.fixture_constraint else ''} "
-            f"noise {a.noise:g} outliers {a.outliers:g} beta {a.beta or 'default'} cap "
+            f"noise {a.noise:g} outliers {a.outliers:g} beta {a.beta or 'default'} "
+            f"quadrature {a.quadrature or 'default'} cap "
             f"{a.cap_factor:g} "
             f"pose_move {a.pose_move} hold "
             f"{'all' if a.hold_all else 'first' if a.hold_first else 'none'}: node rms "

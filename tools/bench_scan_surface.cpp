@@ -8,13 +8,24 @@
 // (seeded), each weighted area / count; density f gives f² × the body's boundary nodes per area of
 // its whole boundary (the body's boundary spacing / f).
 //
-//   bench_scan_surface [--top] [--pose-bias SIGMA] SCENE [THREADS [TOL [SEED [F...]]]]
+//   bench_scan_surface [--top] [--pose-bias SIGMA | --pose-fit SIGMA] SCENE [THREADS [TOL [SEED
+//                      [F...]]]]
 //
 // --pose-bias SIGMA: instead, the pose's bias of each quadrature: the scan at the first density
 // (default 1) with Gaussian noise of SIGMA × L on every coordinate (L the body's bounding-box
 // diagonal; 0: none), rotated about the body's centroid by θ = −0.8°, −0.6°, …, 0.8° about each
 // axis; per axis ρ̃ at each θ and the minimiser of the parabola through the three lowest (the
 // true pose is θ = 0: the minimiser is the data term's bias along that rotation).
+//
+// --pose-fit SIGMA: instead, the data term's pose accuracy in all 6 degrees of freedom: the same
+// noisy scan (first density, default 1), the body started from the true pose turned by 3° about a
+// random axis through its centroid and moved by 0.02 L in a random direction (both seeded by
+// SEED), and the pose refined by the projection's inner minimisation (scan::minimise_pose, first
+// step 1e-3 L, 20 halvings, step tolerance 1e-10 L, 200 iterations) with cells (the body moved by
+// the pose against the scan's surface, CellForm::posed_rho) and with collocation (β = 4, align's,
+// and β = 2, the tracking run's default for scan_to_body); per quadrature the final pose's
+// rotation error in degrees and its error at the scan's centroid in % of L, ρ̃ there and at the
+// true pose, the iterations, the seconds, and where the scan's centroid moved (x, y, z in % L).
 //
 // --top: a one-sided view, the triangles whose outward normal has a positive z component only
 // (seen from above, without occlusion). TOL (default 1e-4): the tree's tolerance for both
@@ -40,6 +51,8 @@
 #include "softhd/error.hpp"
 #include "softhd/fe/boundary.hpp"
 #include "softhd/hausdorff.hpp"
+#include "softhd/scan/align.hpp"
+#include "softhd/scan/pose_map.hpp"
 
 using namespace softhd;
 
@@ -135,16 +148,102 @@ void pose_bias(const fe::Mesh& mesh, const Eigen::VectorXd& u, const PointCloud&
   }
 }
 
+// The start pose (body → scan frame): θ = 3° about a random axis through `centre`, then 0.02 L
+// along a random direction (seeded).
+scan::Pose perturbed_start(const Eigen::Vector3d& centre, double L, unsigned seed) {
+  std::mt19937_64 rng(seed + 2000u);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  const Eigen::Vector3d axis = Eigen::Vector3d(n01(rng), n01(rng), n01(rng)).normalized();
+  const Eigen::Vector3d dir = Eigen::Vector3d(n01(rng), n01(rng), n01(rng)).normalized();
+  scan::Pose Q;
+  Q.R = Eigen::AngleAxisd(3.0 * std::acos(-1.0) / 180.0, axis).matrix();
+  Q.t = centre - Q.R * centre + 0.02 * L * dir;
+  return Q;
+}
+
+// One fit from `start`: the pose found, its errors against the identity (the true pose) and time.
+void report_fit(const char* name, const scan::PoseFunction& f, const scan::Pose& start,
+                const Eigen::Vector3d& scan_centre, double L) {
+  scan::LocalPoseSettings st;
+  st.size = L;
+  st.max_iterations = 200;
+  st.step_tolerance = 1e-10;
+  st.first_step = 1e-3;
+  st.max_backtracks = 20;
+  const double t0 = now();
+  const scan::LocalPoseResult r = scan::minimise_pose(f, start, st);
+  const double seconds = now() - t0;
+  const auto error = [&](const scan::Pose& Q, double* deg, double* shift) {
+    *deg = scan::rotation_angle_between(Q.R, Eigen::Matrix3d::Identity()) * 180.0 / std::acos(-1.0);
+    *shift =
+        100.0 *
+        (scan::apply_points(Q.inverse(), scan_centre.transpose()).row(0).transpose() - scan_centre)
+            .norm() /
+        L;
+  };
+  double d0, s0, d1, s1;
+  error(start, &d0, &s0);
+  error(r.pose, &d1, &s1);
+  // Where the scan's centroid lands in the body's frame, relative to its true place (% L).
+  const Eigen::Vector3d moved =
+      100.0 / L *
+      (scan::apply_points(r.pose.inverse(), scan_centre.transpose()).row(0).transpose() -
+       scan_centre);
+  const double at_truth = f(scan::Pose(), nullptr, nullptr);
+  std::printf(
+      "%-22s start %.3f deg %.3f %%L -> %.4f deg %.4f %%L  rho %.8g (true pose %.8g)  %d it %d ev "
+      "%s  %.2f s; the scan's centroid moved by (%+.3f, %+.3f, %+.3f) %% L\n",
+      name, d0, s0, d1, s1, r.rho, at_truth, r.iterations, r.evaluations,
+      r.converged ? "converged" : "limit", seconds, moved[0], moved[1], moved[2]);
+}
+
+// The 6-DOF fit with cells and collocation (β = 4 and 2) from the perturbed start.
+void pose_fit(const fe::Mesh& mesh, const Eigen::VectorXd& u, const PointCloud& body,
+              const Eigen::MatrixXd& y, const Eigen::VectorXd& w, double L, unsigned seed,
+              const detail::CellDistanceOptions& c, const HausdorffOptions& h) {
+  const Eigen::RowVector3d mean = body.points().colwise().mean();
+  const scan::Pose start = perturbed_start(mean.transpose(), L, seed);
+  const Eigen::Vector3d scan_centre = y.colwise().mean().transpose();
+  double t0 = now();
+  const detail::CellForm form(mesh, y, w, c);
+  const auto deformed = form.deform(u);
+  std::printf("cells: the body's J built in %.2f s\n", now() - t0);
+  const scan::PoseFunction cells = [&](const scan::Pose& Q, Eigen::VectorXd* g,
+                                       Eigen::Vector3d* centre) {
+    const Eigen::Vector3d cq = scan::apply_points(Q, mean).row(0).transpose();
+    if (g) *centre = cq;
+    return form.posed_rho(*deformed, Q, cq, g);
+  };
+  report_fit("cells (beta 4)", cells, start, scan_centre, L);
+  DistanceForm one_sided;
+  one_sided.sides = Sides::scan_to_body;
+  for (double beta : {4.0, 2.0}) {
+    HausdorffOptions hb = h;
+    hb.params.beta = beta;
+    const HausdorffTarget target(PointCloud(y, w), hb);
+    const scan::PoseFunction coll = [&](const scan::Pose& Q, Eigen::VectorXd* g,
+                                        Eigen::Vector3d* centre) {
+      return scan::pose_distance(target, body, one_sided, Q, g, centre);
+    };
+    report_fit(beta == 4.0 ? "collocation (beta 4)" : "collocation (beta 2)", coll, start,
+               scan_centre, L);
+  }
+}
+
 int main(int argc, char** argv) {
   const bool top = argc > 1 && std::string(argv[1]) == "--top";
   if (top) --argc, ++argv;
   double bias_sigma = -1.0;  // < 0: the density table
-  if (argc > 2 && std::string(argv[1]) == "--pose-bias") {
+  bool fit = false;          // --pose-fit: the 6-DOF fit instead of the 1-D scans
+  if (argc > 2 && (std::string(argv[1]) == "--pose-bias" || std::string(argv[1]) == "--pose-fit")) {
+    fit = std::string(argv[1]) == "--pose-fit";
     bias_sigma = std::atof(argv[2]);
     argc -= 2, argv += 2;
   }
   if (argc < 2) {
-    std::fprintf(stderr, "usage: bench_scan_surface [--top] SCENE [THREADS [TOL [SEED [F...]]]]\n");
+    std::fprintf(stderr,
+                 "usage: bench_scan_surface [--top] [--pose-bias|--pose-fit SIGMA] SCENE [THREADS "
+                 "[TOL [SEED [F...]]]]\n");
     return 2;
   }
   std::setvbuf(stdout, nullptr, _IOLBF, 0);
@@ -201,7 +300,10 @@ int main(int argc, char** argv) {
       const Eigen::VectorXd w = Eigen::VectorXd::Constant(count, area / static_cast<double>(count));
       std::printf("pose bias: %ld points (density %g), noise %g L (L = %g)\n", count, f, bias_sigma,
                   L);
-      pose_bias(mesh, u, body, y, w, body.points().colwise().mean().transpose(), c, h, req);
+      if (fit)
+        pose_fit(mesh, u, body, y, w, L, seed, c, h);
+      else
+        pose_bias(mesh, u, body, y, w, body.points().colwise().mean().transpose(), c, h, req);
       return 0;
     }
     std::printf("density points  rho_cells  s_cells  rho_collocation  s_collocation\n");

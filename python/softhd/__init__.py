@@ -399,7 +399,8 @@ def optimise(scene, target=None, *, max_iter=None, max_seconds=None, rel_tol=Non
     "quadrature", else collocation): cells integrates the distance over the body's cells and the
     target's (an arc, or a cloud with "solved_on"; with the distance "scan_to_body", a cloud's
     points as a surface with their weights; any other target without cells falls back to
-    collocation, as its description says), on one level, not with algorithm "newton".
+    collocation, as its description says), on one level, not with algorithm "newton"; a cloud in
+    the camera's frame with it needs pose_method "projection".
     """
     points = vols = file = None
     if isinstance(target, (str, bytes, _os.PathLike)):

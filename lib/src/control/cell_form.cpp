@@ -8,7 +8,9 @@
 
 #include "../common/surface_bvh.hpp"
 #include "../hausdorff/body_integral.hpp"
+#include "../hausdorff/surface_mean.hpp"
 #include "softhd/error.hpp"
+#include "softhd/scan/pose_map.hpp"
 
 namespace softhd::detail {
 
@@ -129,7 +131,7 @@ CellForm::Deformed CellForm::deformed(const Eigen::VectorXd& u) const {
 /// cells against the target); ∂ρ̃/∂A^4 = 1/(8 ρ̃ √(A^4)), likewise B. The body's points get
 /// B's outer gradient and A's source bars (through the body's J, sd and |Ω_X|).
 CellRho CellForm::rho(const Deformed& d, Eigen::VectorXd* grad) const {
-  if (surface()) return scan_rho(d, grad);
+  if (surface()) return scan_rho(d, scan_points_, grad);
   CellRho r;
   OuterMeanGradient ga, gb;
   r.a = directed_outer_mean(target_, *d.j, *d.sd, enclosed_volume(d.surface), options_,
@@ -148,11 +150,12 @@ CellRho CellForm::rho(const Deformed& d, Eigen::VectorXd* grad) const {
 
 /// Against a scan's surface: ρ̃ = A = (A^4)^(1/4), ∂ρ̃/∂A^4 = 1/(4 A³); the body's points get
 /// A's source bars (through its J and |Ω_X|).
-CellRho CellForm::scan_rho(const Deformed& d, Eigen::VectorXd* grad) const {
+CellRho CellForm::scan_rho(const Deformed& d, const Eigen::MatrixXd& scan,
+                           Eigen::VectorXd* grad) const {
   CellRho r;
   OuterMeanGradient ga;
-  r.a = directed_point_mean(scan_points_, scan_weights_, *d.j, enclosed_volume(d.surface),
-                            options_.epsilon, grad ? &ga : nullptr);
+  r.a = directed_point_mean(scan, scan_weights_, *d.j, enclosed_volume(d.surface), options_.epsilon,
+                            grad ? &ga : nullptr);
   r.rho = std::sqrt(std::sqrt(r.a.mean));
   if (!grad) return r;
   Eigen::MatrixXd points = Eigen::MatrixXd::Zero(d.x.nodes.rows(), 3);
@@ -164,6 +167,41 @@ CellRho CellForm::scan_rho(const Deformed& d, Eigen::VectorXd* grad) const {
 
 CellRho CellForm::evaluate(const Eigen::VectorXd& u, Eigen::VectorXd* grad) const {
   return rho(deformed(u), grad);
+}
+
+std::shared_ptr<const CellForm::Deformed> CellForm::deform(const Eigen::VectorXd& u) const {
+  return std::make_shared<const Deformed>(deformed(u));
+}
+
+Eigen::MatrixXd CellForm::pulled(const scan::Pose& Q) const {
+  if (!surface())
+    throw InvalidArgument(
+        "pose: quadrature cells moves the body by a pose against a scan's "
+        "surface only (scan_to_body)");
+  if (!Q.rigid()) throw InvalidArgument("pose: quadrature cells needs a rigid pose (scale 1)");
+  return scan::apply_points(Q.inverse(), scan_points_);
+}
+
+double CellForm::posed_rho(const Deformed& d, const scan::Pose& Q, const Eigen::Vector3d& centre,
+                           Eigen::VectorXd* twist) const {
+  const Eigen::MatrixXd z = pulled(Q);
+  Eigen::MatrixXd g;  // ∂A^4/∂z_j
+  const OuterMean a = directed_point_mean_moving(z, scan_weights_, *d.j, enclosed_volume(d.surface),
+                                                 options_.epsilon, twist ? &g : nullptr);
+  const double rho = std::sqrt(std::sqrt(a.mean));
+  if (!twist) return rho;
+  // k_j = R ∂ρ̃/∂z_j (rows: ∂ρ̃/∂z_jᵀ Rᵀ), ∂ρ̃/∂A^4 = 1/(4 ρ̃³); the scan's points seen as moving
+  // by −k_j: PoseMap's twist gradient at δ = 0 about the centre.
+  const Eigen::MatrixXd k = (g * Q.R.transpose()) / (4.0 * rho * rho * rho);
+  *twist = scan::PoseMap(Q, centre, scan::PoseKind::rigid)
+               .twist_gradient(scan_points_, -k, Eigen::VectorXd());
+  return rho;
+}
+
+CellRho CellForm::evaluate(const Eigen::VectorXd& u, const scan::Pose& Q,
+                           Eigen::VectorXd* grad) const {
+  const Eigen::MatrixXd z = pulled(Q);
+  return scan_rho(deformed(u), z, grad);
 }
 
 CellForm::Fields CellForm::fields(const Eigen::VectorXd& u, const Eigen::MatrixXd& moving,

@@ -85,7 +85,13 @@ void check_cells_quadrature(const ShapeObjectiveOptions& o) {
         "(its points and surface weights), not over target cells");
   if (o.form.cap.c != 0.0) throw InvalidArgument("form.cap: quadrature cells has no cap (not yet)");
   if (o.camera) throw InvalidArgument("camera: quadrature cells has no camera (not yet)");
-  if (o.pose) throw InvalidArgument("pose: quadrature cells has no pose (not yet)");
+  if (o.pose && (o.form.sides != Sides::scan_to_body || o.target_cells))
+    throw InvalidArgument(
+        "pose: quadrature cells takes a pose against a scan's surface only (form.sides "
+        "scan_to_body, no target_cells)");
+  if (o.pose && o.pose_method != PoseMethod::projection)
+    throw InvalidArgument(
+        "pose.method: quadrature cells finds the pose by projection only (not joint)");
   if (o.second_order)
     throw InvalidArgument(
         "second_order: quadrature cells has no Hessian-vector product (optimiser.algorithm "
@@ -171,6 +177,24 @@ struct ShapeObjective::Impl {
                                        Eigen::Vector3d* c) {
       return scan::pose_distance(target, X, f, Q, g, c);
     };
+    return minimise(rho, iterations);
+  }
+  /// The same with quadrature cells: ρ̃ = A of the scan's points pulled into the body's frame
+  /// by Q⁻¹ against the body's J at u (built once), the twist about the centroid of Q(X(u)).
+  Eigen::VectorXd project_cells(const Eigen::VectorXd& u, int* iterations) const {
+    const std::shared_ptr<const detail::CellForm::Deformed> body = cells->deform(u);
+    const Eigen::RowVector3d mean = cloud.at(u).points().colwise().mean();
+    const scan::PoseFunction rho = [&](const scan::Pose& Q, Eigen::VectorXd* g,
+                                       Eigen::Vector3d* c) {
+      const Eigen::Vector3d centre = scan::apply_points(Q, mean).row(0).transpose();
+      if (g) *c = centre;
+      return cells->posed_rho(*body, Q, centre, g);
+    };
+    return minimise(rho, iterations);
+  }
+  /// scan::minimise_pose of `rho` from Q_{warm_twist} with the projection's settings; ξ* of the
+  /// pose found, *iterations its BFGS's.
+  Eigen::VectorXd minimise(const scan::PoseFunction& rho, int* iterations) const {
     scan::LocalPoseSettings st;
     st.max_iterations = options.pose_iterations;
     st.step_tolerance = options.pose_tolerance;
@@ -383,6 +407,7 @@ void ShapeObjective::set_pose_warm_start(const Eigen::VectorXd& xi) {
 }
 double ShapeObjective::cell_rho(const Eigen::VectorXd* u) const {
   if (!impl_->cells) throw InvalidArgument("cell_rho: the objective's quadrature is collocation");
+  if (u && impl_->pose) return impl_->cells->evaluate(*u, impl_->pose->start()).rho;  // at Q₀
   return u ? impl_->cells->evaluate(*u).rho : impl_->cells->self_rho();
 }
 std::pair<long, long> ShapeObjective::cell_counts() const {
@@ -410,13 +435,17 @@ DistanceForm ShapeObjective::distance_form(const Eigen::VectorXd& u,
 
 HausdorffResult ShapeObjective::fields(const Eigen::VectorXd& u, const Eigen::VectorXd& xi) const {
   const Eigen::VectorXd x = impl_->checked_twist(xi);
-  if (impl_->cells) {  // the continuum fields; no pose, cap or camera with cells
+  if (impl_->cells) {  // the continuum fields; no cap or camera with cells
+    // With a pose (a scan's surface) the target's points are pulled into the body's frame.
+    const Eigen::MatrixXd& y = impl_->target.cloud().points();
     const detail::CellForm::Fields f =
-        impl_->cells->fields(u, impl_->moved(u, x).points(), impl_->target.cloud().points());
+        impl_->cells->fields(u, impl_->moved(u, x).points(),
+                             impl_->pose ? scan::apply_points(impl_->pose->at(x).inverse(), y) : y);
+    const detail::CellRho rho = impl_->pose ? impl_->cells->evaluate(u, impl_->pose->at(x)) : f.rho;
     HausdorffResult r;
-    r.rho = f.rho.rho;
-    r.A = std::sqrt(std::sqrt(f.rho.a.mean));
-    r.B = std::sqrt(std::sqrt(f.rho.b.mean));
+    r.rho = rho.rho;
+    r.A = std::sqrt(std::sqrt(rho.a.mean));
+    r.B = std::sqrt(std::sqrt(rho.b.mean));
     r.field_moving = f.moving;
     r.field_target = f.target;
     if (impl_->cells->surface()) {  // a surface bounds no volume: the body's field collocated
@@ -523,7 +552,11 @@ ShapeEvaluation ShapeObjective::Impl::finish_cells(const Eigen::VectorXd& m, boo
                                                    std::chrono::steady_clock::time_point t0,
                                                    ShapeEvaluation ev) {
   Eigen::VectorXd g;
-  const detail::CellRho r = cells->evaluate(state.u, gradient ? &g : nullptr);
+  // Projection: ξ* on this state, then ρ̃ and dρ̃/du at it (the envelope theorem, §8.11).
+  if (projecting()) ev.pose_twist = project_cells(state.u, &ev.pose_iterations);
+  const detail::CellRho r =
+      projecting() ? cells->evaluate(state.u, pose->at(ev.pose_twist), gradient ? &g : nullptr)
+                   : cells->evaluate(state.u, gradient ? &g : nullptr);
   ev.seconds_distance = seconds_since(t0);
   ev.rho = r.rho;
   ev.A = std::sqrt(std::sqrt(r.a.mean));  // A = (A^4)^(1/4)

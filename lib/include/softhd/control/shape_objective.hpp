@@ -252,8 +252,9 @@ class ShapeObjective {
   void set_form(DistanceForm form);
 
   /// Quadrature cells only (else InvalidArgument): ρ̃ by the cell form of the body at the
-  /// displacement *u against the target's cells (the matched floor, u the known map), or, with
-  /// u null, of the target's cells against themselves (the self floor).
+  /// displacement *u against the target's cells (the matched floor, u the known map; with a pose
+  /// the body at the start pose, as target_frame_cloud's), or, with u null, of the target's
+  /// cells against themselves (the self floor).
   double cell_rho(const Eigen::VectorXd* u) const;
   /// Quadrature cells: the hexahedra of the body and of the target ({0, 0} with collocation;
   /// the target's 0 against a scan's surface, whose cell_rho(nullptr) is refused).
