@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """A worked example (docs/guide.md, "Worked example: your own scan"): one synthetic depth view
-of the bent finger, taken through clean-up, the pose of a calibrated camera and a camera-frame
+of the bent finger, taken through clean-up, the pose from the fixture and a camera-frame
 `optimise` to the recovered shape, with pictures.
 
     PYTHONPATH=build/python /usr/bin/python3 examples/scan_example.py [--out DIR]
         [--bend B] [--seed S] [--view full|half] [--noise F] [--outliers F]
-        [--pose calibrated|align] [--calibration DEG FRAC] [--max-iter N] [--stages K]
+        [--pose fixture|calibrated|align] [--calibration DEG FRAC] [--max-iter N] [--stages K]
         [--cap-factor F] [--clean-rms R] [--exact-rms R] [--figures DIR]
 
 (`make example-scan` builds softhd and runs it with the defaults.)
@@ -21,14 +21,19 @@ of the bent finger, taken through clean-up, the pose of a calibrated camera and 
    --plane x L of the dominant plane, default 0.03 = 6 times the noise's standard deviation:
    at 0.01 about 5 % of the table stays and pulls align off) and stray points
    (softhd.remove_statistical_outliers, k = 20, ratio 2): DIR/scan_clean.ply.
-4. The pose's start. --pose calibrated (the default): what a calibrated camera gives, here
-   the true pose rotated by DEG degrees about a random axis through the body's centre and
-   moved by FRAC L (--calibration, default 1 and 0.01): DIR/pose_calibrated.txt, given to the
-   run with its uncertainty (DEG + 0.5 degrees, FRAC + 0.005 L). --pose align: `softhd align
-   data/scenes/finger.json DIR/scan_clean.ply --distance scan_to_body` against the body at
-   rest, no uncertainty (on most views of a smooth body it lands far off: a cheap look with
-   --align-only). The points the start pose puts outside the body's box inflated by
-   --crop-margin (0.4) of its diagonal are dropped: DIR/scan_crop.ply, in the camera's frame.
+4. The pose's start. --pose fixture (the default): `softhd.align` against the body at rest
+   with the fixture, the table under the finger known in the body's frame (where the
+   synthetic view put it) and found in the scan by the clean-up, and the side of the image the
+   clamped end is seen on (a user's "the clamp is on the left"): DIR/pose_fixture.txt, and the
+   run keeps its tilt and height above the table. --pose calibrated: what a calibrated camera
+   gives, here the true pose rotated by DEG degrees about a random axis through the body's
+   centre and moved by FRAC L (--calibration, default 1 and 0.01): DIR/pose_calibrated.txt,
+   given to the run with its uncertainty (DEG + 0.5 degrees, FRAC + 0.005 L). --pose align:
+   `softhd align data/scenes/finger.json DIR/scan_clean.ply --distance scan_to_body` against
+   the body at rest alone (on most views of a smooth body it lands far off). --align-only
+   stops there and prints the start's error. The points the start pose puts outside the
+   body's box inflated by --crop-margin (0.4) of its diagonal are dropped: DIR/scan_crop.ply,
+   in the camera's frame.
 5. The control, the pose refined by projection: DIR/scene.json is the finger's scene with the
    target
        {"kind": "cloud", "file": "scan_crop.ply", "frame": "camera", "pose": POSE,
@@ -141,12 +146,14 @@ def finger_scene(path, description, target):
         f.write("\n")
 
 
-def write_scene(path, scan_file, pose_file, uncertainty, cap):
+def write_scene(path, scan_file, pose_file, uncertainty, fixture, cap):
     target = {"kind": "cloud", "file": os.path.basename(scan_file), "frame": "camera",
               "pose": os.path.relpath(pose_file, os.path.dirname(path)), "distance": "visible",
               "surface": True, "weights": "delaunay", "cap": cap}
     if uncertainty:
         target["pose_uncertainty"] = uncertainty
+    if fixture:  # the projection keeps the start's tilt and height above the table
+        target["fixture"] = {"normal": [float(x) for x in fixture[0]], "offset": float(fixture[1])}
     finger_scene(path, "examples/scan_example.py: the finger against one depth view in the "
                  "camera's frame, the pose refined by projection", target)
 
@@ -298,9 +305,10 @@ def main():
                     help="outliers as a fraction of the visible points (default 0.03)")
     ap.add_argument("--plane", type=float, default=0.03,
                     help="clean-up: the table plane's distance as a fraction of L (default 0.03)")
-    ap.add_argument("--pose", choices=["calibrated", "align"], default="calibrated",
-                    help="the pose's start: a calibrated camera's (the true pose off by "
-                         "--calibration) or align's against the body at rest")
+    ap.add_argument("--pose", choices=["fixture", "calibrated", "align"], default="fixture",
+                    help="the pose's start: align with the fixture (the table under the finger "
+                         "and the clamp's side; default), a calibrated camera's (the true pose "
+                         "off by --calibration) or align's against the body at rest alone")
     ap.add_argument("--calibration", type=float, nargs=2, default=[1.0, 0.01],
                     metavar=("DEG", "FRAC"),
                     help="--pose calibrated: the calibration's error, a rotation in degrees and "
@@ -310,7 +318,7 @@ def main():
                          "of its diagonal (default 0.4: it must cover the deformation; at 0.1 the "
                          "bent tip was cut off)")
     ap.add_argument("--align-only", action="store_true",
-                    help="--pose align: stop after align (prints its pose error)")
+                    help="stop after the start pose (prints its error)")
     ap.add_argument("--max-iter", type=int, default=40, help="iterations per stage (default 40)")
     ap.add_argument("--stages", type=int, default=1,
                     help="optimise runs, each from the last one's control and pose, the cap "
@@ -357,6 +365,7 @@ def main():
         f"body, {info['table']} on the table, {info['outliers']} outliers): {out}/scan.ply")
 
     # 3. Clean-up in the camera's frame.
+    table = softhd.find_dominant_plane(scan, distance=a.plane * L)  # for the fixture
     off_plane = softhd.remove_dominant_plane(scan, distance=a.plane * L)
     inliers = off_plane[softhd.remove_statistical_outliers(scan[off_plane], k=20, ratio=2.0)]
     clean = scan[inliers]
@@ -367,8 +376,24 @@ def main():
 
     # 4. The pose's start, then the crop with it.
     centre = clean.mean(0)
-    uncertainty = None
-    if a.pose == "calibrated":
+    uncertainty, fixture = None, None
+    if a.pose == "fixture":
+        # What the user knows of the bench: the table in the body's frame (here where the
+        # synthetic view put it) and on which side of the image the clamped end is seen.
+        fixture = synthetic.table_plane(fine_deformed)
+        seen = P_true[:3, :3].T @ np.array([-1.0, 0.0, 0.0])  # the base (x = 0) from the centre
+        k = int(np.argmax(np.abs(seen[:2])))
+        hint = np.zeros(3)
+        hint[k] = np.sign(seen[k])
+        fit = softhd.align(rest, clean, distance="scan_to_body", fixture=fixture, table=table,
+                           clamp=(np.array([-1.0, 0.0, 0.0]), hint))
+        P0, start_label = np.array(fit["matrix"]), "fixture"
+        pose_file = os.path.join(out, "pose_fixture.txt")
+        np.savetxt(pose_file, P0, fmt="%.17g")
+        log(f"align with the fixture (the table {fixture[0].tolist()}, offset {fixture[1]:.4g}; "
+            f"the clamp seen towards {hint.tolist()}): {fit['status']}, overlap "
+            f"{fit['overlap']:.3f}")
+    elif a.pose == "calibrated":
         deg_c, frac_c = a.calibration
         P0 = synthetic.perturbed_pose(P_true, centre, L, a.seed, deg_c, frac_c)
         pose_file = os.path.join(out, "pose_calibrated.txt")
@@ -406,7 +431,7 @@ def main():
         if k > 1:  # the last stage's pose (the uncertainty's bound is then about it)
             pose_k = os.path.join(out, f"pose_{k - 1}.txt")
             np.savetxt(pose_k, P, fmt="%.17g")
-        write_scene(path, crop_file, pose_k, uncertainty, cap)
+        write_scene(path, crop_file, pose_k, uncertainty, fixture, cap)
         return path, True
 
     r, rho, poses, stage_rms = staged_runs(a, camera_scene, crop, P0, rest, truth, log, "scan")
