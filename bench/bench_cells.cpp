@@ -1,7 +1,8 @@
 // What `make bench` reports in its quadrature section ("cells"): the distance integrated over cells
 // against the paper's collocation (docs/formulation.md §2.8; ε = 1e-3, α = β = 4, γ = 2).
 //
-//   bench_cells [--quick] [--threads T] [--repeats R (default 1)] --csv FILE
+//   bench_cells [--quick] [--threads T] [--repeats R (default 1)] [--section cube|plate|loop]
+//               --csv FILE
 //
 // One CSV row per measurement (section, case, pair, quadrature, rho, reference, seconds,
 // points):
@@ -17,6 +18,7 @@
 //          of the distance in one objective evaluation, value alone and value with gradient, with
 //          each quadrature (the tree at the loop's τ = 1e-2), interleaved, the median of R.
 // --quick: the cube at 4 × 4 against itself and the smaller cube, nothing else (a smoke run).
+// --section: that section alone (default: all three).
 // The loop's body: 4 000 hexahedra (Q2 50 × 5 × 2 split in 8); the arc target: 32 000 (the
 // scene's) or 4 000.
 
@@ -57,7 +59,7 @@ class Timer {
 struct Settings {
   bool quick = false;
   int threads = 0, repeats = 1;
-  std::string csv;
+  std::string csv, section;  // section: empty for all
 };
 
 class Csv {
@@ -236,12 +238,16 @@ Settings parse(int argc, char** argv) {
       s.repeats = std::stoi(value("--repeats"));
     else if (a == "--csv")
       s.csv = value("--csv");
+    else if (a == "--section")
+      s.section = value("--section");
     else
       throw InvalidArgument("unknown flag " + a);
   }
   if (s.csv.empty()) throw InvalidArgument("--csv: required");
   if (s.repeats < 1) throw InvalidArgument("--repeats: must be >= 1");
   if (s.quick) s.repeats = 1;
+  if (!s.section.empty() && s.section != "cube" && s.section != "plate" && s.section != "loop")
+    throw InvalidArgument("--section: cube, plate or loop (not " + s.section + ")");
   return s;
 }
 
@@ -251,10 +257,11 @@ int main(int argc, char** argv) {
   try {
     const Settings s = parse(argc, argv);
     Csv csv(s.csv);
-    cube_section(csv, s);
+    auto run = [&](const char* name) { return s.section.empty() || s.section == name; };
+    if (run("cube")) cube_section(csv, s);
     if (s.quick) return 0;
-    plate_section(csv, s);
-    loop_section(csv, s);
+    if (run("plate")) plate_section(csv, s);
+    if (run("loop")) loop_section(csv, s);
   } catch (const InvalidArgument& e) {
     std::fprintf(stderr, "bench_cells: %s\n", e.what());
     return 2;

@@ -211,6 +211,8 @@ static void set_option(detail::CellDistanceOptions* o, const std::string& key, d
     o->j_angle_points = static_cast<int>(v);
   else if (key == "ns")
     o->node_samples = v != 0.0;
+  else if (key == "cf")
+    o->corner_factor = v;
   else {
     std::fprintf(stderr, "rules: unknown key %s\n", key.c_str());
     std::exit(2);
@@ -218,7 +220,7 @@ static void set_option(detail::CellDistanceOptions* o, const std::string& key, d
 }
 
 // bench_cell_distance THREADS rules CONFIG...: each CONFIG "key=v,key=v" (keys: tp d0 q pp near t0
-// tpp tol nr ap ns; "-" the defaults), interleaved per case: ρ̃, its error against the continuum
+// tpp tol nr ap ns cf; "-" the defaults), interleaved per case: ρ̃, its error against the continuum
 // (cubes, the flat plate) or its difference from the first configuration (the arcs), seconds
 // and near points.
 static int rules(int threads, int argc, char** argv) {

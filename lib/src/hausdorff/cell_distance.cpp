@@ -106,6 +106,7 @@ void CellDistanceOptions::validate() const {
     bad("tangential_panel_points (1 to 64)");
   if (refine_crossed < 0 || refine_crossed > 4) bad("refine_crossed (0 to 4)");
   if (!(near_factor >= 0.0) || !std::isfinite(near_factor)) bad("near_factor (>= 0)");
+  if (!(corner_factor >= 0.0) || !std::isfinite(corner_factor)) bad("corner_factor (>= 0)");
   if (!(tolerance >= 0.0 && tolerance < 1.0)) bad("tolerance (0 to 1)");
   if (!(j_near_ratio >= 1.0) || !std::isfinite(j_near_ratio)) bad("j_near_ratio (>= 1)");
   if (j_angle_points < 2 || j_angle_points > 64) bad("j_angle_points (2 to 64)");
@@ -287,30 +288,53 @@ void corner_samples(const std::vector<Cell>& cells, const Source& src, const Cel
     }
 }
 
+// ∫_cell d̃^4 by the corner rule: Σ_i (det J(ξ_i)/3) F(J(x_i)) + (16 det J(0)/3) F(J(x(0))),
+// j_corner[i] = J at corner i, j_centre at the centre.
+double corner_cell(const Cell& cell, const double j_corner[8], double j_centre, double volume,
+                   double eps) {
+  double w[9], sum = 0.0;
+  cell_rule::corner_rule_weights(cell, w);
+  for (int i = 0; i < 8; ++i) sum += w[i] * field4(j_corner[i], volume, eps);
+  return sum + w[8] * field4(j_centre, volume, eps);
+}
+
 // Σ over the cells of ∫_cell d̃^4 (the rule of the header); the near cells the surface crosses
 // are split into 8 children with samples of their own while level < refine_crossed.
-double sum_cells(const std::vector<Cell>& cells, const Source& src, const Rule& rule,
-                 const CellDistanceOptions& o, int level, OuterMean* out) {
+double sum_cells(const std::vector<Cell>& cells, const HexCells* body, const Source& src,
+                 const Rule& rule, const CellDistanceOptions& o, int level, OuterMean* out) {
   const std::size_t n = cells.size();
   Eigen::MatrixXd samples;  // every cell's 2×2×2 Gauss points, weights det J
   Eigen::VectorXd weight;
   cell_rule::cell_samples(cells, &samples, &weight);
-  Eigen::VectorXd j_s(samples.rows());
   const int threads = resolve_threads(o.threads);
+  const bool corners = level == 0 && !o.node_samples;  // the mesh's node ids: level 0 only
+  const std::vector<cell_rule::CellKind> kind =
+      cell_rule::cell_kinds(cells, src.sd, o.near_factor, corners ? o.corner_factor : 0.0, threads);
+  const cell_rule::JPoints jp = cell_rule::j_points(cells, kind, samples, corners ? body : nullptr);
+  Eigen::VectorXd j_all(samples.rows());  // J at the rows of jp (8 per cell with node_samples)
   const std::vector<SignedDistance> sd_s = src.sd.at_rows(samples, threads);
   if (o.node_samples)
-    corner_samples(cells, src, o, sd_s, &j_s);
+    corner_samples(cells, src, o, sd_s, &j_all);
   else
-    src.j.evaluate(samples, &j_s);
+    src.j.evaluate(jp.points, &j_all);
   std::vector<double> part(n, 0.0);
-  std::vector<long> near(n, 0), points(n, 0);
+  std::vector<long> near(n, 0), points(n, 0), corner(n, 0);
   std::vector<char> split(n, 0);
 #pragma omp parallel for schedule(dynamic, 4) num_threads(threads)
   for (std::size_t c = 0; c < n; ++c) {
     const Cell& cell = cells[c];
-    if (!cell_rule::is_near(cell, src.sd, o.near_factor)) {
+    const double* j_s = &j_all[jp.first[c]];  // the cell's J: 8 samples, or its centre
+    if (kind[c] == cell_rule::CellKind::kCorner) {
+      corner[c] = 1;
+      double j_corner[8];
+      for (int i = 0; i < 8; ++i)
+        j_corner[i] = j_all[jp.node_row[body->cells(static_cast<Eigen::Index>(c), i)]];
+      part[c] = corner_cell(cell, j_corner, j_s[0], rule.volume, o.epsilon);
+      continue;
+    }
+    if (kind[c] == cell_rule::CellKind::kFar) {
       for (int q = 0; q < 8; ++q)
-        part[c] += weight[8 * c + q] * field4(j_s[8 * c + q], rule.volume, o.epsilon);
+        part[c] += weight[8 * c + q] * field4(j_s[q], rule.volume, o.epsilon);
       continue;
     }
     if (level < o.refine_crossed && crossed(cell, src.sd, sd_s, 8 * c)) {
@@ -320,8 +344,8 @@ double sum_cells(const std::vector<Cell>& cells, const Source& src, const Rule& 
     double f[8], gd[8];  // f_s = log(J_s / P_ε(sd_s)), g_s = J_s − P_ε(sd_s)
     for (int q = 0; q < 8; ++q) {
       const double p = halfspace_profile(sd_s[8 * c + q].sd, o.epsilon);
-      f[q] = std::log(j_s[8 * c + q] / p);
-      gd[q] = j_s[8 * c + q] - p;
+      f[q] = std::log(j_s[q] / p);
+      gd[q] = j_s[q] - p;
     }
     near[c] = 1;
     part[c] = near_cell(cell, f, gd, src.sd, rule, &points[c]);
@@ -332,10 +356,11 @@ double sum_cells(const std::vector<Cell>& cells, const Source& src, const Rule& 
     sum += part[c];
     out->near_cells += near[c];
     out->near_points += points[c];
+    out->corner_cells += corner[c];
     if (split[c]) split_cell(cells[c], &children);
   }
   if (level == 0) out->volume = weight.sum();
-  if (!children.empty()) sum += sum_cells(children, src, rule, o, level + 1, out);
+  if (!children.empty()) sum += sum_cells(children, nullptr, src, rule, o, level + 1, out);
   return sum;
 }
 
@@ -354,7 +379,7 @@ OuterMean directed_outer_mean(const HexCells& outer, const BodyIntegral& source_
   for (Eigen::Index c = 0; c < outer.cells.rows(); ++c)
     cells.push_back(cell_rule::cell_of(outer, c));
   OuterMean out;
-  const double sum = sum_cells(cells, Source{source_j, source_sd}, rule, options, 0, &out);
+  const double sum = sum_cells(cells, &outer, Source{source_j, source_sd}, rule, options, 0, &out);
   out.mean = sum / out.volume;
   return out;
 }

@@ -11,8 +11,9 @@
 // signed distance to them (SurfaceDistance), |Ω_X| by the divergence theorem on them.
 //
 // Per outer cell (trilinear hexahedron): J at its 2×2×2 Gauss points (the samples s), and the
-// factor f_s = log(J_s / P_ε(sd_s)), P_ε the half-space profile. A cell with |sd| at its centre
-// above its diameter: the 2×2×2 Gauss rule (weights w_q det J) with J_s. Otherwise
+// factor f_s = log(J_s / P_ε(sd_s)), P_ε the half-space profile. A cell far from the surface
+// (CellDistanceOptions::near_factor): the 2×2×2 Gauss rule (weights w_q det J) with J_s, or
+// farther (corner_factor) a rule of the same degree with J at its corners and centre. Otherwise
 // J(y) = P_ε(sd(y)) · exp(f(y)), f trilinear in reference coordinates through the 8 samples
 // (extrapolated beyond them), sd exact at every point; tensor Gauss in the two reference axes
 // least aligned with sd's change over the cell (graded too where the cell's centre line along
@@ -73,6 +74,14 @@ struct CellDistanceOptions {
   /// corners, and far cells' J = P_ε(sd) exp(f) at their Gauss points (about 1/8 of the J
   /// evaluations on a structured mesh; measures what shared samples cost in accuracy).
   bool node_samples = false;
+  /// A far cell farther from the source's surface — sd of one sign at its centre and corners,
+  /// the smallest |sd| among them ≥ corner_factor × the cell's extent along ∇sd there — takes
+  /// the corner rule instead of the 2×2×2 Gauss rule: J at its corners (the mesh's nodes,
+  /// shared with its neighbours) and its centre, weights det J/3 and 16 det J(0)/3, of degree
+  /// 3 like the Gauss rule (about 2 evaluations of J per cell instead of 8; its error measured
+  /// in docs/formulation.md §2.8). 0: never. ≥ 0; ignored with node_samples and by the
+  /// children of refine_crossed.
+  double corner_factor = 1.0;
   /// Near cells whose corners and samples lie on both sides of the surface are split into 8
   /// children with samples of their own, this many times (0 to 4).
   int refine_crossed = 0;
@@ -101,10 +110,11 @@ Eigen::MatrixXd enclosed_volume_gradient(const TriangleSurface& surface);
 
 /// The directed mean and what it cost.
 struct OuterMean {
-  double mean = 0.0;     ///< (1/|Ω_Y|) ∫_Ω_Y d̃_X^4
-  double volume = 0.0;   ///< |Ω_Y| (the 2×2×2 rule, exact for trilinear cells)
-  long near_cells = 0;   ///< cells integrated by the graded rule
-  long near_points = 0;  ///< their quadrature points (one signed distance each)
+  double mean = 0.0;      ///< (1/|Ω_Y|) ∫_Ω_Y d̃_X^4
+  double volume = 0.0;    ///< |Ω_Y| (the 2×2×2 rule, exact for trilinear cells)
+  long near_cells = 0;    ///< cells integrated by the graded rule
+  long near_points = 0;   ///< their quadrature points (one signed distance each)
+  long corner_cells = 0;  ///< far cells integrated by the corner rule (corner_factor)
 };
 
 /// The directed mean's gradient with respect to what it depends on.

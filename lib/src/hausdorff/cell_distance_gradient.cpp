@@ -298,10 +298,11 @@ double near_cell_adjoint(const Cell& c, const double f[8], const SurfaceDistance
 // added later from jbar, sdbar, detbar), the samples' J, sd and det J, |Ω_X|'s, the source's.
 struct CellPart {
   double value = 0.0, volume = 0.0;
-  bool near = false;
+  bool near = false, corner = false;
   long points = 0;
   double p[8][3] = {};
-  double jbar[8] = {}, sdbar[8] = {}, detbar[8] = {};
+  double jbar[8] = {}, sdbar[8] = {}, detbar[8] = {};  // a corner cell's: at its corners
+  double jbar_centre = 0.0, detbar_centre = 0.0;       // a corner cell's centre
   SparseBars source;
 };
 
@@ -314,6 +315,27 @@ void far_part(const double* det, const double* j_s, double volume, double eps, C
     out->detbar[q] = F.f;
     out->volume += det[q] * F.dv;
   }
+}
+
+// A corner cell: S_c = Σ_i w_i F(J_i) + w_c F(J_c), w_i = det J(ξ_i)/3, w_c = 16 det J(0)/3 ⇒
+// J̄_i = w_i F′(J_i), det̄(ξ_i) = F(J_i)/3, J̄_c = w_c F′(J_c), det̄(0) = 16 F(J_c)/3.
+void corner_part(const Cell& cell, const double j_corner[8], double j_centre, double volume,
+                 double eps, CellPart* out) {
+  double w[9];
+  corner_rule_weights(cell, w);
+  out->corner = true;
+  for (int i = 0; i < 8; ++i) {
+    const Field4 F = field4_rates(j_corner[i], volume, eps);
+    out->value += w[i] * F.f;
+    out->jbar[i] = w[i] * F.dj;
+    out->detbar[i] = F.f / 3.0;
+    out->volume += w[i] * F.dv;
+  }
+  const Field4 F = field4_rates(j_centre, volume, eps);
+  out->value += w[8] * F.f;
+  out->jbar_centre = w[8] * F.dj;
+  out->detbar_centre = 16.0 * F.f / 3.0;
+  out->volume += w[8] * F.dv;
 }
 
 // A near cell: the graded rule with f_s = log(J_s/P_ε(sd_s)) ⇒ J̄_s = f̄_s/J_s,
@@ -338,8 +360,9 @@ void near_part(const Cell& cell, const double* j_s, const SignedDistance* sd_s,
 }
 
 // Every cell's part (OpenMP over the cells, each cell's own).
-std::vector<CellPart> cell_parts(const std::vector<Cell>& cells, const Eigen::VectorXd& weight,
-                                 const Eigen::VectorXd& j_s,
+std::vector<CellPart> cell_parts(const std::vector<Cell>& cells, const HexCells& outer,
+                                 const std::vector<CellKind>& kind, const JPoints& jp,
+                                 const Eigen::VectorXd& weight, const Eigen::VectorXd& j_all,
                                  const std::vector<SignedDistance>& sd_s, const SurfaceDistance& s,
                                  const Rule& rule, const CellDistanceOptions& o) {
   std::vector<CellPart> parts(cells.size());
@@ -349,35 +372,57 @@ std::vector<CellPart> cell_parts(const std::vector<Cell>& cells, const Eigen::Ve
     SourceBar source(s.surface().points.rows());
 #pragma omp for schedule(dynamic, 4)
     for (std::size_t c = 0; c < cells.size(); ++c) {
-      if (!is_near(cells[c], s, o.near_factor))
-        far_part(&weight[8 * c], &j_s[8 * c], rule.volume, o.epsilon, &parts[c]);
-      else
-        near_part(cells[c], &j_s[8 * c], &sd_s[8 * c], s, rule, &source, &parts[c]);
+      const double* j_s = &j_all[jp.first[c]];
+      if (kind[c] == CellKind::kCorner) {
+        double j_corner[8];
+        for (int i = 0; i < 8; ++i)
+          j_corner[i] = j_all[jp.node_row[outer.cells(static_cast<Eigen::Index>(c), i)]];
+        corner_part(cells[c], j_corner, j_s[0], rule.volume, o.epsilon, &parts[c]);
+      } else if (kind[c] == CellKind::kFar) {
+        far_part(&weight[8 * c], j_s, rule.volume, o.epsilon, &parts[c]);
+      } else {
+        near_part(cells[c], j_s, &sd_s[8 * c], s, rule, &source, &parts[c]);
+      }
     }
   }
   return parts;
 }
 
 // The samples' bars into the corners, y_s = x(ξ_s): ȳ_s = J̄_s ∂J/∂y + s̄d_s n̂_s, and det J_s's
-// (det̄_s into ∂S; 1 into ∂|Ω_Y|). Adds to the outer nodes' ∂S (ds) and ∂|Ω_Y| (dv).
+// (det̄_s into ∂S; 1 into ∂|Ω_Y|); a corner cell's J̄ ∂J/∂y and det̄ at its corners and centre.
+// Adds to the outer nodes' ∂S (ds) and ∂|Ω_Y| (dv).
 void samples_adjoint(const HexCells& outer, const std::vector<Cell>& cells,
-                     const std::vector<CellPart>& parts, const Eigen::MatrixXd& dj,
-                     const std::vector<SignedDistance>& sd_s, Eigen::MatrixXd* ds,
-                     Eigen::MatrixXd* dv) {
+                     const std::vector<CellPart>& parts, const JPoints& jp,
+                     const Eigen::MatrixXd& dj, const std::vector<SignedDistance>& sd_s,
+                     Eigen::MatrixXd* ds, Eigen::MatrixXd* dv) {
   for (std::size_t c = 0; c < cells.size(); ++c) {
     const CellPart& part = parts[c];
     double ps[8][3], pv[8][3] = {};
     for (int i = 0; i < 8; ++i)
       for (int d = 0; d < 3; ++d) ps[i][d] = part.p[i][d];
+    if (part.corner) {
+      for (int i = 0; i < 9; ++i) {  // the corners ξ_i, then the centre
+        const Eigen::Index row =
+            i < 8 ? jp.node_row[outer.cells(static_cast<Eigen::Index>(c), i)] : jp.first[c];
+        const double jb = i < 8 ? part.jbar[i] : part.jbar_centre;
+        double xi[3] = {0.0, 0.0, 0.0}, ybar[3];
+        if (i < 8)
+          for (int k = 0; k < 3; ++k) xi[k] = kSign[i][k];
+        for (int d = 0; d < 3; ++d) ybar[d] = jb * dj(row, d);
+        map_adjoint(cells[c], xi, ybar, i < 8 ? part.detbar[i] : part.detbar_centre, ps, nullptr);
+      }
+    }
     for (int q = 0; q < 8; ++q) {
-      double xi[3], ybar[3];
+      double xi[3];
       sample_xi(q, xi);
-      const Eigen::Index r = static_cast<Eigen::Index>(8 * c + q);
-      for (int d = 0; d < 3; ++d)
-        ybar[d] = part.jbar[q] * dj(r, d) + part.sdbar[q] * sd_s[r].gradient[d];
-      map_adjoint(cells[c], xi, ybar, part.detbar[q], ps, nullptr);
       const double none[3] = {0.0, 0.0, 0.0};
       map_adjoint(cells[c], xi, none, 1.0, pv, nullptr);
+      if (part.corner) continue;
+      double ybar[3];
+      const Eigen::Index r = static_cast<Eigen::Index>(8 * c + q);
+      for (int d = 0; d < 3; ++d)
+        ybar[d] = part.jbar[q] * dj(jp.first[c] + q, d) + part.sdbar[q] * sd_s[r].gradient[d];
+      map_adjoint(cells[c], xi, ybar, part.detbar[q], ps, nullptr);
     }
     for (int i = 0; i < 8; ++i) {
       const int node = outer.cells(static_cast<Eigen::Index>(c), i);
@@ -407,16 +452,19 @@ OuterMean outer_mean_with_gradient(const HexCells& outer, const BodyIntegral& so
   std::vector<Cell> cells;
   for (Eigen::Index c = 0; c < outer.cells.rows(); ++c) cells.push_back(cell_of(outer, c));
   Eigen::MatrixXd samples, dj;
-  Eigen::VectorXd weight, j_s;
+  Eigen::VectorXd weight, j_all;
   cell_samples(cells, &samples, &weight);
-  source_j.evaluate(samples, &j_s, &dj);
-  const std::vector<SignedDistance> sd_s =
-      source_sd.at_rows(samples, resolve_threads(options.threads));
+  const int threads = resolve_threads(options.threads);
+  const std::vector<CellKind> kind =
+      cell_kinds(cells, source_sd, options.near_factor, options.corner_factor, threads);
+  const JPoints jp = j_points(cells, kind, samples, &outer);
+  source_j.evaluate(jp.points, &j_all, &dj);
+  const std::vector<SignedDistance> sd_s = source_sd.at_rows(samples, threads);
   const std::vector<CellPart> parts =
-      cell_parts(cells, weight, j_s, sd_s, source_sd, rule, options);
+      cell_parts(cells, outer, kind, jp, weight, j_all, sd_s, source_sd, rule, options);
   OuterMean out;
   double sum = 0.0, dvolume = 0.0;  // S, ∂S/∂|Ω_X|
-  Eigen::VectorXd jbar(samples.rows()), sdbar(samples.rows());
+  Eigen::VectorXd jbar = Eigen::VectorXd::Zero(jp.points.rows()), sdbar(samples.rows());
   Eigen::MatrixXd dsource = Eigen::MatrixXd::Zero(source_sd.surface().points.rows(), 3);
   for (std::size_t c = 0; c < parts.size(); ++c) {
     const CellPart& p = parts[c];
@@ -424,15 +472,23 @@ OuterMean outer_mean_with_gradient(const HexCells& outer, const BodyIntegral& so
     dvolume += p.volume;
     out.near_cells += p.near;
     out.near_points += p.points;
-    for (int q = 0; q < 8; ++q) jbar[8 * c + q] = p.jbar[q], sdbar[8 * c + q] = p.sdbar[q];
+    out.corner_cells += p.corner;
+    for (int q = 0; q < 8; ++q) sdbar[8 * c + q] = p.sdbar[q];
+    if (p.corner) {  // the corners' rows are shared with the neighbours: summed
+      for (int i = 0; i < 8; ++i)
+        jbar[jp.node_row[outer.cells(static_cast<Eigen::Index>(c), i)]] += p.jbar[i];
+      jbar[jp.first[c]] = p.jbar_centre;
+    } else {
+      for (int q = 0; q < 8; ++q) jbar[jp.first[c] + q] = p.jbar[q];
+    }
     for (const auto& [a, v] : p.source) dsource.row(a) += v.transpose();
   }
   out.volume = weight.sum();
   out.mean = sum / out.volume;
   // ∂J_s/∂(source points) and ∂sd_s/∂(source points), weighted by the samples' bars
-  dsource += source_j.surface_vjp(samples, jbar) + source_sd.pullback(sd_s, sdbar);
+  dsource += source_j.surface_vjp(jp.points, jbar) + source_sd.pullback(sd_s, sdbar);
   Eigen::MatrixXd ds = Eigen::MatrixXd::Zero(outer.nodes.rows(), 3), dv = ds;
-  samples_adjoint(outer, cells, parts, dj, sd_s, &ds, &dv);
+  samples_adjoint(outer, cells, parts, jp, dj, sd_s, &ds, &dv);
   // mean = S/|Ω_Y|: ∂mean = ∂S/|Ω_Y| − S ∂|Ω_Y|/|Ω_Y|²
   grad->outer = (ds - out.mean * dv) / out.volume;
   grad->source = dsource / out.volume;

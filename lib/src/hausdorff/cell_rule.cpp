@@ -183,7 +183,8 @@ void cell_samples(const std::vector<Cell>& cells, Eigen::MatrixXd* samples,
     }
 }
 
-bool is_near(const Cell& cell, const SurfaceDistance& s, double near_factor) {
+CellKind cell_kind(const Cell& cell, const SurfaceDistance& s, double near_factor,
+                   double corner_factor) {
   // sd at the centre and the corners: a sign change, or the smallest |sd| against the cell's
   // extent along ∇sd there (the direction in which the integrand varies on the scale |sd|)
   const double zero[3] = {0, 0, 0};
@@ -197,14 +198,79 @@ bool is_near(const Cell& cell, const SurfaceDistance& s, double near_factor) {
     above = above || q.sd > 0.0;
     if (std::abs(q.sd) < std::abs(nearest.sd)) nearest = q;
   }
-  if (below && above) return true;
+  if (below && above) return CellKind::kNear;
   double lo = 1e300, hi = -1e300;  // the corners' extent along n̂ = ∇sd
   for (int i = 0; i < 8; ++i) {
     const double t = nearest.gradient[0] * cell.p[i][0] + nearest.gradient[1] * cell.p[i][1] +
                      nearest.gradient[2] * cell.p[i][2];
     lo = std::min(lo, t), hi = std::max(hi, t);
   }
-  return std::abs(nearest.sd) <= near_factor * (hi - lo);
+  if (std::abs(nearest.sd) <= near_factor * (hi - lo)) return CellKind::kNear;
+  if (corner_factor > 0.0 && std::abs(nearest.sd) >= corner_factor * (hi - lo))
+    return CellKind::kCorner;
+  return CellKind::kFar;
+}
+
+bool is_near(const Cell& cell, const SurfaceDistance& s, double near_factor) {
+  return cell_kind(cell, s, near_factor, 0.0) == CellKind::kNear;
+}
+
+std::vector<CellKind> cell_kinds(const std::vector<Cell>& cells, const SurfaceDistance& s,
+                                 double near_factor, double corner_factor, int threads) {
+  std::vector<CellKind> kind(cells.size());
+#pragma omp parallel for schedule(dynamic, 16) num_threads(threads)
+  for (std::size_t c = 0; c < cells.size(); ++c)
+    kind[c] = cell_kind(cells[c], s, near_factor, corner_factor);
+  return kind;
+}
+
+void corner_rule_weights(const Cell& c, double w[9]) {
+  for (int i = 0; i < 8; ++i) {
+    const double xi[3] = {double(kSign[i][0]), double(kSign[i][1]), double(kSign[i][2])};
+    double x[3];
+    map_point(c, xi, x, &w[i]);
+    w[i] /= 3.0;
+  }
+  const double zero[3] = {0, 0, 0};
+  double x[3];
+  map_point(c, zero, x, &w[8]);
+  w[8] *= 16.0 / 3.0;
+}
+
+JPoints j_points(const std::vector<Cell>& cells, const std::vector<CellKind>& kind,
+                 const Eigen::MatrixXd& samples, const HexCells* body) {
+  JPoints out;
+  out.first.resize(cells.size());
+  Eigen::Index rows = 0;
+  if (body) {
+    out.node_row.assign(static_cast<std::size_t>(body->nodes.rows()), -1);
+    for (std::size_t c = 0; c < cells.size(); ++c)
+      if (kind[c] == CellKind::kCorner)
+        for (int i = 0; i < 8; ++i) {
+          Eigen::Index& r = out.node_row[body->cells(static_cast<Eigen::Index>(c), i)];
+          if (r < 0) r = 0;  // marked; numbered in node order below (nearby rows together)
+        }
+    for (Eigen::Index& r : out.node_row)
+      if (r >= 0) r = rows++;
+  }
+  for (std::size_t c = 0; c < cells.size(); ++c)
+    out.first[c] = rows, rows += kind[c] == CellKind::kCorner ? 1 : 8;
+  out.points.resize(rows, 3);
+  for (std::size_t v = 0; v < out.node_row.size(); ++v)
+    if (out.node_row[v] >= 0)
+      out.points.row(out.node_row[v]) = body->nodes.row(static_cast<Eigen::Index>(v));
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    if (kind[c] != CellKind::kCorner) {
+      out.points.middleRows(out.first[c], 8) =
+          samples.middleRows(static_cast<Eigen::Index>(8 * c), 8);
+      continue;
+    }
+    const double zero[3] = {0, 0, 0};
+    double x[3];
+    map_point(cells[c], zero, x, nullptr);
+    out.points.row(out.first[c]) << x[0], x[1], x[2];
+  }
+  return out;
 }
 
 double halfspace_slope(double sd, double epsilon) {

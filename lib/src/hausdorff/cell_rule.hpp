@@ -181,6 +181,35 @@ void sample_xi(int q, double xi[3]);
 // smallest |sd| among them is ≤ near_factor × the cell's extent along ∇sd at that point.
 bool is_near(const Cell& c, const SurfaceDistance& s, double near_factor);
 
+// The outer rule a cell takes: the graded rule (near), the 2×2×2 rule with J at its Gauss
+// points (far), or, farther from the surface (sd of one sign at its centre and corners, the
+// smallest |sd| among them ≥ corner_factor × the cell's extent along ∇sd there; corner_factor
+// ≤ 0: never), the corner rule: J at its corners (the mesh's nodes, shared with its
+// neighbours) and its centre,
+//
+//     ∫_cell F dx ≈ Σ_i (1/3) det J(ξ_i) F(x_i) + (16/3) det J(0) F(x(0))   (ξ_i = ±1, ±1, ±1),
+//
+// of degree 3 in ξ like the 2×2×2 Gauss rule (corner_rule_weights).
+enum class CellKind { kFar, kNear, kCorner };
+CellKind cell_kind(const Cell& c, const SurfaceDistance& s, double near_factor,
+                   double corner_factor);
+// Every cell's kind (OpenMP over the cells).
+std::vector<CellKind> cell_kinds(const std::vector<Cell>& cells, const SurfaceDistance& s,
+                                 double near_factor, double corner_factor, int threads);
+// The corner rule's weights: w[i] = det J(ξ_i)/3 at corner i, w[8] = 16 det J(0)/3.
+void corner_rule_weights(const Cell& c, double w[9]);
+
+// The points J is evaluated at: the nodes the corner cells use (rows node_row[v], −1 for the
+// others), then per cell its 2×2×2 Gauss points (rows first[c] + q, q = i + 2j + 4k), or its
+// centre alone (row first[c]) for a corner cell.
+struct JPoints {
+  Eigen::MatrixXd points;
+  std::vector<Eigen::Index> first, node_row;
+};
+// body: the cells' mesh (its node ids), or null when no cell is a corner cell.
+JPoints j_points(const std::vector<Cell>& cells, const std::vector<CellKind>& kind,
+                 const Eigen::MatrixXd& samples, const HexCells* body);
+
 // The half-space profile's slope dP_ε/dsd (continuous at sd = 0: −π/(3ε²)).
 double halfspace_slope(double sd, double epsilon);
 
