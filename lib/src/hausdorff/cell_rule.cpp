@@ -206,7 +206,11 @@ CellKind cell_kind(const Cell& cell, const SurfaceDistance& s, double near_facto
     lo = std::min(lo, t), hi = std::max(hi, t);
   }
   if (std::abs(nearest.sd) <= near_factor * (hi - lo)) return CellKind::kNear;
-  if (corner_factor > 0.0 && std::abs(nearest.sd) >= corner_factor * (hi - lo))
+  // A cell exactly corner_factor extents from the surface (aligned grids: a cell one extent
+  // from a coinciding face) keeps the Gauss rule whatever the rounding: the margin, far above
+  // the rounding of sd and of the extent, keeps a rigid motion from flipping its rule.
+  constexpr double kTieMargin = 1e-9;
+  if (corner_factor > 0.0 && std::abs(nearest.sd) >= corner_factor * (hi - lo) * (1 + kTieMargin))
     return CellKind::kCorner;
   return CellKind::kFar;
 }
